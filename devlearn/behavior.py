@@ -1,0 +1,148 @@
+"""The Behavior interface: what the infant should learn, independent of PPO and of the body."""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, ClassVar
+
+import numpy as np
+
+from devlearn.curriculum import Curriculum, Stage
+from devlearn.rewards import IntrinsicReward, StepContext
+from devlearn.sensors import SensorEncoder
+
+if TYPE_CHECKING:
+    from devlearn.infant import Infant
+
+
+@dataclass
+class NetworkSpec:
+    """How to assemble the policy and value networks from per-sense encoders.
+
+    Both networks get their own copy of every encoder (no shared parameters). Each observation
+    named in ``encoders`` goes through its encoder; the features are concatenated, passed
+    through ``fusion_dims`` (Linear+ReLU each), then ``trunk_dims`` (Linear+ReLU each). The
+    policy head is a Gaussian with ``tanh`` mean and state-dependent ``softplus`` standard
+    deviation (paper, sec. II-A4); the value head is one linear layer.
+
+    Attributes:
+        encoders: Observation name -> encoder. Every observation in the behaviour's actor and
+            critic groups must have one.
+        fusion_dims: Fusion layers after concatenation (paper Model I: ``(512,)``).
+        trunk_dims: Shared trunk layers before the heads (paper Model I: ``(256, 256)``).
+        init_std: Initial standard deviation of the policy (softplus bias is set to match).
+    """
+
+    encoders: dict[str, SensorEncoder]
+    fusion_dims: tuple[int, ...] = (512,)
+    trunk_dims: tuple[int, ...] = (256, 256)
+    init_std: float = 0.5
+
+
+class Evaluator:
+    """Collects a behaviour's metrics over steps and episodes.
+
+    The environment keeps one per sub-environment during training (each episode's
+    :meth:`end_episode` metrics are logged under ``metrics/<key>``); ``devlearn eval`` keeps one
+    over all evaluation episodes and prints :meth:`summary`.
+    """
+
+    def record(self, ctx: StepContext) -> None:
+        """Take note of one step."""
+
+    def end_episode(self) -> dict[str, float]:
+        """Close the current episode; return its metrics (name -> float)."""
+        return {}
+
+    def summary(self) -> dict[str, Any]:
+        """Return the metrics over every episode recorded so far (JSON-serialisable)."""
+        return {}
+
+    def write_artifacts(self, out_dir: Path) -> list[Path]:
+        """Write pictures or files that explain the summary; return their paths."""
+        return []
+
+
+class Behavior(ABC):
+    """What the infant should learn: scene, senses, observations, rewards, curriculum, metrics.
+
+    A behaviour knows nothing of rsl-rl. It is constructed from its config dataclass
+    (``config_class``) in every environment process, so it must be picklable and cheap.
+    Plugins register Behavior subclasses through the ``register_behaviors`` hook.
+    """
+
+    name: ClassVar[str]
+    """Unique name used on the command line (``devlearn run NAME``)."""
+    description: ClassVar[str] = ""
+    """One line shown by ``devlearn plugins`` and ``devlearn info``."""
+    scene: ClassVar[str]
+    """Infant scene to build: ``"crib"`` or ``"sitting"`` (see :func:`devlearn.infant.build_infant`)."""
+    senses: ClassVar[tuple[str, ...]] = ("touch", "proprioception", "vestibular")
+    """Infant senses this behaviour reads: ``touch``, ``proprioception``, ``vestibular``, ``eyes``."""
+    config_class: ClassVar[type]
+    """Dataclass of the behaviour's own options; every field documented. Overridable on the CLI
+    as ``--set behavior.FIELD=VALUE``."""
+    headline_metric: ClassVar[str] = ""
+    """Key of :meth:`Evaluator.end_episode` shown on the progress bar."""
+
+    def __init__(self, config: Any | None = None) -> None:
+        self.config = config if config is not None else self.config_class()
+
+    # --- observations -------------------------------------------------------------------
+    def facts(self, infant: Infant) -> dict[str, Any]:
+        """Compute per-step facts shared by observations, rewards and metrics (once a step)."""
+        return {}
+
+    @abstractmethod
+    def observe(self, infant: Infant, facts: dict[str, Any]) -> dict[str, np.ndarray]:
+        """Return this step's observations, name -> float32 array of a fixed shape."""
+
+    def obs_groups(self, observation_names: list[str]) -> dict[str, list[str]]:
+        """Map rsl-rl's observation sets (``actor``, ``critic``) to observation names."""
+        return {"actor": list(observation_names), "critic": list(observation_names)}
+
+    @abstractmethod
+    def network(self) -> NetworkSpec:
+        """Return how to build the policy and value networks."""
+
+    # --- rewards, actions, curriculum ----------------------------------------------------
+    @abstractmethod
+    def reward_terms(self) -> list[IntrinsicReward]:
+        """Return fresh reward-term instances for one environment."""
+
+    def curriculum(self) -> Curriculum:
+        """Return the training curriculum (default: one stage, fixed initial pose)."""
+        return Curriculum([Stage("main", None, {})])
+
+    def eval_stage(self) -> dict[str, Any]:
+        """Stage options used by ``devlearn eval`` (default: the curriculum's last stage)."""
+        return dict(self.curriculum().stages[-1].options)
+
+    def process_action(self, action: np.ndarray, stage: dict[str, Any]) -> np.ndarray:
+        """Adjust a policy action before it reaches the body (e.g. zero an inactive arm).
+
+        Args:
+            action: (action_dim,) in [-1, 1].
+            stage: The active stage's options.
+        Returns:
+            (action_dim,) array.
+        """
+        return action
+
+    # --- metrics and set-up --------------------------------------------------------------
+    def evaluator(self, training: bool) -> Evaluator:
+        """Return a fresh metrics collector (``training=False`` for ``devlearn eval``)."""
+        return Evaluator()
+
+    def train_defaults(self) -> dict[str, Any]:
+        """Run-config overrides this behaviour prefers, as dotted keys (``{"total_steps": 8e6}``)."""
+        return {}
+
+    def prepare(self, run_dir: Path) -> None:
+        """One-off work before training (e.g. motor babbling); may update ``self.config``.
+
+        Called in the main process once per run, before environments are built; on resume
+        it is called again and should reuse what it saved in ``run_dir``.
+        """

@@ -1,0 +1,14 @@
+"""Errors the CLI reports as one clear line with exit code 2."""
+
+from __future__ import annotations
+
+
+class UsageError(Exception):
+    """Bad input from the user: unknown behaviour, bad option, unusable checkpoint.
+
+    The message names what was wrong and what is valid.
+    """
+
+
+class PluginError(Exception):
+    """A plugin failed to load or registered something invalid."""

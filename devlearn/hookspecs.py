@@ -1,0 +1,50 @@
+"""The devlearn plugin API: every hook a plugin may implement, documented here.
+
+A plugin is a module listed under the ``devlearn`` entry-point group. It implements hooks by
+decorating functions with :data:`devlearn.hookimpl`. Hooks only register things: each receives
+a ``register`` callable; the core validates, names and de-duplicates what is registered and
+reports clashes with the names of both plugins.
+
+Example::
+
+    import devlearn
+
+    @devlearn.hookimpl
+    def register_behaviors(register):
+        register(MyBehavior)
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import pluggy
+
+hookspec = pluggy.HookspecMarker("devlearn")
+hookimpl = pluggy.HookimplMarker("devlearn")
+
+
+@hookspec
+def register_behaviors(register: Callable[[type], None]) -> None:
+    """Register behaviours (subclasses of :class:`devlearn.Behavior`).
+
+    Call ``register(BehaviorClass)`` once per behaviour. The class's ``name`` must be unique
+    across all installed plugins; a duplicate is reported with both plugins' names and the
+    second registration is ignored.
+
+    Args:
+        register: Callable taking one Behavior subclass.
+    """
+
+
+@hookspec
+def register_encoders(register: Callable[[str, type], None]) -> None:
+    """Register sensor encoders that other behaviours may reuse by name.
+
+    Call ``register(name, EncoderClass)`` where ``EncoderClass`` subclasses
+    :class:`devlearn.SensorEncoder`. ``devlearn plugins`` lists them; behaviours can look
+    them up with :func:`devlearn.plugins.PluginRegistry.encoder`.
+
+    Args:
+        register: Callable taking a unique name and a SensorEncoder subclass.
+    """

@@ -1,0 +1,14 @@
+#!/usr/bin/env bash
+# Sets up devlearn in ./.venv: the core, the built-in plugins and the example plugin,
+# pinned by constraints.txt (CPU torch 2.13, mujoco 3.17, dm-control 1.0.50, rsl-rl-lib 5.5.1).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+PY=${PYTHON:-python3}
+if [ ! -x .venv/bin/python ]; then
+  "$PY" -m venv .venv
+fi
+# Install the pinned torch first so nothing else pulls a CUDA build.
+.venv/bin/python -m pip install -q --disable-pip-version-check -c constraints.txt torch
+.venv/bin/python -m pip install -q --disable-pip-version-check -c constraints.txt \
+  -e ".[test]" -e plugins/self_touch -e plugins/hand_regard -e examples/hand_to_mouth
+echo "devlearn is set up in .venv (activate with: source .venv/bin/activate)"
