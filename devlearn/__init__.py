@@ -1,0 +1,29 @@
+"""devlearn: developmental reinforcement learning with a simulated infant.
+
+The public API for behaviour plugins: the four interfaces (:class:`Behavior`,
+:class:`SensorEncoder`, :class:`IntrinsicReward`, :class:`Curriculum`) and the hook marker
+:data:`hookimpl`. See ``docs/writing-a-plugin.md``.
+"""
+
+from __future__ import annotations
+
+from devlearn.behavior import Behavior, Evaluator, NetworkSpec
+from devlearn.curriculum import Curriculum, Stage
+from devlearn.hookspecs import hookimpl
+from devlearn.rewards import IntrinsicReward, StepContext
+from devlearn.sensors import MLPEncoder, SensorEncoder
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "Behavior",
+    "Curriculum",
+    "Evaluator",
+    "IntrinsicReward",
+    "MLPEncoder",
+    "NetworkSpec",
+    "SensorEncoder",
+    "Stage",
+    "StepContext",
+    "hookimpl",
+]
