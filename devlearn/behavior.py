@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar
 
@@ -78,9 +78,9 @@ class Behavior(ABC):
     description: ClassVar[str] = ""
     """One line shown by ``devlearn plugins`` and ``devlearn info``."""
     scene: ClassVar[str]
-    """Infant scene to build: ``"crib"`` or ``"sitting"`` (see :func:`devlearn.infant.build_infant`)."""
+    """Infant scene to build: ``"crib"`` or ``"sitting"`` (:func:`devlearn.infant.build_infant`)."""
     senses: ClassVar[tuple[str, ...]] = ("touch", "proprioception", "vestibular")
-    """Infant senses this behaviour reads: ``touch``, ``proprioception``, ``vestibular``, ``eyes``."""
+    """Infant senses read: ``touch``, ``proprioception``, ``vestibular``, ``eyes``."""
     config_class: ClassVar[type]
     """Dataclass of the behaviour's own options; every field documented. Overridable on the CLI
     as ``--set behavior.FIELD=VALUE``."""
@@ -137,7 +137,11 @@ class Behavior(ABC):
         return Evaluator()
 
     def train_defaults(self) -> dict[str, Any]:
-        """Run-config overrides this behaviour prefers, as dotted keys (``{"total_steps": 8e6}``)."""
+        """Run-config overrides this behaviour prefers, as dotted keys (``{"total_steps": 8e6}``).
+
+        Returns:
+            Mapping of dotted RunConfig keys to values.
+        """
         return {}
 
     def prepare(self, run_dir: Path) -> None:

@@ -1,0 +1,225 @@
+"""Plugin discovery: load entry points, call their hooks, validate what they register.
+
+There is no module-level plugin manager: each :class:`PluginRegistry` builds its own, so tests
+(and tools) can build registries from any list of plugins.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib.metadata as metadata
+import inspect
+import json
+import os
+import re
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import pluggy
+
+from devlearn import hookspecs
+from devlearn.behavior import Behavior
+from devlearn.errors import UsageError
+from devlearn.sensors import SensorEncoder
+
+ENTRY_POINT_GROUP = "devlearn"
+DISABLE_ENV = "DEVLEARN_DISABLE_PLUGINS"
+_NAME = re.compile(r"^[a-z][a-z0-9_]*$")
+
+
+def settings_path() -> Path:
+    """Return the file that remembers disabled plugins (``$DEVLEARN_CONFIG_DIR/plugins.json``)."""
+    base = os.environ.get("DEVLEARN_CONFIG_DIR") or Path.home() / ".config" / "devlearn"
+    return Path(base) / "plugins.json"
+
+
+def disabled_plugins() -> set[str]:
+    """Names disabled by ``DEVLEARN_DISABLE_PLUGINS`` (comma-separated) or the settings file."""
+    names = {n.strip() for n in os.environ.get(DISABLE_ENV, "").split(",") if n.strip()}
+    path = settings_path()
+    if path.exists():
+        try:
+            names |= set(json.loads(path.read_text()).get("disabled", []))
+        except (OSError, ValueError):
+            pass
+    return names
+
+
+def set_plugin_disabled(name: str, disabled: bool) -> Path:
+    """Persistently disable (or re-enable) a plugin by name; return the settings file."""
+    path = settings_path()
+    current: set[str] = set()
+    if path.exists():
+        try:
+            current = set(json.loads(path.read_text()).get("disabled", []))
+        except (OSError, ValueError):
+            current = set()
+    current = current | {name} if disabled else current - {name}
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps({"disabled": sorted(current)}, indent=2) + "\n")
+    return path
+
+
+@dataclass
+class PluginInfo:
+    """What one plugin is and what it registered."""
+
+    name: str
+    distribution: str
+    version: str
+    behaviors: list[str] = field(default_factory=list)
+    encoders: list[str] = field(default_factory=list)
+    hooks: list[str] = field(default_factory=list)
+    disabled: bool = False
+    error: str | None = None
+
+    def to_json(self) -> dict[str, Any]:
+        """Return a JSON-ready dict (keys: name, distribution, version, behaviors, hooks, ...)."""
+        return dataclasses.asdict(self)
+
+
+@dataclass
+class PluginSource:
+    """A plugin to load: a name, a loader returning its module or object, and its origin."""
+
+    name: str
+    load: Any
+    distribution: str = "unknown"
+    version: str = "unknown"
+
+
+def entry_point_sources() -> list[PluginSource]:
+    """Return the plugins installed under the ``devlearn`` entry-point group."""
+    sources = []
+    for ep in metadata.entry_points(group=ENTRY_POINT_GROUP):
+        dist = getattr(ep, "dist", None)
+        sources.append(
+            PluginSource(
+                name=ep.name,
+                load=ep.load,
+                distribution=dist.metadata["Name"] if dist is not None else "unknown",
+                version=dist.version if dist is not None else "unknown",
+            )
+        )
+    return sorted(sources, key=lambda s: s.name)
+
+
+class PluginRegistry:
+    """Loads plugins, calls their hooks and holds what they registered.
+
+    A plugin that fails to import, implements a hook with a wrong signature or an unknown hook,
+    raises inside a hook, or registers something invalid is recorded with its name and
+    distribution in :attr:`plugins` (``error``) and :attr:`errors`; the others still work.
+
+    Args:
+        sources: Plugins to load (default: installed entry points).
+        disabled: Plugin names to skip (default: :func:`disabled_plugins`).
+    """
+
+    def __init__(
+        self, sources: Iterable[PluginSource] | None = None, disabled: Iterable[str] | None = None
+    ) -> None:
+        self.plugins: dict[str, PluginInfo] = {}
+        self.errors: list[str] = []
+        self._behaviors: dict[str, type[Behavior]] = {}
+        self._encoders: dict[str, type[SensorEncoder]] = {}
+        self._owner: dict[tuple[str, str], str] = {}
+        self._pm = pluggy.PluginManager("devlearn")
+        self._pm.add_hookspecs(hookspecs)
+        skip = set(disabled_plugins() if disabled is None else disabled)
+        for source in entry_point_sources() if sources is None else sources:
+            info = PluginInfo(source.name, source.distribution, source.version)
+            self.plugins[source.name] = info
+            if source.name in skip:
+                info.disabled = True
+                continue
+            try:
+                self._load(source, info)
+            except Exception as exc:  # a broken plugin must never stop the others
+                self._fail(info, f"{type(exc).__name__}: {exc}")
+
+    # --- loading --------------------------------------------------------------------------
+    def _fail(self, info: PluginInfo, message: str) -> None:
+        info.error = message
+        self.errors.append(f"plugin '{info.name}' ({info.distribution}): {message}")
+
+    def _load(self, source: PluginSource, info: PluginInfo) -> None:
+        module = source.load() if callable(source.load) else source.load
+        spec_names = {n for n in dir(hookspecs) if n.startswith("register_")}
+        for attr in dir(module):
+            value = getattr(module, attr, None)
+            if callable(value) and hasattr(value, "devlearn_impl") and attr not in spec_names:
+                valid = ", ".join(sorted(spec_names))
+                raise TypeError(f"unknown hook '{attr}'; valid hooks: {valid}")
+        self._pm.register(module, name=source.name)  # validates hook signatures
+        for hook_name in sorted(spec_names):
+            caller = getattr(self._pm.hook, hook_name)
+            for impl in caller.get_hookimpls():
+                if impl.plugin_name != source.name:
+                    continue
+                info.hooks.append(hook_name)
+                register = getattr(self, "_" + hook_name)(info)
+                impl.function(register=register)
+
+    def _register_behaviors(self, info: PluginInfo):
+        def register(behavior: type) -> None:
+            if not (inspect.isclass(behavior) and issubclass(behavior, Behavior)):
+                raise TypeError(f"register_behaviors got {behavior!r}, not a Behavior subclass")
+            name = getattr(behavior, "name", None)
+            if not isinstance(name, str) or not _NAME.match(name):
+                raise TypeError(f"{behavior.__name__}.name must be a lower_snake_case string")
+            if not dataclasses.is_dataclass(getattr(behavior, "config_class", None)):
+                raise TypeError(f"{behavior.__name__}.config_class must be a dataclass")
+            if ("behavior", name) in self._owner:
+                other = self._owner[("behavior", name)]
+                self.errors.append(
+                    f"plugin '{info.name}' ({info.distribution}): behavior '{name}' is already "
+                    f"registered by plugin '{other}'; ignoring this one"
+                )
+                return
+            self._owner[("behavior", name)] = info.name
+            self._behaviors[name] = behavior
+            info.behaviors.append(name)
+
+        return register
+
+    def _register_encoders(self, info: PluginInfo):
+        def register(name: str, encoder: type) -> None:
+            if not (inspect.isclass(encoder) and issubclass(encoder, SensorEncoder)):
+                raise TypeError(f"register_encoders got {encoder!r}, not a SensorEncoder subclass")
+            if ("encoder", name) in self._owner:
+                other = self._owner[("encoder", name)]
+                self.errors.append(
+                    f"plugin '{info.name}' ({info.distribution}): encoder '{name}' is already "
+                    f"registered by plugin '{other}'; ignoring this one"
+                )
+                return
+            self._owner[("encoder", name)] = info.name
+            self._encoders[name] = encoder
+            info.encoders.append(name)
+
+        return register
+
+    # --- lookup ---------------------------------------------------------------------------
+    def behaviors(self) -> dict[str, type[Behavior]]:
+        """Return every registered behaviour, name -> class, sorted by name."""
+        return dict(sorted(self._behaviors.items()))
+
+    def behavior(self, name: str) -> type[Behavior]:
+        """Return the behaviour class called ``name``; raise UsageError listing the valid ones."""
+        if name not in self._behaviors:
+            installed = ", ".join(sorted(self._behaviors)) or "none (install a plugin)"
+            raise UsageError(f"unknown behavior '{name}'; installed: {installed}")
+        return self._behaviors[name]
+
+    def encoder(self, name: str) -> type[SensorEncoder]:
+        """Return the encoder class registered as ``name``."""
+        if name not in self._encoders:
+            raise UsageError(f"unknown encoder '{name}'; registered: {', '.join(self._encoders)}")
+        return self._encoders[name]
+
+    def plugin_of(self, behavior_name: str) -> PluginInfo:
+        """Return the plugin that registered a behaviour."""
+        return self.plugins[self._owner[("behavior", behavior_name)]]
