@@ -1,0 +1,70 @@
+"""The ``devlearn`` command line: one sub-command per module in this package."""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+from devlearn.errors import UsageError
+
+# Sub-command modules, each with add_parser(subparsers) and run(args, registry) -> int.
+COMMANDS = ("run", "evaluate", "info", "plugins", "bench", "picture")
+
+
+def _load_commands() -> list:
+    modules = []
+    for name in COMMANDS:
+        try:
+            modules.append(importlib.import_module(f"devlearn.cli.{name}"))
+        except ModuleNotFoundError as exc:
+            if exc.name != f"devlearn.cli.{name}":
+                raise
+    return modules
+
+
+def build_parser() -> tuple[argparse.ArgumentParser, dict]:
+    """Return the argument parser and a map from sub-command name to its module."""
+    parser = argparse.ArgumentParser(
+        prog="devlearn",
+        description="Developmental RL: a simulated infant learns body skills from curiosity.",
+    )
+    parser.add_argument(
+        "--disable-plugin",
+        action="append",
+        default=[],
+        metavar="NAME",
+        help="skip a plugin for this command (repeatable; see also DEVLEARN_DISABLE_PLUGINS)",
+    )
+    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
+    handlers = {}
+    for module in _load_commands():
+        for name in module.add_parser(subparsers):
+            handlers[name] = module
+    return parser, handlers
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the CLI; return the exit code (2 for bad input, with a one-line message)."""
+    parser, handlers = build_parser()
+    args = parser.parse_args(argv)
+    if args.command is None:
+        parser.print_help()
+        return 2
+    from devlearn.plugins import PluginRegistry, disabled_plugins
+
+    registry = PluginRegistry(disabled=disabled_plugins() | set(args.disable_plugin))
+    for error in registry.errors:
+        print(f"devlearn: warning: {error}", file=sys.stderr)
+    try:
+        return int(handlers[args.command].run(args, registry) or 0)
+    except UsageError as exc:
+        print(f"devlearn: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("devlearn: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

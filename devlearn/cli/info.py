@@ -1,0 +1,39 @@
+"""``devlearn info BEHAVIOR``: what a behaviour's environment looks like."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+from devlearn.describe import describe_behavior
+
+
+def add_parser(subparsers) -> list[str]:
+    """Register the ``info`` sub-command."""
+    p = subparsers.add_parser("info", help="describe a behaviour's observations, actions, skin")
+    p.add_argument("behavior", help="behaviour name (see `devlearn plugins`)")
+    p.add_argument("--json", action="store_true", help="print a JSON object")
+    return ["info"]
+
+
+def run(args: argparse.Namespace, registry) -> int:
+    """Print the description as a table or JSON."""
+    behavior = registry.behavior(args.behavior)()
+    info = describe_behavior(behavior)
+    info["plugin"] = registry.plugin_of(args.behavior).name
+    if args.json:
+        print(json.dumps(info, indent=2))
+        return 0
+    width = max(len(k) for k in info)
+    for key, value in info.items():
+        if key == "observations":
+            shapes = ", ".join(f"{name} {tuple(shape)}" for name, shape in value.items())
+            print(f"{key.ljust(width)}  {shapes}")
+        elif key == "curriculum":
+            stages = " -> ".join(f"{s['name']} ({s['steps'] or 'rest'})" for s in value)
+            print(f"{key.ljust(width)}  {stages}")
+        elif isinstance(value, (list, dict)):
+            print(f"{key.ljust(width)}  {json.dumps(value)}")
+        else:
+            print(f"{key.ljust(width)}  {value}")
+    return 0
