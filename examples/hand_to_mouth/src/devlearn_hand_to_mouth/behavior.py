@@ -1,0 +1,159 @@
+"""hand_to_mouth: reward the infant for touching its face's target parts with either hand.
+
+Written only against devlearn's public API (``devlearn`` and ``devlearn.infant``'s Infant).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+import devlearn
+from devlearn import StepContext
+
+
+@dataclass
+class HandToMouthConfig:
+    """Options of the hand_to_mouth behaviour."""
+
+    target_parts: tuple[str, ...] = ("mouth",)
+    """Side-free body-map part names that count as the mouth (see docs/body_map.md)."""
+    contact_reward: float = 1.0
+    """Reward per step in which a hand touches a target part."""
+    first_contact_bonus: float = 5.0
+    """Extra reward the first time in an episode a hand reaches a target part."""
+    action_cost: float = 0.01
+    """Penalty weight on the mean squared action (keeps movements calm)."""
+    stages: list[int] = field(default_factory=lambda: [100_000])
+    """Steps of the fixed-pose stage before random initial poses begin."""
+
+
+class MouthContact(devlearn.IntrinsicReward):
+    """``contact_reward`` for every step a hand touches a target part, plus a one-off bonus.
+
+    Reads the fact ``mouth_contact`` (bool). The bonus memory is per episode (no lifetime state).
+    """
+
+    name = "mouth_contact"
+
+    def __init__(self, contact_reward: float, first_bonus: float) -> None:
+        super().__init__()
+        self.contact_reward = contact_reward
+        self.first_bonus = first_bonus
+        self.reached = False
+
+    def reset(self) -> None:
+        self.reached = False
+
+    def __call__(self, ctx: StepContext) -> float:
+        if not ctx.facts["mouth_contact"]:
+            return 0.0
+        bonus = 0.0 if self.reached else self.first_bonus
+        self.reached = True
+        return self.contact_reward + bonus
+
+
+class ActionCost(devlearn.IntrinsicReward):
+    """Minus ``weight`` times the mean squared action of this step (fact ``action_energy``)."""
+
+    name = "action_cost"
+
+    def __call__(self, ctx: StepContext) -> float:
+        return -float(ctx.facts["action_energy"])
+
+
+class MouthEvaluator(devlearn.Evaluator):
+    """Share of steps and of episodes in which a hand touched the mouth."""
+
+    def __init__(self) -> None:
+        self.steps = self.contact_steps = 0
+        self.episode_contact_steps = 0
+        self.episodes = self.episodes_with_contact = 0
+
+    def record(self, ctx: StepContext) -> None:
+        self.steps += 1
+        self.episode_contact_steps += int(ctx.facts["mouth_contact"])
+
+    def end_episode(self) -> dict[str, float]:
+        self.episodes += 1
+        self.contact_steps += self.episode_contact_steps
+        self.episodes_with_contact += int(self.episode_contact_steps > 0)
+        result = {"reached": float(self.episode_contact_steps > 0)}
+        self.episode_contact_steps = 0
+        return result
+
+    def summary(self) -> dict[str, Any]:
+        return {
+            "episodes": self.episodes,
+            "steps": self.steps,
+            "reached": self.episodes_with_contact / max(self.episodes, 1),
+            "contact_fraction": self.contact_steps / max(self.steps, 1),
+        }
+
+
+class HandToMouth(devlearn.Behavior):
+    """Bring a hand to the mouth, in the crib, from proprioception and touch contacts."""
+
+    name = "hand_to_mouth"
+    description = "example plugin: bring either hand to the mouth"
+    scene = "crib"
+    senses = ("touch", "proprioception")
+    config_class = HandToMouthConfig
+    headline_metric = "reached"
+
+    def __init__(self, config: HandToMouthConfig | None = None) -> None:
+        super().__init__(config)
+        self._target: np.ndarray | None = None  # (68,) bool, built from the infant's regions
+        self._last_action = np.zeros(0)
+
+    def _target_regions(self, infant) -> np.ndarray:
+        if self._target is None:
+            names = list(infant.regions.part_names)
+            unknown = [p for p in self.config.target_parts if p not in names]
+            if unknown:
+                raise ValueError(f"unknown body part(s) {unknown}; valid parts: {names}")
+            wanted = [names.index(p) for p in self.config.target_parts]
+            self._target = np.isin(np.asarray(infant.regions.parts), wanted)
+        return self._target
+
+    def process_action(self, action: np.ndarray, stage: dict[str, Any]) -> np.ndarray:
+        self._last_action = action
+        return action
+
+    def facts(self, infant) -> dict[str, Any]:
+        contacts = infant.hand_contacts()  # (2 hands, 68) bool
+        energy = float(np.mean(np.square(self._last_action))) if self._last_action.size else 0.0
+        return {
+            "mouth_contact": bool(np.any(contacts[:, self._target_regions(infant)])),
+            "action_energy": energy,
+        }
+
+    def observe(self, infant, facts: dict[str, Any]) -> dict[str, np.ndarray]:
+        return {"proprioception": infant.proprioception().astype(np.float32)}
+
+    def network(self) -> devlearn.NetworkSpec:
+        return devlearn.NetworkSpec(
+            encoders={"proprioception": devlearn.MLPEncoder((256,))},
+            fusion_dims=(256,),
+            trunk_dims=(128, 128),
+        )
+
+    def reward_terms(self) -> list[devlearn.IntrinsicReward]:
+        cfg = self.config
+        return [
+            MouthContact(cfg.contact_reward, cfg.first_contact_bonus),
+            ActionCost(weight=cfg.action_cost),
+        ]
+
+    def curriculum(self) -> devlearn.Curriculum:
+        return devlearn.Curriculum(
+            [
+                devlearn.Stage("fixed_pose", self.config.stages[0], {"random_pose": False}),
+                devlearn.Stage("random_pose", None, {"random_pose": True}),
+            ]
+        )
+
+    def evaluator(self, training: bool) -> devlearn.Evaluator:
+        return MouthEvaluator()
