@@ -1,0 +1,72 @@
+"""Tests of the example plugin, written only against devlearn's public API."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from importlib.metadata import entry_points
+
+import pytest
+
+from devlearn import StepContext
+from devlearn.testing import check_behavior, registry_for
+from devlearn_hand_to_mouth import HandToMouth
+from devlearn_hand_to_mouth.behavior import ActionCost, MouthContact
+
+
+def _ctx(contact: bool, energy: float = 0.0) -> StepContext:
+    facts = {"mouth_contact": contact, "action_energy": energy}
+    return StepContext(None, {}, facts, step=0, last_step=False)
+
+
+def test_entry_point_is_installed():
+    names = {ep.name: ep.value for ep in entry_points(group="devlearn")}
+    assert names["hand_to_mouth"] == "devlearn_hand_to_mouth.plugin"
+
+
+def test_registry_finds_behavior():
+    assert registry_for(HandToMouth).behavior("hand_to_mouth") is HandToMouth
+
+
+def test_mouth_contact_pays_bonus_once_per_episode():
+    term = MouthContact(contact_reward=1.0, first_bonus=5.0)
+    assert term(_ctx(False)) == 0.0
+    assert term(_ctx(True)) == 6.0
+    assert term(_ctx(True)) == 1.0
+    term.reset()
+    assert term(_ctx(True)) == 6.0
+
+
+def test_action_cost_is_negative_energy():
+    assert ActionCost(weight=0.01)(_ctx(False, energy=0.25)) == -0.25
+
+
+@pytest.mark.slow
+def test_conformance():
+    shapes = check_behavior(HandToMouth, steps=20)
+    assert set(shapes) == {"proprioception"}
+
+
+@pytest.mark.slow
+def test_tiny_training_run(tmp_path):
+    out = tmp_path / "run"
+    cmd = [
+        sys.executable,
+        "-m",
+        "devlearn.cli",
+        "run",
+        "hand_to_mouth",
+        "--steps",
+        "512",
+        "--envs",
+        "2",
+        "--seed",
+        "1",
+        "--out",
+        str(out),
+    ]
+    subprocess.run(cmd, check=True, timeout=600)
+    assert (out / "checkpoint_latest.pt").exists()
+    lines = (out / "metrics.jsonl").read_text().splitlines()
+    assert json.loads(lines[-1])["step"] >= 512
