@@ -1,0 +1,7 @@
+"""Allow ``python -m devlearn.cli``."""
+
+import sys
+
+from devlearn.cli import main
+
+sys.exit(main())
