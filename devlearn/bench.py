@@ -1,0 +1,197 @@
+"""Speed measurements: environment steps per second and the cost of each sense.
+
+Run through ``devlearn bench``. Figures come from timing real work after a warm-up, with random
+actions; nothing here is a test and nothing is asserted.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+
+def _per_call_ms(
+    fn: Callable[[], Any], calls: int, before: Callable[[], Any] | None = None
+) -> float:
+    """Mean milliseconds of ``fn`` over ``calls`` calls (``before`` runs untimed each time)."""
+    total = 0.0
+    for _ in range(calls):
+        if before is not None:
+            before()
+        start = time.perf_counter()
+        fn()
+        total += time.perf_counter() - start
+    return 1000.0 * total / calls
+
+
+def bench_infant(steps: int = 2000, frames: int = 100) -> dict[str, float]:
+    """Physics, touch, proprioception and eye-render cost on the bare infant.
+
+    Returns:
+        ``build_s`` (crib build), ``physics_ms_per_step``, ``touch_ms_per_step``,
+        ``proprioception_ms_per_step``, ``render_ms_per_frame`` (one 64x64 eye),
+        ``touch_sensors``, ``contacts_per_step``.
+    """
+    from devlearn.infant import build_infant
+
+    rng = np.random.default_rng(0)
+    start = time.perf_counter()
+    crib = build_infant("crib", senses=("touch", "proprioception", "vestibular"))
+    build_s = time.perf_counter() - start
+    crib.reset(rng, random_pose=True)
+    actions = rng.uniform(-1, 1, (steps, crib.action_dim))
+    for a in actions[:200]:  # warm-up, and reach a state with contacts
+        crib.step(a)
+    it = iter(actions)
+    physics = _per_call_ms(lambda: crib.step(next(it)), steps)
+    it = iter(actions)
+    contacts = []
+
+    def step_and_count():
+        crib.step(next(it))
+        contacts.append(int(crib.physics.data.ncon))
+
+    touch = _per_call_ms(crib.touch, steps, before=step_and_count)
+    it = iter(actions)
+    proprio = _per_call_ms(crib.proprioception, steps, before=lambda: crib.step(next(it)))
+    crib.close()
+
+    sitting = build_infant("sitting", senses=("proprioception", "eyes"))
+    sitting.reset(rng)
+    acts = rng.uniform(-1, 1, (frames + 10, sitting.action_dim))
+    for a in acts[:10]:
+        sitting.step(a)
+        sitting.eyes()
+    it = iter(acts[10:])
+    render = _per_call_ms(sitting.eyes, frames, before=lambda: sitting.step(next(it))) / 2.0
+    sitting.close()
+    return {
+        "build_s": build_s,
+        "physics_ms_per_step": physics,
+        "touch_ms_per_step": touch,
+        "proprioception_ms_per_step": proprio,
+        "render_ms_per_frame": render,
+        "touch_sensors": int(crib.skin.num_sensors),
+        "contacts_per_step": float(np.mean(contacts)),
+    }
+
+
+def bench_behavior_env(behavior, steps: int) -> float:
+    """Single-process environment steps per second of one BehaviorEnv (random actions)."""
+    from devlearn.env import BehaviorEnv
+
+    env = BehaviorEnv(behavior, seed=0)
+    env.reset()
+    rng = np.random.default_rng(0)
+    actions = rng.uniform(-1, 1, (steps + 50, env.action_dim))
+    for a in actions[:50]:
+        env.step(a)
+    start = time.perf_counter()
+    for a in actions[50:]:
+        env.step(a)
+    rate = steps / (time.perf_counter() - start)
+    env.close()
+    return rate
+
+
+def bench_vec_env(behavior, num_envs: int, workers: int, steps: int) -> float:
+    """Environment steps per second (summed over envs) of a DevVecEnv with ``workers`` processes."""
+    import torch
+
+    from devlearn.env import DevVecEnv
+
+    env = DevVecEnv(behavior, num_envs=num_envs, seed=0, workers=workers)
+    try:
+        gen = torch.Generator().manual_seed(0)
+        for _ in range(10):
+            env.step(torch.rand(num_envs, env.num_actions, generator=gen) * 2 - 1)
+        start = time.perf_counter()
+        for _ in range(steps):
+            env.step(torch.rand(num_envs, env.num_actions, generator=gen) * 2 - 1)
+        return steps * num_envs / (time.perf_counter() - start)
+    finally:
+        env.close()
+
+
+def bench_training(behavior: str, steps: int, envs: int, workers: int, extra: list[str]) -> float:
+    """End-to-end training steps per second (collection plus PPO update) of ``devlearn run``.
+
+    Reads the steps-per-second the run itself logged for its iterations after the first.
+    """
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "run"
+        cmd = [
+            sys.executable,
+            "-m",
+            "devlearn.cli",
+            "run",
+            behavior,
+            "--steps",
+            str(steps),
+            "--envs",
+            str(envs),
+            "--workers",
+            str(workers),
+            "--seed",
+            "0",
+            "--out",
+            str(out),
+            *extra,
+        ]
+        subprocess.run(cmd, check=True, capture_output=True, timeout=1800)
+        rows = [json.loads(line) for line in (out / "metrics.jsonl").read_text().splitlines()]
+    rows = rows[1:] or rows  # the first iteration includes start-up costs
+    return float(np.mean([r["steps_per_s"] for r in rows]))
+
+
+def run_bench(registry, quick: bool = False, progress: Callable[[str], None] = print) -> dict:
+    """Run every measurement; return the figures (see ``devlearn bench --help``)."""
+    n = 300 if quick else 2000
+    progress("infant: physics, touch, proprioception, eye render")
+    result: dict[str, Any] = bench_infant(steps=n, frames=20 if quick else 100)
+    behaviors = registry.behaviors()
+    for name in ("self_touch", "hand_regard"):
+        if name not in behaviors:
+            progress(f"{name}: not installed, skipped")
+            continue
+        behavior = behaviors[name]()
+        progress(f"{name}: single-process environment steps")
+        steps = n if name == "self_touch" else max(n // 10, 50)
+        result[f"{name}_steps_per_s"] = bench_behavior_env(behavior, steps)
+    if "self_touch" in behaviors:
+        behavior = behaviors["self_touch"]()
+        for workers in (1, 2):
+            progress(f"self_touch: 8 environments over {workers} worker process(es)")
+            result[f"self_touch_vec_steps_per_s_{workers}_workers"] = bench_vec_env(
+                behavior, num_envs=8, workers=workers, steps=n // 8 if quick else 400
+            )
+        progress("self_touch: end-to-end training")
+        result["self_touch_train_steps_per_s"] = bench_training(
+            "self_touch", 8192 if quick else 65536, envs=16, workers=2, extra=[]
+        )
+    if "hand_regard" in behaviors:
+        progress("hand_regard: end-to-end training")
+        result["hand_regard_train_steps_per_s"] = bench_training(
+            "hand_regard",
+            1024 if quick else 4096,
+            envs=8,
+            workers=2,
+            extra=["--set", "behavior.babbling_steps=200"],
+        )
+    usage_self = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    usage_children = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    result["peak_memory_mb"] = max(usage_self, usage_children) / 1024.0
+    result["machine"] = f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores"
+    result["date"] = time.strftime("%Y-%m-%d")
+    return result
