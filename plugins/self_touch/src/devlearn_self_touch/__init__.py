@@ -1,1 +1,25 @@
-"""Placeholder until the plugin lands."""
+"""devlearn-self-touch: the paper's Model I, self-touch via tactile novelty (sec. II-A)."""
+
+from __future__ import annotations
+
+from devlearn_self_touch.behavior import SelfTouch
+from devlearn_self_touch.config import SelfTouchConfig
+from devlearn_self_touch.evaluation import SelfTouchEvaluator
+from devlearn_self_touch.rewards import (
+    Balance,
+    ContactNovelty,
+    DiversityMilestones,
+    TouchNovelty,
+    f_decay,
+)
+
+__all__ = [
+    "Balance",
+    "ContactNovelty",
+    "DiversityMilestones",
+    "SelfTouch",
+    "SelfTouchConfig",
+    "SelfTouchEvaluator",
+    "TouchNovelty",
+    "f_decay",
+]

@@ -1,0 +1,140 @@
+"""The self_touch behaviour: the paper's Model I, self-touch via tactile novelty (sec. II-A)."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from devlearn import (
+    Behavior,
+    Curriculum,
+    Evaluator,
+    IntrinsicReward,
+    MLPEncoder,
+    NetworkSpec,
+    Stage,
+)
+from devlearn_self_touch.body_map import (
+    body_map,
+    body_map_observation,
+    hand_touched_parts,
+    own_hand_mask,
+)
+from devlearn_self_touch.config import SelfTouchConfig
+from devlearn_self_touch.evaluation import SelfTouchEvaluator
+from devlearn_self_touch.rewards import Balance, ContactNovelty, DiversityMilestones, TouchNovelty
+
+if TYPE_CHECKING:
+    from devlearn.infant import Infant
+
+
+class SelfTouch(Behavior):
+    """Self-touch: the infant lying in its crib learns to touch its own body (sec. II-A).
+
+    Observations: ``body_map`` (68,) log1p-scaled mean force per region (sec. II-A2) and
+    ``proprioception`` (P,). Network: touch MLP 68 -> 128 -> 256, proprioception MLP
+    P -> 128 -> 256 ("similarly processed"), fusion Linear+ReLU to 512, trunk 256-256 ReLU,
+    tanh-mean / softplus-std Gaussian policy (sec. II-A2, II-A4). Rewards: the four terms of
+    :mod:`devlearn_self_touch.rewards`. Curriculum: fixed pose then random pose (sec. II-A5).
+    """
+
+    name = "self_touch"
+    description = "Model I (paper sec. II-A): self-touch driven by tactile novelty on a body map"
+    scene = "crib"
+    senses = ("touch", "proprioception")
+    config_class = SelfTouchConfig
+    headline_metric = "score"
+
+    def __init__(self, config: SelfTouchConfig | None = None) -> None:
+        super().__init__(config)
+        self._own_hand: np.ndarray | None = None  # (2, 68) bool, cached per infant
+
+    # --- observations -------------------------------------------------------------------
+    def facts(self, infant: Infant) -> dict[str, Any]:
+        """Compute this step's touch facts.
+
+        Returns:
+            ``body_map`` (68,) float32 g_t (N per sensor); ``hand_contacts`` (2, 68) bool, hand
+            (left, right) palm or fingers touches region j, the hand's own regions excluded;
+            ``hand_parts`` (2, 34) bool, the same per side-free part; ``touched`` (68,) bool,
+            region j counts as touched (see :attr:`SelfTouchConfig.touch_source`).
+        """
+        cfg = self.config
+        if self._own_hand is None:
+            self._own_hand = own_hand_mask(infant.regions)
+        skin = infant.skin
+        g = body_map(infant.touch(), skin.sensor_region, skin.region_sizes)
+        contacts = np.asarray(infant.hand_contacts(), dtype=bool) & ~self._own_hand
+        by_hand = contacts.any(axis=0)
+        above = g > cfg.touch_threshold
+        touched = {"hands": by_hand, "threshold": above, "hands_or_threshold": by_hand | above}
+        return {
+            "body_map": g,
+            "hand_contacts": contacts,
+            "hand_parts": hand_touched_parts(contacts, np.asarray(infant.regions.parts)),
+            "touched": touched[cfg.touch_source],
+        }
+
+    def observe(self, infant: Infant, facts: dict[str, Any]) -> dict[str, np.ndarray]:
+        """Return ``body_map`` (68,) log1p(g / body_map_scale) and ``proprioception`` (P,)."""
+        return {
+            "body_map": body_map_observation(facts["body_map"], self.config.body_map_scale),
+            "proprioception": np.asarray(infant.proprioception(), dtype=np.float32),
+        }
+
+    def network(self) -> NetworkSpec:
+        """The paper's Model I network (sec. II-A2 and II-A4)."""
+        return NetworkSpec(
+            encoders={
+                "body_map": MLPEncoder((128, 256)),
+                "proprioception": MLPEncoder((128, 256)),
+            },
+            fusion_dims=(512,),
+            trunk_dims=(256, 256),
+        )
+
+    # --- rewards and curriculum ------------------------------------------------------------
+    def reward_terms(self) -> list[IntrinsicReward]:
+        """R_t = R_touch + R_geom + R_milestones + R_balance (sec. II-A3), fresh instances."""
+        c = self.config
+        return [
+            TouchNovelty(
+                c.weight_touch_novelty,
+                c.touch_first_ever,
+                c.touch_first_in_episode,
+                c.touch_repeat_scale,
+                c.decay_midpoint,
+                c.decay_rate,
+            ),
+            ContactNovelty(
+                c.weight_contact_novelty, c.contact_first_ever, c.contact_first_in_episode
+            ),
+            DiversityMilestones(c.weight_diversity_milestones, c.milestone_reward, c.milestones),
+            Balance(c.weight_balance, c.balance_reward, c.balance_tolerance, c.balance_min_parts),
+        ]
+
+    def curriculum(self) -> Curriculum:
+        """``two_stage``: fixed pose for ``fixed_pose_steps``, then random initial poses;
+        ``fixed_only`` / ``random_only``: one stage for the whole run (sec. II-A5, Table II)."""
+        fixed = Stage("fixed_pose", None, {"random_pose": False})
+        random = Stage("random_pose", None, {"random_pose": True})
+        if self.config.curriculum == "fixed_only":
+            return Curriculum([fixed])
+        if self.config.curriculum == "random_only":
+            return Curriculum([random])
+        fixed.steps = int(self.config.fixed_pose_steps)
+        return Curriculum([fixed, random])
+
+    def eval_stage(self) -> dict[str, Any]:
+        """Evaluation starts every episode from a random initial pose (sec. II-A6)."""
+        return {"random_pose": True}
+
+    # --- metrics and set-up --------------------------------------------------------------
+    def evaluator(self, training: bool) -> Evaluator:
+        """Per-hand coverage of the 34 parts and the score (:class:`SelfTouchEvaluator`)."""
+        return SelfTouchEvaluator(training=training)
+
+    def train_defaults(self) -> dict[str, Any]:
+        """PPO settings for this behaviour (the paper's run is 8M steps: pass ``--steps``)."""
+        return {}

@@ -1,0 +1,98 @@
+"""Options of the self_touch behaviour: every constant of the paper's Model I (sec. II-A)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+CURRICULA = ("two_stage", "fixed_only", "random_only")
+"""Valid values of :attr:`SelfTouchConfig.curriculum` (paper sec. II-A5 and its ablation)."""
+
+TOUCH_SOURCES = ("hands", "hands_or_threshold", "threshold")
+"""Valid values of :attr:`SelfTouchConfig.touch_source`."""
+
+
+@dataclass
+class SelfTouchConfig:
+    """Options of :class:`devlearn_self_touch.SelfTouch`; overridable as ``--set behavior.X=V``.
+
+    Defaults reproduce the paper (Baby Sophia, sec. II-A) unless a field says otherwise.
+    """
+
+    # --- what counts as "touched" (sec. II-A2/A3) ----------------------------------------
+    touch_source: str = "hands_or_threshold"
+    """How a region is marked touched for the touch-novelty and milestone terms.
+    ``"hands"``: a palm or finger touches it (``Infant.hand_contacts``). ``"threshold"``: the
+    paper's literal rule g_j > ``touch_threshold`` (counts mattress contacts as touch).
+    ``"hands_or_threshold"`` (default): either, with the threshold calibrated above every
+    mattress-resting level we measured so lying on the mattress never counts (see README)."""
+    touch_threshold: float = 0.05
+    """Threshold on the mean force per sensor g_j (N) above which a region counts as touched.
+    The paper uses 0.1 in MIMo's units (sec. II-A3); ours is calibrated by
+    ``python -m devlearn_self_touch.calibrate`` (numbers in the README)."""
+    body_map_scale: float = 0.01
+    """Observation scaling: the policy sees log1p(g / body_map_scale) so that a light touch
+    (~0.01 N per sensor) maps to ~0.7 and the full weight on the mattress stays O(1-5)."""
+
+    # --- reward weights (R_t = R_touch + R_geom + R_milestones + R_balance, sec. II-A3) -----
+    weight_touch_novelty: float = 1.0
+    """Weight of R_touch (paper: 1)."""
+    weight_contact_novelty: float = 1.0
+    """Weight of R_geom (paper: 1)."""
+    weight_diversity_milestones: float = 1.0
+    """Weight of R_milestones (paper: 1)."""
+    weight_balance: float = 1.0
+    """Weight of R_balance (paper: 1)."""
+
+    # --- touch novelty R_touch (sec. II-A3) ------------------------------------------------
+    touch_first_ever: float = 5.0
+    """Reward for a region's first touch in the environment's lifetime."""
+    touch_first_in_episode: float = 1.0
+    """Reward for a region's first touch in the current episode."""
+    touch_repeat_scale: float = 0.5
+    """Repeats pay touch_repeat_scale * f_decay(c_j)."""
+    decay_midpoint: float = 10.0
+    """f_decay(c) = 2 / (1 + exp(decay_rate * (c - decay_midpoint))) - 1 crosses 0 here."""
+    decay_rate: float = 0.5
+    """Steepness of f_decay."""
+
+    # --- contact novelty R_geom (sec. II-A3) ------------------------------------------------
+    contact_first_ever: float = 10.0
+    """Reward for a (hand, region) pair's first contact in the environment's lifetime."""
+    contact_first_in_episode: float = 2.0
+    """Reward for a (hand, region) pair's first contact in the current episode."""
+
+    # --- diversity milestones R_milestones (sec. II-A3) ------------------------------------
+    milestone_reward: float = 5.0
+    """Bonus paid once per episode per milestone crossed."""
+    milestones: tuple[int, ...] = (5, 10, 15, 20, 25, 30)
+    """Distinct touched regions (of 68) in the episode at which the bonus is paid."""
+
+    # --- balance R_balance (sec. II-A3) -----------------------------------------------------
+    balance_reward: float = 10.0
+    """Bonus on the episode's last step when |N_L - N_R| <= balance_tolerance."""
+    balance_tolerance: int = 3
+    """Largest |N_L - N_R| (distinct parts of 34 touched per hand) that still pays."""
+    balance_min_parts: int = 0
+    """Extra condition N_L + N_R >= this (paper: none, i.e. 0; then an episode without any
+    touch also pays the bonus). Set 1 or more to stop rewarding idleness."""
+
+    # --- curriculum (sec. II-A5) ------------------------------------------------------------
+    curriculum: str = "two_stage"
+    """``"two_stage"`` (fixed pose then random pose), ``"fixed_only"`` or ``"random_only"``
+    (the paper's ablation, Table II)."""
+    fixed_pose_steps: int = 4_000_000
+    """Environment steps (all environments) of stage 1, fixed initial pose (paper: 4M)."""
+    random_pose_steps: int = 4_000_000
+    """Environment steps of stage 2, random initial joint angles (paper: 4M). Informational:
+    the last stage lasts until training ends (set total_steps = 8M for the paper's run)."""
+
+    def __post_init__(self) -> None:
+        if self.curriculum not in CURRICULA:
+            raise ValueError(
+                f"unknown curriculum '{self.curriculum}'; valid: {', '.join(CURRICULA)}"
+            )
+        if self.touch_source not in TOUCH_SOURCES:
+            raise ValueError(
+                f"unknown touch_source '{self.touch_source}'; valid: {', '.join(TOUCH_SOURCES)}"
+            )
+        self.milestones = tuple(sorted(int(m) for m in self.milestones))

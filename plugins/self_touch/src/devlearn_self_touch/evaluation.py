@@ -1,0 +1,158 @@
+"""Self-touch metrics (paper sec. II-A6, BabyBench scoring) and the body-map picture."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from devlearn import Evaluator, StepContext
+from devlearn_self_touch.body_map import HANDS, NUM_PARTS, NUM_REGIONS
+
+
+class SelfTouchEvaluator(Evaluator):
+    """Per-hand coverage of the 34 side-free body parts, and the self-touch score.
+
+    A hand "touched" part p when its palm or fingers touched either side's region of p
+    (``facts["hand_parts"]``). Coverage of a hand is the number of distinct parts it touched
+    (of 34); ``coverage_total`` the union over both hands; ``score`` = (left + right) / 68
+    (BabyBench's self-touch score, both hands counted fairly; paper Table I: 0.85 for
+    28 + 30 parts); ``balance`` = |left - right| (sec. II-A6).
+
+    :meth:`end_episode` reports one episode's values; :meth:`summary` reports the union over
+    every recorded episode (how the paper's evaluation over 100 episodes is reported) plus
+    episode means and per-part touch counts (steps in contact) per hand.
+
+    Args:
+        training: True inside training environments (per-episode metrics only).
+    """
+
+    def __init__(self, training: bool = True) -> None:
+        self.training = training
+        self.region_steps = np.zeros((len(HANDS), NUM_REGIONS), dtype=np.int64)
+        self.part_steps = np.zeros((len(HANDS), NUM_PARTS), dtype=np.int64)
+        self.ever_parts = np.zeros((len(HANDS), NUM_PARTS), dtype=bool)
+        self.episode_parts = np.zeros((len(HANDS), NUM_PARTS), dtype=bool)
+        self.episodes: list[dict[str, float]] = []
+        self.regions: Any = None  # the infant's region table, taken from the first real step
+
+    def record(self, ctx: StepContext) -> None:
+        if self.regions is None and ctx.infant is not None:
+            self.regions = ctx.infant.regions
+        parts = np.asarray(ctx.facts["hand_parts"], dtype=bool)
+        self.episode_parts |= parts
+        if not self.training:
+            self.part_steps += parts
+            self.region_steps += np.asarray(ctx.facts["hand_contacts"], dtype=bool)
+
+    @staticmethod
+    def _coverage(parts: np.ndarray) -> dict[str, float]:
+        """Coverage metrics of a (2, 34) bool touched-parts array."""
+        left, right = (int(n) for n in parts.sum(axis=1))
+        return {
+            "coverage_left": float(left),
+            "coverage_right": float(right),
+            "coverage_total": float(parts.any(axis=0).sum()),
+            "score": (left + right) / (2 * NUM_PARTS),
+        }
+
+    def end_episode(self) -> dict[str, float]:
+        metrics = self._coverage(self.episode_parts)
+        self.ever_parts |= self.episode_parts
+        self.episode_parts[:] = False
+        if not self.training:
+            self.episodes.append(metrics)
+        return metrics
+
+    def part_names(self) -> list[str]:
+        """Names of the 34 parts (generic ``part_NN`` before a real infant was seen)."""
+        if self.regions is not None:
+            return [str(n) for n in self.regions.part_names]
+        return [f"part_{p:02d}" for p in range(NUM_PARTS)]
+
+    def summary(self) -> dict[str, Any]:
+        union = self._coverage(self.ever_parts)
+        names = self.part_names()
+        means = {
+            f"episode_{k}_mean": float(np.mean([e[k] for e in self.episodes]))
+            for k in ("coverage_left", "coverage_right", "coverage_total", "score")
+            if self.episodes
+        }
+        return {
+            "episodes": len(self.episodes),
+            **{k: int(v) if k.startswith("coverage") else v for k, v in union.items()},
+            "parts": NUM_PARTS,
+            "balance": int(abs(union["coverage_left"] - union["coverage_right"])),
+            **means,
+            "part_touch_steps": {
+                hand: {names[p]: int(self.part_steps[h, p]) for p in range(NUM_PARTS)}
+                for h, hand in enumerate(HANDS)
+            },
+            "parts_never_touched": [
+                names[p] for p in range(NUM_PARTS) if not self.ever_parts[:, p].any()
+            ],
+        }
+
+    def write_artifacts(self, out_dir: Path) -> list[Path]:
+        """Write ``self_touch_body_map.png`` and ``self_touch_region_counts.json``."""
+        out_dir = Path(out_dir)
+        out_dir.mkdir(parents=True, exist_ok=True)
+        picture = draw_body_map_counts(self.region_steps, self.regions, out_dir)
+        counts = out_dir / "self_touch_region_counts.json"
+        names = (
+            [str(n) for n in self.regions.names]
+            if self.regions is not None
+            else [f"region_{j:02d}" for j in range(NUM_REGIONS)]
+        )
+        counts.write_text(
+            json.dumps(
+                {
+                    hand: dict(zip(names, map(int, self.region_steps[h])))
+                    for h, hand in enumerate(HANDS)
+                },
+                indent=2,
+            )
+            + "\n"
+        )
+        return [picture, counts]
+
+
+def draw_body_map_counts(region_steps: np.ndarray, regions: Any, out_dir: Path) -> Path:
+    """Draw how often each hand touched each region: one panel per hand, parts x sides.
+
+    Args:
+        region_steps: (2, 68) steps on which hand h touched region j.
+        regions: The infant's region table (``.parts``, ``.sides``, ``.part_names``), or None
+            (then regions are drawn in index order, 34 per column).
+        out_dir: Folder to write into.
+
+    Returns:
+        Path of the PNG written.
+    """
+    from matplotlib.figure import Figure  # no pyplot: no global backend state
+
+    grids = np.zeros((len(HANDS), NUM_PARTS, 2))
+    if regions is not None:
+        parts, sides = np.asarray(regions.parts), np.asarray(regions.sides)
+        labels = [str(n) for n in regions.part_names]
+    else:
+        parts = np.arange(NUM_REGIONS) % NUM_PARTS
+        sides = np.where(np.arange(NUM_REGIONS) < NUM_PARTS, HANDS[0], HANDS[1])
+        labels = [f"part_{p:02d}" for p in range(NUM_PARTS)]
+    for j in range(NUM_REGIONS):
+        grids[:, parts[j], 0 if sides[j] == HANDS[0] else 1] = region_steps[:, j]
+    fig = Figure(figsize=(7.5, 10), constrained_layout=True)
+    axes = fig.subplots(1, 2, sharey=True)
+    vmax = max(1.0, float(np.log1p(grids).max()))
+    for h, ax in enumerate(axes):
+        image = ax.imshow(np.log1p(grids[h]), aspect="auto", cmap="magma", vmin=0, vmax=vmax)
+        ax.set_title(f"{HANDS[h]} hand ({int((grids[h] > 0).any(axis=1).sum())}/34 parts)")
+        ax.set_xticks([0, 1], ["left side", "right side"])
+        ax.set_yticks(range(NUM_PARTS), labels, fontsize=7)
+    fig.colorbar(image, ax=axes, label="log(1 + steps in contact)", shrink=0.6)
+    fig.suptitle("Self-touch: where each hand touched the body")
+    path = out_dir / "self_touch_body_map.png"
+    fig.savefig(path, dpi=110)
+    return path

@@ -1,0 +1,12 @@
+"""Entry point of the devlearn-self-touch distribution (group ``devlearn``, name ``self_touch``)."""
+
+from __future__ import annotations
+
+from devlearn import hookimpl
+from devlearn_self_touch.behavior import SelfTouch
+
+
+@hookimpl
+def register_behaviors(register) -> None:
+    """Register the :class:`SelfTouch` behaviour."""
+    register(SelfTouch)

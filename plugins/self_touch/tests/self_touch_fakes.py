@@ -1,0 +1,77 @@
+"""Fakes for the self_touch tests: synthetic step contexts, a fake region table and skin."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+
+from devlearn import StepContext
+
+
+def make_ctx(
+    touched=(),
+    hand_contacts=(),
+    hand_parts=(),
+    step: int = 0,
+    last_step: bool = False,
+) -> StepContext:
+    """A synthetic StepContext (no infant) with the facts the reward terms read.
+
+    Args:
+        touched: Region indices touched this step.
+        hand_contacts: (hand, region) pairs in contact this step.
+        hand_parts: (hand, part) pairs touched this step.
+    """
+    t = np.zeros(68, dtype=bool)
+    t[list(touched)] = True
+    hc = np.zeros((2, 68), dtype=bool)
+    for h, j in hand_contacts:
+        hc[h, j] = True
+    hp = np.zeros((2, 34), dtype=bool)
+    for h, p in hand_parts:
+        hp[h, p] = True
+    facts = {"touched": t, "hand_contacts": hc, "hand_parts": hp}
+    return StepContext(infant=None, observations={}, facts=facts, step=step, last_step=last_step)
+
+
+def make_regions() -> SimpleNamespace:
+    """A 68-region table: regions 0-33 left side, 34-67 right; part p = j % 34; part 32 is
+    "hand", part 33 "fingers"."""
+    names = [f"p{p}" for p in range(32)] + ["hand", "fingers"]
+    return SimpleNamespace(
+        names=[f"{s}_{names[j % 34]}" for s in ("left", "right") for j in range(34)],
+        sides=np.array(["left"] * 34 + ["right"] * 34),
+        parts=np.arange(68) % 34,
+        part_names=names,
+    )
+
+
+class FakeInfant:
+    """Just enough of :class:`devlearn.infant.Infant` for :meth:`SelfTouch.facts`.
+
+    Skin: 3 sensors per region (sensor i in region i // 3), so region_sizes are all 3.
+
+    Args:
+        touch: (204, 3) forces; zeros if None.
+        hand_contacts: (2, 68) bool; all False if None.
+    """
+
+    def __init__(self, touch=None, hand_contacts=None) -> None:
+        self.skin = SimpleNamespace(
+            num_sensors=204,
+            sensor_region=np.repeat(np.arange(68), 3),
+            region_sizes=np.full(68, 3),
+        )
+        self.regions = make_regions()
+        self._touch = np.zeros((204, 3), np.float32) if touch is None else touch
+        self._contacts = np.zeros((2, 68), bool) if hand_contacts is None else hand_contacts
+
+    def touch(self) -> np.ndarray:
+        return self._touch
+
+    def hand_contacts(self) -> np.ndarray:
+        return self._contacts
+
+    def proprioception(self) -> np.ndarray:
+        return np.arange(10, dtype=np.float32)

@@ -1,0 +1,163 @@
+"""The body map, the behaviour's facts and observations, its curriculum and its evaluator."""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib.metadata as metadata
+import json
+
+import numpy as np
+import pytest
+from devlearn_self_touch import SelfTouch, SelfTouchConfig, SelfTouchEvaluator
+from devlearn_self_touch.body_map import body_map, hand_touched_parts, own_hand_mask
+from self_touch_fakes import FakeInfant, make_ctx
+
+from devlearn import Behavior, Curriculum
+from devlearn.plugins import PluginRegistry
+
+
+def test_entry_point_is_declared_and_registers_self_touch():
+    eps = [ep for ep in metadata.entry_points(group="devlearn") if ep.name == "self_touch"]
+    assert len(eps) == 1 and eps[0].value == "devlearn_self_touch.plugin"
+    registry = PluginRegistry(disabled=())
+    assert registry.behavior("self_touch") is SelfTouch
+    assert registry.plugin_of("self_touch").distribution == "devlearn-self-touch"
+    assert not [e for e in registry.errors if "self_touch" in e]
+
+
+def test_body_map_is_mean_force_magnitude_per_region():
+    sensor_region = np.array([0, 0, 1, 1, 1, 67])
+    sizes = np.zeros(68, dtype=int)
+    sizes[[0, 1, 67]] = [2, 3, 1]
+    touch = np.array([[3, 4, 0], [0, 0, 0], [1, 0, 0], [0, 2, 0], [0, 0, 0], [0, 0, -6]], float)
+    g = body_map(touch, sensor_region, sizes)
+    assert g.shape == (68,) and g.dtype == np.float32
+    assert g[0] == pytest.approx(5.0 / 2)
+    assert g[1] == pytest.approx(3.0 / 3)
+    assert g[67] == pytest.approx(6.0)
+    assert g[2:67].sum() == 0.0
+
+
+def test_parts_and_own_hand_mask(fake_regions):
+    contacts = np.zeros((2, 68), bool)
+    contacts[0, [5, 39]] = True  # left hand: left and right side of part 5
+    contacts[1, 40] = True
+    parts = hand_touched_parts(contacts, fake_regions.parts)
+    assert parts.shape == (2, 34)
+    assert parts[0].sum() == 1 and parts[0, 5] and parts[1, 6]
+    mask = own_hand_mask(fake_regions)
+    assert np.flatnonzero(mask[0]).tolist() == [32, 33]
+    assert np.flatnonzero(mask[1]).tolist() == [66, 67]
+
+
+def test_facts_ignore_the_mattress_and_own_hand():
+    touch = np.zeros((204, 3), np.float32)
+    touch[3 * 20 : 3 * 21, 2] = 0.01  # region 20: a light force under the threshold (mattress)
+    touch[3 * 30, 2] = 3.0  # region 30: g = 1.0, strong
+    contacts = np.zeros((2, 68), bool)
+    contacts[0, [10, 32]] = True  # left hand on region 10 and on its own palm (32)
+    facts = SelfTouch().facts(FakeInfant(touch, contacts))
+    assert facts["body_map"][20] == pytest.approx(0.01) and facts["body_map"][30] == 1.0
+    assert np.flatnonzero(facts["hand_contacts"][0]).tolist() == [10]
+    assert np.flatnonzero(facts["touched"]).tolist() == [10, 30]
+    hands_only = SelfTouch(SelfTouchConfig(touch_source="hands")).facts(FakeInfant(touch, contacts))
+    assert np.flatnonzero(hands_only["touched"]).tolist() == [10]
+    assert facts["hand_parts"].shape == (2, 34) and facts["hand_parts"][0, 10]
+
+
+def test_observations_have_fixed_shapes_and_are_scaled():
+    behavior = SelfTouch()
+    infant = FakeInfant()
+    obs = behavior.observe(infant, behavior.facts(infant))
+    assert set(obs) == {"body_map", "proprioception"}
+    assert obs["body_map"].shape == (68,) and obs["body_map"].dtype == np.float32
+    g = np.full(68, behavior.config.body_map_scale)
+    from devlearn_self_touch.body_map import body_map_observation
+
+    assert body_map_observation(g, behavior.config.body_map_scale) == pytest.approx(np.log(2))
+    spec = behavior.network()
+    assert set(spec.encoders) == {"body_map", "proprioception"}
+    assert spec.encoders["body_map"].hidden_dims == (128, 256)
+    assert spec.fusion_dims == (512,) and spec.trunk_dims == (256, 256)
+
+
+def test_two_stage_curriculum_switches_at_its_step_count():
+    curriculum = SelfTouch(SelfTouchConfig(fixed_pose_steps=1000)).curriculum()
+    assert isinstance(curriculum, Curriculum)
+    assert [s.name for s in curriculum.stages] == ["fixed_pose", "random_pose"]
+    assert curriculum.stage.options == {"random_pose": False}
+    assert not curriculum.update(999)
+    assert curriculum.update(1000)
+    assert curriculum.stage.options == {"random_pose": True}
+    assert SelfTouch().curriculum().stages[0].steps == 4_000_000
+
+
+@pytest.mark.parametrize(("variant", "random_pose"), [("fixed_only", False), ("random_only", True)])
+def test_ablation_curricula_have_one_stage(variant, random_pose):
+    curriculum = SelfTouch(SelfTouchConfig(curriculum=variant)).curriculum()
+    assert len(curriculum.stages) == 1 and curriculum.stages[0].steps is None
+    assert curriculum.stage.options == {"random_pose": random_pose}
+    curriculum.update(10**9)
+    assert curriculum.stage.options == {"random_pose": random_pose}
+
+
+def test_config_rejects_unknown_choices_and_documents_every_field():
+    with pytest.raises(ValueError, match="unknown curriculum 'three'.*two_stage"):
+        SelfTouchConfig(curriculum="three")
+    with pytest.raises(ValueError, match="touch_source"):
+        SelfTouchConfig(touch_source="eyes")
+    source = __import__("inspect").getsource(SelfTouchConfig)
+    for f in dataclasses.fields(SelfTouchConfig):
+        after = source.split(f"    {f.name}:", 1)[1].split("\n", 2)[1]
+        assert after.strip().startswith('"""'), f"field {f.name} has no docstring"
+
+
+def test_behavior_contract():
+    behavior = SelfTouch()
+    assert isinstance(behavior, Behavior)
+    assert behavior.scene == "crib" and "touch" in behavior.senses
+    assert [t.name for t in behavior.reward_terms()] == [
+        "touch_novelty",
+        "contact_novelty",
+        "diversity_milestones",
+        "balance",
+    ]
+    assert behavior.eval_stage() == {"random_pose": True}
+    assert "total_steps" not in behavior.train_defaults()
+    import pickle
+
+    assert pickle.loads(pickle.dumps(behavior)).config == behavior.config
+
+
+def test_evaluator_episode_and_summary(tmp_path):
+    ev = SelfTouchEvaluator(training=False)
+    ev.record(make_ctx(hand_parts=[(0, 1), (0, 2), (1, 2)], hand_contacts=[(0, 1), (1, 36)]))
+    ev.record(make_ctx(hand_parts=[(0, 1)], hand_contacts=[(0, 1)], last_step=True))
+    first = ev.end_episode()
+    assert first == {
+        "coverage_left": 2.0,
+        "coverage_right": 1.0,
+        "coverage_total": 2.0,
+        "score": 3 / 68,
+    }
+    ev.record(make_ctx(hand_parts=[(1, 3), (1, 4), (1, 5)]))
+    assert ev.end_episode()["coverage_right"] == 3.0
+    summary = ev.summary()
+    assert summary["episodes"] == 2 and summary["parts"] == 34
+    assert summary["coverage_left"] == 2 and summary["coverage_right"] == 4
+    assert summary["coverage_total"] == 5 and summary["balance"] == 2
+    assert summary["score"] == pytest.approx(6 / 68)
+    assert summary["part_touch_steps"]["left"]["part_01"] == 2
+    json.dumps(summary)
+    paths = ev.write_artifacts(tmp_path)
+    assert all(p.exists() for p in paths) and paths[0].suffix == ".png"
+    counts = json.loads(paths[1].read_text())
+    assert counts["left"]["region_01"] == 2 and counts["right"]["region_36"] == 1
+
+
+def test_training_evaluator_keeps_no_history():
+    ev = SelfTouchEvaluator(training=True)
+    ev.record(make_ctx(hand_parts=[(0, 1)]))
+    assert ev.end_episode()["coverage_left"] == 1.0
+    assert ev.end_episode()["coverage_left"] == 0.0
+    assert ev.episodes == []
