@@ -1,0 +1,48 @@
+"""devlearn's conformance checks and a tiny real training run through the CLI."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+from devlearn_self_touch import SelfTouch, SelfTouchConfig
+
+from devlearn.testing import (
+    check_behavior,
+    check_behavior_class,
+    check_curriculum,
+    check_reward_terms,
+    registry_for,
+)
+
+
+def test_class_terms_and_curricula_conform():
+    check_behavior_class(SelfTouch)
+    check_reward_terms(SelfTouch().reward_terms())
+    for variant in ("two_stage", "fixed_only", "random_only"):
+        check_curriculum(SelfTouch(SelfTouchConfig(curriculum=variant)).curriculum())
+    assert registry_for(SelfTouch).behavior("self_touch") is SelfTouch
+
+
+@pytest.mark.slow
+def test_conformance_on_the_real_infant():
+    pytest.importorskip("devlearn.infant")
+    pytest.importorskip("devlearn.env")
+    shapes = check_behavior(SelfTouch, steps=20)
+    assert shapes["body_map"] == (68,)
+    assert len(shapes["proprioception"]) == 1
+
+
+@pytest.mark.slow
+def test_tiny_training_run(tmp_path):
+    pytest.importorskip("devlearn.infant")
+    pytest.importorskip("devlearn.training")
+    out = tmp_path / "run"
+    cmd = [sys.executable, "-m", "devlearn.cli", "run", "self_touch", "--steps", "512",
+           "--envs", "2", "--seed", "1", "--out", str(out)]  # fmt: skip
+    subprocess.run(cmd, check=True, timeout=600)
+    assert (out / "checkpoint_latest.pt").exists()
+    last = json.loads((out / "metrics.jsonl").read_text().splitlines()[-1])
+    assert last["step"] >= 512
