@@ -75,3 +75,39 @@ class FakeInfant:
 
     def proprioception(self) -> np.ndarray:
         return np.arange(10, dtype=np.float32)
+
+
+class ScriptedInfant(FakeInfant):
+    """A fake infant for :class:`devlearn.env.BehaviorEnv` whose hands follow a script.
+
+    On episode step t the left hand touches region t while t < ``left`` and the right hand
+    touches region 34 + t while t < ``right`` (both hands, the same part index t).
+    """
+
+    action_dim = 4
+    episode_steps = 20
+    control_timestep = 0.005
+
+    def __init__(self, scene: str = "crib", senses=(), left: int = 12, right: int = 10) -> None:
+        super().__init__()
+        self.left, self.right, self.t = left, right, 0
+        self.resets: list[bool] = []
+
+    def reset(self, rng, random_pose: bool = False) -> None:
+        self.t = 0
+        self.resets.append(random_pose)
+
+    def step(self, action) -> None:
+        self.t += 1
+
+    def hand_contacts(self) -> np.ndarray:
+        contacts = np.zeros((2, 68), bool)
+        k = self.t - 1
+        if 0 <= k < self.left:
+            contacts[0, k] = True
+        if 0 <= k < self.right:
+            contacts[1, 34 + k] = True
+        return contacts
+
+    def close(self) -> None:
+        pass
