@@ -1,0 +1,174 @@
+"""DevVecEnv: a batch of BehaviorEnvs behind rsl-rl's VecEnv interface."""
+
+from __future__ import annotations
+
+import os
+import weakref
+from typing import Any
+
+import numpy as np
+import torch
+from rsl_rl.env import VecEnv
+from tensordict import TensorDict
+
+from devlearn.env.behavior_env import InfantFactory
+from devlearn.env.workers import (
+    EnvBuffers,
+    EpisodeInfos,
+    WorkerPool,
+    env_spec,
+    make_envs,
+    step_envs,
+    write_obs,
+)
+
+
+class DevVecEnv(VecEnv):
+    """``num_envs`` BehaviorEnvs of one behaviour, stepped together (rsl-rl's VecEnv).
+
+    Env ``i`` on distributed rank ``r`` is seeded ``seed + r * num_envs + i``. With
+    ``workers=0`` the envs run one after another in this process; with ``workers >= 1`` they
+    are split over that many worker processes that write observations, rewards and flags
+    straight into shared memory (only short commands and finished-episode summaries travel
+    through pipes). A failing worker's traceback is re-raised here as
+    :class:`~devlearn.env.workers.EnvWorkerError`; workers exit when this process dies.
+
+    Args:
+        behavior: The behaviour; every env gets its own copy.
+        num_envs: Number of sub-environments on this rank.
+        seed: Base seed.
+        workers: Worker processes (0: in process).
+        device: Torch device of the returned tensors.
+        infant_factory: ``factory(scene, senses=...) -> Infant`` (default: the real infant);
+            must be picklable when ``workers >= 1``.
+        rank: Distributed rank for seeding (default: ``$RANK`` or 0).
+    """
+
+    def __init__(
+        self,
+        behavior,
+        num_envs: int,
+        seed: int,
+        workers: int = 0,
+        device: str = "cpu",
+        infant_factory: InfantFactory | None = None,
+        rank: int | None = None,
+    ) -> None:
+        if num_envs < 1:
+            raise ValueError(f"num_envs must be at least 1, got {num_envs}")
+        rank = int(os.environ.get("RANK", "0")) if rank is None else rank
+        seeds = [seed + rank * num_envs + i for i in range(num_envs)]
+        self.behavior_name = behavior.name
+        self._pool: WorkerPool | None = None
+        self._envs: list = []
+        if workers > 0:
+            self._pool = WorkerPool(behavior, seeds, workers, infant_factory)
+            spec = self._pool.spec
+        else:
+            self._envs = make_envs(behavior, seeds, infant_factory)
+            first = [env.reset() for env in self._envs]
+            spec = env_spec(self._envs[0], first[0])
+        self._buffers = EnvBuffers(spec, num_envs, shared=self._pool is not None)
+        self._finalizer = weakref.finalize(self, _shutdown, self._pool, self._envs, self._buffers)
+        if self._pool is not None:
+            self._pool.call("attach", [self._buffers.handle()] * len(self._pool.conns))
+        else:
+            for i, obs in enumerate(first):
+                write_obs(self._buffers.arrays, i, obs)
+
+        self.num_envs = num_envs
+        self.num_actions = int(spec["action_dim"])
+        self.max_episode_length = int(spec["episode_steps"])
+        self.step_dt = float(spec["step_dt"])
+        self.observation_shapes = {k: shape for k, (shape, _) in spec["obs"].items()}
+        self.device = device
+        self.episode_length_buf = torch.zeros(num_envs, dtype=torch.long, device=device)
+        self.cfg: Any = {"behavior": behavior.name, "num_envs": num_envs, "seed": seed}
+
+    @property
+    def unwrapped(self) -> DevVecEnv:
+        """This env (rsl-rl's RND extension reads ``env.unwrapped.step_dt``)."""
+        return self
+
+    def get_observations(self) -> TensorDict:
+        """Return the current observations: one group per observation name, (N, *shape)."""
+        arrays = self._buffers.arrays
+        groups = {
+            name: torch.from_numpy(arrays[f"obs/{name}"].copy()).to(self.device)
+            for name in self.observation_shapes
+        }
+        return TensorDict(groups, batch_size=[self.num_envs], device=self.device)
+
+    def step(self, actions: torch.Tensor) -> tuple[TensorDict, torch.Tensor, torch.Tensor, dict]:
+        """Step every env (finished ones reset themselves).
+
+        Args:
+            actions: (num_envs, num_actions), clipped to [-1, 1] by each env.
+        Returns:
+            ``(obs, rewards (N,), dones (N,), extras)``; ``extras["time_outs"]`` (N,) marks
+            time-limit ends, ``extras["log"]`` holds the mean ``reward/*`` and ``metrics/*`` over
+            the episodes that ended this step (empty if none) and ``extras["episode_infos"]``
+            the list of those episodes' summaries.
+        """
+        arrays = self._buffers.arrays
+        arrays["actions"][:] = actions.detach().to("cpu", torch.float32).numpy()
+        if self._pool is None:
+            infos: EpisodeInfos = step_envs(self._envs, 0, arrays)
+        else:
+            infos = [item for reply in self._pool.call("step") for item in reply]
+        rewards = torch.from_numpy(arrays["rewards"].copy()).to(self.device)
+        dones = torch.from_numpy(arrays["dones"].copy()).to(self.device)
+        time_outs = torch.from_numpy(arrays["time_outs"].copy()).to(self.device)
+        self.episode_length_buf += 1
+        self.episode_length_buf[dones] = 0
+        episodes = [info for _, info in infos]
+        extras = {"time_outs": time_outs, "log": mean_episode_info(episodes)}
+        extras["episode_infos"] = episodes
+        return self.get_observations(), rewards, dones.to(torch.long), extras
+
+    def set_stage(self, options: dict[str, Any]) -> None:
+        """Send a curriculum stage's options to every env."""
+        if self._pool is None:
+            for env in self._envs:
+                env.set_stage(options)
+        else:
+            self._pool.call("set_stage", [options] * len(self._pool.conns))
+
+    def state_dict(self) -> dict[str, Any]:
+        """Return every env's state (reward terms, rng, stage), in env order."""
+        if self._pool is None:
+            states = [env.state_dict() for env in self._envs]
+        else:
+            states = [s for reply in self._pool.call("state") for s in reply]
+        return {"envs": states}
+
+    def load_state_dict(self, state: dict[str, Any]) -> None:
+        """Restore :meth:`state_dict`'s output and start fresh episodes in every env."""
+        states = state["envs"]
+        if len(states) != self.num_envs:
+            raise ValueError(f"state holds {len(states)} envs, this batch has {self.num_envs}")
+        if self._pool is None:
+            for i, (env, env_state) in enumerate(zip(self._envs, states)):
+                env.load_state_dict(env_state)
+                write_obs(self._buffers.arrays, i, env.reset())
+        else:
+            self._pool.call("load", self._pool.split(states))
+        self.episode_length_buf.zero_()
+
+    def close(self) -> None:
+        """Stop workers, close envs and free shared memory (safe to call twice)."""
+        self._finalizer()
+
+
+def mean_episode_info(episodes: list[dict[str, float]]) -> dict[str, float]:
+    """Mean of every key over the given episode summaries (keys missing from some are skipped)."""
+    keys = dict.fromkeys(k for ep in episodes for k in ep)
+    return {k: float(np.mean([ep[k] for ep in episodes if k in ep])) for k in keys}
+
+
+def _shutdown(pool: WorkerPool | None, envs: list, buffers: EnvBuffers) -> None:
+    if pool is not None:
+        pool.close()
+    for env in envs:
+        env.close()
+    buffers.close()

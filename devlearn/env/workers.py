@@ -1,0 +1,262 @@
+"""Batches of BehaviorEnvs, in process or in worker processes writing to shared memory."""
+
+from __future__ import annotations
+
+import copy
+import ctypes
+import multiprocessing as mp
+import signal
+import sys
+import traceback
+from multiprocessing import shared_memory
+from typing import Any
+
+import numpy as np
+
+from devlearn.env.behavior_env import BehaviorEnv, InfantFactory
+
+EpisodeInfos = list[tuple[int, dict[str, float]]]
+"""(global env index, episode_info) for every episode that ended this step."""
+
+
+class EnvWorkerError(RuntimeError):
+    """An environment worker process failed; the message holds the worker's traceback."""
+
+
+def env_spec(env: BehaviorEnv, obs: dict[str, np.ndarray]) -> dict[str, Any]:
+    """Describe an env's batch layout: observation shapes/dtypes, action size, episode length."""
+    return {
+        "obs": {k: (tuple(np.shape(v)), _buffer_dtype(v)) for k, v in obs.items()},
+        "action_dim": env.action_dim,
+        "episode_steps": env.episode_steps,
+        "step_dt": env.step_dt,
+    }
+
+
+def _buffer_dtype(value: np.ndarray) -> str:
+    """uint8 stays uint8 (images); everything else is stored as float32."""
+    return "uint8" if np.asarray(value).dtype == np.uint8 else "float32"
+
+
+class EnvBuffers:
+    """The batch's arrays: ``obs/<name>`` (N, *shape), ``actions`` (N, A) float32,
+    ``rewards`` (N,) float32, ``dones`` and ``time_outs`` (N,) bool.
+
+    With ``shared=True`` every array lives in a ``multiprocessing.shared_memory`` block that
+    worker processes attach to by name, so steps move no array through pipes.
+    """
+
+    def __init__(self, spec: dict[str, Any], num_envs: int, shared: bool) -> None:
+        layout = {f"obs/{k}": ((num_envs, *shape), dt) for k, (shape, dt) in spec["obs"].items()}
+        layout["actions"] = ((num_envs, spec["action_dim"]), "float32")
+        layout["rewards"] = ((num_envs,), "float32")
+        layout["dones"] = ((num_envs,), "bool")
+        layout["time_outs"] = ((num_envs,), "bool")
+        self.layout = layout
+        self.blocks: list[shared_memory.SharedMemory] = []
+        self.arrays: dict[str, np.ndarray] = {}
+        for key, (shape, dtype) in layout.items():
+            if shared:
+                nbytes = max(int(np.prod(shape)) * np.dtype(dtype).itemsize, 1)
+                block = shared_memory.SharedMemory(create=True, size=nbytes)
+                self.blocks.append(block)
+                self.arrays[key] = np.ndarray(shape, dtype=dtype, buffer=block.buf)
+                self.arrays[key].fill(0)
+            else:
+                self.arrays[key] = np.zeros(shape, dtype=dtype)
+
+    def handle(self) -> dict[str, Any]:
+        """Return what a worker needs to attach: block names and the layout (picklable)."""
+        return {"names": [b.name for b in self.blocks], "layout": self.layout}
+
+    def close(self, unlink: bool = True) -> None:
+        """Release (and by default unlink) the shared-memory blocks."""
+        self.arrays = {}
+        for block in self.blocks:
+            block.close()
+            if unlink:
+                block.unlink()
+        self.blocks = []
+
+
+def _attach(handle: dict[str, Any]) -> tuple[dict[str, np.ndarray], list]:
+    blocks = [shared_memory.SharedMemory(name=n) for n in handle["names"]]
+    arrays = {
+        key: np.ndarray(shape, dtype=dtype, buffer=block.buf)
+        for (key, (shape, dtype)), block in zip(handle["layout"].items(), blocks)
+    }
+    return arrays, blocks
+
+
+def write_obs(arrays: dict[str, np.ndarray], index: int, obs: dict[str, np.ndarray]) -> None:
+    """Copy one env's observations into row ``index`` of the batch arrays."""
+    for key, value in obs.items():
+        arrays[f"obs/{key}"][index] = value
+
+
+def step_envs(envs: list[BehaviorEnv], offset: int, arrays: dict[str, np.ndarray]) -> EpisodeInfos:
+    """Step envs ``offset..offset+len(envs)`` with their rows of ``arrays["actions"]``."""
+    infos = []
+    for i, env in enumerate(envs):
+        j = offset + i
+        obs, reward, done, time_out, info = env.step(arrays["actions"][j])
+        write_obs(arrays, j, obs)
+        arrays["rewards"][j] = reward
+        arrays["dones"][j] = done
+        arrays["time_outs"][j] = time_out
+        if info is not None:
+            infos.append((j, info))
+    return infos
+
+
+def make_envs(behavior, seeds: list[int], infant_factory: InfantFactory | None) -> list:
+    """Build one BehaviorEnv per seed, each with its own copy of the behaviour."""
+    return [BehaviorEnv(copy.deepcopy(behavior), s, infant_factory) for s in seeds]
+
+
+def _die_with_parent() -> None:
+    """Ask Linux to SIGTERM this worker when its parent dies (kill -9 included)."""
+    if sys.platform.startswith("linux"):
+        try:
+            ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+        except OSError:
+            pass  # the closed pipe (EOFError below) still ends the worker
+
+
+def worker_main(conn, behavior, seeds: list[int], offset: int, infant_factory) -> None:
+    """Entry point of one worker process: serve commands from the parent until told to close.
+
+    Replies ``("ok", payload)`` or, on any exception, ``("error", traceback text)`` and exits.
+    The worker ignores SIGINT so that Ctrl-C reaches only the parent, which can then still ask
+    for the envs' state to write its interrupt checkpoint.
+    """
+    _die_with_parent()
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    envs: list[BehaviorEnv] = []
+    blocks: list = []
+    arrays: dict[str, np.ndarray] = {}
+    try:
+        envs = make_envs(behavior, seeds, infant_factory)
+        first = [env.reset() for env in envs]
+        conn.send(("ok", env_spec(envs[0], first[0])))
+        while True:
+            cmd, arg = conn.recv()
+            if cmd == "close":
+                break
+            if cmd == "attach":
+                arrays, blocks = _attach(arg)
+                for i, obs in enumerate(first):
+                    write_obs(arrays, offset + i, obs)
+                reply: Any = None
+            elif cmd == "step":
+                reply = step_envs(envs, offset, arrays)
+            elif cmd == "set_stage":
+                reply = [env.set_stage(arg) for env in envs]
+            elif cmd == "state":
+                reply = [env.state_dict() for env in envs]
+            elif cmd == "load":
+                for i, (env, state) in enumerate(zip(envs, arg)):
+                    env.load_state_dict(state)
+                    write_obs(arrays, offset + i, env.reset())
+                reply = None
+            else:
+                raise ValueError(f"unknown worker command {cmd!r}")
+            conn.send(("ok", reply))
+    except (EOFError, BrokenPipeError, KeyboardInterrupt):
+        pass  # the parent is gone: nothing to report to
+    except BaseException:
+        try:
+            conn.send(("error", traceback.format_exc()))
+        except (BrokenPipeError, OSError):
+            pass
+    finally:
+        arrays = {}
+        for env in envs:
+            env.close()
+        for block in blocks:
+            block.close()
+
+
+class WorkerPool:
+    """Envs split over worker processes; commands go through pipes, arrays through shared memory.
+
+    Args:
+        behavior: Pickled to every worker; each env gets its own deep copy.
+        seeds: One seed per env, in global order.
+        workers: Number of processes (at most one per env).
+        infant_factory: Picklable infant factory (None: the real infant).
+        context: multiprocessing start method; ``spawn`` (default) imports everything afresh, so
+            no parent state (threads, torch, open files) leaks into workers.
+    """
+
+    def __init__(self, behavior, seeds: list[int], workers: int, infant_factory=None,
+                 context: str = "spawn") -> None:
+        ctx = mp.get_context(context)
+        self.conns: list = []
+        self.procs: list = []
+        self.chunks = np.array_split(np.arange(len(seeds)), min(workers, len(seeds)))
+        try:
+            for chunk in self.chunks:
+                parent_conn, child_conn = ctx.Pipe()
+                chunk_seeds = [seeds[i] for i in chunk]
+                proc = ctx.Process(
+                    target=worker_main,
+                    args=(child_conn, behavior, chunk_seeds, int(chunk[0]), infant_factory),
+                    daemon=True,
+                    name=f"devlearn-env-worker-{len(self.procs)}",
+                )
+                proc.start()
+                child_conn.close()
+                self.conns.append(parent_conn)
+                self.procs.append(proc)
+            self.spec = self._gather()[0]
+        except BaseException:
+            self.close()
+            raise
+
+    def _gather(self) -> list:
+        replies = []
+        for k, (conn, proc) in enumerate(zip(self.conns, self.procs)):
+            try:
+                status, payload = conn.recv()
+            except (EOFError, OSError):
+                proc.join(timeout=1.0)
+                self.close()
+                raise EnvWorkerError(
+                    f"env worker {k} (pid {proc.pid}) died unexpectedly, exit code {proc.exitcode}"
+                ) from None
+            if status == "error":
+                self.close()
+                raise EnvWorkerError(f"env worker {k} (pid {proc.pid}) failed:\n{payload}")
+            replies.append(payload)
+        return replies
+
+    def call(self, cmd: str, args: list | None = None) -> list:
+        """Send ``cmd`` (with ``args[k]`` to worker k, or None) to every worker; return replies."""
+        for k, conn in enumerate(self.conns):
+            try:
+                conn.send((cmd, None if args is None else args[k]))
+            except (BrokenPipeError, OSError):
+                self.close()
+                raise EnvWorkerError(f"env worker {k} is gone (pipe closed)") from None
+        return self._gather()
+
+    def split(self, items: list) -> list[list]:
+        """Split a per-env list into per-worker lists."""
+        return [[items[i] for i in chunk] for chunk in self.chunks]
+
+    def close(self) -> None:
+        """Ask workers to close, then terminate any that do not exit within a few seconds."""
+        for conn in self.conns:
+            try:
+                conn.send(("close", None))
+            except (BrokenPipeError, OSError):
+                pass
+        for proc in self.procs:
+            proc.join(timeout=5.0)
+            if proc.is_alive():
+                proc.terminate()
+                proc.join(timeout=1.0)
+        for conn in self.conns:
+            conn.close()
+        self.conns, self.procs = [], []
