@@ -1,0 +1,198 @@
+"""The hand_regard behaviour: look at your own hands (paper sec. II-B, Model II)."""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from devlearn.behavior import Behavior, Evaluator, NetworkSpec
+from devlearn.curriculum import Curriculum, Stage
+from devlearn.rewards import IntrinsicReward
+from devlearn.sensors import MLPEncoder
+from devlearn_hand_regard.config import HandRegardConfig
+from devlearn_hand_regard.detector import DetectorParams, HandDetector, HandFlow
+from devlearn_hand_regard.encoders import EyeCNNEncoder
+from devlearn_hand_regard.evaluation import HandRegardEvaluator
+from devlearn_hand_regard.rewards import (
+    HANDS,
+    BilateralBalance,
+    HandCount,
+    HandMotion,
+    LivingPenalty,
+    hand_motion,
+)
+
+if TYPE_CHECKING:
+    from devlearn.infant import Infant
+
+DETECTOR_FILE = "hand_detector.json"
+"""Name of the calibrated detector in a run directory."""
+
+
+class HandRegard(Behavior):
+    """Hand regard: keep your hands in view of both eyes, from intrinsic visual rewards.
+
+    Before training, motor babbling discovers what the hands look like (:meth:`prepare`). Each
+    step the calibrated detector counts the hands in both 64x64 eye images and optical flow
+    measures their motion; rewards follow the paper (sec. II-B4) plus an optional bilateral
+    term. Observations: ``left_eye`` and ``right_eye`` (64, 64, 3) uint8, ``proprioception``
+    (P,) float32. Curriculum: left arm only, right arm only, then both (sec. II-B5).
+    """
+
+    name = "hand_regard"
+    description = "Look at your own hands: babbling-calibrated hand detector, visual rewards"
+    scene = "sitting"
+    senses = ("proprioception", "eyes")
+    config_class = HandRegardConfig
+    headline_metric = "average"
+
+    def __init__(self, config: HandRegardConfig | None = None) -> None:
+        super().__init__(config)
+        self._detector: HandDetector | None = None
+        self._flow = HandFlow()
+        self._arm_actuators: dict[str, np.ndarray] | None = None
+        self._last_time = -1.0
+
+    def __getstate__(self) -> dict[str, Any]:
+        # Travel light to worker processes: the detector is reloaded from its file there.
+        state = dict(self.__dict__)
+        state.update(_detector=None, _flow=HandFlow(), _last_time=-1.0)
+        return state
+
+    # --- set-up -----------------------------------------------------------------------------
+    def prepare(self, run_dir: Path) -> None:
+        """Calibrate the hand detector by motor babbling, or reuse ``run_dir/hand_detector.json``.
+
+        Sets ``config.detector_file`` to the file's absolute path.
+        """
+        from devlearn_hand_regard.babbling import babble
+        from devlearn_hand_regard.calibration import calibrate
+
+        path = Path(run_dir) / DETECTOR_FILE
+        if not path.exists():
+            cfg = self.config
+            data = babble(cfg.babbling_steps, seed=cfg.babbling_seed,
+                          hold_steps=cfg.babbling_hold_steps)
+            calibrate(data, threshold=cfg.correlation_threshold).save(path)
+        self.config.detector_file = str(path.resolve())
+        self._detector = None
+
+    @property
+    def detector(self) -> HandDetector:
+        """The calibrated detector (loaded from ``config.detector_file`` on first use)."""
+        if self._detector is None:
+            params = None
+            if self.config.detector_file:
+                params = DetectorParams.load(self.config.detector_file)
+            else:
+                warnings.warn(
+                    "hand_regard: no calibrated hand detector (config.detector_file is empty); "
+                    "call prepare(run_dir) first. Nothing will be detected.",
+                    stacklevel=2,
+                )
+            self._detector = HandDetector(params)
+        return self._detector
+
+    # --- observations -----------------------------------------------------------------------
+    def facts(self, infant: Infant) -> dict[str, Any]:
+        """Detect the hands and their motion once per step.
+
+        Returns:
+            ``eyes`` (2, H, W, 3) uint8; ``hand_detections`` (2 eyes, 2 hands) bool;
+            ``hand_flow`` (2, 2) summed flow magnitude and ``hand_pixels`` (2, 2) pixel counts
+            (see :class:`HandFlow`); ``hand_count`` int; ``image_width`` int; ``motion`` float,
+            m_t over both hands.
+        """
+        if self._arm_actuators is None:
+            self._arm_actuators = {
+                side: np.asarray(infant.actuator_groups[f"{side}_arm"]) for side in HANDS
+            }
+        time = float(infant.physics.data.time)
+        if time <= self._last_time:  # the clock went back: a new episode began
+            self._flow.reset()
+        self._last_time = time
+        eyes = infant.eyes()
+        detections, masks = self.detector.detect(eyes)
+        flow, pixels = self._flow.update(eyes, masks)
+        facts = {
+            "eyes": eyes,
+            "hand_detections": detections,
+            "hand_flow": flow,
+            "hand_pixels": pixels,
+            "hand_count": int(detections.sum()),
+            "image_width": int(eyes.shape[2]),
+        }
+        facts["motion"] = hand_motion(facts, [0, 1])
+        return facts
+
+    def observe(self, infant: Infant, facts: dict[str, Any]) -> dict[str, np.ndarray]:
+        eyes = facts["eyes"]
+        return {
+            "left_eye": eyes[0],
+            "right_eye": eyes[1],
+            "proprioception": np.asarray(infant.proprioception(), dtype=np.float32),
+        }
+
+    def network(self) -> NetworkSpec:
+        cfg = self.config
+        eye = EyeCNNEncoder()
+        return NetworkSpec(
+            encoders={
+                "left_eye": eye,
+                "right_eye": eye,
+                "proprioception": MLPEncoder(tuple(cfg.proprioception_dims)),
+            },
+            fusion_dims=(cfg.fusion_dim,),  # 256 + 256 + 64 = 576 -> 256 (sec. II-B3)
+            trunk_dims=(),  # the paper's heads sit directly on the fused features
+            init_std=cfg.init_std,
+        )
+
+    # --- rewards, actions, curriculum -------------------------------------------------------
+    def reward_terms(self) -> list[IntrinsicReward]:
+        """The paper's three terms and ``bilateral_balance``; zero-weight terms are left out."""
+        cfg = self.config
+        terms: list[IntrinsicReward] = [
+            HandCount(cfg.hand_count_weight),
+            HandMotion(cfg.motion_weight),
+            LivingPenalty(cfg.living_penalty_weight),
+            BilateralBalance(cfg.bilateral_weight, cfg.bilateral_bonus, cfg.bilateral_penalty,
+                             cfg.bilateral_horizon),
+        ]
+        return [t for t in terms if t.weight != 0.0]
+
+    def curriculum(self) -> Curriculum:
+        """Left arm, right arm, both arms (paper sec. II-B5: ~175k + ~175k + ~1.5M steps)."""
+        cfg = self.config
+        return Curriculum([
+            Stage("left_arm", cfg.left_arm_steps, {"active_arms": ["left"]}),
+            Stage("right_arm", cfg.right_arm_steps, {"active_arms": ["right"]}),
+            Stage("both_arms", None, {"active_arms": ["left", "right"]}),
+        ])
+
+    def process_action(self, action: np.ndarray, stage: dict[str, Any]) -> np.ndarray:
+        """Zero the actions of the arm the stage switches off (paper sec. II-B5).
+
+        Args:
+            action: (17,) in [-1, 1].
+            stage: Stage options with ``active_arms``.
+        Returns:
+            (17,) action, inactive arm's actuators (shoulder, elbow, wrist) set to 0.
+        """
+        arms = stage.get("active_arms", HANDS)
+        inactive = [side for side in HANDS if side not in arms]
+        if not inactive:
+            return action
+        if self._arm_actuators is None:
+            raise RuntimeError("hand_regard: process_action before the first facts(); the arm "
+                               "actuator groups are read from the infant at reset")
+        action = np.array(action, copy=True)
+        for side in inactive:
+            action[self._arm_actuators[side]] = 0.0
+        return action
+
+    # --- metrics ----------------------------------------------------------------------------
+    def evaluator(self, training: bool) -> Evaluator:
+        return HandRegardEvaluator(ground_truth=not training)

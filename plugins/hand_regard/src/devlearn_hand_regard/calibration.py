@@ -1,0 +1,287 @@
+"""Unsupervised hand discovery from a babbling recording (paper sec. II-B2).
+
+1. **Candidate blobs.** Colours are clustered (k-means in CIE Lab, lightness down-weighted so
+   one object's lit and shaded sides stay together); every colour cluster's mask in every
+   frame is cleaned by morphological opening/closing and split into contours, keeping
+   object-sized ones (a generic 0.2%..30% of the image, nothing hand-specific).
+2. **Tracks.** Blob centroids are linked frame to frame by nearest-neighbour matching within
+   each eye and colour cluster; a track ends when its blob is not found, and at resets.
+3. **Correlation.** For every track, the centroid's displacement over a short window (minus
+   the eye's median displacement over all tracks, which removes the head's own motion) is
+   correlated in time with each arm's joint-speed magnitude. ``rho_k`` is the best Pearson
+   correlation over both arms and lags 0..``max_lag``.
+4. **Hands.** Tracks with ``rho_k > 0.6`` are hands, of the arm that correlates best. The HSV
+   ranges (1st..99th percentiles per channel, per colour cluster holding hands), the
+   expected size and each hand's mean image position are taken from their blobs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from devlearn_hand_regard.babbling import BabblingData
+from devlearn_hand_regard.detector import DetectorParams, colour_blobs
+
+
+@dataclass
+class Track:
+    """A blob followed through consecutive frames of one eye and one colour cluster."""
+
+    eye: int
+    cluster: int
+    steps: list[int] = field(default_factory=list)
+    centroids: list[tuple[float, float]] = field(default_factory=list)
+    areas: list[float] = field(default_factory=list)
+    pixels: list[np.ndarray] = field(default_factory=list)  # flat pixel indices per frame
+    rho: float = 0.0
+    side: int = -1
+
+
+def lab_features(images: np.ndarray, lightness_weight: float = 0.5) -> np.ndarray:
+    """Return (..., 3) float32 Lab colours of RGB uint8 images, lightness scaled down."""
+    flat = np.ascontiguousarray(images.reshape(-1, 1, 3))
+    lab = cv2.cvtColor(flat, cv2.COLOR_RGB2Lab).reshape(*images.shape[:-1], 3).astype(np.float32)
+    lab[..., 0] *= lightness_weight
+    return lab
+
+
+def colour_palette(data: BabblingData, clusters: int, seed: int, frames: int = 200) -> np.ndarray:
+    """Cluster the colours of ``frames`` evenly spaced frames; return (clusters, 3) Lab centres."""
+    index = np.linspace(0, len(data) - 1, min(frames, len(data))).astype(int)
+    pixels = lab_features(data.eyes[index]).reshape(-1, 3)
+    pixels = np.random.default_rng(seed).permutation(pixels)[:200_000]
+    cv2.setRNGSeed(seed)
+    criteria = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 50, 0.5)
+    _, _, centres = cv2.kmeans(pixels, clusters, None, criteria, 3, cv2.KMEANS_PP_CENTERS)
+    return centres
+
+
+def label_image(image: np.ndarray, centres: np.ndarray) -> np.ndarray:
+    """Return (H, W) int: the nearest palette colour of every pixel of an RGB image."""
+    features = lab_features(image)
+    distance = ((features[..., None, :] - centres) ** 2).sum(-1)
+    return distance.argmin(-1)
+
+
+def track_blobs(data: BabblingData, centres: np.ndarray, max_jump: float = 0.12,
+                min_area: float = 0.002, max_area: float = 0.3) -> list[Track]:
+    """Find colour blobs in every frame and link them into tracks.
+
+    Args:
+        data: The babbling recording.
+        centres: (K, 3) palette from :func:`colour_palette`.
+        max_jump: Largest centroid move between frames, as a fraction of the image width.
+        min_area: Smallest blob, fraction of the image area.
+        max_area: Largest blob, fraction of the image area.
+    Returns:
+        Every track (any length).
+    """
+    _, n_eyes, height, width, _ = data.eyes.shape
+    area = height * width
+    jump = max_jump * width
+    active: dict[tuple[int, int], list[Track]] = {}
+    done: list[Track] = []
+    for t in range(len(data)):
+        new_episode = t > 0 and data.episode[t] != data.episode[t - 1]
+        for eye in range(n_eyes):
+            labels = label_image(data.eyes[t, eye], centres)
+            for k in range(len(centres)):
+                blobs = colour_blobs(labels == k, min_area * area, max_area * area, kernel=3)
+                previous = [] if new_episode else active.get((eye, k), [])
+                if new_episode:
+                    done += active.get((eye, k), [])
+                # Greedy nearest-neighbour matching, closest pairs first.
+                pairs = sorted(
+                    (np.hypot(b.centroid[0] - tr.centroids[-1][0],
+                              b.centroid[1] - tr.centroids[-1][1]), i, j)
+                    for i, b in enumerate(blobs) for j, tr in enumerate(previous)
+                )
+                used_b, used_t, current = set(), set(), []
+                for dist, i, j in pairs:
+                    if dist > jump or i in used_b or j in used_t:
+                        continue
+                    used_b.add(i)
+                    used_t.add(j)
+                    current.append(previous[j])
+                    _extend(previous[j], t, blobs[i])
+                for i, b in enumerate(blobs):
+                    if i not in used_b:
+                        current.append(_extend(Track(eye, k), t, b))
+                done += [tr for j, tr in enumerate(previous) if j not in used_t]
+                active[(eye, k)] = current
+    for tracks in active.values():
+        done += tracks
+    return done
+
+
+def _extend(track: Track, step: int, blob) -> Track:
+    track.steps.append(step)
+    track.centroids.append(blob.centroid)
+    track.areas.append(blob.area)
+    track.pixels.append(np.flatnonzero(blob.mask).astype(np.int32))
+    return track
+
+
+def ego_motion(tracks: list[Track], steps: int, n_eyes: int, window: int) -> np.ndarray:
+    """Return (steps, n_eyes, 2): per step, the median windowed displacement of all tracks.
+
+    Everything in view shifts when the head turns; the median over all blobs estimates that
+    shift (NaN where fewer than three blobs were tracked over the window).
+    """
+    moves: list[list[list[np.ndarray]]] = [[[] for _ in range(n_eyes)] for _ in range(steps)]
+    for tr in tracks:
+        c = np.asarray(tr.centroids)
+        for i in range(window, len(c)):
+            moves[tr.steps[i]][tr.eye].append(c[i] - c[i - window])
+    out = np.full((steps, n_eyes, 2), np.nan)
+    for t in range(steps):
+        for eye in range(n_eyes):
+            if len(moves[t][eye]) >= 3:
+                out[t, eye] = np.median(np.asarray(moves[t][eye]), axis=0)
+    return out
+
+
+def track_correlation(track: Track, arm_speed: np.ndarray, ego: np.ndarray, window: int,
+                      max_lag: int) -> tuple[float, int]:
+    """Best Pearson correlation of a track's own motion with either arm's speed.
+
+    Returns:
+        (rho, side): the correlation and the arm (0 left, 1 right) achieving it.
+    """
+    c = np.asarray(track.centroids)
+    steps = np.asarray(track.steps)
+    move = c[window:] - c[:-window]
+    shift = ego[steps[window:], track.eye]
+    move = move - np.where(np.isnan(shift), 0.0, shift)
+    displacement = np.linalg.norm(move, axis=1)
+    best, side = 0.0, -1
+    for lag in range(max_lag + 1):
+        # Mean arm speed over the same window, ``lag`` steps earlier.
+        idx = steps[window:, None] - lag - np.arange(window)[None, :]
+        if idx.min() < 0:
+            continue
+        speed = arm_speed[idx].mean(axis=1)  # (n, 2)
+        for s in range(arm_speed.shape[1]):
+            if displacement.std() < 1e-9 or speed[:, s].std() < 1e-9:
+                continue
+            rho = float(np.corrcoef(displacement, speed[:, s])[0, 1])
+            if rho > best:
+                best, side = rho, s
+    return best, side
+
+
+class CalibrationError(RuntimeError):
+    """Babbling found no hand (too short a recording, or hands never in view)."""
+
+
+def hsv_boxes(hsv: np.ndarray, low: float = 1.0, high: float = 99.0,
+              margin: tuple[int, int, int] = (2, 8, 8)) -> list[list[int]]:
+    """Percentile box of (N, 3) OpenCV HSV pixels, widened by ``margin``.
+
+    Hue is circular (0..179): when the colours sit around red's wrap, the box is computed on
+    shifted hues and returned as two boxes.
+    """
+    h = hsv[:, 0].astype(float)
+    spans = []
+    for shift in (0, 90):
+        hs = (h + shift) % 180
+        lo, hi = np.percentile(hs, [low, high])
+        spans.append((hi - lo, shift, lo, hi))
+    _, shift, h_lo, h_hi = min(spans)
+    s_lo, v_lo = np.percentile(hsv[:, 1:], low, axis=0)
+    s_hi, v_hi = np.percentile(hsv[:, 1:], high, axis=0)
+    s_lo, v_lo = max(0, s_lo - margin[1]), max(0, v_lo - margin[2])
+    s_hi, v_hi = min(255, s_hi + margin[1]), min(255, v_hi + margin[2])
+    h_lo, h_hi = h_lo - margin[0] - shift, h_hi + margin[0] - shift
+    boxes = []
+    for lo, hi in ((h_lo, h_hi), (h_lo + 180, h_hi + 180), (h_lo - 180, h_hi - 180)):
+        lo, hi = max(lo, 0), min(hi, 179)
+        if lo <= hi:
+            boxes.append([int(np.floor(lo)), int(np.floor(s_lo)), int(np.floor(v_lo)),
+                          int(np.ceil(hi)), int(np.ceil(s_hi)), int(np.ceil(v_hi))])
+    return boxes
+
+
+def calibrate(data: BabblingData, threshold: float = 0.6, clusters: int = 8, seed: int = 0,
+              window: int = 4, max_lag: int = 2, min_track: int = 60,
+              min_cluster_share: float = 0.2) -> DetectorParams:
+    """Discover the hands in a babbling recording and calibrate the detector.
+
+    Args:
+        data: The babbling recording.
+        threshold: Correlation above which a track is a hand (paper: 0.6).
+        clusters: Colours in the palette.
+        seed: Seed of k-means.
+        window: Steps over which displacement and arm speed are compared (smooths pixel noise).
+        max_lag: Largest lag (steps) of the arm speed tried.
+        min_track: Shortest track (steps) whose correlation is trusted.
+        min_cluster_share: A colour cluster joins the hand colours when it holds at least this
+            share of the hand tracks' frames.
+    Returns:
+        The detector parameters, with a ``calibration`` report.
+    Raises:
+        CalibrationError: No track correlated above ``threshold``.
+    """
+    n_steps, n_eyes, height, width, _ = data.eyes.shape
+    centres = colour_palette(data, clusters, seed)
+    tracks = track_blobs(data, centres)
+    ego = ego_motion([t for t in tracks if len(t.steps) > window], n_steps, n_eyes, window)
+    candidates = [t for t in tracks if len(t.steps) >= min_track]
+    for tr in candidates:
+        tr.rho, tr.side = track_correlation(tr, data.arm_speed, ego, window, max_lag)
+    hands = [t for t in candidates if t.rho > threshold]
+    report = {
+        "babbling_steps": int(n_steps),
+        "tracks": len(tracks),
+        "tracks_scored": len(candidates),
+        "hand_tracks": len(hands),
+        "threshold": threshold,
+        "rho_hand_tracks": sorted((round(t.rho, 3) for t in hands), reverse=True)[:20],
+        "rho_other_tracks_max": round(max((t.rho for t in candidates if t.rho <= threshold),
+                                          default=0.0), 3),
+    }
+    if not hands:
+        raise CalibrationError(
+            f"no blob track correlated with the arms above {threshold} ({len(candidates)} "
+            f"tracks of >= {min_track} steps, best {report['rho_other_tracks_max']}); babble "
+            "for more steps"
+        )
+    frames = np.bincount([t.cluster for t in hands], [len(t.steps) for t in hands], clusters)
+    keep = [k for k in range(clusters) if frames[k] >= min_cluster_share * frames.sum()]
+    hands = [t for t in hands if t.cluster in keep]
+    boxes: list[list[int]] = []
+    for k in keep:
+        pixels = [data.eyes[s, t.eye].reshape(-1, 3)[p]
+                  for t in hands if t.cluster == k for s, p in zip(t.steps, t.pixels)]
+        rgb = np.concatenate(pixels)[:, None, :]
+        boxes += hsv_boxes(cv2.cvtColor(rgb, cv2.COLOR_RGB2HSV)[:, 0, :])
+    areas = np.concatenate([t.areas for t in hands])
+    means = np.zeros((n_eyes, 2, 2))
+    for eye in range(n_eyes):
+        for side in range(2):
+            points = [c for t in hands if t.eye == eye and t.side == side for c in t.centroids]
+            if points:
+                means[eye, side] = np.mean(points, axis=0)
+            else:  # never seen: assume the mirror image of the other hand (or a default side)
+                other = [c for t in hands if t.eye == eye and t.side != side for c in t.centroids]
+                x, y = np.mean(other, axis=0) if other else (width * (0.25 + 0.5 * side), height)
+                means[eye, side] = (width - 1 - x, y) if other else (x, y)
+    report.update(
+        hand_clusters={str(k): int(frames[k]) for k in keep},
+        hand_frames={f"eye{e}_side{s}": int(sum(len(t.steps) for t in hands
+                                                if t.eye == e and t.side == s))
+                     for e in range(n_eyes) for s in range(2)},
+        palette_lab=np.round(centres, 1).tolist(),
+    )
+    return DetectorParams(
+        hsv_ranges=boxes,
+        min_area=float(max(0.5 * np.percentile(areas, 2), 0.002 * height * width)),
+        max_area=float(2.0 * np.percentile(areas, 98)),
+        expected_area=float(np.median(areas)),
+        hand_means=means.tolist(),
+        image_size=(height, width),
+        calibration=report,
+    )

@@ -1,0 +1,59 @@
+"""Options of the hand_regard behaviour (paper sec. II-B), overridable as ``behavior.FIELD``."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass
+class HandRegardConfig:
+    """Everything the hand_regard behaviour can be told; paper defaults unless noted."""
+
+    # --- motor babbling and calibration (sec. II-B2) -------------------------------------
+    babbling_steps: int = 10_000
+    """Random-action steps recorded before training to discover the hands (paper: 10,000)."""
+    babbling_seed: int = 0
+    """Seed of the babbling episode's random actions and initial state."""
+    babbling_hold_steps: int = 8
+    """Steps each random babbling action is held (piecewise-constant noise: 200 Hz i.i.d. noise
+    barely moves the arms through their damping, so the hands would hardly move)."""
+    correlation_threshold: float = 0.6
+    """A blob track whose motion correlates above this with the arm proprioception is a hand
+    (paper: rho_k > 0.6)."""
+    detector_file: str = ""
+    """Calibrated detector (JSON). Set by ``prepare(run_dir)`` to ``run_dir/hand_detector.json``
+    (babbling runs first if that file is missing). Empty: uncalibrated, nothing is detected."""
+
+    # --- reward weights (sec. II-B4); 0 switches a term off ------------------------------
+    hand_count_weight: float = 1.0
+    """Weight of ``hand_count`` (-0.1, 0.25, 0.5, 1.0, 2.0 for n_t = 0..4)."""
+    motion_weight: float = 1.0
+    """Weight of ``motion`` (optical flow in the hand regions, rewarding moderate motion)."""
+    living_penalty_weight: float = 1.0
+    """Weight of ``living_penalty`` (-0.05 per step)."""
+    bilateral_weight: float = 1.0
+    """Weight of the extra ``bilateral_balance`` term (not in the paper; its future work). It
+    only pays while both arms are active. 0 reproduces the paper's reward exactly."""
+    bilateral_bonus: float = 0.25
+    """``bilateral_balance``: bonus on steps where each hand is detected by at least one eye."""
+    bilateral_penalty: float = 0.5
+    """``bilateral_balance``: penalty per unit of |v_left - v_right|, the gap between the two
+    hands' recent visibility (exponential moving averages over ``bilateral_horizon`` steps)."""
+    bilateral_horizon: float = 200.0
+    """``bilateral_balance``: time constant (steps) of the per-hand visibility averages."""
+
+    # --- curriculum (sec. II-B5) ----------------------------------------------------------
+    left_arm_steps: int = 175_000
+    """Stage ``left_arm``: only the left arm moves and only the left hand is rewarded."""
+    right_arm_steps: int = 175_000
+    """Stage ``right_arm``: only the right arm moves and only the right hand is rewarded."""
+    both_arms_steps: int = 1_500_000
+    """Stage ``both_arms`` (last): both arms, both hands. Sets the default run length."""
+
+    # --- network (sec. II-B3) -------------------------------------------------------------
+    proprioception_dims: tuple[int, ...] = (128, 64)
+    """Two-layer proprioception MLP ending in the paper's 64 features."""
+    fusion_dim: int = 256
+    """Fused feature size after the 576-d concatenation (paper: 256)."""
+    init_std: float = 0.5
+    """Initial policy standard deviation."""

@@ -1,0 +1,223 @@
+"""The calibrated hand detector (HSV threshold, morphology, contours) and hand optical flow.
+
+Nothing here knows what a hand looks like: the colour ranges, the blob sizes and the
+left/right attribution all come from :class:`DetectorParams`, which motor babbling learns
+(:mod:`devlearn_hand_regard.calibration`, paper sec. II-B2) and saves as JSON with the run.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+
+FORMAT_VERSION = 1
+
+
+@dataclass
+class DetectorParams:
+    """What babbling learned about the hands' appearance.
+
+    Attributes:
+        hsv_ranges: Colour boxes ``[h_lo, s_lo, v_lo, h_hi, s_hi, v_hi]`` in OpenCV HSV
+            (H 0..179, S and V 0..255); a pixel is hand-coloured when inside any box (a hue
+            range crossing red's 179 -> 0 wrap is stored as two boxes).
+        min_area: Smallest hand blob, in pixels (after morphology).
+        max_area: Largest hand blob, in pixels.
+        expected_area: Median hand blob size seen while babbling, in pixels.
+        hand_means: (2 eyes, 2 hands [left, right], 2 [x, y]) mean image position of each
+            hand while babbling, in pixels; used to tell which blob is which hand.
+        image_size: (H, W) of the eye images the sizes refer to.
+        kernel: Side of the square morphology kernel, in pixels.
+        calibration: Report of the calibration (tracks, correlations); informative only.
+    """
+
+    hsv_ranges: list[list[int]]
+    min_area: float
+    max_area: float
+    expected_area: float
+    hand_means: list[list[list[float]]]
+    image_size: tuple[int, int] = (64, 64)
+    kernel: int = 3
+    calibration: dict[str, Any] = field(default_factory=dict)
+
+    def save(self, path: str | Path) -> Path:
+        """Write the parameters as JSON; return the path."""
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        data = {"format_version": FORMAT_VERSION, **asdict(self)}
+        tmp = path.with_suffix(".tmp")
+        tmp.write_text(json.dumps(data, indent=2) + "\n")
+        tmp.replace(path)  # atomic: a resumed run never reads half a file
+        return path
+
+    @classmethod
+    def load(cls, path: str | Path) -> DetectorParams:
+        """Read parameters written by :meth:`save`."""
+        data = json.loads(Path(path).read_text())
+        version = data.pop("format_version", None)
+        if version != FORMAT_VERSION:
+            raise ValueError(f"{path}: hand detector format {version}, expected {FORMAT_VERSION}")
+        data["image_size"] = tuple(data["image_size"])
+        return cls(**data)
+
+
+@dataclass
+class Blob:
+    """One connected hand-coloured region.
+
+    Attributes:
+        centroid: (x, y) in pixels.
+        area: Pixels in the region.
+        mask: (H, W) bool, the region's pixels.
+    """
+
+    centroid: tuple[float, float]
+    area: float
+    mask: np.ndarray
+
+
+def colour_blobs(mask: np.ndarray, min_area: float, max_area: float, kernel: int) -> list[Blob]:
+    """Clean a binary mask (opening, then closing) and return its blobs within an area range.
+
+    Args:
+        mask: (H, W) uint8 or bool.
+        min_area: Smallest kept region, pixels.
+        max_area: Largest kept region, pixels.
+        kernel: Morphology kernel side, pixels.
+    Returns:
+        Blobs sorted by decreasing area.
+    """
+    element = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (kernel, kernel))
+    clean = mask.astype(np.uint8) * 255
+    clean = cv2.morphologyEx(clean, cv2.MORPH_OPEN, element)  # removes specks
+    clean = cv2.morphologyEx(clean, cv2.MORPH_CLOSE, element)  # fills small holes
+    count, labels, stats, centroids = cv2.connectedComponentsWithStats(clean, connectivity=8)
+    blobs = []
+    for label in range(1, count):
+        area = float(stats[label, cv2.CC_STAT_AREA])
+        if min_area <= area <= max_area:
+            blobs.append(Blob(tuple(map(float, centroids[label])), area, labels == label))
+    return sorted(blobs, key=lambda b: -b.area)
+
+
+class HandDetector:
+    """Finds up to two hands per eye and says which is which.
+
+    Args:
+        params: Calibrated parameters; ``None`` gives a detector that never sees anything.
+        max_hands: Most hands reported per eye (paper: 2).
+    """
+
+    def __init__(self, params: DetectorParams | None, max_hands: int = 2) -> None:
+        self.params = params
+        self.max_hands = max_hands
+
+    def colour_mask(self, image: np.ndarray) -> np.ndarray:
+        """Return (H, W) bool: pixels inside the learned hand colour boxes of an RGB image."""
+        hsv = cv2.cvtColor(np.ascontiguousarray(image), cv2.COLOR_RGB2HSV)
+        mask = np.zeros(image.shape[:2], dtype=np.uint8)
+        for box in self.params.hsv_ranges if self.params else []:
+            lo, hi = np.array(box[:3], np.uint8), np.array(box[3:], np.uint8)
+            mask |= cv2.inRange(hsv, lo, hi)
+        return mask > 0
+
+    def blobs(self, image: np.ndarray) -> list[Blob]:
+        """Return the hand blobs of one (H, W, 3) RGB image, largest first (at most max_hands)."""
+        if self.params is None:
+            return []
+        scale = image.shape[0] * image.shape[1] / float(np.prod(self.params.image_size))
+        found = colour_blobs(
+            self.colour_mask(image),
+            self.params.min_area * scale,
+            self.params.max_area * scale,
+            self.params.kernel,
+        )
+        return found[: self.max_hands]
+
+    def attribute(self, blobs: list[Blob], eye: int, width: int) -> list[Blob | None]:
+        """Say which blob is the left and which the right hand, without ground truth.
+
+        Rule: each hand has a mean image position learned while babbling (``hand_means``). Two
+        blobs get the pairing with the smaller summed distance to those means; one blob goes
+        to the nearer mean. Positions are scaled from the calibration image size.
+
+        Returns:
+            [left-hand blob or None, right-hand blob or None].
+        """
+        if not blobs:
+            return [None, None]
+        means = np.asarray(self.params.hand_means[eye], dtype=float)
+        means = means * width / float(self.params.image_size[1])
+        pos = np.array([b.centroid for b in blobs])
+        dist = np.linalg.norm(pos[:, None, :] - means[None, :, :], axis=-1)  # (blobs, 2 hands)
+        if len(blobs) == 1:
+            return [blobs[0], None] if dist[0, 0] <= dist[0, 1] else [None, blobs[0]]
+        straight = dist[0, 0] + dist[1, 1]
+        crossed = dist[0, 1] + dist[1, 0]
+        return [blobs[0], blobs[1]] if straight <= crossed else [blobs[1], blobs[0]]
+
+    def detect(self, eyes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Detect and attribute the hands in both eyes.
+
+        Args:
+            eyes: (2, H, W, 3) uint8 RGB, [left eye, right eye].
+        Returns:
+            detections: (2 eyes, 2 hands) bool, hands ordered [left, right].
+            masks: (2 eyes, 2 hands, H, W) bool, each detected hand's pixels.
+        """
+        n_eyes, height, width = eyes.shape[:3]
+        detections = np.zeros((n_eyes, 2), dtype=bool)
+        masks = np.zeros((n_eyes, 2, height, width), dtype=bool)
+        for eye in range(n_eyes):
+            for hand, blob in enumerate(self.attribute(self.blobs(eyes[eye]), eye, width)):
+                if blob is not None:
+                    detections[eye, hand] = True
+                    masks[eye, hand] = blob.mask
+        return detections, masks
+
+
+class HandFlow:
+    """Dense optical flow (Farneback, on grey frames) measured inside the hand regions.
+
+    Keeps the previous step's grey frames; :meth:`reset` forgets them at episode start.
+    """
+
+    def __init__(self) -> None:
+        self.previous: np.ndarray | None = None
+
+    def reset(self) -> None:
+        """Forget the previous frames (the next :meth:`update` measures no motion)."""
+        self.previous = None
+
+    def update(self, eyes: np.ndarray, masks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Measure the flow from the previous frames to ``eyes`` inside ``masks``.
+
+        Args:
+            eyes: (2, H, W, 3) uint8 RGB.
+            masks: (2 eyes, 2 hands, H, W) bool hand regions in ``eyes``.
+        Returns:
+            flow: (2, 2) summed flow magnitude (pixels per step) over each hand's pixels.
+            pixels: (2, 2) int, pixels in each hand region.
+        """
+        grey = np.stack([cv2.cvtColor(np.ascontiguousarray(e), cv2.COLOR_RGB2GRAY) for e in eyes])
+        pixels = masks.sum(axis=(2, 3)).astype(np.int64)
+        flow_sum = np.zeros(masks.shape[:2])
+        if self.previous is not None and self.previous.shape == grey.shape:
+            for eye in range(len(eyes)):
+                if not pixels[eye].any():
+                    continue
+                flow = cv2.calcOpticalFlowFarneback(
+                    self.previous[eye], grey[eye], None, 0.5, 2, 9, 3, 5, 1.1, 0
+                )
+                magnitude = np.linalg.norm(flow, axis=-1)  # (H, W) pixels per step
+                for hand in range(masks.shape[1]):
+                    flow_sum[eye, hand] = float(magnitude[masks[eye, hand]].sum())
+        else:
+            pixels[:] = 0  # no previous frame: no motion measured this step
+        self.previous = grey
+        return flow_sum, pixels

@@ -1,0 +1,12 @@
+"""Entry point of the devlearn-hand-regard distribution: registers the hand_regard behaviour."""
+
+from __future__ import annotations
+
+from devlearn.hookspecs import hookimpl
+from devlearn_hand_regard.behavior import HandRegard
+
+
+@hookimpl
+def register_behaviors(register):
+    """Register :class:`HandRegard`."""
+    register(HandRegard)
