@@ -106,6 +106,10 @@ def test_config_rejects_unknown_choices_and_documents_every_field():
         SelfTouchConfig(curriculum="three")
     with pytest.raises(ValueError, match="touch_source"):
         SelfTouchConfig(touch_source="eyes")
+    config = SelfTouchConfig()
+    config.curriculum = "fixed"  # as ``--set`` does, after construction
+    with pytest.raises(ValueError, match="fixed_only"):
+        SelfTouch(config)
     source = __import__("inspect").getsource(SelfTouchConfig)
     for f in dataclasses.fields(SelfTouchConfig):
         after = source.split(f"    {f.name}:", 1)[1].split("\n", 2)[1]

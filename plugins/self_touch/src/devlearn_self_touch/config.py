@@ -87,6 +87,10 @@ class SelfTouchConfig:
     the last stage lasts until training ends (set total_steps = 8M for the paper's run)."""
 
     def __post_init__(self) -> None:
+        self.validate()
+
+    def validate(self) -> None:
+        """Raise ValueError naming a wrong choice and the valid ones; normalise milestones."""
         if self.curriculum not in CURRICULA:
             raise ValueError(
                 f"unknown curriculum '{self.curriculum}'; valid: {', '.join(CURRICULA)}"
