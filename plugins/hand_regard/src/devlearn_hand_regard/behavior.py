@@ -193,6 +193,15 @@ class HandRegard(Behavior):
             action[self._arm_actuators[side]] = 0.0
         return action
 
-    # --- metrics ----------------------------------------------------------------------------
+    # --- metrics and run defaults -----------------------------------------------------------
     def evaluator(self, training: bool) -> Evaluator:
         return HandRegardEvaluator(ground_truth=not training)
+
+    def train_defaults(self) -> dict[str, Any]:
+        """The paper's run length: the three stages, 175k + 175k + 1.5M = 1.85M steps.
+
+        That is many hours of rendering on a CPU; shorten it with ``--steps``. The paper gives
+        no PPO constants for Model II beyond the network, so the core's PPO defaults stand.
+        """
+        cfg = self.config
+        return {"total_steps": cfg.left_arm_steps + cfg.right_arm_steps + cfg.both_arms_steps}
