@@ -2,8 +2,22 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from devlearn.env.behavior_env import BehaviorEnv
-from devlearn.env.vec_env import DevVecEnv
 from devlearn.env.workers import EnvWorkerError
 
+if TYPE_CHECKING:
+    from devlearn.env.vec_env import DevVecEnv
+
 __all__ = ["BehaviorEnv", "DevVecEnv", "EnvWorkerError"]
+
+
+def __getattr__(name: str):
+    # DevVecEnv pulls in rsl-rl and tensordict (seconds of imports); worker processes, which
+    # import this package for BehaviorEnv, never need it.
+    if name == "DevVecEnv":
+        from devlearn.env.vec_env import DevVecEnv
+
+        return DevVecEnv
+    raise AttributeError(f"module 'devlearn.env' has no attribute {name!r}")

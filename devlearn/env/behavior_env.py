@@ -34,17 +34,22 @@ class BehaviorEnv:
         behavior: The behaviour (this env's own instance; it may keep per-env state).
         seed: Seed of this env's numpy Generator (initial poses).
         infant_factory: ``factory(scene, senses=...) -> Infant``; tests pass a fake one.
+        training: Passed to ``behavior.evaluator`` (False for ``devlearn eval``).
     """
 
     def __init__(
-        self, behavior: Behavior, seed: int, infant_factory: InfantFactory | None = None
+        self,
+        behavior: Behavior,
+        seed: int,
+        infant_factory: InfantFactory | None = None,
+        training: bool = True,
     ) -> None:
         self.behavior = behavior
         factory = infant_factory or build_default_infant
         self.infant = factory(behavior.scene, senses=tuple(behavior.senses))
         self.rng = np.random.default_rng(seed)
         self.terms = behavior.reward_terms()
-        self.evaluator = behavior.evaluator(training=True)
+        self.evaluator = behavior.evaluator(training=training)
         self.stage: dict[str, Any] = dict(behavior.curriculum().stage.options)
         self.action_dim = int(self.infant.action_dim)
         self.episode_steps = int(self.infant.episode_steps)

@@ -189,9 +189,11 @@ class WorkerPool:
             no parent state (threads, torch, open files) leaks into workers.
     """
 
-    def __init__(self, behavior, seeds: list[int], workers: int, infant_factory=None,
-                 context: str = "spawn") -> None:
+    def __init__(
+        self, behavior, seeds: list[int], workers: int, infant_factory=None, context: str = "spawn"
+    ) -> None:
         ctx = mp.get_context(context)
+        self._pending: set[int] = set()
         self.conns: list = []
         self.procs: list = []
         self.chunks = np.array_split(np.arange(len(seeds)), min(workers, len(seeds)))
@@ -215,6 +217,9 @@ class WorkerPool:
             raise
 
     def _gather(self) -> list:
+        # Workers still owed a reply are remembered, so a call interrupted by Ctrl-C (the
+        # interrupt checkpoint then asks for state) first drains the stale replies.
+        self._pending = set(range(len(self.conns)))
         replies = []
         for k, (conn, proc) in enumerate(zip(self.conns, self.procs)):
             try:
@@ -228,11 +233,18 @@ class WorkerPool:
             if status == "error":
                 self.close()
                 raise EnvWorkerError(f"env worker {k} (pid {proc.pid}) failed:\n{payload}")
+            self._pending.discard(k)
             replies.append(payload)
         return replies
 
     def call(self, cmd: str, args: list | None = None) -> list:
         """Send ``cmd`` (with ``args[k]`` to worker k, or None) to every worker; return replies."""
+        for k in sorted(self._pending):
+            try:
+                self.conns[k].recv()
+            except (EOFError, OSError):
+                pass  # reported by the send or receive below
+        self._pending = set()
         for k, conn in enumerate(self.conns):
             try:
                 conn.send((cmd, None if args is None else args[k]))

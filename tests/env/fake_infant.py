@@ -17,8 +17,15 @@ class FakeInfant:
     physics_timestep = 0.005
     control_timestep = 0.005
 
-    def __init__(self, scene: str, senses=("proprioception",), eye_size: int = 8,
-                 episode_steps: int = 10, action_dim: int = 3, fail_after: int | None = None):
+    def __init__(
+        self,
+        scene: str,
+        senses=("proprioception",),
+        eye_size: int = 8,
+        episode_steps: int = 10,
+        action_dim: int = 3,
+        fail_after: int | None = None,
+    ):
         self.scene = scene
         self.senses = tuple(senses)
         self.eye_size = eye_size
@@ -30,8 +37,8 @@ class FakeInfant:
         self.position = np.zeros(action_dim)
 
     def reset(self, rng: np.random.Generator, random_pose: bool = False) -> None:
-        self.position = rng.uniform(-1, 1, self.action_dim) if random_pose else np.zeros(
-            self.action_dim
+        self.position = (
+            rng.uniform(-1, 1, self.action_dim) if random_pose else np.zeros(self.action_dim)
         )
 
     def step(self, action: np.ndarray) -> None:

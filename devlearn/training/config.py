@@ -1,0 +1,254 @@
+"""Run configuration: nested dataclasses, ``--set a.b=value`` overrides, rsl-rl's train_cfg."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import types
+import typing
+from dataclasses import dataclass, field
+from typing import Any
+
+from devlearn.errors import UsageError
+
+
+@dataclass
+class PPOConfig:
+    """PPO hyper-parameters (rsl-rl's ``PPO`` keyword arguments plus the rollout length)."""
+
+    learning_rate: float = 3e-4
+    """Adam step size (the starting value when ``schedule`` is ``adaptive``)."""
+    num_steps_per_env: int = 64
+    """Steps each environment collects per iteration (rollout length)."""
+    num_learning_epochs: int = 5
+    """Passes over each rollout."""
+    num_mini_batches: int = 4
+    """Mini-batches per pass."""
+    clip_param: float = 0.2
+    """PPO ratio clip epsilon (paper, sec. II-A5: 0.2); also clips the value loss."""
+    gamma: float = 0.99
+    """Discount factor."""
+    lam: float = 0.95
+    """GAE lambda."""
+    entropy_coef: float = 0.005
+    """Weight of the entropy bonus."""
+    value_loss_coef: float = 1.0
+    """Weight of the value loss."""
+    max_grad_norm: float = 1.0
+    """Gradient-norm clip (actor and critic separately)."""
+    desired_kl: float | None = 0.01
+    """Target KL for the adaptive schedule (None disables adaptation)."""
+    schedule: str = "adaptive"
+    """Learning-rate schedule: ``adaptive`` (KL-driven) or ``fixed``."""
+
+
+@dataclass
+class RunConfig:
+    """Everything one ``devlearn run`` needs; saved as ``config.json`` in the run directory."""
+
+    behavior_name: str = ""
+    """Registered behaviour to train (``devlearn plugins`` lists them)."""
+    total_steps: int = 1_000_000
+    """Environment steps to train for, summed over all environments and ranks."""
+    num_envs: int = 8
+    """Environments per rank."""
+    workers: int = 0
+    """Environment worker processes per rank (0: step environments in the training process)."""
+    seed: int = 0
+    """Seed of torch, numpy, random and (plus the env index) every environment."""
+    device: str = "cpu"
+    """Torch device of the networks (``cpu`` or ``cuda``; ``cuda:LOCAL_RANK`` when distributed)."""
+    out_dir: str = ""
+    """Run directory (config, checkpoints, metrics.jsonl, TensorBoard); default runs/NAME-TIME."""
+    save_interval: int = 50
+    """Iterations between periodic ``checkpoint_<step>.pt`` files (latest is saved as often)."""
+    torch_threads: int = 1
+    """``torch.set_num_threads`` (1: small nets gain nothing from more and results stay repeatable;
+    0 leaves torch's default)."""
+    ppo: PPOConfig = field(default_factory=PPOConfig)
+    """PPO hyper-parameters."""
+    behavior: Any = None
+    """The behaviour's own options (an instance of its ``config_class``)."""
+
+
+def _leaf_keys(obj: Any, prefix: str = "") -> list[str]:
+    keys = []
+    for f in dataclasses.fields(obj):
+        value = getattr(obj, f.name)
+        if dataclasses.is_dataclass(value):
+            keys += _leaf_keys(value, f"{prefix}{f.name}.")
+        else:
+            keys.append(prefix + f.name)
+    return keys
+
+
+def valid_keys(cfg: RunConfig) -> list[str]:
+    """Return every overridable dotted key (``ppo.learning_rate``, ``behavior.stage_steps``...)."""
+    return _leaf_keys(cfg)
+
+
+def convert(value: Any, kind: Any, key: str) -> Any:
+    """Convert a string (from the command line) or JSON value to a field's declared type."""
+    origin, args = typing.get_origin(kind), typing.get_args(kind)
+    if origin in (typing.Union, types.UnionType):
+        if value is None or (isinstance(value, str) and value.lower() in ("none", "null")):
+            if type(None) in args:
+                return None
+        errors = []
+        for arg in (a for a in args if a is not type(None)):
+            try:
+                return convert(value, arg, key)
+            except (UsageError, ValueError, TypeError) as exc:
+                errors.append(str(exc))
+        raise UsageError(errors[0] if errors else f"bad value {value!r} for {key}")
+    try:
+        if kind is bool:
+            if isinstance(value, str):
+                text = value.strip().lower()
+                if text not in ("true", "false", "1", "0", "yes", "no"):
+                    raise ValueError("expected true or false")
+                return text in ("true", "1", "yes")
+            return bool(value)
+        if kind is int:
+            number = float(value)
+            if not number.is_integer():
+                raise ValueError("expected an integer")
+            return int(number)
+        if kind is float:
+            return float(value)
+        if kind is str:
+            return str(value)
+        if origin in (tuple, list) or kind in (tuple, list):
+            items = value
+            if isinstance(value, str):
+                text = value.strip()
+                items = (
+                    json.loads(text)
+                    if text.startswith("[")
+                    else [s for s in text.split(",") if s.strip()]
+                )
+            item_kind = args[0] if args else Any
+            items = [convert(v, item_kind, key) for v in items]
+            return tuple(items) if (origin or kind) is tuple else list(items)
+        if isinstance(value, str) and (origin is dict or kind is dict):
+            return json.loads(value)
+    except (ValueError, TypeError) as exc:
+        name = getattr(kind, "__name__", str(kind))
+        raise UsageError(f"bad value {value!r} for {key} (expected {name}): {exc}") from None
+    return value
+
+
+def _hints(obj: Any) -> dict[str, Any]:
+    try:
+        return typing.get_type_hints(type(obj))
+    except Exception:  # unresolvable annotations: fall back to the runtime value's type
+        return {f.name: type(getattr(obj, f.name)) for f in dataclasses.fields(obj)}
+
+
+def set_value(cfg: RunConfig, key: str, value: Any) -> None:
+    """Set dotted ``key`` to ``value`` (converted to the field's type); UsageError if unknown."""
+    *path, leaf = key.split(".")
+    obj: Any = cfg
+    for part in path:
+        obj = getattr(obj, part, None) if dataclasses.is_dataclass(obj) else None
+    names = {f.name for f in dataclasses.fields(obj)} if dataclasses.is_dataclass(obj) else set()
+    if leaf not in names or dataclasses.is_dataclass(getattr(obj, leaf)):
+        raise UsageError(f"unknown config key '{key}'; valid keys: {', '.join(valid_keys(cfg))}")
+    setattr(obj, leaf, convert(value, _hints(obj).get(leaf, Any), key))
+
+
+def apply_overrides(cfg: RunConfig, overrides: list[str] | dict[str, Any]) -> RunConfig:
+    """Apply ``["ppo.learning_rate=3e-4", ...]`` (or a dict of dotted keys) to ``cfg`` in place.
+
+    Raises:
+        UsageError: An item without ``=``, an unknown key (the valid keys are listed) or a value
+            that does not convert to the field's type.
+    """
+    if isinstance(overrides, dict):
+        items = list(overrides.items())
+    else:
+        items = []
+        for text in overrides:
+            key, sep, value = text.partition("=")
+            if not sep or not key.strip():
+                raise UsageError(f"override '{text}' must look like key=value (e.g. seed=3)")
+            items.append((key.strip(), value.strip()))
+    for key, value in items:
+        set_value(cfg, key, value)
+    return cfg
+
+
+def default_config(behavior_cls: type, overrides: list[str] | None = None, **top: Any) -> RunConfig:
+    """Build a run's config: defaults < the behaviour's ``train_defaults()`` < ``top`` < overrides.
+
+    Args:
+        behavior_cls: The behaviour class.
+        overrides: ``key=value`` strings (``--set``).
+        top: Top-level RunConfig fields (e.g. ``total_steps=...``); None values are skipped.
+    """
+    cfg = RunConfig(behavior_name=behavior_cls.name, behavior=behavior_cls.config_class())
+    apply_overrides(cfg, behavior_cls(cfg.behavior).train_defaults())
+    apply_overrides(cfg, {k: v for k, v in top.items() if v is not None})
+    return apply_overrides(cfg, overrides or [])
+
+
+def to_dict(cfg: RunConfig) -> dict[str, Any]:
+    """Return a JSON-ready dict of ``cfg`` (tuples become lists)."""
+    return json.loads(json.dumps(dataclasses.asdict(cfg)))
+
+
+def _fill(obj: Any, data: dict[str, Any], prefix: str) -> None:
+    hints = _hints(obj)
+    for name, value in data.items():
+        current = getattr(obj, name, None)
+        if dataclasses.is_dataclass(current) and isinstance(value, dict):
+            _fill(current, value, f"{prefix}{name}.")
+        elif name in {f.name for f in dataclasses.fields(obj)}:
+            setattr(obj, name, convert(value, hints.get(name, Any), prefix + name))
+        else:
+            raise UsageError(f"unknown config key '{prefix}{name}' in saved config")
+
+
+def from_dict(data: dict[str, Any], behavior_cls: type) -> RunConfig:
+    """Rebuild a RunConfig saved by :func:`to_dict` for the behaviour class ``behavior_cls``."""
+    cfg = RunConfig(behavior_name=behavior_cls.name, behavior=behavior_cls.config_class())
+    _fill(cfg, data, "")
+    return cfg
+
+
+def to_rsl_rl(cfg: RunConfig, behavior: Any, observation_names: list[str] | None = None) -> dict:
+    """Return rsl-rl 5.5.1's ``train_cfg`` for this run.
+
+    Actor and critic are :class:`~devlearn.training.networks.MultiSenseModel`s built from the
+    behaviour's :class:`~devlearn.behavior.NetworkSpec` (passed as an object; rsl-rl deep-copies
+    it, so each network gets its own encoders). The algorithm is
+    :class:`~devlearn.training.ppo.UniqueParamPPO`.
+
+    Args:
+        cfg: The run config.
+        behavior: The behaviour instance.
+        observation_names: Observation names (default: the spec's encoder names).
+    """
+    spec = behavior.network()
+    names = list(observation_names or spec.encoders)
+    ppo = dataclasses.asdict(cfg.ppo)
+    num_steps = ppo.pop("num_steps_per_env")
+    model = "devlearn.training.networks:MultiSenseModel"
+    return {
+        "algorithm": {"class_name": "devlearn.training.ppo:UniqueParamPPO", **ppo},
+        "actor": {
+            "class_name": model,
+            "spec": spec,
+            "distribution_cfg": {
+                "class_name": "devlearn.training.networks:TanhSoftplusGaussian",
+                "init_std": spec.init_std,
+            },
+        },
+        "critic": {"class_name": model, "spec": spec},
+        "obs_groups": behavior.obs_groups(names),
+        "num_steps_per_env": num_steps,
+        "save_interval": cfg.save_interval,
+        "run_name": cfg.behavior_name,
+        "logger": "tensorboard",
+        "check_for_nan": True,
+    }

@@ -1,0 +1,44 @@
+"""rsl-rl's PPO with one optimiser entry per parameter (no double Adam steps on shared tensors)."""
+
+from __future__ import annotations
+
+from itertools import chain
+
+import torch.nn as nn
+from rsl_rl.algorithms import PPO
+from rsl_rl.utils import reduce_gradients_in_buckets
+
+
+def unique_parameters(*modules: nn.Module) -> list[nn.Parameter]:
+    """Parameters of all ``modules``, each tensor once, in first-seen order."""
+    seen: set[int] = set()
+    params = []
+    for param in chain.from_iterable(m.parameters() for m in modules):
+        if id(param) not in seen:
+            seen.add(id(param))
+            params.append(param)
+    return params
+
+
+class UniqueParamPPO(PPO):
+    """PPO whose optimiser holds every parameter once.
+
+    rsl-rl 5.5.1 builds its optimiser over ``chain(actor.parameters(), critic.parameters())``:
+    a tensor shared by actor and critic would then get two Adam steps per mini-batch. Our
+    MultiSenseModels give each network its own encoders, but a behaviour (or rsl-rl's
+    ``share_cnn_encoders``) may still share modules, so the optimiser is rebuilt here over
+    unique parameters, and gradients are all-reduced once per tensor when distributed.
+    """
+
+    def __init__(self, actor, critic, storage, *args, **kwargs) -> None:
+        super().__init__(actor, critic, storage, *args, **kwargs)
+        self.optimizer = type(self.optimizer)(
+            unique_parameters(self.actor, self.critic), lr=self.learning_rate
+        )
+
+    def reduce_parameters(self) -> None:
+        """Average gradients across ranks, each tensor once."""
+        modules = [self.actor, self.critic] + ([self.rnd] if self.rnd else [])
+        reduce_gradients_in_buckets(
+            unique_parameters(*modules), self.gpu_world_size, self.grad_reduce_bucket_mb
+        )

@@ -1,0 +1,286 @@
+"""DevRunner: rsl-rl's OnPolicyRunner with a curriculum, metrics.jsonl and atomic checkpoints."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+import math
+import os
+import random
+import sys
+import time
+from collections import deque
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+import torch.distributed as dist
+from rsl_rl.runners import OnPolicyRunner
+from rsl_rl.utils import check_nan
+from tqdm import tqdm
+
+from devlearn.curriculum import Curriculum
+from devlearn.training.checkpoint import FORMAT, LATEST, link_atomic, save_atomic
+from devlearn.training.config import RunConfig, to_dict
+
+
+@contextlib.contextmanager
+def quiet():
+    """Swallow rsl-rl's console report (the progress bar and metrics.jsonl replace it)."""
+    with contextlib.redirect_stdout(io.StringIO()):
+        yield
+
+
+class DevRunner(OnPolicyRunner):
+    """Trains one behaviour; the loop is rsl-rl's (act, step, returns, update, log).
+
+    Additions: the curriculum advances from the global env-step counter
+    (``iterations * num_steps_per_env * num_envs * world_size``) before each iteration; a tqdm
+    bar and ``metrics.jsonl``; checkpoints (model, optimiser, iteration, env steps,
+    curriculum, every env's reward-term state, rng states, behaviour name, config) written
+    atomically as ``checkpoint_latest.pt`` every iteration that is a multiple of
+    ``save_interval`` (plus ``checkpoint_<step>.pt``), at the end and on Ctrl-C; and
+    CPU distributed training over gloo. ``current_learning_iteration`` counts *completed*
+    iterations, so a resumed run logs each iteration index once.
+
+    Args:
+        env: The DevVecEnv.
+        train_cfg: From :func:`~devlearn.training.config.to_rsl_rl`.
+        cfg: The run config (saved in checkpoints).
+        run_dir: Where logs and checkpoints go.
+        curriculum: The behaviour's curriculum.
+        headline_metric: Evaluator key shown on the progress bar.
+        device: Torch device of the networks.
+        progress: Show the progress bar (rank 0 only).
+    """
+
+    def __init__(
+        self,
+        env,
+        train_cfg: dict,
+        cfg: RunConfig,
+        run_dir: Path,
+        curriculum: Curriculum,
+        headline_metric: str = "",
+        device: str = "cpu",
+        progress: bool = True,
+    ) -> None:
+        self.run_cfg = cfg
+        self.run_dir = Path(run_dir)
+        self.curriculum = curriculum
+        self.headline_metric = headline_metric
+        self.show_progress = progress
+        self.env_steps = 0
+        self.episodes: deque[dict[str, float]] = deque(maxlen=100)
+        self.last_row: dict[str, Any] = {}
+        report = io.StringIO()
+        with contextlib.redirect_stdout(report):
+            super().__init__(env, train_cfg, log_dir=str(self.run_dir), device=device)
+        self.is_main = self.gpu_global_rank == 0
+        if self.is_main:
+            (self.run_dir / "networks.txt").write_text(report.getvalue())
+
+    # --- distributed ----------------------------------------------------------------------
+    def _configure_multi_gpu(self) -> None:
+        """rsl-rl hard-codes NCCL and cuda; use gloo on the CPU (torchrun's env vars)."""
+        self.gpu_world_size = int(os.getenv("WORLD_SIZE", "1"))
+        self.is_distributed = self.gpu_world_size > 1
+        self.gpu_local_rank = int(os.getenv("LOCAL_RANK", "0"))
+        self.gpu_global_rank = int(os.getenv("RANK", "0"))
+        if not self.is_distributed:
+            self.cfg["multi_gpu"] = None
+            return
+        self.cfg["multi_gpu"] = {
+            "global_rank": self.gpu_global_rank,
+            "local_rank": self.gpu_local_rank,
+            "world_size": self.gpu_world_size,
+        }
+        if not dist.is_initialized():
+            cuda = torch.device(self.device).type == "cuda"
+            dist.init_process_group("nccl" if cuda else "gloo")
+        if torch.device(self.device).type == "cuda":
+            torch.cuda.set_device(self.gpu_local_rank)
+
+    # --- training loop --------------------------------------------------------------------
+    def learn(self, total_steps: int) -> None:  # type: ignore[override]
+        """Train until ``total_steps`` environment steps (all envs, all ranks) are done."""
+        env, alg = self.env, self.alg
+        per_iteration = self.cfg["num_steps_per_env"] * env.num_envs * self.gpu_world_size
+        total_it = self.current_learning_iteration + max(
+            math.ceil((total_steps - self.env_steps) / per_iteration), 0
+        )
+        start_it = self.current_learning_iteration
+        obs = env.get_observations().to(self.device)
+        alg.train_mode()
+        if self.is_distributed:
+            alg.broadcast_parameters()
+        with quiet():
+            self.logger.init_logging_writer()
+        self.curriculum.update(self.env_steps)
+        env.set_stage(self.curriculum.stage.options)
+        bar = tqdm(
+            total=total_steps,
+            initial=self.env_steps,
+            unit="step",
+            unit_scale=True,
+            disable=not (self.is_main and self.show_progress),
+            dynamic_ncols=True,
+        )
+        try:
+            while self.env_steps < total_steps:
+                if self.curriculum.update(self.env_steps):
+                    env.set_stage(self.curriculum.stage.options)
+                start = time.time()
+                finished: list[dict[str, float]] = []
+                step_rewards = 0.0
+                with torch.inference_mode():
+                    for _ in range(self.cfg["num_steps_per_env"]):
+                        actions = alg.act(obs)
+                        obs, rewards, dones, extras = env.step(actions.to(env.device))
+                        if self.cfg.get("check_for_nan", True):
+                            check_nan(obs, rewards, dones)
+                        obs, rewards = obs.to(self.device), rewards.to(self.device)
+                        dones = dones.to(self.device)
+                        alg.process_env_step(obs, rewards, dones, extras)
+                        self.logger.process_env_step(rewards, dones, extras, None)
+                        finished += extras["episode_infos"]
+                        step_rewards += float(rewards.mean())
+                    collect_time = time.time() - start
+                    alg.compute_returns(obs)
+                start = time.time()
+                losses = alg.update()
+                learn_time = time.time() - start
+                it = self.current_learning_iteration
+                self.current_learning_iteration += 1
+                self.env_steps += per_iteration
+                with quiet():
+                    self.logger.log(
+                        it=it,
+                        start_it=start_it,
+                        total_it=total_it,
+                        collect_time=collect_time,
+                        learn_time=learn_time,
+                        loss_dict=losses,
+                        learning_rate=alg.learning_rate,
+                        action_std=alg.get_policy().output_std,
+                        rnd_weight=None,
+                    )
+                self.episodes.extend(finished)
+                rate = per_iteration / max(collect_time + learn_time, 1e-9)
+                mean_step = step_rewards / self.cfg["num_steps_per_env"]
+                self._record(it, len(finished), mean_step, losses, rate, bar)
+                if self.current_learning_iteration % self.cfg["save_interval"] == 0:
+                    self.save_checkpoints(periodic=True)
+        except KeyboardInterrupt:
+            self.save_checkpoints(periodic=False, gather=False)
+            if self.is_main:
+                print(
+                    f"\ninterrupted: checkpoint saved in {self.run_dir / LATEST}", file=sys.stderr
+                )
+            raise
+        finally:
+            bar.close()
+        self.save_checkpoints(periodic=True)
+        with quiet():
+            self.logger.stop_logging_writer()
+            if self.logger.writer is not None:
+                self.logger.writer.close()
+
+    def _record(
+        self,
+        it: int,
+        num_finished: int,
+        mean_step_reward: float,
+        losses: dict,
+        rate: float,
+        bar: tqdm,
+    ) -> None:
+        """Append one line to metrics.jsonl and refresh the progress bar (rank 0)."""
+        row: dict[str, Any] = {
+            "step": self.env_steps,
+            "iteration": it,
+            "stage": self.curriculum.stage.name,
+            "steps_per_s": rate,
+            "episodes": num_finished,
+            "mean_step_reward": mean_step_reward,
+            "mean_reward": None,
+        }
+        if self.episodes:
+            returns = [
+                sum(v for k, v in ep.items() if k.startswith("reward/")) for ep in self.episodes
+            ]
+            row["mean_reward"] = float(np.mean(returns))
+            for key in dict.fromkeys(k for ep in self.episodes for k in ep):
+                row[key] = float(np.mean([ep[key] for ep in self.episodes if key in ep]))
+        row.update({f"loss/{k}": float(v) for k, v in losses.items()})
+        self.last_row = row
+        if not self.is_main:
+            return
+        with open(self.run_dir / "metrics.jsonl", "a") as f:
+            f.write(json.dumps(row) + "\n")
+        postfix = {"steps/s": f"{rate:.0f}", "stage": row["stage"]}
+        if row["mean_reward"] is not None:
+            postfix["reward"] = f"{row['mean_reward']:.3g}"
+        headline = row.get(f"metrics/{self.headline_metric}")
+        if headline is not None:
+            postfix[self.headline_metric] = f"{headline:.3g}"
+        bar.set_postfix(postfix, refresh=False)
+        bar.update(self.env_steps - bar.n)
+
+    # --- checkpoints ----------------------------------------------------------------------
+    def checkpoint_state(self, gather: bool = True) -> dict[str, Any]:
+        """Everything needed to resume (collective when distributed and ``gather``)."""
+        env_state = self.env.state_dict()
+        ranks = [env_state]
+        if self.is_distributed and gather:
+            ranks = [None] * self.gpu_world_size
+            dist.all_gather_object(ranks, env_state)
+        state = self.alg.save()
+        state.update(
+            format=FORMAT,
+            behavior=self.run_cfg.behavior_name,
+            config=to_dict(self.run_cfg),
+            iteration=self.current_learning_iteration,
+            env_steps=self.env_steps,
+            curriculum=self.curriculum.state_dict(),
+            env={"ranks": ranks},
+            learning_rate=self.alg.learning_rate,
+            rng={
+                "torch": torch.get_rng_state(),
+                "numpy": np.random.get_state(),
+                "random": random.getstate(),
+            },
+        )
+        return state
+
+    def save_checkpoints(self, periodic: bool, gather: bool = True) -> Path | None:
+        """Write ``checkpoint_latest.pt`` (and ``checkpoint_<step>.pt`` when ``periodic``)."""
+        state = self.checkpoint_state(gather)
+        if not self.is_main:
+            return None
+        latest = self.run_dir / LATEST
+        if periodic:
+            path = self.run_dir / f"checkpoint_{self.env_steps}.pt"
+            save_atomic(state, path)
+            link_atomic(path, latest)
+        else:
+            save_atomic(state, latest)
+        return latest
+
+    def restore(self, state: dict[str, Any]) -> None:
+        """Resume from a checkpoint: networks, optimiser, counters, curriculum, envs, rngs."""
+        self.alg.load(state, None, strict=True)
+        self.alg.learning_rate = float(state["learning_rate"])
+        for group in self.alg.optimizer.param_groups:
+            group["lr"] = self.alg.learning_rate
+        self.current_learning_iteration = int(state["iteration"])
+        self.env_steps = int(state["env_steps"])
+        self.curriculum.load_state_dict(state["curriculum"])
+        ranks = state["env"]["ranks"]
+        if self.gpu_global_rank < len(ranks):
+            self.env.load_state_dict(ranks[self.gpu_global_rank])
+        torch.set_rng_state(state["rng"]["torch"])
+        np.random.set_state(state["rng"]["numpy"])
+        random.setstate(state["rng"]["random"])

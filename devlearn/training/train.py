@@ -1,0 +1,147 @@
+"""train(): config, seed, behaviour, environments, runner, learn, save."""
+
+from __future__ import annotations
+
+import json
+import os
+import random
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+
+from devlearn.env import DevVecEnv
+from devlearn.errors import UsageError
+from devlearn.training.checkpoint import check_behavior, resume_checkpoint
+from devlearn.training.config import RunConfig, from_dict, to_dict, to_rsl_rl
+from devlearn.training.runner import DevRunner
+
+CONFIG_FILE = "config.json"
+
+
+@dataclass
+class TrainResult:
+    """What a finished (or resumed and finished) run reports."""
+
+    run_dir: Path
+    """The run directory."""
+    env_steps: int
+    """Environment steps done in total (all envs, all ranks)."""
+    iterations: int
+    """PPO iterations done in total."""
+    last: dict[str, Any] = field(default_factory=dict)
+    """The last metrics.jsonl row (mean reward, reward terms, metrics, stage...)."""
+
+
+def seed_everything(seed: int) -> None:
+    """Seed torch, numpy's global generator and ``random`` (the envs have their own)."""
+    random.seed(seed)
+    np.random.seed(seed)
+    torch.manual_seed(seed)
+
+
+def default_run_dir(behavior_name: str) -> Path:
+    """``runs/<behavior>-<YYYYmmdd-HHMMSS>``."""
+    return Path("runs") / f"{behavior_name}-{time.strftime('%Y%m%d-%H%M%S')}"
+
+
+def load_run_config(run_dir: str | Path, registry) -> RunConfig:
+    """Read a run directory's ``config.json`` (UsageError if missing or unreadable)."""
+    path = Path(run_dir) / CONFIG_FILE
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, ValueError) as exc:
+        raise UsageError(f"cannot read {path}: {exc}") from None
+    return from_dict(data, registry.behavior(data.get("behavior_name", "")))
+
+
+def _resolve_device(device: str, local_rank: int, world_size: int) -> str:
+    if device == "cuda" and world_size > 1:
+        return f"cuda:{local_rank}"
+    if device.startswith("cuda") and not torch.cuda.is_available():
+        raise UsageError(f"device '{device}' requested but CUDA is not available; use --device cpu")
+    return device
+
+
+def train(
+    cfg: RunConfig | None,
+    registry,
+    *,
+    resume: str | Path | None = None,
+    infant_factory=None,
+    progress: bool = True,
+) -> TrainResult:
+    """Train ``cfg.behavior_name`` with PPO; return where and how far it got.
+
+    Args:
+        cfg: The run config (with ``resume``: None reads the run's config.json).
+        registry: Plugin registry (``.behavior(name)``).
+        resume: A run directory to continue from its newest complete checkpoint: step counter,
+            curriculum stage, reward-term state, networks and optimiser are restored.
+        infant_factory: Infant builder for the envs (tests); default the real infant.
+        progress: Show a progress bar.
+    """
+    # Config (and, when resuming, the checkpoint it continues from).
+    checkpoint = None
+    if resume is not None:
+        run_dir = Path(resume)
+        ckpt_path, checkpoint = resume_checkpoint(run_dir)
+        cfg = cfg or load_run_config(run_dir, registry)
+        check_behavior(checkpoint, ckpt_path, cfg.behavior_name)
+    elif cfg is None:
+        raise UsageError("train() needs a config or a run directory to resume")
+    else:
+        run_dir = Path(cfg.out_dir) if cfg.out_dir else default_run_dir(cfg.behavior_name)
+    cfg.out_dir = str(run_dir)
+    rank = int(os.environ.get("RANK", "0"))
+    world_size = int(os.environ.get("WORLD_SIZE", "1"))
+    device = _resolve_device(cfg.device, int(os.environ.get("LOCAL_RANK", "0")), world_size)
+
+    # Seed. One intra-op thread by default: these networks are small, and a fixed thread
+    # count keeps CPU results bit-for-bit repeatable (torch_threads=0 keeps torch's default).
+    seed_everything(cfg.seed)
+    if cfg.torch_threads > 0:
+        torch.set_num_threads(cfg.torch_threads)
+
+    # Behaviour: one-off preparation, then the resolved config is written next to the logs.
+    behavior = registry.behavior(cfg.behavior_name)(cfg.behavior)
+    run_dir.mkdir(parents=True, exist_ok=True)
+    behavior.prepare(run_dir)
+    cfg.behavior = behavior.config
+    if rank == 0:
+        (run_dir / CONFIG_FILE).write_text(json.dumps(to_dict(cfg), indent=2) + "\n")
+
+    # Environments (seeded seed + rank * num_envs + index) and the runner.
+    if checkpoint is not None:
+        saved = checkpoint["env"]["ranks"][0]["envs"]
+        if len(saved) != cfg.num_envs:
+            raise UsageError(
+                f"checkpoint has {len(saved)} envs per rank; resume with --envs {len(saved)}"
+            )
+    env = DevVecEnv(behavior, cfg.num_envs, cfg.seed, cfg.workers, "cpu", infant_factory, rank)
+    try:
+        env.cfg = cfg
+        train_cfg = to_rsl_rl(cfg, behavior, list(env.observation_shapes))
+        runner = DevRunner(
+            env,
+            train_cfg,
+            cfg,
+            run_dir,
+            behavior.curriculum(),
+            behavior.headline_metric,
+            device,
+            progress,
+        )
+        if checkpoint is not None:
+            runner.restore(checkpoint)
+
+        # Learn; the runner saves checkpoints periodically, at the end and on Ctrl-C.
+        runner.learn(cfg.total_steps)
+    finally:
+        env.close()
+    return TrainResult(
+        run_dir, runner.env_steps, runner.current_learning_iteration, runner.last_row
+    )
