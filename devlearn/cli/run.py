@@ -1,0 +1,101 @@
+"""``devlearn run BEHAVIOR``: train a behaviour with PPO (or resume a run)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+from pathlib import Path
+
+from devlearn.errors import UsageError
+
+_DEVICE = re.compile(r"^(cpu|cuda(:\d+)?)$")
+
+
+def add_parser(subparsers) -> list[str]:
+    """Register the ``run`` sub-command."""
+    p = subparsers.add_parser(
+        "run",
+        help="train a behaviour with PPO",
+        description="Train a behaviour; writes config.json, checkpoints, metrics.jsonl and "
+        "TensorBoard logs to the run directory. Ctrl-C saves a checkpoint; --resume continues.",
+    )
+    p.add_argument("behavior", help="behaviour name (see `devlearn plugins`)")
+    p.add_argument("--steps", metavar="N", help="total environment steps (e.g. 8e6)")
+    p.add_argument("--envs", metavar="N", help="environments per process")
+    p.add_argument("--workers", metavar="N", help="environment worker processes (0: in process)")
+    p.add_argument("--seed", metavar="S", help="random seed")
+    p.add_argument("--out", metavar="DIR", help="run directory (default runs/BEHAVIOR-TIME)")
+    p.add_argument("--device", metavar="DEV", help="cpu or cuda (default cpu)")
+    p.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a config field, e.g. ppo.learning_rate=3e-4 (repeatable)",
+    )
+    p.add_argument("--resume", metavar="RUN_DIR", help="continue a run from its latest checkpoint")
+    return ["run"]
+
+
+def run(args: argparse.Namespace, registry) -> int:
+    """Build the config, train, print the run directory and a final summary."""
+    from devlearn.training.config import apply_overrides, default_config
+    from devlearn.training.train import load_run_config, train
+
+    behavior_cls = registry.behavior(args.behavior)
+    top = {
+        "total_steps": args.steps,
+        "num_envs": args.envs,
+        "workers": args.workers,
+        "seed": args.seed,
+        "device": args.device,
+    }
+    if args.resume:
+        if args.out:
+            raise UsageError("--out and --resume exclude each other (a resumed run stays put)")
+        run_dir = Path(args.resume)
+        if not run_dir.is_dir():
+            raise UsageError(f"run directory {run_dir} does not exist")
+        cfg = load_run_config(run_dir, registry)
+        if cfg.behavior_name != args.behavior:
+            raise UsageError(f"run {run_dir} trains '{cfg.behavior_name}', not '{args.behavior}'")
+        apply_overrides(cfg, {k: v for k, v in top.items() if v is not None})
+        apply_overrides(cfg, args.overrides)
+    else:
+        cfg = default_config(behavior_cls, args.overrides, out_dir=args.out, **top)
+    check_config(cfg)
+    if not args.resume and not cfg.out_dir:
+        from devlearn.training.train import default_run_dir
+
+        cfg.out_dir = str(default_run_dir(cfg.behavior_name))
+    print(f"run directory: {cfg.out_dir}", flush=True)
+    result = train(cfg, registry, resume=args.resume)
+    summary = {
+        "run_dir": str(result.run_dir),
+        "env_steps": result.env_steps,
+        "iterations": result.iterations,
+    }
+    summary.update({k: v for k, v in result.last.items() if not k.startswith("loss/")})
+    print(json.dumps(summary, indent=2))
+    return 0
+
+
+def check_config(cfg) -> None:
+    """Reject values that would fail later with a less clear error."""
+    if cfg.total_steps < 1:
+        raise UsageError(f"--steps must be at least 1, got {cfg.total_steps}")
+    if cfg.num_envs < 1:
+        raise UsageError(f"--envs must be at least 1, got {cfg.num_envs}")
+    if cfg.workers < 0:
+        raise UsageError(f"--workers must be 0 or more, got {cfg.workers}")
+    if cfg.save_interval < 1:
+        raise UsageError(f"save_interval must be at least 1, got {cfg.save_interval}")
+    if not _DEVICE.match(cfg.device):
+        raise UsageError(f"--device must be cpu, cuda or cuda:N, got '{cfg.device}'")
+    if cfg.ppo.schedule not in ("adaptive", "fixed"):
+        raise UsageError(f"ppo.schedule must be adaptive or fixed, got '{cfg.ppo.schedule}'")
+    for name in ("num_steps_per_env", "num_learning_epochs", "num_mini_batches"):
+        if getattr(cfg.ppo, name) < 1:
+            raise UsageError(f"ppo.{name} must be at least 1, got {getattr(cfg.ppo, name)}")
