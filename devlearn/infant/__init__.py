@@ -1,0 +1,40 @@
+"""The simulated infant: body, skin, senses and scenes (``build_infant``)."""
+
+from __future__ import annotations
+
+import os
+
+# Headless rendering everywhere; must be set before mujoco or dm_control is imported.
+os.environ.setdefault("MUJOCO_GL", "egl")
+
+from devlearn.infant.infant import (  # noqa: E402
+    ACTUATOR_GROUPS,
+    SENSES,
+    Infant,
+    SenseNotEnabledError,
+    build_infant,
+)
+from devlearn.infant.regions import (  # noqa: E402
+    NUM_PARTS,
+    NUM_REGIONS,
+    PART_NAMES,
+    RegionTable,
+    region_table,
+)
+from devlearn.infant.skin import Skin  # noqa: E402
+from devlearn.infant.vision import HAND_LABELS  # noqa: E402
+
+__all__ = [
+    "ACTUATOR_GROUPS",
+    "HAND_LABELS",
+    "NUM_PARTS",
+    "NUM_REGIONS",
+    "PART_NAMES",
+    "SENSES",
+    "Infant",
+    "RegionTable",
+    "SenseNotEnabledError",
+    "Skin",
+    "build_infant",
+    "region_table",
+]

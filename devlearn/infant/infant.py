@@ -1,0 +1,237 @@
+"""The Infant: a scene's physics plus its senses, cached until the next step or reset."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import mujoco
+import numpy as np
+from dm_control import mjcf
+
+from devlearn.infant import contacts, vision
+from devlearn.infant.body_table import BODY_TABLE
+from devlearn.infant.regions import NUM_PARTS, NUM_REGIONS, RegionTable, region_table
+from devlearn.infant.scenes import EPISODE_STEPS, PHYSICS_TIMESTEP, SCENES, build_scene_model
+from devlearn.infant.senses import Proprioception, vestibular
+from devlearn.infant.skin import Skin
+
+SENSES = ("touch", "proprioception", "vestibular", "eyes")
+ACTUATOR_GROUPS = ("left_arm", "right_arm", "head", "trunk", "legs")
+
+
+class SenseNotEnabledError(RuntimeError):
+    """A sense was asked for that the infant was built without."""
+
+
+def _group_of(joint: str) -> str:
+    side, _, rest = joint.partition("_")
+    for spec in BODY_TABLE:
+        for j in spec.joints:
+            if joint == j.name or (spec.paired and rest == j.name):
+                if j.group in ("arm", "wrist", "fingers"):
+                    return f"{side}_arm"
+                return {"leg": "legs", "foot": "legs"}.get(j.group, j.group)
+    raise KeyError(joint)
+
+
+class Infant:
+    """The simulated 18-month-old in one scene (see docs/architecture.md, "The infant").
+
+    Build with :func:`build_infant`. Senses are computed on first request after a ``step`` or
+    ``reset`` and cached; returned arrays are read-only.
+    """
+
+    physics_timestep = PHYSICS_TIMESTEP
+    control_timestep = PHYSICS_TIMESTEP  # one physics step per control step
+    episode_steps = EPISODE_STEPS
+
+    def __init__(self, scene: str, senses: Sequence[str] = SENSES, eye_size: int = 64) -> None:
+        unknown = sorted(set(senses) - set(SENSES))
+        if unknown:
+            raise ValueError(f"unknown sense(s) {unknown}; valid senses: {', '.join(SENSES)}")
+        if scene not in SCENES:
+            raise ValueError(f"unknown scene '{scene}'; valid scenes: {', '.join(SCENES)}")
+        self.scene = scene
+        self.senses = tuple(senses)
+        self.eye_size = int(eye_size)
+        root, self.actuator_names = build_scene_model(scene, vestibular="vestibular" in senses)
+        self.mjcf_model = root
+        self.physics = mjcf.Physics.from_mjcf_model(root)
+        self.model: mujoco.MjModel = self.physics.model.ptr
+        self.data: mujoco.MjData = self.physics.data.ptr
+        self.action_dim = len(self.actuator_names)
+        groups = [_group_of(j) for j in self.actuator_names]
+        self.actuator_groups = {
+            g: np.array([i for i, x in enumerate(groups) if x == g], dtype=np.int64)
+            for g in ACTUATOR_GROUPS
+        }
+        self.skin = Skin(self.model)
+        self.regions: RegionTable = region_table()
+        self._skin_body = self.skin.body_spacing > 0
+        self.hand_of_body = np.full(self.model.nbody, -1, dtype=np.int64)
+        for h, side in enumerate(("left", "right")):
+            for part in ("hand", "fingers"):
+                self.hand_of_body[self.model.body(f"{side}_{part}").id] = h
+        self.hand_labels = dict(vision.HAND_LABELS)
+        self._proprio = Proprioception(self.model, self.actuator_names)
+        joints = [self.model.joint(j) for j in self.actuator_names]
+        self._qpos_index = np.array([j.qposadr[0] for j in joints])
+        self._ranges = np.array([j.range for j in joints])
+        rest = SCENES[scene].rest
+        self._rest = np.array([rest.get(j, 0.0) for j in self.actuator_names])
+        self._eyes: vision.Eyes | None = None
+        self._views: dict[tuple[int, int], mujoco.Renderer] = {}
+        self._cache: dict[str, Any] = {}
+        self.steps = 0
+        self.reset(np.random.default_rng(0))
+
+    # -- simulation -------------------------------------------------------------------------
+    def reset(self, rng: np.random.Generator, random_pose: bool = False) -> None:
+        """Start an episode: the scene's rest pose, or joint angles uniform within their ranges."""
+        mujoco.mj_resetData(self.model, self.data)
+        pose = rng.uniform(self._ranges[:, 0], self._ranges[:, 1]) if random_pose else self._rest
+        self.data.qpos[self._qpos_index] = pose
+        mujoco.mj_forward(self.model, self.data)
+        self._cache.clear()
+        self.steps = 0
+
+    def step(self, action: np.ndarray) -> None:
+        """Apply ``action`` (action_dim,) in [-1, 1] (clipped): torque = max_torque * action."""
+        action = np.asarray(action, dtype=np.float64)
+        if action.shape != (self.action_dim,):
+            raise ValueError(f"action has shape {action.shape}; expected ({self.action_dim},)")
+        if not np.all(np.isfinite(action)):
+            raise ValueError("action contains NaN or inf")
+        np.clip(action, -1.0, 1.0, out=self.data.ctrl)
+        mujoco.mj_step(self.model, self.data)
+        self._cache.clear()
+        self.steps += 1
+
+    # -- senses -----------------------------------------------------------------------------
+    def _need(self, sense: str) -> None:
+        if sense not in self.senses:
+            raise SenseNotEnabledError(
+                f"sense '{sense}' is not enabled for this infant (senses: "
+                f"{', '.join(self.senses) or 'none'}); pass senses=(..., '{sense}') to build_infant"
+            )
+
+    def _cached(self, key: str, compute) -> Any:
+        value = self._cache.get(key)
+        if value is None:
+            value = compute()
+            if isinstance(value, np.ndarray):
+                value.flags.writeable = False
+            self._cache[key] = value
+        return value
+
+    def _sides(self, with_force: bool) -> contacts.ContactSides:
+        key = "sides_force" if with_force else "sides"
+        if not with_force and "sides_force" in self._cache:
+            return self._cache["sides_force"]
+        return self._cached(
+            key, lambda: contacts.contact_sides(self.model, self.data, self._skin_body, with_force)
+        )
+
+    def touch(self) -> np.ndarray:
+        """Returns (num_sensors, 3) float32: force on each sensor in its body's frame (N)."""
+        self._need("touch")
+        return self._cached(
+            "touch", lambda: contacts.touch_from_contacts(self.skin, self._sides(True))
+        )
+
+    def proprioception(self) -> np.ndarray:
+        """Returns (6 * action_dim,) float32; layout in :class:`~.senses.Proprioception`."""
+        self._need("proprioception")
+        return self._cached("proprioception", lambda: self._proprio(self.data))
+
+    def vestibular(self) -> np.ndarray:
+        """Returns (6,) float32: head accelerometer (m/s^2) then gyro (rad/s), head frame."""
+        self._need("vestibular")
+        return self._cached("vestibular", lambda: vestibular(self.data))
+
+    def _eye_renderer(self) -> vision.Eyes:
+        self._need("eyes")
+        if self._eyes is None:
+            labels = vision.geom_labels(self.model, self.hand_of_body)
+            self._eyes = vision.Eyes(self.model, self.eye_size, labels)
+        return self._eyes
+
+    def eyes(self) -> np.ndarray:
+        """Returns (2, H, W, 3) uint8 camera images, [left eye, right eye]."""
+        return self._cached("eyes", lambda: self._eye_renderer().rgb(self.data))
+
+    def eyes_segmentation(self) -> np.ndarray:
+        """Returns (2, H, W) int32 labels: 0 background, ``hand_labels`` (left 1, right 2),
+        3 other body parts, 4 scene (mattress, floor, toys)."""
+        return self._cached("segmentation", lambda: self._eye_renderer().segmentation(self.data))
+
+    def hand_visibility(self) -> np.ndarray:
+        """Returns (2 eyes, 2 hands) bool: some pixel of the hand is in that eye's image."""
+        seg = self.eyes_segmentation()
+        return self._cached(
+            "visibility",
+            lambda: np.array(
+                [
+                    [np.any(seg[e] == self.hand_labels[h]) for h in ("left", "right")]
+                    for e in range(2)
+                ]
+            ),
+        )
+
+    def hand_contacts(self) -> np.ndarray:
+        """Returns (2 hands, 68) bool: regions each hand (palm or fingers) touches this step."""
+        return self._cached(
+            "hand_contacts",
+            lambda: contacts.hand_contacts(self.skin, self._sides(False), self.hand_of_body),
+        )
+
+    def render_view(self, width: int = 320, height: int = 240) -> np.ndarray:
+        """Returns (height, width, 3) uint8 from the scene's third-person camera."""
+        key = (int(width), int(height))
+        if key not in self._views:
+            self._views[key] = vision.fast_renderer(self.model, key[1], key[0])
+        renderer = self._views[key]
+        renderer.update_scene(self.data, camera="overview")
+        return renderer.render()
+
+    def describe(self) -> dict[str, Any]:
+        """Cheap summary for ``devlearn info``: sizes, timing, actuators."""
+        return {
+            "scene": self.scene,
+            "senses": list(self.senses),
+            "action_dim": self.action_dim,
+            "touch_sensors": self.skin.num_sensors,
+            "skin_regions": NUM_REGIONS,
+            "regions_per_side": NUM_PARTS,
+            "proprioception_size": self._proprio.size,
+            "eye_size": self.eye_size,
+            "physics_timestep": self.physics_timestep,
+            "control_timestep": self.control_timestep,
+            "episode_steps": self.episode_steps,
+            "actuator_groups": {k: len(v) for k, v in self.actuator_groups.items()},
+        }
+
+    def close(self) -> None:
+        """Free renderers (GL contexts). The infant cannot render afterwards."""
+        if self._eyes is not None:
+            self._eyes.close()
+            self._eyes = None
+        for renderer in self._views.values():
+            renderer.close()
+        self._views.clear()
+
+
+def build_infant(scene: str, *, senses: Sequence[str] = SENSES, eye_size: int = 64) -> Infant:
+    """Build the infant in a scene.
+
+    Args:
+        scene: "crib" (lying, pelvis fixed, 30 actuators) or "sitting" (trunk and legs held,
+            17 actuators, toy blocks in front).
+        senses: Any of "touch", "proprioception", "vestibular", "eyes".
+        eye_size: Eye image height and width (pixels).
+
+    Returns:
+        The infant, reset to its rest pose.
+    """
+    return Infant(scene, senses=senses, eye_size=eye_size)

@@ -1,0 +1,198 @@
+"""The two scenes: lying in a crib (self-touch) and sitting before toy blocks (hand regard)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from dm_control import mjcf
+
+from devlearn.infant.body import WORLD_CONTYPE, add_infant
+
+PHYSICS_TIMESTEP = 0.005  # facts sec. 1: 5 ms, one physics step per control step (200 Hz)
+EPISODE_STEPS = 1000  # 5 simulated seconds
+
+TOY_COLOURS = (
+    (0.85, 0.15, 0.15, 1),
+    (0.15, 0.65, 0.2, 1),
+    (0.15, 0.3, 0.85, 1),
+    (0.95, 0.85, 0.1, 1),
+)
+
+
+@dataclass(frozen=True)
+class SceneSpec:
+    """What differs between scenes.
+
+    Attributes:
+        name: "crib" or "sitting".
+        actuated_groups: Joint groups with motors; every other joint is locked (held).
+        held: Held angles (radians) of locked joints by full name; default 0.
+        root_pos, root_quat: Pose of the fixed hip in the world.
+        rest: Initial angles of actuated joints when not posed randomly (full names).
+        overview: Third-person camera (pos, xyaxes) for ``render_view``.
+    """
+
+    name: str
+    actuated_groups: frozenset[str]
+    held: dict[str, float]
+    root_pos: tuple[float, float, float]
+    root_quat: tuple[float, float, float, float]
+    rest: dict[str, float] = field(default_factory=dict)
+    overview: tuple[tuple[float, ...], tuple[float, ...]] = ((0, 0, 1), (1, 0, 0, 0, 1, 0))
+
+
+_HALF = math.sqrt(0.5)
+_SITTING_LEGS = {
+    f"{s}_{j}": a
+    for s in ("left", "right")
+    for j, a in (("hip_flexion", math.radians(90)), ("hip_abduction", 0.4), ("fingers", 0.3))
+}
+
+SCENES = {
+    # On its back, head towards +x: body x (front) -> world z, body z (up) -> world x, so the
+    # body's left (+y) is world -y. The hip is welded to the mattress at its own radius.
+    "crib": SceneSpec(
+        "crib",
+        frozenset({"trunk", "head", "arm", "wrist", "fingers", "leg"}),
+        {},
+        root_pos=(0.0, 0.0, 0.05),
+        root_quat=(0.0, _HALF, 0.0, _HALF),
+        overview=((-0.55, -0.45, 0.75), (0.63, -0.77, 0.0, 0.45, 0.37, 0.81)),
+    ),
+    # Upright on the floor, legs straight forward in a V, trunk and legs held.
+    "sitting": SceneSpec(
+        "sitting",
+        frozenset({"head", "arm", "wrist"}),
+        _SITTING_LEGS,
+        root_pos=(0.0, 0.0, 0.07),
+        root_quat=(1.0, 0.0, 0.0, 0.0),
+        rest={
+            "head_tilt": 0.5,
+            "left_elbow": 0.6,
+            "right_elbow": 0.6,
+            "left_shoulder_flexion": 0.4,
+            "right_shoulder_flexion": 0.4,
+        },
+        overview=((0.75, -0.55, 0.55), (0.59, 0.81, 0.0, -0.35, 0.25, 0.9)),
+    ),
+}
+
+
+def _options(root: mjcf.RootElement) -> None:
+    root.compiler.angle = "radian"
+    root.option.timestep = PHYSICS_TIMESTEP
+    root.option.integrator = "implicitfast"  # damping integrated implicitly: stable at 5 ms
+    root.option.iterations = 20
+    root.option.ls_iterations = 8
+    root.default.geom.condim = 3
+    root.default.geom.friction = (1.0, 0.005, 0.0002)
+    # Fast software rendering: no multisampling, coarse built-in shapes, small shadow map.
+    quality = root.visual.quality
+    quality.offsamples = 0
+    quality.numslices = 16
+    quality.numstacks = 8
+    quality.numquads = 1
+    quality.shadowsize = 256
+    glob = getattr(root.visual, "global")
+    glob.offwidth, glob.offheight = 1280, 960
+    root.visual.map.znear = 0.002
+    root.visual.headlight.ambient = (0.35, 0.35, 0.35)
+    root.visual.headlight.diffuse = (0.35, 0.35, 0.35)
+
+
+def _props(root: mjcf.RootElement, scene: str) -> None:
+    world = root.worldbody
+    world.add(
+        "light",
+        name="sun",
+        pos=(0, 0, 2.0),
+        dir=(0, 0, -1),
+        directional=True,
+        diffuse=(0.4, 0.4, 0.4),
+        castshadow=False,
+    )
+    if scene == "crib":
+        world.add(
+            "geom",
+            name="mattress",
+            type="plane",
+            size=(0.6, 0.4, 0.05),
+            rgba=(0.6, 0.75, 0.92, 1),
+            contype=WORLD_CONTYPE,
+            conaffinity=1,
+        )
+        # Something to look at: a ceiling (a plane seen from below) and the crib's rails,
+        # visual only (contype 0) so they cost no collision checks.
+        world.add(
+            "geom",
+            name="ceiling",
+            type="plane",
+            size=(1.5, 1.5, 0.05),
+            pos=(0, 0, 1.4),
+            euler=(math.pi, 0, 0),
+            rgba=(0.95, 0.92, 0.8, 1),
+            contype=0,
+            conaffinity=0,
+        )
+        for i, (x, y, sx, sy) in enumerate(
+            ((0.6, 0, 0.02, 0.4), (-0.6, 0, 0.02, 0.4), (0, 0.4, 0.6, 0.02), (0, -0.4, 0.6, 0.02))
+        ):
+            world.add(
+                "geom",
+                name=f"rail_{i}",
+                type="box",
+                size=(sx, sy, 0.15),
+                pos=(x, y, 0.15),
+                rgba=(0.8, 0.62, 0.42, 1),
+                contype=0,
+                conaffinity=0,
+            )
+    else:
+        world.add(
+            "geom",
+            name="floor",
+            type="plane",
+            size=(1.0, 1.0, 0.05),
+            rgba=(0.72, 0.74, 0.78, 1),
+            contype=WORLD_CONTYPE,
+            conaffinity=1,
+        )
+        blocks = ((0.24, 0.05, 0.4), (0.3, -0.07, -0.3), (0.37, 0.02, 0.1), (0.21, -0.02, 0.8))
+        for i, ((x, y, yaw), rgba) in enumerate(zip(blocks, TOY_COLOURS)):
+            world.add(
+                "geom",
+                name=f"toy_{i}",
+                type="box",
+                size=(0.02, 0.02, 0.02),
+                pos=(x, y, 0.02),
+                euler=(0, 0, yaw),
+                rgba=rgba,
+                contype=WORLD_CONTYPE,
+                conaffinity=1,
+            )
+
+
+def build_scene_model(scene: str, vestibular: bool = True) -> tuple[mjcf.RootElement, list[str]]:
+    """Build the MJCF model of a scene.
+
+    Returns:
+        (root element, actuated joint names in actuator order).
+    """
+    if scene not in SCENES:
+        raise ValueError(f"unknown scene '{scene}'; valid scenes: {', '.join(SCENES)}")
+    spec = SCENES[scene]
+    root = mjcf.RootElement(model=f"infant_{scene}")
+    _options(root)
+    _props(root, scene)
+    pos, xyaxes = spec.overview
+    root.worldbody.add("camera", name="overview", pos=pos, xyaxes=xyaxes, fovy=50)
+    actuated = add_infant(
+        root,
+        root_pos=spec.root_pos,
+        root_quat=spec.root_quat,
+        actuated_groups=set(spec.actuated_groups),
+        held=spec.held,
+        vestibular=vestibular,
+    )
+    return root, actuated

@@ -1,0 +1,45 @@
+"""Proprioception and the vestibular sense, read straight from MuJoCo's arrays."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+
+LIMIT_ZONE = 0.035  # rad: limit proximity rises from 0 to 1 over the last 0.035 rad (facts 2)
+
+
+class Proprioception:
+    """Joint positions, velocities, torques, limit proximity, actions and motor torques.
+
+    The vector is [qpos, qvel, torque, limit, action, actuator_force], each (J,) for the J
+    actuated joints in actuator order, so (6 J,) float32: 180 in the crib, 102 sitting.
+    "torque" is the net torque the joint passes on (motor + passive spring-damper + constraint
+    forces such as limits and contacts); "limit" is 0 until within 0.035 rad of a joint limit,
+    rising linearly to 1 at the limit.
+    """
+
+    def __init__(self, model: mujoco.MjModel, joints: list[str]) -> None:
+        ids = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, j) for j in joints]
+        self.qpos = np.array([model.jnt_qposadr[j] for j in ids])
+        self.dof = np.array([model.jnt_dofadr[j] for j in ids])
+        self.lo, self.hi = model.jnt_range[ids, 0], model.jnt_range[ids, 1]
+        self.size = 6 * len(ids)
+
+    def __call__(self, data: mujoco.MjData) -> np.ndarray:
+        """Returns (6 J,) float32."""
+        q = data.qpos[self.qpos]
+        to_limit = np.minimum(q - self.lo, self.hi - q)
+        limit = np.clip((LIMIT_ZONE - to_limit) / LIMIT_ZONE, 0.0, 1.0)
+        torque = (
+            data.qfrc_actuator[self.dof]
+            + data.qfrc_passive[self.dof]
+            + data.qfrc_constraint[self.dof]
+        )
+        return np.concatenate(
+            [q, data.qvel[self.dof], torque, limit, data.ctrl, data.actuator_force]
+        ).astype(np.float32)
+
+
+def vestibular(data: mujoco.MjData) -> np.ndarray:
+    """Head accelerometer (m/s^2, includes gravity) and gyro (rad/s) in the head frame, (6,)."""
+    return np.asarray(data.sensordata[:6], dtype=np.float32).copy()
