@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from itertools import chain
 
 import torch.nn as nn
@@ -31,7 +32,9 @@ class UniqueParamPPO(PPO):
     """
 
     def __init__(self, actor, critic, storage, *args, **kwargs) -> None:
-        super().__init__(actor, critic, storage, *args, **kwargs)
+        with warnings.catch_warnings():  # the parent's optimiser, replaced below, may warn
+            warnings.filterwarnings("ignore", message=".*duplicate parameters")
+            super().__init__(actor, critic, storage, *args, **kwargs)
         self.optimizer = type(self.optimizer)(
             unique_parameters(self.actor, self.critic), lr=self.learning_rate
         )

@@ -229,6 +229,23 @@ class DevRunner(OnPolicyRunner):
         bar.set_postfix(postfix, refresh=False)
         bar.update(self.env_steps - bar.n)
 
+    def _forget_metrics_after(self, step: int) -> None:
+        """Drop metrics.jsonl rows past ``step``: a killed run may have logged iterations after
+        its last checkpoint, and the resumed run redoes (and logs) them again."""
+        path = self.run_dir / "metrics.jsonl"
+        if not path.exists():
+            return
+        kept = []
+        for line in path.read_text().splitlines():
+            try:
+                if json.loads(line)["step"] <= step:
+                    kept.append(line)
+            except (ValueError, KeyError, TypeError):
+                pass  # a line cut short by the kill
+        tmp = path.with_name(path.name + ".tmp")
+        tmp.write_text("".join(line + "\n" for line in kept))
+        os.replace(tmp, path)
+
     # --- checkpoints ----------------------------------------------------------------------
     def checkpoint_state(self, gather: bool = True) -> dict[str, Any]:
         """Everything needed to resume (collective when distributed and ``gather``)."""
@@ -281,6 +298,8 @@ class DevRunner(OnPolicyRunner):
         ranks = state["env"]["ranks"]
         if self.gpu_global_rank < len(ranks):
             self.env.load_state_dict(ranks[self.gpu_global_rank])
+        if self.is_main:
+            self._forget_metrics_after(self.env_steps)
         torch.set_rng_state(state["rng"]["torch"])
         np.random.set_state(state["rng"]["numpy"])
         random.setstate(state["rng"]["random"])

@@ -25,6 +25,7 @@ class FakeInfant:
         episode_steps: int = 10,
         action_dim: int = 3,
         fail_after: int | None = None,
+        interrupt_after: int | None = None,
     ):
         self.scene = scene
         self.senses = tuple(senses)
@@ -33,6 +34,7 @@ class FakeInfant:
         self.action_dim = action_dim
         self.actuator_names = [f"joint{i}" for i in range(action_dim)]
         self.fail_after = fail_after
+        self.interrupt_after = interrupt_after
         self.steps_taken = 0
         self.position = np.zeros(action_dim)
 
@@ -45,6 +47,8 @@ class FakeInfant:
         self.steps_taken += 1
         if self.fail_after is not None and self.steps_taken > self.fail_after:
             raise RuntimeError("fake infant broke on purpose")
+        if self.interrupt_after is not None and self.steps_taken > self.interrupt_after:
+            raise KeyboardInterrupt  # as if Ctrl-C arrived mid-rollout
         self.position = np.clip(self.position + 0.1 * np.clip(action, -1, 1), -2, 2)
 
     def proprioception(self) -> np.ndarray:
@@ -65,7 +69,7 @@ class FakeInfant:
 
 
 def fake_infant_factory(scene: str, senses=("proprioception",), eye_size: int = 8, **kwargs):
-    """Build a FakeInfant; extra kwargs (episode_steps, action_dim, fail_after) pass through."""
+    """Build a FakeInfant; extra kwargs (episode_steps, action_dim, fail_after...) pass through."""
     return FakeInfant(scene, senses, eye_size, **kwargs)
 
 

@@ -1,0 +1,70 @@
+"""BehaviorEnv: episodes, time-outs, per-term sums, stages, seeding and resumable state."""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+from fake_infant import TinyBehavior, TinyConfig, fake_infant_factory
+
+from devlearn.env import BehaviorEnv
+
+factory = functools.partial(fake_infant_factory, episode_steps=5)
+
+
+def make_env(seed: int = 0, **config) -> BehaviorEnv:
+    return BehaviorEnv(TinyBehavior(TinyConfig(**config)), seed, infant_factory=factory)
+
+
+def test_episode_times_out_and_reports_term_sums():
+    env = make_env(target=0.45)
+    obs = env.reset()
+    np.testing.assert_array_equal(obs["proprioception"], np.zeros(3))
+    rewards = []
+    for t in range(5):
+        obs, reward, done, time_out, info = env.step(np.ones(3))
+        rewards.append(reward)
+        assert (done, time_out) == ((t == 4), (t == 4))
+        assert (info is None) == (t < 4)
+    # positions 0.1..0.5 -> reach = -|position - 0.45|
+    np.testing.assert_allclose(rewards, [-0.35, -0.25, -0.15, -0.05, -0.05], atol=1e-6)
+    assert set(info) == {"reward/reach", "reward/counter", "metrics/close"}
+    assert info["reward/reach"] == sum(rewards)
+    assert info["reward/counter"] == 0.0  # weight 0: logged weighted
+    assert info["metrics/close"] == 0.6  # 0.3, 0.4 and 0.5 are within 0.2 of 0.45
+    # auto-reset: the returned observation is the new episode's first one
+    np.testing.assert_array_equal(obs["proprioception"], np.zeros(3))
+    assert env.episode_step == 0
+
+
+def test_actions_are_clipped():
+    env = make_env()
+    env.reset()
+    obs, *_ = env.step(np.full(3, 50.0))
+    np.testing.assert_allclose(obs["proprioception"], np.full(3, 0.1), atol=1e-6)
+
+
+def test_random_pose_stage_and_seeding():
+    a, b, c = make_env(seed=1), make_env(seed=1), make_env(seed=2)
+    for env in (a, b, c):
+        env.set_stage({"random_pose": True})
+    pa, pb, pc = (env.reset()["proprioception"] for env in (a, b, c))
+    assert np.any(pa != 0)
+    np.testing.assert_array_equal(pa, pb)
+    assert not np.array_equal(pa, pc)
+
+
+def test_state_dict_restores_terms_rng_and_stage():
+    env = make_env(seed=3)
+    env.set_stage({"random_pose": True})
+    env.reset()
+    for _ in range(7):
+        env.step(np.zeros(3))
+    state = env.state_dict()
+    expected_next = env.reset()["proprioception"]
+
+    fresh = make_env(seed=99)
+    fresh.load_state_dict(state)
+    assert fresh.terms[1].count == 7
+    assert fresh.stage == {"random_pose": True}
+    np.testing.assert_array_equal(fresh.reset()["proprioception"], expected_next)

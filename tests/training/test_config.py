@@ -1,0 +1,135 @@
+"""RunConfig: overrides with type conversion, clear errors, save/load and rsl-rl's train_cfg."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+import tiny_run
+from fake_infant import TinyBehavior, TinyConfig
+
+from devlearn.errors import UsageError
+from devlearn.training.config import (
+    RunConfig,
+    apply_overrides,
+    default_config,
+    from_dict,
+    to_dict,
+    to_rsl_rl,
+    valid_keys,
+)
+
+
+def test_every_field_is_documented():
+    import ast
+    import inspect
+
+    from devlearn.training import config
+
+    tree = ast.parse(inspect.getsource(config))
+    for node in (n for n in tree.body if isinstance(n, ast.ClassDef)):
+        body = node.body
+        for i, item in enumerate(body):
+            if isinstance(item, ast.AnnAssign):
+                doc = body[i + 1] if i + 1 < len(body) else None
+                assert isinstance(doc, ast.Expr) and isinstance(doc.value, ast.Constant), (
+                    f"{node.name}.{item.target.id} has no docstring"
+                )
+
+
+def test_overrides_convert_to_field_types():
+    cfg = RunConfig(behavior_name="tiny", behavior=TinyConfig())
+    apply_overrides(
+        cfg,
+        [
+            "ppo.learning_rate=3e-4",
+            "total_steps=1e6",
+            "behavior.use_eyes=true",
+            "behavior.stage_steps=1000",
+            "ppo.desired_kl=none",
+            "device=cuda",
+        ],
+    )
+    assert cfg.ppo.learning_rate == 3e-4 and isinstance(cfg.ppo.learning_rate, float)
+    assert cfg.total_steps == 1_000_000 and isinstance(cfg.total_steps, int)
+    assert cfg.behavior.use_eyes is True
+    assert cfg.behavior.stage_steps == 1000
+    assert cfg.ppo.desired_kl is None
+    assert cfg.device == "cuda"
+
+
+def test_sequence_fields_convert():
+    from dataclasses import dataclass, field
+
+    @dataclass
+    class Seq:
+        dims: tuple[int, ...] = (1,)
+        """Dims."""
+        names: list[str] = field(default_factory=list)
+        """Names."""
+
+    cfg = RunConfig(behavior=Seq())
+    apply_overrides(cfg, ["behavior.dims=64,32", 'behavior.names=["a", "b"]'])
+    assert cfg.behavior.dims == (64, 32)
+    assert cfg.behavior.names == ["a", "b"]
+
+
+@pytest.mark.parametrize(
+    "override, message",
+    [
+        ("ppo.lr=1", "unknown config key 'ppo.lr'; valid keys: "),
+        ("behavior.nope=1", "unknown config key 'behavior.nope'"),
+        ("ppo=1", "unknown config key 'ppo'"),
+        ("ppo.num_mini_batches=two", "bad value 'two' for ppo.num_mini_batches (expected int)"),
+        ("total_steps=1.5", "expected an integer"),
+        ("behavior.use_eyes=maybe", "expected true or false"),
+        ("seed", "override 'seed' must look like key=value"),
+    ],
+)
+def test_override_errors_are_clear(override, message):
+    cfg = RunConfig(behavior_name="tiny", behavior=TinyConfig())
+    with pytest.raises(UsageError) as info:
+        apply_overrides(cfg, [override])
+    assert message in str(info.value)
+    if "valid keys" in message:
+        assert "ppo.learning_rate" in str(info.value) and "behavior.stage_steps" in str(info.value)
+
+
+def test_precedence_defaults_behaviour_cli_set():
+    cfg = default_config(TinyBehavior, ["ppo.num_mini_batches=4"], num_envs=3, seed=None)
+    assert cfg.ppo.num_steps_per_env == 8  # from TinyBehavior.train_defaults()
+    assert cfg.ppo.num_mini_batches == 4  # --set beats train_defaults
+    assert cfg.num_envs == 3 and cfg.seed == 0
+    assert "ppo.clip_param" in valid_keys(cfg)
+    assert cfg.ppo.clip_param == 0.2  # paper, sec. II-A5
+
+
+def test_dict_round_trip_through_json():
+    cfg = default_config(TinyBehavior, ["behavior.target=0.25", "ppo.desired_kl=none"])
+    data = json.loads(json.dumps(to_dict(cfg)))
+    again = from_dict(data, TinyBehavior)
+    assert again == cfg
+    with pytest.raises(UsageError, match="unknown config key 'ppo.bogus'"):
+        from_dict({**data, "ppo": {**data["ppo"], "bogus": 1}}, TinyBehavior)
+
+
+def test_to_rsl_rl():
+    cfg = tiny_run.config("unused")
+    behavior = TinyBehavior(cfg.behavior)
+    train_cfg = to_rsl_rl(cfg, behavior)
+    alg = train_cfg["algorithm"]
+    assert alg["class_name"] == "devlearn.training.ppo:UniqueParamPPO"
+    assert alg["clip_param"] == 0.2 and "num_steps_per_env" not in alg
+    assert train_cfg["num_steps_per_env"] == 8
+    assert train_cfg["obs_groups"] == {"actor": ["proprioception"], "critic": ["proprioception"]}
+    assert train_cfg["actor"]["class_name"] == "devlearn.training.networks:MultiSenseModel"
+    dist = train_cfg["actor"]["distribution_cfg"]
+    assert dist["class_name"] == "devlearn.training.networks:TanhSoftplusGaussian"
+    assert "distribution_cfg" not in train_cfg["critic"]
+    # every algorithm key is a PPO keyword argument (rsl-rl raises TypeError otherwise)
+    import inspect
+
+    from devlearn.training.ppo import UniqueParamPPO
+
+    params = inspect.signature(UniqueParamPPO.__mro__[1].__init__).parameters
+    assert set(alg) - {"class_name"} <= set(params)

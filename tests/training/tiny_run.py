@@ -1,0 +1,42 @@
+"""Helpers for training tests: a registry with the tiny behaviour and a config factory.
+
+Run as a script (``python tiny_run.py OUT_DIR TOTAL_STEPS``) it trains the tiny behaviour in
+process, so tests can kill it at any moment.
+"""
+
+from __future__ import annotations
+
+import functools
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "env"))
+
+from fake_infant import OtherBehavior, TinyBehavior, fake_infant_factory  # noqa: E402
+
+from devlearn.testing import registry_for  # noqa: E402
+
+EPISODE_STEPS = 10
+factory = functools.partial(fake_infant_factory, episode_steps=EPISODE_STEPS)
+
+
+def registry():
+    """A registry holding ``tiny`` and ``other``."""
+    return registry_for(TinyBehavior, OtherBehavior)
+
+
+def config(out_dir, total_steps: int = 256, *overrides: str, **top):
+    """The tiny behaviour's config: 4 envs x 8 steps per iteration (32 env steps)."""
+    from devlearn.training import default_config
+
+    top = {"num_envs": 4, "save_interval": 1, **top}
+    return default_config(
+        TinyBehavior, list(overrides), out_dir=str(out_dir), total_steps=total_steps, **top
+    )
+
+
+if __name__ == "__main__":
+    from devlearn.training import train
+
+    out, steps, *rest = sys.argv[1:]
+    train(config(out, int(steps), *rest), registry(), infant_factory=factory, progress=False)
