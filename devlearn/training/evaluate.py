@@ -21,8 +21,8 @@ VIDEO_FPS = 25
 
 
 def _batch(obs: dict[str, np.ndarray]) -> TensorDict:
-    """One env's observations as a batch of one: groups (1, *shape)."""
-    return TensorDict({k: torch.from_numpy(np.asarray(v)[None]) for k, v in obs.items()}, [1])
+    """One env's observations as a batch of one (copied): groups (1, *shape)."""
+    return TensorDict({k: torch.from_numpy(np.array(v)[None]) for k, v in obs.items()}, [1])
 
 
 def load_actor(checkpoint: dict[str, Any], behavior, obs: dict[str, np.ndarray], action_dim: int):

@@ -1,0 +1,127 @@
+"""``devlearn run`` and ``devlearn eval``: the whole path, resume, and one-line errors."""
+
+from __future__ import annotations
+
+import functools
+import json
+import sys
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "env"))
+
+from fake_infant import OtherBehavior, TinyBehavior, fake_infant_factory  # noqa: E402
+
+import devlearn.plugins  # noqa: E402
+from devlearn.cli import main  # noqa: E402
+from devlearn.testing import registry_for  # noqa: E402
+
+SMALL = ["--envs", "2", "--seed", "1", "--set", "save_interval=1"]
+
+
+@pytest.fixture
+def cli(monkeypatch):
+    """Run ``devlearn ...`` in process with the tiny behaviours installed and a fake infant."""
+    registry = registry_for(TinyBehavior, OtherBehavior)
+    monkeypatch.setattr(devlearn.plugins, "PluginRegistry", lambda *a, **k: registry)
+    fake = functools.partial(fake_infant_factory, episode_steps=10)
+    monkeypatch.setattr("devlearn.env.behavior_env.build_default_infant", fake)
+    return main
+
+
+def test_run_then_eval(cli, tmp_path, capsys):
+    out = tmp_path / "run"
+    assert cli(["run", "tiny", "--steps", "64", "--out", str(out), *SMALL]) == 0
+    printed = capsys.readouterr().out
+    assert f"run directory: {out}" in printed
+    summary = json.loads(printed[printed.index("{") :])
+    assert summary["env_steps"] == 64 and summary["iterations"] == 4
+    assert "mean_reward" in summary and "metrics/close" in summary
+    assert json.loads((out / "config.json").read_text())["num_envs"] == 2
+
+    ckpt = out / "checkpoint_latest.pt"
+    assert cli(["eval", "tiny", "--checkpoint", str(ckpt), "--episodes", "2", "--json"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["episodes"] == 2
+    assert (out / "eval" / "eval.json").exists() and (out / "eval" / "close.txt").exists()
+
+    assert cli(["run", "tiny", "--resume", str(out), "--steps", "96"]) == 0
+    assert json.loads(capsys.readouterr().out.split("\n", 1)[1])["env_steps"] == 96
+    steps = [json.loads(line)["step"] for line in (out / "metrics.jsonl").read_text().splitlines()]
+    assert steps == [16, 32, 48, 64, 80, 96]
+
+
+def test_eval_video(cli, tmp_path, capsys):
+    out = tmp_path / "run"
+    assert cli(["run", "tiny", "--steps", "16", "--out", str(out), *SMALL]) == 0
+    video = tmp_path / "episode.mp4"
+    ckpt = str(out / "checkpoint_latest.pt")
+    eval_dir = tmp_path / "eval"
+    assert (
+        cli(
+            [
+                "eval",
+                "tiny",
+                "--checkpoint",
+                ckpt,
+                "--episodes",
+                "1",
+                "--video",
+                str(video),
+                "--out",
+                str(eval_dir),
+            ]
+        )
+        == 0
+    )
+    assert video.stat().st_size > 0 and (eval_dir / "eval.json").exists()
+    assert "close" in capsys.readouterr().out
+
+
+def error(cli, capsys, *argv: str) -> str:
+    capsys.readouterr()  # drop earlier output (progress bars)
+    assert cli(list(argv)) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("devlearn: error: ") and "\n" not in err and "Traceback" not in err
+    return err
+
+
+def test_run_errors(cli, tmp_path, capsys):
+    assert "bad value 'lots' for total_steps" in error(
+        cli, capsys, "run", "tiny", "--steps", "lots"
+    )
+    assert "--envs must be at least 1" in error(cli, capsys, "run", "tiny", "--envs", "0")
+    assert "--device must be cpu, cuda or cuda:N" in error(
+        cli, capsys, "run", "tiny", "--device", "tpu"
+    )
+    err = error(cli, capsys, "run", "tiny", "--set", "ppo.lr=1")
+    assert "unknown config key 'ppo.lr'; valid keys:" in err and "ppo.learning_rate" in err
+    assert "unknown behavior 'tinyy'" in error(cli, capsys, "run", "tinyy")
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    assert "cannot read" in error(cli, capsys, "run", "tiny", "--resume", str(empty))
+    assert "does not exist" in error(cli, capsys, "run", "tiny", "--resume", str(tmp_path / "x"))
+    out = tmp_path / "run"
+    assert cli(["run", "tiny", "--steps", "16", "--out", str(out), *SMALL]) == 0
+    for ckpt in out.glob("checkpoint_*.pt"):
+        ckpt.unlink()
+    assert "no checkpoint in" in error(cli, capsys, "run", "tiny", "--resume", str(out))
+    assert "trains 'tiny', not 'other'" in error(cli, capsys, "run", "other", "--resume", str(out))
+
+
+def test_eval_errors(cli, tmp_path, capsys):
+    out = tmp_path / "run"
+    assert cli(["run", "tiny", "--steps", "16", "--out", str(out), *SMALL]) == 0
+    ckpt = out / "checkpoint_latest.pt"
+    err = error(cli, capsys, "eval", "other", "--checkpoint", str(ckpt))
+    assert f"checkpoint {ckpt} was trained for 'tiny', not 'other'" in err
+    truncated = tmp_path / "truncated.pt"
+    truncated.write_bytes(ckpt.read_bytes()[:1000])
+    err = error(cli, capsys, "eval", "tiny", "--checkpoint", str(truncated))
+    assert f"checkpoint {truncated} is corrupt or unreadable" in err
+    missing = tmp_path / "missing.pt"
+    assert "does not exist" in error(cli, capsys, "eval", "tiny", "--checkpoint", str(missing))
+    assert "--episodes must be at least 1" in error(
+        cli, capsys, "eval", "tiny", "--checkpoint", str(ckpt), "--episodes", "0"
+    )
