@@ -9,7 +9,7 @@ import json
 import numpy as np
 import pytest
 from devlearn_self_touch import SelfTouch, SelfTouchConfig, SelfTouchEvaluator
-from devlearn_self_touch.body_map import body_map, hand_touched_parts, own_hand_mask
+from devlearn_self_touch.body_map import body_map, hand_touched_parts
 from self_touch_fakes import FakeInfant, make_ctx
 
 from devlearn import Behavior, Curriculum
@@ -38,31 +38,31 @@ def test_body_map_is_mean_force_magnitude_per_region():
     assert g[2:67].sum() == 0.0
 
 
-def test_parts_and_own_hand_mask(fake_regions):
+def test_hand_parts_merge_sides(fake_regions):
     contacts = np.zeros((2, 68), bool)
     contacts[0, [5, 39]] = True  # left hand: left and right side of part 5
     contacts[1, 40] = True
     parts = hand_touched_parts(contacts, fake_regions.parts)
     assert parts.shape == (2, 34)
     assert parts[0].sum() == 1 and parts[0, 5] and parts[1, 6]
-    mask = own_hand_mask(fake_regions)
-    assert np.flatnonzero(mask[0]).tolist() == [32, 33]
-    assert np.flatnonzero(mask[1]).tolist() == [66, 67]
 
 
-def test_facts_ignore_the_mattress_and_own_hand():
+def test_facts_touched_sources():
     touch = np.zeros((204, 3), np.float32)
-    touch[3 * 20 : 3 * 21, 2] = 0.01  # region 20: a light force under the threshold (mattress)
-    touch[3 * 30, 2] = 3.0  # region 30: g = 1.0, strong
+    touch[3 * 20 : 3 * 21, 2] = 0.5  # region 20: the mattress under the back, g = 0.5 N
+    touch[3 * 30, 2] = 0.03  # region 30: a hand's light touch, g = 0.01 N
     contacts = np.zeros((2, 68), bool)
-    contacts[0, [10, 32]] = True  # left hand on region 10 and on its own palm (32)
-    facts = SelfTouch().facts(FakeInfant(touch, contacts))
-    assert facts["body_map"][20] == pytest.approx(0.01) and facts["body_map"][30] == 1.0
-    assert np.flatnonzero(facts["hand_contacts"][0]).tolist() == [10]
-    assert np.flatnonzero(facts["touched"]).tolist() == [10, 30]
-    hands_only = SelfTouch(SelfTouchConfig(touch_source="hands")).facts(FakeInfant(touch, contacts))
-    assert np.flatnonzero(hands_only["touched"]).tolist() == [10]
-    assert facts["hand_parts"].shape == (2, 34) and facts["hand_parts"][0, 10]
+    contacts[0, 30] = True
+    infant = FakeInfant(touch, contacts)
+    facts = SelfTouch().facts(infant)
+    assert facts["body_map"][20] == pytest.approx(0.5)
+    assert facts["body_map"][30] == pytest.approx(0.01)
+    assert np.flatnonzero(facts["touched"]).tolist() == [30]  # default: hands, light touch counts
+    assert facts["hand_parts"].shape == (2, 34) and facts["hand_parts"][0, 30]
+    literal = SelfTouch(SelfTouchConfig(touch_source="threshold")).facts(infant)
+    assert np.flatnonzero(literal["touched"]).tolist() == [20]  # the paper's rule: mattress
+    either = SelfTouch(SelfTouchConfig(touch_source="hands_or_threshold")).facts(infant)
+    assert np.flatnonzero(either["touched"]).tolist() == [20, 30]
 
 
 def test_observations_have_fixed_shapes_and_are_scaled():

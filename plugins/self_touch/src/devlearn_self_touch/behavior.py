@@ -19,7 +19,6 @@ from devlearn_self_touch.body_map import (
     body_map,
     body_map_observation,
     hand_touched_parts,
-    own_hand_mask,
 )
 from devlearn_self_touch.config import SelfTouchConfig
 from devlearn_self_touch.evaluation import SelfTouchEvaluator
@@ -49,24 +48,23 @@ class SelfTouch(Behavior):
     def __init__(self, config: SelfTouchConfig | None = None) -> None:
         super().__init__(config)
         self.config.validate()  # ``--set`` assigns fields after construction
-        self._own_hand: np.ndarray | None = None  # (2, 68) bool, cached per infant
 
     # --- observations -------------------------------------------------------------------
     def facts(self, infant: Infant) -> dict[str, Any]:
         """Compute this step's touch facts.
 
         Returns:
-            ``body_map`` (68,) float32 g_t (N per sensor); ``hand_contacts`` (2, 68) bool, hand
-            (left, right) palm or fingers touches region j, the hand's own regions excluded;
-            ``hand_parts`` (2, 34) bool, the same per side-free part; ``touched`` (68,) bool,
-            region j counts as touched (see :attr:`SelfTouchConfig.touch_source`).
+            ``body_map``: (68,) float32 g_t (N per sensor), mattress contact included.
+            ``hand_contacts``: (2, 68) bool, hand (left, right) palm or fingers touches region
+            j; by the infant's contract never its own hand and never the mattress.
+            ``hand_parts``: (2, 34) bool, the same per side-free part.
+            ``touched``: (68,) bool, region j counts as touched
+            (:attr:`SelfTouchConfig.touch_source`).
         """
         cfg = self.config
-        if self._own_hand is None:
-            self._own_hand = own_hand_mask(infant.regions)
         skin = infant.skin
         g = body_map(infant.touch(), skin.sensor_region, skin.region_sizes)
-        contacts = np.asarray(infant.hand_contacts(), dtype=bool) & ~self._own_hand
+        contacts = np.asarray(infant.hand_contacts(), dtype=bool)
         by_hand = contacts.any(axis=0)
         above = g > cfg.touch_threshold
         touched = {"hands": by_hand, "threshold": above, "hands_or_threshold": by_hand | above}

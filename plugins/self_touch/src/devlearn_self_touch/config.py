@@ -19,19 +19,20 @@ class SelfTouchConfig:
     """
 
     # --- what counts as "touched" (sec. II-A2/A3) ----------------------------------------
-    touch_source: str = "hands_or_threshold"
+    touch_source: str = "hands"
     """How a region is marked touched for the touch-novelty and milestone terms.
-    ``"hands"``: a palm or finger touches it (``Infant.hand_contacts``). ``"threshold"``: the
-    paper's literal rule g_j > ``touch_threshold`` (counts mattress contacts as touch).
-    ``"hands_or_threshold"`` (default): either, with the threshold calibrated above every
-    mattress-resting level we measured so lying on the mattress never counts (see README)."""
-    touch_threshold: float = 0.05
-    """Threshold on the mean force per sensor g_j (N) above which a region counts as touched.
-    The paper uses 0.1 in MIMo's units (sec. II-A3); ours is calibrated by
-    ``python -m devlearn_self_touch.calibrate`` (numbers in the README)."""
-    body_map_scale: float = 0.01
-    """Observation scaling: the policy sees log1p(g / body_map_scale) so that a light touch
-    (~0.01 N per sensor) maps to ~0.7 and the full weight on the mattress stays O(1-5)."""
+    ``"hands"`` (default): a palm or finger touches it (``Infant.hand_contacts``; the mattress
+    can never produce one). ``"threshold"``: the paper's literal rule g_j > ``touch_threshold``
+    (sec. II-A3), which on our skin also counts lying on the mattress. ``"hands_or_threshold"``:
+    either. We measured mattress-only and self-touch g_j to overlap entirely (README,
+    ``python -m devlearn_self_touch.calibrate``), so no threshold separates them."""
+    touch_threshold: float = 0.1
+    """Threshold on g_j (N per sensor) for the ``threshold`` sources (paper: 0.1, in MIMo's
+    units, sec. II-A3). Lying still, mattress regions read 0.12 (median) to 1.0 N."""
+    body_map_scale: float = 0.1
+    """Observation scaling: the policy sees log1p(g / body_map_scale). With 0.1 N a typical
+    hand touch (0.3 N) reads 1.4, the weight on the mattress 0.7 to 2.4, a hard kick (30 N)
+    5.7, instead of raw values spanning four orders of magnitude."""
 
     # --- reward weights (R_t = R_touch + R_geom + R_milestones + R_balance, sec. II-A3) -----
     weight_touch_novelty: float = 1.0
