@@ -26,6 +26,12 @@ from devlearn.training.checkpoint import FORMAT, LATEST, link_atomic, save_atomi
 from devlearn.training.config import RunConfig, to_dict
 
 
+def init_distributed(device: str) -> None:
+    """Join torchrun's process group once: gloo on the CPU, NCCL on cuda."""
+    if int(os.getenv("WORLD_SIZE", "1")) > 1 and not dist.is_initialized():
+        dist.init_process_group("nccl" if torch.device(device).type == "cuda" else "gloo")
+
+
 @contextlib.contextmanager
 def quiet():
     """Swallow rsl-rl's console report (the progress bar and metrics.jsonl replace it)."""
@@ -97,9 +103,7 @@ class DevRunner(OnPolicyRunner):
             "local_rank": self.gpu_local_rank,
             "world_size": self.gpu_world_size,
         }
-        if not dist.is_initialized():
-            cuda = torch.device(self.device).type == "cuda"
-            dist.init_process_group("nccl" if cuda else "gloo")
+        init_distributed(self.device)
         if torch.device(self.device).type == "cuda":
             torch.cuda.set_device(self.gpu_local_rank)
 

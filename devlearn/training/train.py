@@ -17,7 +17,7 @@ from devlearn.env import DevVecEnv
 from devlearn.errors import UsageError
 from devlearn.training.checkpoint import check_behavior, resume_checkpoint
 from devlearn.training.config import RunConfig, from_dict, to_dict, to_rsl_rl
-from devlearn.training.runner import DevRunner
+from devlearn.training.runner import DevRunner, init_distributed
 
 CONFIG_FILE = "config.json"
 
@@ -107,9 +107,16 @@ def train(
         torch.set_num_threads(cfg.torch_threads)
 
     # Behaviour: one-off preparation, then the resolved config is written next to the logs.
+    # With several ranks, rank 0 prepares first; the others then reuse what it saved.
     behavior = registry.behavior(cfg.behavior_name)(cfg.behavior)
     run_dir.mkdir(parents=True, exist_ok=True)
-    behavior.prepare(run_dir)
+    init_distributed(device)
+    if rank == 0:
+        behavior.prepare(run_dir)
+    if world_size > 1:
+        torch.distributed.barrier()
+    if rank != 0:
+        behavior.prepare(run_dir)
     cfg.behavior = behavior.config
     if rank == 0:
         (run_dir / CONFIG_FILE).write_text(json.dumps(to_dict(cfg), indent=2) + "\n")
