@@ -147,7 +147,7 @@ def draw_body_map_counts(region_steps: np.ndarray, regions: Any, out_dir: Path) 
     axes = fig.subplots(1, 2, sharey=True)
     vmax = max(1.0, float(np.log1p(grids).max()))
     for h, ax in enumerate(axes):
-        image = ax.imshow(np.log1p(grids[h]), aspect="auto", cmap="magma", vmin=0, vmax=vmax)
+        image = ax.imshow(np.log1p(grids[h]), aspect="auto", cmap="YlOrRd", vmin=0, vmax=vmax)
         ax.set_title(f"{HANDS[h]} hand ({int((grids[h] > 0).any(axis=1).sum())}/34 parts)")
         ax.set_xticks([0, 1], ["left side", "right side"])
         ax.set_yticks(range(NUM_PARTS), labels, fontsize=7)
