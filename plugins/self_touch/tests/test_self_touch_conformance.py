@@ -51,3 +51,13 @@ def test_tiny_training_run(tmp_path):
     assert (out / "checkpoint_latest.pt").exists()
     last = json.loads((out / "metrics.jsonl").read_text().splitlines()[-1])
     assert last["step"] >= 512
+    evaluation = tmp_path / "eval"
+    checkpoint = str(out / "checkpoint_latest.pt")
+    cmd = [sys.executable, "-m", "devlearn.cli", "eval", "self_touch", "--checkpoint", checkpoint,
+           "--episodes", "1", "--out", str(evaluation)]  # fmt: skip
+    subprocess.run(cmd, check=True, timeout=600)
+    summary = json.loads((evaluation / "eval.json").read_text())
+    assert summary["episodes"] == 1 and summary["parts"] == 34
+    assert 0.0 <= summary["score"] <= 1.0
+    assert summary["score"] == (summary["coverage_left"] + summary["coverage_right"]) / 68
+    assert (evaluation / "self_touch_body_map.png").stat().st_size > 0
