@@ -10,95 +10,113 @@ import numpy as np
 from devlearn.infant.regions import NUM_REGIONS
 from devlearn.infant.skin import Skin
 
+_EDGES = np.arange(4)
+
 
 @dataclass(frozen=True)
 class ContactSides:
     """Each active contact seen from each of its bodies that has skin.
 
     Attributes:
-        contact: (Q,) index into data.contact.
-        body: (Q,) body id on this side.
+        body: (Q,) body id on this side (a self-contact gives a row for each body).
         other_body: (Q,) body id on the other side.
         point: (Q, 3) contact point in ``body``'s frame.
-        force: (Q, 3) force on ``body`` in its frame (N); None when not computed.
+        force: (Q, 3) force on ``body`` in its frame (N), or None when not asked for.
+        cand, dist: (Q, K) candidate sensors near ``point`` and their distances.
     """
 
-    contact: np.ndarray
     body: np.ndarray
     other_body: np.ndarray
     point: np.ndarray
     force: np.ndarray | None
+    cand: np.ndarray
+    dist: np.ndarray
 
 
-def contact_forces_world(model: mujoco.MjModel, data: mujoco.MjData, ids: np.ndarray):
-    """World-frame force that geom1 exerts on geom2, for the given contacts.
+def contact_forces_world(model: mujoco.MjModel, data: mujoco.MjData, ids: np.ndarray | None):
+    """World-frame force that geom1 exerts on geom2, (n, 3) float64.
 
     Vectorised equivalent of ``mj_contactForce`` followed by the rotation out of the contact
-    frame (rows of ``contact.frame`` are the normal and the two tangents). Pyramidal cones
-    store 2 (dim - 1) edge forces per contact: normal = their sum, tangent_i =
-    (f_2i - f_2i+1) * mu_i (MuJoCo's mju_decodePyramid).
+    frame (rows of ``contact.frame``: normal, then the two tangents). Pyramidal cones store
+    2 (dim - 1) edge forces per contact: normal = their sum, tangent_i = (f_2i - f_2i+1) mu_i
+    (MuJoCo's mju_decodePyramid). All our geoms have condim 3.
 
-    Returns:
-        (len(ids), 3) float64.
+    Args:
+        ids: Contact indices, or None for all ``data.ncon`` contacts.
     """
     con = data.contact
-    addr = con.efc_address[ids]
-    dim = con.dim[ids]
-    local = np.zeros((len(ids), 3))
-    if model.opt.cone == mujoco.mjtCone.mjCONE_PYRAMIDAL and np.all(dim == 3):
-        edges = data.efc_force[addr[:, None] + np.arange(4)]
-        mu = con.friction[ids, :2]
-        local[:, 0] = edges.sum(axis=1)
-        local[:, 1] = (edges[:, 0] - edges[:, 1]) * mu[:, 0]
-        local[:, 2] = (edges[:, 2] - edges[:, 3]) * mu[:, 1]
-    else:  # other cones or condims: MuJoCo's own decoding, one call per contact
+    if ids is None:
+        ids = np.arange(data.ncon)
+    local = np.empty((len(ids), 1, 3))
+    if model.opt.cone == mujoco.mjtCone.mjCONE_PYRAMIDAL:
+        edges = data.efc_force.take(con.efc_address.take(ids)[:, None] + _EDGES)
+        local[:, 0, 0] = edges.sum(axis=1)
+        local[:, 0, 1:] = (edges[:, 0::2] - edges[:, 1::2]) * con.friction.take(ids, 0)[:, :2]
+    else:  # elliptic cones: MuJoCo's own decoding, one call per contact
         wrench = np.zeros(6)
         for row, i in enumerate(ids):
             mujoco.mj_contactForce(model, data, int(i), wrench)
-            local[row] = wrench[:3]
-    frames = con.frame[ids].reshape(-1, 3, 3)
-    return np.einsum("nij,ni->nj", frames, local)
+            local[row, 0] = wrench[:3]
+    # Row vector times frame: f_world = f_local @ frame (the frame's rows are its axes).
+    return np.matmul(local, con.frame.take(ids, 0).reshape(-1, 3, 3))[:, 0]
 
 
 def contact_sides(
-    model: mujoco.MjModel, data: mujoco.MjData, skin_body: np.ndarray, with_force: bool
-) -> ContactSides:
-    """Active contacts, one row per side that has skin (a self-contact gives two rows).
+    model: mujoco.MjModel,
+    data: mujoco.MjData,
+    skin: Skin,
+    skin_body: np.ndarray,
+    with_force: bool,
+) -> ContactSides | None:
+    """Active contacts, one row per side that has skin; None when there are none.
 
     Args:
+        skin: The skin (for the candidate sensors of each contact point).
         skin_body: (nbody,) bool, bodies with tactile sensors.
         with_force: Also compute forces (the skin needs them, hand contacts do not).
     """
-    n = data.ncon
+    if data.ncon == 0:
+        return None
     con = data.contact
-    if n:
-        ids = np.flatnonzero((con.exclude == 0) & (con.efc_address >= 0))
-    else:
-        ids = np.zeros(0, dtype=np.int64)
-    geom = con.geom[ids] if len(ids) else np.zeros((0, 2), dtype=np.int64)
-    b1, b2 = model.geom_bodyid[geom[:, 0]], model.geom_bodyid[geom[:, 1]]
-    on1, on2 = skin_body[b1], skin_body[b2]
-    contact = np.concatenate([ids[on1], ids[on2]])
-    body = np.concatenate([b1[on1], b2[on2]])
-    other = np.concatenate([b2[on1], b1[on2]])
-    rot = data.xmat[body].reshape(-1, 3, 3)
-    rel = con.pos[contact] - data.xpos[body]
-    point = np.einsum("qi,qij->qj", rel, rot)  # R^T (p - x)
+    geom = con.geom
+    efc = con.efc_address
+    ids = None
+    if efc.min() < 0:  # gap or excluded contacts carry no force: drop them
+        ids = np.flatnonzero(efc >= 0)
+        geom = geom.take(ids, 0)
+    bodies = model.geom_bodyid.take(geom.T.ravel())  # [bodies of geom1, of geom2]
+    rows = np.flatnonzero(skin_body.take(bodies))
+    if len(rows) == 0:
+        return None
+    m = len(geom)
+    body = bodies.take(rows)
+    other = bodies.take((rows + m) % (2 * m))
+    row_contact = rows % m
+    contact = row_contact if ids is None else ids.take(row_contact)
+    rot = data.xmat.take(body, 0).reshape(-1, 3, 3)
+    rel = con.pos.take(contact, 0) - data.xpos.take(body, 0)
     force = None
     if with_force:
-        world = contact_forces_world(model, data, ids)
-        sign = np.concatenate([-np.ones(on1.sum()), np.ones(on2.sum())])
-        rows = np.concatenate([np.flatnonzero(on1), np.flatnonzero(on2)])
-        force = np.einsum("qi,qij->qj", world[rows] * sign[:, None], rot)
-    return ContactSides(contact, body, other, point, force)
+        world = contact_forces_world(model, data, ids).take(row_contact, 0)
+        world[: np.searchsorted(rows, m)] *= -1.0  # geom1's body feels the opposite force
+        both = np.empty((len(rows), 2, 3))
+        both[:, 0], both[:, 1] = rel, world
+        local = np.matmul(both, rot)  # row vectors: v^T R = (R^T v)^T, into the body frame
+        point, force = local[:, 0], local[:, 1]
+    else:
+        point = np.matmul(rel[:, None, :], rot)[:, 0]
+    cand, dist = skin.candidates(body, point)
+    return ContactSides(body, other, point, force, cand, dist)
 
 
-def touch_from_contacts(skin: Skin, sides: ContactSides) -> np.ndarray:
+def touch_from_contacts(skin: Skin, sides: ContactSides | None) -> np.ndarray:
     """Sensor forces, (num_sensors, 3) float32, body frames."""
-    return skin.spread(sides.body, sides.point, sides.force)
+    if sides is None:
+        return np.zeros((skin.num_sensors, 3), dtype=np.float32)
+    return skin.spread(sides.body, sides.point, sides.force, sides.cand, sides.dist)
 
 
-def hand_contacts(skin: Skin, sides: ContactSides, hand_of_body: np.ndarray) -> np.ndarray:
+def hand_contacts(skin: Skin, sides: ContactSides | None, hand_of_body: np.ndarray) -> np.ndarray:
     """Which regions each hand touches.
 
     A hand is its hand (palm) body or its fingers body. For every contact between a hand and
@@ -116,10 +134,12 @@ def hand_contacts(skin: Skin, sides: ContactSides, hand_of_body: np.ndarray) -> 
         (2, 68) bool: [hand (left, right), region].
     """
     out = np.zeros((2, NUM_REGIONS), dtype=bool)
+    if sides is None:
+        return out
     # Row q is the touched side (body, point); the toucher is other_body.
     hand = hand_of_body[sides.other_body]
-    use = (hand >= 0) & (hand_of_body[sides.body] != hand)
-    if np.any(use):
-        sensor = skin.nearest(sides.body[use], sides.point[use])
+    use = np.flatnonzero((hand >= 0) & (hand_of_body[sides.body] != hand))
+    if len(use):
+        sensor = skin.nearest(sides.body[use], sides.point[use], sides.cand[use], sides.dist[use])
         out[hand[use], skin.sensor_region[sensor]] = True
     return out

@@ -80,8 +80,7 @@ class Infant:
         self._ranges = np.array([j.range for j in joints])
         rest = SCENES[scene].rest
         self._rest = np.array([rest.get(j, 0.0) for j in self.actuator_names])
-        self._eyes: vision.Eyes | None = None
-        self._views: dict[tuple[int, int], mujoco.Renderer] = {}
+        self._gl: dict[str, Any] = {"eyes": None, "views": {}}  # renderers, made on first use
         self._cache: dict[str, Any] = {}
         self.steps = 0
         self.reset(np.random.default_rng(0))
@@ -125,13 +124,15 @@ class Infant:
             self._cache[key] = value
         return value
 
-    def _sides(self, with_force: bool) -> contacts.ContactSides:
-        key = "sides_force" if with_force else "sides"
-        if not with_force and "sides_force" in self._cache:
+    def _sides(self, with_force: bool) -> contacts.ContactSides | None:
+        if "sides_force" in self._cache:
             return self._cache["sides_force"]
-        return self._cached(
-            key, lambda: contacts.contact_sides(self.model, self.data, self._skin_body, with_force)
-        )
+        key = "sides_force" if with_force else "sides"
+        if key not in self._cache:
+            self._cache[key] = contacts.contact_sides(
+                self.model, self.data, self.skin, self._skin_body, with_force
+            )
+        return self._cache[key]
 
     def touch(self) -> np.ndarray:
         """Returns (num_sensors, 3) float32: force on each sensor in its body's frame (N)."""
@@ -152,10 +153,10 @@ class Infant:
 
     def _eye_renderer(self) -> vision.Eyes:
         self._need("eyes")
-        if self._eyes is None:
+        if self._gl["eyes"] is None:
             labels = vision.geom_labels(self.model, self.hand_of_body)
-            self._eyes = vision.Eyes(self.model, self.eye_size, labels)
-        return self._eyes
+            self._gl["eyes"] = vision.Eyes(self.model, self.eye_size, labels)
+        return self._gl["eyes"]
 
     def eyes(self) -> np.ndarray:
         """Returns (2, H, W, 3) uint8 camera images, [left eye, right eye]."""
@@ -189,9 +190,10 @@ class Infant:
     def render_view(self, width: int = 320, height: int = 240) -> np.ndarray:
         """Returns (height, width, 3) uint8 from the scene's third-person camera."""
         key = (int(width), int(height))
-        if key not in self._views:
-            self._views[key] = vision.fast_renderer(self.model, key[1], key[0])
-        renderer = self._views[key]
+        views = self._gl["views"]
+        if key not in views:
+            views[key] = vision.fast_renderer(self.model, key[1], key[0])
+        renderer = views[key]
         renderer.update_scene(self.data, camera="overview")
         return renderer.render()
 
@@ -213,13 +215,17 @@ class Infant:
         }
 
     def close(self) -> None:
-        """Free renderers (GL contexts). The infant cannot render afterwards."""
-        if self._eyes is not None:
-            self._eyes.close()
-            self._eyes = None
-        for renderer in self._views.values():
-            renderer.close()
-        self._views.clear()
+        """Free renderers (GL contexts); rendering again opens new ones."""
+        _free_gl(self._gl)
+
+
+def _free_gl(gl: dict[str, Any]) -> None:
+    if gl["eyes"] is not None:
+        gl["eyes"].close()
+        gl["eyes"] = None
+    for renderer in gl["views"].values():
+        renderer.close()
+    gl["views"].clear()
 
 
 def build_infant(scene: str, *, senses: Sequence[str] = SENSES, eye_size: int = 64) -> Infant:

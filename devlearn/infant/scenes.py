@@ -9,6 +9,7 @@ from dm_control import mjcf
 
 from devlearn.infant.body import WORLD_CONTYPE, add_infant
 
+SCENE_GROUP = 2  # geom group of everything that is not the infant (hidden in body-map pictures)
 PHYSICS_TIMESTEP = 0.005  # facts sec. 1: 5 ms, one physics step per control step (200 Hz)
 EPISODE_STEPS = 1000  # 5 simulated seconds
 
@@ -43,6 +44,13 @@ class SceneSpec:
 
 
 _HALF = math.sqrt(0.5)
+_Q = math.pi / 2
+_WALLS = (
+    ((2, 0, 1), (0, -_Q, 0)),
+    ((-2, 0, 1), (0, _Q, 0)),
+    ((0, 2, 1), (_Q, 0, 0)),
+    ((0, -2, 1), (-_Q, 0, 0)),
+)
 _SITTING_LEGS = {
     f"{s}_{j}": a
     for s in ("left", "right")
@@ -115,6 +123,7 @@ def _props(root: mjcf.RootElement, scene: str) -> None:
     if scene == "crib":
         world.add(
             "geom",
+            group=SCENE_GROUP,
             name="mattress",
             type="plane",
             size=(0.6, 0.4, 0.05),
@@ -126,6 +135,7 @@ def _props(root: mjcf.RootElement, scene: str) -> None:
         # visual only (contype 0) so they cost no collision checks.
         world.add(
             "geom",
+            group=SCENE_GROUP,
             name="ceiling",
             type="plane",
             size=(1.5, 1.5, 0.05),
@@ -140,6 +150,7 @@ def _props(root: mjcf.RootElement, scene: str) -> None:
         ):
             world.add(
                 "geom",
+                group=SCENE_GROUP,
                 name=f"rail_{i}",
                 type="box",
                 size=(sx, sy, 0.15),
@@ -151,17 +162,33 @@ def _props(root: mjcf.RootElement, scene: str) -> None:
     else:
         world.add(
             "geom",
+            group=SCENE_GROUP,
             name="floor",
             type="plane",
-            size=(1.0, 1.0, 0.05),
+            size=(2.0, 2.0, 0.05),
             rgba=(0.72, 0.74, 0.78, 1),
             contype=WORLD_CONTYPE,
             conaffinity=1,
         )
+        # The room's walls, visual only: planes 2 m away, facing the infant.
+        for i, (pos, euler) in enumerate(_WALLS):
+            world.add(
+                "geom",
+                group=SCENE_GROUP,
+                name=f"wall_{i}",
+                type="plane",
+                size=(2.0, 1.0, 0.05),
+                pos=pos,
+                euler=euler,
+                rgba=(0.93, 0.9, 0.82, 1),
+                contype=0,
+                conaffinity=0,
+            )
         blocks = ((0.24, 0.05, 0.4), (0.3, -0.07, -0.3), (0.37, 0.02, 0.1), (0.21, -0.02, 0.8))
         for i, ((x, y, yaw), rgba) in enumerate(zip(blocks, TOY_COLOURS)):
             world.add(
                 "geom",
+                group=SCENE_GROUP,
                 name=f"toy_{i}",
                 type="box",
                 size=(0.02, 0.02, 0.02),

@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import atexit
+import os
+import weakref
+
 import mujoco
 import numpy as np
 
@@ -20,10 +24,38 @@ _OFF = (
 
 def fast_renderer(model: mujoco.MjModel, height: int, width: int) -> mujoco.Renderer:
     """A renderer with shadows, reflections, skybox, fog and haze off (cheap on Mesa)."""
-    renderer = mujoco.Renderer(model, height=height, width=width)
+    try:
+        renderer = mujoco.Renderer(model, height=height, width=width)
+    except mujoco.FatalError as exc:  # typically: mujoco imported before MUJOCO_GL was set
+        raise RuntimeError(
+            f"cannot open an OpenGL context ({exc}); MUJOCO_GL is "
+            f"{os.environ.get('MUJOCO_GL')!r}. Import devlearn.infant before mujoco or "
+            "dm_control, or set MUJOCO_GL=egl (headless) in the environment"
+        ) from exc
     for flag in _OFF:
         renderer.scene.flags[flag] = False
+    _track(renderer)
     return renderer
+
+
+_LIVE: weakref.WeakSet = weakref.WeakSet()
+_EXIT_HOOK = []
+
+
+def _track(renderer: mujoco.Renderer) -> None:
+    """Close live renderers at exit, before mujoco's own exit hook terminates the EGL display
+    (hooks run last-registered first; mujoco registers its hook with the first context)."""
+    _LIVE.add(renderer)
+    if not _EXIT_HOOK:
+        _EXIT_HOOK.append(atexit.register(_close_all))
+
+
+def _close_all() -> None:
+    for renderer in list(_LIVE):
+        try:
+            renderer.close()
+        except Exception:  # noqa: BLE001 - best effort at interpreter exit
+            pass
 
 
 def geom_labels(model: mujoco.MjModel, hand_of_body: np.ndarray) -> np.ndarray:

@@ -1,0 +1,142 @@
+"""Pictures of the infant: the 68-region body map (docs/images/body_map.png) and the eyes' view."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import cv2
+import mujoco
+import numpy as np
+
+from devlearn.infant.infant import build_infant
+from devlearn.infant.regions import NUM_PARTS, PART_NAMES
+from devlearn.infant.scenes import SCENE_GROUP
+
+
+# Looking down at both hands held in front, toys on the floor beyond.
+EYES_POSE = {"head_tilt": 0.95, "shoulder_flexion": 0.6, "elbow": 1.0, "shoulder_abduction": -0.3}
+
+
+def part_colours() -> np.ndarray:
+    """(34, 3) RGB in [0, 1]: 34 distinct colours (matplotlib's tab20, then tab20b)."""
+    from matplotlib import colormaps
+
+    palette = list(colormaps["tab20"].colors) + list(colormaps["tab20b"].colors)
+    return np.array(palette[:NUM_PARTS])[:, :3]
+
+
+def region_colours() -> np.ndarray:
+    """(68, 3) RGB in [0, 1]: the part's colour, the right side a little darker."""
+    part = part_colours()
+    return np.concatenate([part, 0.75 * part])
+
+
+def _sensor_view(infant, camera: mujoco.MjvCamera, size: tuple[int, int]) -> np.ndarray:
+    """Render the infant without its surroundings, each sensor a dot in its region's colour."""
+    model, data, skin = infant.model, infant.data, infant.skin
+    option = mujoco.MjvOption()
+    option.geomgroup[SCENE_GROUP] = 0
+    renderer = mujoco.Renderer(
+        model, height=size[1], width=size[0], max_geom=skin.num_sensors + 500
+    )
+    try:
+        renderer.update_scene(data, camera=camera, scene_option=option)
+        scene = renderer.scene
+        for i in range(scene.ngeom):  # the body itself pale grey under the dots
+            scene.geoms[i].rgba[:] = (0.82, 0.82, 0.82, 1.0)
+        rot = data.xmat[skin.sensor_body].reshape(-1, 3, 3)
+        world = data.xpos[skin.sensor_body] + np.einsum("nij,nj->ni", rot, skin.sensor_pos)
+        radius = 0.42 * skin.body_spacing[skin.sensor_body]
+        rgba = np.concatenate([region_colours()[skin.sensor_region], np.ones((len(world), 1))], 1)
+        eye = np.eye(3).ravel()
+        for pos, r, colour in zip(world, radius, rgba):
+            geom = scene.geoms[scene.ngeom]
+            mujoco.mjv_initGeom(geom, mujoco.mjtGeom.mjGEOM_SPHERE, [r, r, r], pos, eye, colour)
+            scene.ngeom += 1
+        image = renderer.render()
+        renderer.enable_depth_rendering()
+        depth = renderer.render()
+        image[depth >= depth.max() * 0.999] = 255  # white background
+        return image
+    finally:
+        renderer.close()
+
+
+def _legend(height: int, width: int) -> np.ndarray:
+    panel = np.full((height, width, 3), 255, dtype=np.uint8)
+    colours = (part_colours() * 255).astype(int)
+    step = min(26, (height - 40) // NUM_PARTS)
+    cv2.putText(panel, "part (left | right)", (10, 22), cv2.FONT_HERSHEY_SIMPLEX, 0.55, (0,) * 3, 1)
+    for i, name in enumerate(PART_NAMES):
+        y = 40 + i * step
+        for k, scale in enumerate((1.0, 0.75)):
+            colour = tuple(int(c * scale) for c in colours[i][::-1])  # BGR for cv2
+            cv2.rectangle(panel, (10 + 22 * k, y), (28 + 22 * k, y + step - 6), colour, -1)
+        cv2.putText(panel, name, (60, y + step - 9), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (0,) * 3, 1)
+    return panel
+
+
+def body_map_picture(path: str | Path, width: int = 420, height: int = 900) -> Path:
+    """Write the body map: front and back views of the infant, sensors coloured by region.
+
+    Args:
+        path: Output PNG.
+        width, height: Size of each view in pixels.
+
+    Returns:
+        The path written.
+    """
+    infant = build_infant("crib", senses=("touch",))
+    try:
+        infant.reset(np.random.default_rng(0))
+        centre = infant.data.xpos[infant.model.body("lower_body").id].copy()
+        centre[0] += 0.034  # halfway between sole and crown (body table)
+        views = []
+        for azimuth, elevation, title in ((0.0, -89.9, "front"), (180.0, 89.9, "back")):
+            camera = mujoco.MjvCamera()
+            camera.lookat[:], camera.distance = centre, 1.12
+            camera.azimuth, camera.elevation = azimuth, elevation
+            image = np.ascontiguousarray(_sensor_view(infant, camera, (width, height))[..., ::-1])
+            cv2.putText(image, title, (12, 30), cv2.FONT_HERSHEY_SIMPLEX, 0.9, (40,) * 3, 2)
+            views.append(image)
+        picture = np.concatenate(views + [_legend(height, 260)], axis=1)
+    finally:
+        infant.close()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    cv2.imwrite(str(path), picture)
+    return path
+
+
+def eyes_picture(path: str | Path, scale: int = 4) -> Path:
+    """Write what the two eyes see, sitting with the hands raised: left | right, 64 x 64 each.
+
+    Args:
+        path: Output PNG.
+        scale: Each pixel is drawn as scale x scale pixels.
+
+    Returns:
+        The path written.
+    """
+    infant = build_infant("sitting", senses=("eyes",))
+    try:
+        infant.reset(np.random.default_rng(0))
+        for joint, angle in EYES_POSE.items():
+            for name in (joint, f"left_{joint}", f"right_{joint}"):
+                if name in infant.actuator_names:
+                    infant.data.qpos[infant.model.joint(name).qposadr[0]] = angle
+        mujoco.mj_forward(infant.model, infant.data)
+        frames = []
+        for image, title in zip(infant.eyes(), ("left eye", "right eye")):
+            big = cv2.resize(image, None, fx=scale, fy=scale, interpolation=cv2.INTER_NEAREST)
+            big = np.ascontiguousarray(big[..., ::-1])
+            cv2.putText(big, title, (8, 22), cv2.FONT_HERSHEY_SIMPLEX, 0.6, (20,) * 3, 2)
+            frames.append(big)
+        gap = np.full((frames[0].shape[0], 6, 3), 255, dtype=np.uint8)
+        picture = np.concatenate([frames[0], gap, frames[1]], axis=1)
+    finally:
+        infant.close()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    cv2.imwrite(str(path), picture)
+    return path
