@@ -13,7 +13,7 @@ from tensordict import TensorDict
 
 from devlearn.env.behavior_env import BehaviorEnv
 from devlearn.training.checkpoint import check_behavior, load_checkpoint
-from devlearn.training.config import from_dict, to_rsl_rl
+from devlearn.training.config import RunConfig, from_dict, to_rsl_rl
 from devlearn.training.runner import quiet
 
 VIDEO_FPS = 25
@@ -25,9 +25,14 @@ def _batch(obs: dict[str, np.ndarray]) -> TensorDict:
     return TensorDict({k: torch.from_numpy(np.array(v)[None]) for k, v in obs.items()}, [1])
 
 
-def load_actor(checkpoint: dict[str, Any], behavior, obs: dict[str, np.ndarray], action_dim: int):
+def load_actor(
+    cfg: RunConfig,
+    checkpoint: dict[str, Any],
+    behavior,
+    obs: dict[str, np.ndarray],
+    action_dim: int,
+):
     """Rebuild the checkpoint's policy network for ``behavior`` (eval mode, CPU)."""
-    cfg = from_dict(checkpoint["config"], type(behavior))
     train_cfg = to_rsl_rl(cfg, behavior, list(obs))
     batch = _batch(obs)
     with quiet():  # rsl-rl prints the resolved sets
@@ -76,14 +81,15 @@ def evaluate(
     state = load_checkpoint(checkpoint)
     check_behavior(state, checkpoint, behavior_name)
     behavior_cls = registry.behavior(behavior_name)
-    behavior = behavior_cls(from_dict(state["config"], behavior_cls).behavior)
+    cfg = from_dict(state["config"], behavior_cls)
+    behavior = behavior_cls(cfg.behavior)
     torch.manual_seed(seed)
     env = BehaviorEnv(behavior, seed, infant_factory, training=False)
     writer = None
     try:
         env.set_stage(behavior.eval_stage())
         obs = env.reset()
-        actor = load_actor(state, behavior, obs, env.action_dim)
+        actor = load_actor(cfg, state, behavior, obs, env.action_dim)
         if video is not None:
             import imageio.v2 as imageio
 
