@@ -12,7 +12,6 @@ from devlearn.infant.infant import build_infant
 from devlearn.infant.regions import NUM_PARTS, PART_NAMES
 from devlearn.infant.scenes import SCENE_GROUP
 
-
 # Looking down at both hands held in front, toys on the floor beyond.
 EYES_POSE = {"head_tilt": 0.95, "shoulder_flexion": 0.6, "elbow": 1.0, "shoulder_abduction": -0.3}
 
