@@ -66,6 +66,7 @@ SCENES = {
         {},
         root_pos=(0.0, 0.0, 0.05),
         root_quat=(0.0, _HALF, 0.0, _HALF),
+        rest={"left_shoulder_abduction": 0.15, "right_shoulder_abduction": 0.15},
         overview=((-0.55, -0.45, 0.75), (0.63, -0.77, 0.0, 0.45, 0.37, 0.81)),
     ),
     # Upright on the floor, legs straight forward in a V, trunk and legs held.

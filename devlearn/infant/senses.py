@@ -11,11 +11,11 @@ LIMIT_ZONE = 0.035  # rad: limit proximity rises from 0 to 1 over the last 0.035
 class Proprioception:
     """Joint positions, velocities, torques, limit proximity, actions and motor torques.
 
-    The vector is [qpos, qvel, torque, limit, action, actuator_force], each (J,) for the J
+    The vector is [qpos, qvel, torque, limit, action, motor], each (J,) for the J
     actuated joints in actuator order, so (6 J,) float32: 180 in the crib, 102 sitting.
     "torque" is the net torque the joint passes on (motor + passive spring-damper + constraint
     forces such as limits and contacts); "limit" is 0 until within 0.035 rad of a joint limit,
-    rising linearly to 1 at the limit.
+    rising linearly to 1 at the limit; "motor" is the applied motor torque, max_torque * action.
     """
 
     def __init__(self, model: mujoco.MjModel, joints: list[str]) -> None:
@@ -27,17 +27,13 @@ class Proprioception:
 
     def __call__(self, data: mujoco.MjData) -> np.ndarray:
         """Returns (6 J,) float32."""
-        q = data.qpos[self.qpos]
+        q = data.qpos.take(self.qpos)
         to_limit = np.minimum(q - self.lo, self.hi - q)
         limit = np.clip((LIMIT_ZONE - to_limit) / LIMIT_ZONE, 0.0, 1.0)
-        torque = (
-            data.qfrc_actuator[self.dof]
-            + data.qfrc_passive[self.dof]
-            + data.qfrc_constraint[self.dof]
-        )
-        return np.concatenate(
-            [q, data.qvel[self.dof], torque, limit, data.ctrl, data.actuator_force]
-        ).astype(np.float32)
+        motor = data.qfrc_actuator.take(self.dof)  # gear * ctrl: the motor's joint torque
+        torque = motor + data.qfrc_passive.take(self.dof) + data.qfrc_constraint.take(self.dof)
+        parts = [q, data.qvel.take(self.dof), torque, limit, data.ctrl, motor]
+        return np.concatenate(parts).astype(np.float32)
 
 
 def vestibular(data: mujoco.MjData) -> np.ndarray:
