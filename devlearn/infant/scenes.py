@@ -160,6 +160,19 @@ def _props(root: mjcf.RootElement, scene: str) -> None:
                 contype=0,
                 conaffinity=0,
             )
+        # A mobile of coloured shapes hanging over the infant's face (visual only).
+        for i, (x, y, rgba) in enumerate(zip((0.36, 0.28, 0.22), (0.08, -0.07, 0.03), TOY_COLOURS)):
+            world.add(
+                "geom",
+                group=SCENE_GROUP,
+                name=f"mobile_{i}",
+                type="sphere",
+                size=(0.03,),
+                pos=(x, y, 0.62),
+                rgba=rgba,
+                contype=0,
+                conaffinity=0,
+            )
     else:
         world.add(
             "geom",

@@ -1,0 +1,32 @@
+"""``devlearn picture``: the module contract and the two pictures."""
+
+from __future__ import annotations
+
+import argparse
+
+import cv2
+import pytest
+
+from devlearn.cli import picture
+
+
+def _parse(argv):
+    parser = argparse.ArgumentParser(prog="devlearn")
+    sub = parser.add_subparsers(dest="command")
+    assert picture.add_parser(sub) == ["picture"]
+    return parser.parse_args(argv)
+
+
+@pytest.mark.parametrize("what, shape", [("eyes", (256, 518, 3)), ("body-map", (900, 1100, 3))])
+def test_picture_writes_png(tmp_path, capsys, what, shape):
+    out = tmp_path / f"{what}.png"
+    args = _parse(["picture", what, "--out", str(out)])
+    assert picture.run(args, registry=None) == 0
+    image = cv2.imread(str(out))
+    assert image.shape == shape and image.std() > 10
+    assert str(out) in capsys.readouterr().out
+
+
+def test_unknown_picture_is_rejected():
+    with pytest.raises(SystemExit):
+        _parse(["picture", "nose", "--out", "x.png"])

@@ -1,0 +1,66 @@
+"""Proprioception, vestibular sense, caching and senses that are switched off."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from devlearn.infant import SenseNotEnabledError, build_infant
+from devlearn.infant.senses import LIMIT_ZONE
+
+
+def test_proprioception_layout(crib, sitting):
+    assert crib.proprioception().shape == (180,) and sitting.proprioception().shape == (102,)
+    crib.reset(np.random.default_rng(0))
+    action = np.linspace(-1, 1, 30)
+    crib.step(action)
+    p = crib.proprioception().reshape(6, 30)
+    assert p.dtype == np.float32
+    qpos = [crib.model.joint(name).qposadr[0] for name in crib.actuator_names]
+    assert np.allclose(p[0], crib.data.qpos[qpos])  # in actuator order
+    assert np.allclose(p[4], action)
+    gear = crib.model.actuator_gear[:, 0]
+    assert np.allclose(p[5], gear * action, rtol=1e-5)  # torque = max_torque * action
+    crib.reset(np.random.default_rng(0))
+
+
+def test_limit_proximity(crib):
+    crib.reset(np.random.default_rng(0))
+    lo, hi = crib.model.jnt_range[0]
+    for q, expected in (
+        (0.5 * (lo + hi), 0.0),
+        (lo + LIMIT_ZONE / 2, 0.5),
+        (hi, 1.0),
+        (hi - 2 * LIMIT_ZONE, 0.0),
+    ):
+        crib.data.qpos[0] = q
+        crib._cache.clear()
+        assert crib.proprioception()[3 * 30] == pytest.approx(expected, abs=1e-5)
+    crib.reset(np.random.default_rng(0))
+
+
+def test_vestibular_feels_gravity(sitting):
+    sitting.reset(np.random.default_rng(0))
+    for _ in range(200):
+        sitting.step(np.zeros(sitting.action_dim))
+    v = sitting.vestibular()
+    assert v.shape == (6,) and v.dtype == np.float32
+    assert np.linalg.norm(v[:3]) == pytest.approx(9.81, abs=0.3)
+    assert np.linalg.norm(v[3:]) < 0.2
+
+
+def test_senses_are_cached_until_the_next_step(crib):
+    crib.reset(np.random.default_rng(0))
+    first = crib.touch()
+    assert crib.touch() is first and not first.flags.writeable
+    crib.step(np.zeros(30))
+    assert crib.touch() is not first
+
+
+def test_senses_not_enabled_raise_clearly():
+    infant = build_infant("crib", senses=("proprioception",))
+    for sense in ("touch", "vestibular", "eyes"):
+        with pytest.raises(SenseNotEnabledError, match=f"sense '{sense}' is not enabled"):
+            getattr(infant, sense)()
+    assert infant.hand_contacts().shape == (2, 68)  # facts need no sense
+    infant.close()

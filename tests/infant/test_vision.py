@@ -1,0 +1,50 @@
+"""The eyes: images, segmentation and which hands each eye sees; the third-person view."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+
+from devlearn.infant.pictures import EYES_POSE
+
+
+def _pose(infant, pose):
+    infant.reset(np.random.default_rng(0))
+    for joint, angle in pose.items():
+        for name in (f"left_{joint}", f"right_{joint}", joint):
+            if name in infant.actuator_names:
+                infant.data.qpos[infant.model.joint(name).qposadr[0]] = angle
+    mujoco.mj_forward(infant.model, infant.data)
+    infant._cache.clear()
+
+
+def test_eye_images(sitting, crib):
+    for infant in (sitting, crib):
+        infant.reset(np.random.default_rng(0))
+        eyes = infant.eyes()
+        assert eyes.shape == (2, 64, 64, 3) and eyes.dtype == np.uint8
+        assert eyes.std() > 5  # something is in view
+        assert np.abs(eyes[0].astype(int) - eyes[1]).mean() > 0.5  # two viewpoints
+
+
+def test_hands_in_view_are_seen_by_both_eyes(sitting):
+    _pose(sitting, EYES_POSE)
+    seg = sitting.eyes_segmentation()
+    assert seg.shape == (2, 64, 64) and seg.dtype == np.int32
+    assert sitting.hand_visibility().all()
+    labels = sitting.hand_labels
+    assert np.array_equal(
+        sitting.hand_visibility(),
+        [[(seg[e] == labels[h]).any() for h in ("left", "right")] for e in range(2)],
+    )
+    assert (seg == 4).any()  # floor and toys
+
+
+def test_hands_behind_are_not_seen(sitting):
+    _pose(sitting, {"head_tilt": -0.3, "shoulder_flexion": -0.6, "elbow": 0.0})
+    assert not sitting.hand_visibility().any()
+
+
+def test_render_view(crib):
+    frame = crib.render_view(160, 120)
+    assert frame.shape == (120, 160, 3) and frame.dtype == np.uint8 and frame.std() > 5
