@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import mujoco
 import numpy as np
 
@@ -13,7 +11,6 @@ from devlearn.infant.skin import Skin
 _EDGES = np.arange(4)
 
 
-@dataclass(frozen=True)
 class ContactSides:
     """Each active contact seen from each of its bodies that has skin.
 
@@ -25,28 +22,22 @@ class ContactSides:
         cand, dist: (Q, K) candidate sensors near ``point`` and their distances.
     """
 
-    body: np.ndarray
-    other_body: np.ndarray
-    point: np.ndarray
-    force: np.ndarray | None
-    cand: np.ndarray
-    dist: np.ndarray
+    __slots__ = ("body", "other_body", "point", "force", "cand", "dist")
+
+    def __init__(self, body, other_body, point, force, cand, dist) -> None:
+        self.body, self.other_body, self.point = body, other_body, point
+        self.force, self.cand, self.dist = force, cand, dist
 
 
-def contact_forces_world(model: mujoco.MjModel, data: mujoco.MjData, ids: np.ndarray | None):
-    """World-frame force that geom1 exerts on geom2, (n, 3) float64.
+def contact_forces_world(model: mujoco.MjModel, data: mujoco.MjData, ids: np.ndarray):
+    """World-frame force that geom1 exerts on geom2, (len(ids), 3) float64.
 
     Vectorised equivalent of ``mj_contactForce`` followed by the rotation out of the contact
     frame (rows of ``contact.frame``: normal, then the two tangents). Pyramidal cones store
     2 (dim - 1) edge forces per contact: normal = their sum, tangent_i = (f_2i - f_2i+1) mu_i
     (MuJoCo's mju_decodePyramid). All our geoms have condim 3.
-
-    Args:
-        ids: Contact indices, or None for all ``data.ncon`` contacts.
     """
     con = data.contact
-    if ids is None:
-        ids = np.arange(data.ncon)
     local = np.empty((len(ids), 1, 3))
     if model.opt.cone == mujoco.mjtCone.mjCONE_PYRAMIDAL:
         edges = data.efc_force.take(con.efc_address.take(ids)[:, None] + _EDGES)
@@ -61,52 +52,75 @@ def contact_forces_world(model: mujoco.MjModel, data: mujoco.MjData, ids: np.nda
     return np.matmul(local, con.frame.take(ids, 0).reshape(-1, 3, 3))[:, 0]
 
 
-def contact_sides(
-    model: mujoco.MjModel,
-    data: mujoco.MjData,
-    skin: Skin,
-    skin_body: np.ndarray,
-    with_force: bool,
-) -> ContactSides | None:
-    """Active contacts, one row per side that has skin; None when there are none.
+class ContactReader:
+    """Reads the contacts of one model each step: the hot path of touch and hand contacts.
+
+    Everything that does not change between steps is looked up once here; each step costs a
+    fixed, small number of numpy calls whatever the number of contacts.
 
     Args:
-        skin: The skin (for the candidate sensors of each contact point).
-        skin_body: (nbody,) bool, bodies with tactile sensors.
-        with_force: Also compute forces (the skin needs them, hand contacts do not).
+        model: The compiled model.
+        skin: Its skin.
     """
-    if data.ncon == 0:
-        return None
-    con = data.contact
-    geom = con.geom
-    efc = con.efc_address
-    ids = None
-    if efc.min() < 0:  # gap or excluded contacts carry no force: drop them
-        ids = np.flatnonzero(efc >= 0)
-        geom = geom.take(ids, 0)
-    bodies = model.geom_bodyid.take(geom.T.ravel())  # [bodies of geom1, of geom2]
-    rows = np.flatnonzero(skin_body.take(bodies))
-    if len(rows) == 0:
-        return None
-    m = len(geom)
-    body = bodies.take(rows)
-    other = bodies.take((rows + m) % (2 * m))
-    row_contact = rows % m
-    contact = row_contact if ids is None else ids.take(row_contact)
-    rot = data.xmat.take(body, 0).reshape(-1, 3, 3)
-    rel = con.pos.take(contact, 0) - data.xpos.take(body, 0)
-    force = None
-    if with_force:
-        world = contact_forces_world(model, data, ids).take(row_contact, 0)
-        world[: np.searchsorted(rows, m)] *= -1.0  # geom1's body feels the opposite force
-        both = np.empty((len(rows), 2, 3))
-        both[:, 0], both[:, 1] = rel, world
+
+    def __init__(self, model: mujoco.MjModel, skin: Skin) -> None:
+        self.model = model
+        self.skin = skin
+        self.geom_body = model.geom_bodyid.astype(np.int64)
+        self.geom_skin = skin.body_spacing[self.geom_body] > 0
+        friction = model.geom_friction[:, 0]
+        # With pyramidal cones, condim 3 and one sliding friction mu for every geom, a
+        # contact's local force is edges @ P: normal = sum of the 4 edge forces, tangent_i =
+        # (f_2i - f_2i+1) mu (see contact_forces_world).
+        self.pyramid = None
+        uniform = np.all(model.geom_condim == 3) and np.ptp(friction) == 0
+        if model.opt.cone == mujoco.mjtCone.mjCONE_PYRAMIDAL and uniform:
+            mu = float(friction[0])
+            self.pyramid = np.array([[1, mu, 0], [1, -mu, 0], [1, 0, mu], [1, 0, -mu]], float)
+
+    def sides(self, data: mujoco.MjData, with_force: bool) -> ContactSides | None:
+        """Active contacts, one row per side that has skin; None when there are none.
+
+        Args:
+            data: The simulation state (after mj_step or mj_forward).
+            with_force: Also compute forces (the skin needs them, hand contacts do not).
+        """
+        if data.ncon == 0:
+            return None
+        con = data.contact
+        geom = con.geom
+        efc = con.efc_address
+        ids = None
+        if efc.min() < 0:  # gap or excluded contacts carry no force: drop them
+            ids = np.flatnonzero(efc >= 0)
+            geom = geom.take(ids, 0)
+        flat = geom.T.ravel()  # [geom1 of each contact, then geom2]
+        rows = np.flatnonzero(self.geom_skin.take(flat))
+        if len(rows) == 0:
+            return None
+        m = len(geom)
+        body = self.geom_body.take(flat.take(rows))
+        other = self.geom_body.take(flat.take((rows + m) % (2 * m)))
+        contact = rows % m if ids is None else ids.take(rows % m)
+        both = np.empty((len(rows), 2, 3))  # [contact point, force] per row, world frame
+        np.subtract(con.pos.take(contact, 0), data.xpos.take(body, 0), out=both[:, 0])
+        force = None
+        if with_force:
+            if self.pyramid is not None:
+                edges = data.efc_force.take(efc.take(contact)[:, None] + _EDGES)
+                local = np.matmul(edges, self.pyramid)[:, None, :]
+                frames = con.frame.take(contact, 0).reshape(-1, 3, 3)
+                np.matmul(local, frames, out=both[:, 1:2])
+            else:
+                both[:, 1] = contact_forces_world(self.model, data, contact)
+            both[: np.searchsorted(rows, m), 1] *= -1.0  # geom1's body feels the opposite
+        rot = data.xmat.take(body, 0).reshape(-1, 3, 3)
         local = np.matmul(both, rot)  # row vectors: v^T R = (R^T v)^T, into the body frame
-        point, force = local[:, 0], local[:, 1]
-    else:
-        point = np.matmul(rel[:, None, :], rot)[:, 0]
-    cand, dist = skin.candidates(body, point)
-    return ContactSides(body, other, point, force, cand, dist)
+        point = local[:, 0]
+        if with_force:
+            force = local[:, 1]
+        cand, dist = self.skin.candidates(body, point)
+        return ContactSides(body, other, point, force, cand, dist)
 
 
 def touch_from_contacts(skin: Skin, sides: ContactSides | None) -> np.ndarray:

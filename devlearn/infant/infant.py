@@ -68,7 +68,7 @@ class Infant:
         }
         self.skin = Skin(self.model)
         self.regions: RegionTable = region_table()
-        self._skin_body = self.skin.body_spacing > 0
+        self._contacts = contacts.ContactReader(self.model, self.skin)
         self.hand_of_body = np.full(self.model.nbody, -1, dtype=np.int64)
         for h, side in enumerate(("left", "right")):
             for part in ("hand", "fingers"):
@@ -129,9 +129,7 @@ class Infant:
             return self._cache["sides_force"]
         key = "sides_force" if with_force else "sides"
         if key not in self._cache:
-            self._cache[key] = contacts.contact_sides(
-                self.model, self.data, self.skin, self._skin_body, with_force
-            )
+            self._cache[key] = self._contacts.sides(self.data, with_force)
         return self._cache[key]
 
     def touch(self) -> np.ndarray:

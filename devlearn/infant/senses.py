@@ -29,7 +29,8 @@ class Proprioception:
         """Returns (6 J,) float32."""
         q = data.qpos.take(self.qpos)
         to_limit = np.minimum(q - self.lo, self.hi - q)
-        limit = np.clip((LIMIT_ZONE - to_limit) / LIMIT_ZONE, 0.0, 1.0)
+        limit = np.maximum(1.0 - to_limit / LIMIT_ZONE, 0.0)
+        np.minimum(limit, 1.0, out=limit)
         motor = data.qfrc_actuator.take(self.dof)  # gear * ctrl: the motor's joint torque
         torque = motor + data.qfrc_passive.take(self.dof) + data.qfrc_constraint.take(self.dof)
         parts = [q, data.qvel.take(self.dof), torque, limit, data.ctrl, motor]

@@ -148,7 +148,7 @@ def test_box_resting_on_the_shin_weighs_on_it():
     for _ in range(600):
         mujoco.mj_step(model, data)
     skin = Skin(model)
-    sides = contacts.contact_sides(model, data, skin, skin.body_spacing > 0, True)
+    sides = contacts.ContactReader(model, skin).sides(data, with_force=True)
     touch = contacts.touch_from_contacts(skin, sides).astype(np.float64)
     b = model.body("left_lower_leg").id
     others = {model.geom_bodyid[g] for g in data.contact.geom[data.contact.geom[:, 1] > 0].ravel()}
