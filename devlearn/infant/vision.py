@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import atexit
-import os
 import weakref
 
 import mujoco
@@ -28,9 +27,9 @@ def fast_renderer(model: mujoco.MjModel, height: int, width: int) -> mujoco.Rend
         renderer = mujoco.Renderer(model, height=height, width=width)
     except mujoco.FatalError as exc:  # typically: mujoco imported before MUJOCO_GL was set
         raise RuntimeError(
-            f"cannot open an OpenGL context ({exc}); MUJOCO_GL is "
-            f"{os.environ.get('MUJOCO_GL')!r}. Import devlearn.infant before mujoco or "
-            "dm_control, or set MUJOCO_GL=egl (headless) in the environment"
+            f"cannot open an OpenGL context ({exc}). mujoco picks its GL backend when it is first "
+            "imported: import devlearn.infant before mujoco and dm_control, or set MUJOCO_GL=egl "
+            "in the environment for headless rendering"
         ) from exc
     for flag in _OFF:
         renderer.scene.flags[flag] = False
@@ -84,7 +83,9 @@ class Eyes:
             for s in ("left", "right")
         ]
         self.labels = labels
+        self._lut: np.ndarray | None = None
         self.size = size
+        self.seg_renderer: mujoco.Renderer | None = None
 
     def rgb(self, data: mujoco.MjData) -> np.ndarray:
         """Returns (2, H, W, 3) uint8, [left, right]."""
@@ -96,18 +97,38 @@ class Eyes:
 
     def segmentation(self, data: mujoco.MjData) -> np.ndarray:
         """Returns (2, H, W) int32 labels (BACKGROUND, LEFT_HAND, RIGHT_HAND, BODY, SCENE)."""
-        out = np.zeros((2, self.size, self.size), dtype=np.int32)
-        self.renderer.enable_segmentation_rendering()
-        try:
-            for i, cam in enumerate(self.cameras):
-                self.renderer.update_scene(data, camera=cam)
-                ids = self.renderer.render()
-                geom = (ids[..., 1] == mujoco.mjtObj.mjOBJ_GEOM) & (ids[..., 0] >= 0)
-                out[i][geom] = self.labels[ids[..., 0][geom]]
-        finally:
-            self.renderer.disable_segmentation_rendering()
+        renderer = self.seg_renderer
+        if renderer is None:
+            # A second renderer drawing every geom in its id colour (MuJoCo's segmentation
+            # mode), decoded here: mujoco.Renderer's own decoding walks the scene's geoms in
+            # Python each frame (~7 ms).
+            renderer = self.seg_renderer = fast_renderer(self.renderer.model, self.size, self.size)
+            renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SEGMENT] = True
+            renderer.scene.flags[mujoco.mjtRndFlag.mjRND_IDCOLOR] = True
+        out = np.empty((2, self.size, self.size), dtype=np.int32)
+        pixels = np.empty((self.size, self.size, 3), dtype=np.uint8)
+        for i, cam in enumerate(self.cameras):
+            renderer.update_scene(data, camera=cam)
+            lut = self._segment_labels(renderer.scene)
+            renderer.render(out=pixels)
+            segid = pixels.astype(np.int32)
+            code = segid[..., 0] + (segid[..., 1] << 8) + (segid[..., 2] << 16)  # segid + 1
+            out[i] = lut.take(np.minimum(code, len(lut) - 1))
         return out
 
+    def _segment_labels(self, scene: mujoco.MjvScene) -> np.ndarray:
+        """Label of each segmentation colour code (segid + 1; 0 = nothing drawn)."""
+        if self._lut is None or len(self._lut) != scene.ngeom + 1:
+            lut = np.full(scene.ngeom + 1, BACKGROUND, dtype=np.int32)
+            for i in range(scene.ngeom):
+                geom = scene.geoms[i]
+                if geom.segid >= 0 and geom.objtype == mujoco.mjtObj.mjOBJ_GEOM:
+                    lut[geom.segid + 1] = self.labels[geom.objid]
+            self._lut = lut
+        return self._lut
+
     def close(self) -> None:
-        """Free the GL context."""
+        """Free the GL contexts."""
         self.renderer.close()
+        if self.seg_renderer is not None:
+            self.seg_renderer.close()

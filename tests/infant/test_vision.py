@@ -48,3 +48,23 @@ def test_hands_behind_are_not_seen(sitting):
 def test_render_view(crib):
     frame = crib.render_view(160, 120)
     assert frame.shape == (120, 160, 3) and frame.dtype == np.uint8 and frame.std() > 5
+
+
+def test_segmentation_matches_mujoco_segmentation_mode(sitting):
+    """Our id-colour decoding agrees pixel for pixel with mujoco.Renderer's own."""
+    rng = np.random.default_rng(4)
+    eyes = sitting._eye_renderer()
+    for _ in range(3):
+        sitting.reset(rng, random_pose=True)
+        ours = sitting.eyes_segmentation()
+        renderer = eyes.renderer
+        renderer.enable_segmentation_rendering()
+        try:
+            for e, camera in enumerate(eyes.cameras):
+                renderer.update_scene(sitting.data, camera=camera)
+                ids = renderer.render()
+                geom = np.where(ids[..., 1] == mujoco.mjtObj.mjOBJ_GEOM, ids[..., 0], -1)
+                reference = np.where(geom >= 0, eyes.labels[geom], 0)
+                assert np.array_equal(ours[e], reference)
+        finally:
+            renderer.disable_segmentation_rendering()
