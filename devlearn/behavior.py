@@ -33,12 +33,16 @@ class NetworkSpec:
         fusion_dims: Fusion layers after concatenation (paper Model I: ``(512,)``).
         trunk_dims: Shared trunk layers before the heads (paper Model I: ``(256, 256)``).
         init_std: Initial standard deviation of the policy (softplus bias is set to match).
+        normalize: Observations standardised by a running mean and variance before their
+            encoder (rsl-rl's ``EmpiricalNormalization``, updated during rollouts), e.g.
+            ``("proprioception",)`` whose joint velocities and torques have mixed scales.
     """
 
     encoders: dict[str, SensorEncoder]
     fusion_dims: tuple[int, ...] = (512,)
     trunk_dims: tuple[int, ...] = (256, 256)
     init_std: float = 0.5
+    normalize: tuple[str, ...] = ()
 
 
 class Evaluator:

@@ -8,6 +8,7 @@ import torch
 import torch.nn as nn
 import torch.nn.functional as F
 from rsl_rl.models import MLPModel
+from rsl_rl.modules import EmpiricalNormalization
 from rsl_rl.modules.distribution import Distribution
 from tensordict import TensorDict
 from torch.distributions import Normal
@@ -77,11 +78,34 @@ class MultiSenseModel(MLPModel):
         self.encoders = nn.ModuleDict(
             {g: self.spec.encoders[g].build(shape) for g, shape in self.obs_shapes.items()}
         )
+        unknown = set(self.spec.normalize) - set(self.spec.encoders)
+        if unknown:
+            raise ValueError(f"NetworkSpec.normalize names unknown observations {sorted(unknown)}")
+        self.normalizers = nn.ModuleDict(
+            {
+                g: EmpiricalNormalization(shape)
+                for g, shape in self.obs_shapes.items()
+                if g in self.spec.normalize
+            }
+        )
         return sum(self.spec.encoders[g].out_dim(s) for g, s in self.obs_shapes.items())
 
+    def _input(self, obs: TensorDict, group: str) -> torch.Tensor:
+        x = as_float(obs[group])
+        return self.normalizers[group](x) if group in self.normalizers else x
+
     def get_latent(self, obs: TensorDict, masks=None, hidden_state=None) -> torch.Tensor:
-        """Encode every group and concatenate: returns (N, latent_dim)."""
-        return torch.cat([self.encoders[g](as_float(obs[g])) for g in self.obs_groups], dim=-1)
+        """Normalise the groups named in ``spec.normalize``, encode every group, concatenate.
+
+        Returns:
+            (N, latent_dim).
+        """
+        return torch.cat([self.encoders[g](self._input(obs, g)) for g in self.obs_groups], dim=-1)
+
+    def update_normalization(self, obs: TensorDict) -> None:
+        """Update the running statistics of the normalised groups from a rollout batch."""
+        for group, normalizer in self.normalizers.items():
+            normalizer.update(as_float(obs[group]))  # type: ignore[operator]
 
     def as_jit(self) -> nn.Module:
         raise NotImplementedError("MultiSenseModel has no TorchScript export; use the checkpoint")

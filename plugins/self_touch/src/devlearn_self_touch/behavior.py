@@ -91,6 +91,8 @@ class SelfTouch(Behavior):
             },
             fusion_dims=(512,),
             trunk_dims=(256, 256),
+            # joint velocities and torques have mixed scales: standardise them (running stats)
+            normalize=("proprioception",),
         )
 
     # --- rewards and curriculum ------------------------------------------------------------
