@@ -214,6 +214,18 @@ class PluginRegistry:
             raise UsageError(f"unknown behavior '{name}'; installed: {installed}")
         return self._behaviors[name]
 
+    def create(self, name: str, config: Any | None = None) -> Behavior:
+        """Instantiate behaviour ``name`` with ``config`` (its default when None).
+
+        A ``ValueError`` or ``TypeError`` from the behaviour's config validation becomes a
+        :class:`UsageError` naming the behaviour, so the CLI reports one clear line.
+        """
+        cls = self.behavior(name)
+        try:
+            return cls(config if config is not None else cls.config_class())
+        except (ValueError, TypeError) as exc:
+            raise UsageError(f"invalid config for behavior '{name}': {exc}") from exc
+
     def encoder(self, name: str) -> type[SensorEncoder]:
         """Return the encoder class registered as ``name``."""
         if name not in self._encoders:

@@ -132,3 +132,15 @@ def test_disabling_through_environment(monkeypatch, tmp_path):
 def test_builtin_plugins_are_entry_points():
     names = {s.name for s in entry_point_sources()}
     assert {"self_touch", "hand_regard"} <= names
+
+
+def test_create_turns_config_errors_into_usage_errors():
+    class Picky(_behavior("picky")):
+        """Rejects its config."""
+
+        def __init__(self, config=None):
+            raise ValueError("unknown curriculum 'bogus'; valid: a, b")
+
+    registry = PluginRegistry([_plugin("p", Picky)])
+    with pytest.raises(UsageError, match=r"invalid config for behavior 'picky': unknown curr"):
+        registry.create("picky")

@@ -18,7 +18,7 @@ def add_parser(subparsers) -> list[str]:
 
 def run(args: argparse.Namespace, registry) -> int:
     """Print the description as a table or JSON."""
-    behavior = registry.behavior(args.behavior)()
+    behavior = registry.create(args.behavior)
     info = describe_behavior(behavior)
     info["plugin"] = registry.plugin_of(args.behavior).name
     if args.json:

@@ -82,7 +82,7 @@ def evaluate(
     check_behavior(state, checkpoint, behavior_name)
     behavior_cls = registry.behavior(behavior_name)
     cfg = from_dict(state["config"], behavior_cls)
-    behavior = behavior_cls(cfg.behavior)
+    behavior = registry.create(behavior_name, cfg.behavior)
     torch.manual_seed(seed)
     env = BehaviorEnv(behavior, seed, infant_factory, training=False)
     writer = None

@@ -108,7 +108,7 @@ def train(
 
     # Behaviour: one-off preparation, then the resolved config is written next to the logs.
     # With several ranks, rank 0 prepares first; the others then reuse what it saved.
-    behavior = registry.behavior(cfg.behavior_name)(cfg.behavior)
+    behavior = registry.create(cfg.behavior_name, cfg.behavior)
     run_dir.mkdir(parents=True, exist_ok=True)
     init_distributed(device)
     if rank == 0:
