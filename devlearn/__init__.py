@@ -7,6 +7,12 @@ The public API for behaviour plugins: the four interfaces (:class:`Behavior`,
 
 from __future__ import annotations
 
+import os
+
+# MuJoCo picks its GL backend when first imported: headless EGL (no display needed) unless the
+# user chose another. Set here, before anything can import mujoco through devlearn.
+os.environ.setdefault("MUJOCO_GL", "egl")
+
 from devlearn.behavior import Behavior, Evaluator, NetworkSpec
 from devlearn.curriculum import Curriculum, Stage
 from devlearn.hookspecs import hookimpl

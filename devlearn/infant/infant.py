@@ -20,6 +20,10 @@ SENSES = ("touch", "proprioception", "vestibular", "eyes")
 ACTUATOR_GROUPS = ("left_arm", "right_arm", "head", "trunk", "legs")
 
 
+MAX_START_PENETRATION = 0.005
+"""Deepest contact penetration (m) accepted for a random initial pose."""
+
+
 class SenseNotEnabledError(RuntimeError):
     """A sense was asked for that the infant was built without."""
 
@@ -89,11 +93,35 @@ class Infant:
     def reset(self, rng: np.random.Generator, random_pose: bool = False) -> None:
         """Start an episode: the scene's rest pose, or joint angles uniform within their ranges."""
         mujoco.mj_resetData(self.model, self.data)
-        pose = rng.uniform(self._ranges[:, 0], self._ranges[:, 1]) if random_pose else self._rest
-        self.data.qpos[self._qpos_index] = pose
-        mujoco.mj_forward(self.model, self.data)
+        if random_pose:
+            self._random_pose(rng)
+        else:
+            self.data.qpos[self._qpos_index] = self._rest
+            mujoco.mj_forward(self.model, self.data)
         self._cache.clear()
         self.steps = 0
+
+    def _random_pose(self, rng: np.random.Generator, tries: int = 20) -> None:
+        """Joint angles uniform within their ranges, avoiding poses that start buried.
+
+        A uniform pose can put a limb deep inside the mattress or the body; the push-out
+        then reaches thousands of newtons per sensor. Up to ``tries`` poses are drawn and the
+        first whose deepest contact penetrates less than ``MAX_START_PENETRATION`` is kept
+        (else the least-penetrating one), so the pose stays random within the ranges.
+        """
+        best_pose, best_depth = None, np.inf
+        for _ in range(tries):
+            pose = rng.uniform(self._ranges[:, 0], self._ranges[:, 1])
+            self.data.qpos[self._qpos_index] = pose
+            mujoco.mj_forward(self.model, self.data)
+            ncon = self.data.ncon
+            depth = float(-self.data.contact.dist[:ncon].min()) if ncon else 0.0
+            if depth < best_depth:
+                best_pose, best_depth = pose, depth
+            if depth < MAX_START_PENETRATION:
+                return
+        self.data.qpos[self._qpos_index] = best_pose
+        mujoco.mj_forward(self.model, self.data)
 
     def step(self, action: np.ndarray) -> None:
         """Apply ``action`` (action_dim,) in [-1, 1] (clipped): torque = max_torque * action."""
