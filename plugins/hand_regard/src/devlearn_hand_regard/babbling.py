@@ -22,9 +22,9 @@ class BabblingData:
         proprioception: (T, P) float32.
         actions: (T, A) float32, the random actions taken.
         arm_speed: (T, 2) float32, [left, right] arm joint-speed magnitude: the norm of the
-            arm joints' velocities (the velocity part of proprioception, read through each
-            arm's actuators, ``infant.actuator_groups``).
+            arm joints' velocities (from proprioception, see :func:`joint_state`).
         episode: (T,) int, episode index (tracks never cross an episode boundary).
+        head_pose: (T, 3) float32 head joint angles (from proprioception), or (T, 0).
     """
 
     eyes: np.ndarray
@@ -32,40 +32,61 @@ class BabblingData:
     actions: np.ndarray
     arm_speed: np.ndarray
     episode: np.ndarray
+    head_pose: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        if self.head_pose is None:
+            self.head_pose = np.zeros((len(self.eyes), 0), np.float32)
 
     def __len__(self) -> int:
         return len(self.eyes)
 
 
-def arm_speeds(infant) -> np.ndarray:
-    """Return (2,) [left, right] norms of the arm joints' velocities (rad/s, via actuators)."""
-    velocity = np.asarray(infant.physics.data.actuator_velocity)
-    return np.array(
-        [np.linalg.norm(velocity[np.asarray(infant.actuator_groups[f"{s}_arm"])]) for s in SIDES],
-        dtype=np.float32,
-    )
+def joint_state(proprioception: np.ndarray, groups: dict[str, np.ndarray]) -> tuple:
+    """Split proprioception into arm speeds and head pose.
+
+    The infant's proprioception is [qpos, qvel, torque, limit, action, actuator_force], each
+    (J,) in actuator order (``devlearn.infant.senses.Proprioception``).
+
+    Args:
+        proprioception: (6 J,) one step's proprioception.
+        groups: ``infant.actuator_groups``.
+    Returns:
+        arm_speed: (2,) [left, right] norm of the arm joints' velocities (rad/s).
+        head_pose: (len(head),) head joint angles (rad).
+    """
+    n_joints = len(proprioception) // 6
+    qpos, qvel = proprioception[:n_joints], proprioception[n_joints : 2 * n_joints]
+    speed = np.array([np.linalg.norm(qvel[groups[f"{s}_arm"]]) for s in SIDES], np.float32)
+    return speed, np.asarray(qpos[groups["head"]], np.float32)
 
 
-def babble(steps: int, seed: int = 0, hold_steps: int = 8, infant=None,
+def babble(steps: int, seed: int = 0, hold_steps: int = 8, head_hold_steps: int = 50,
+           head_scale: float = 0.3, infant=None,
            episode_steps: int | None = None) -> BabblingData:
     """Move every actuator randomly and record eyes, proprioception, actions and arm speeds.
 
-    Each random action (uniform in [-1, 1] per actuator) is held for ``hold_steps`` steps: the
-    joints are damped, so fresh noise every 5 ms would only make the arms tremble. The head
-    moves too, so the scene shifts in view; the arms' speeds are what tells the hands apart.
+    Each actuator keeps its random action (uniform in [-1, 1]) and redraws it with probability
+    ``1 / hold_steps`` per step (arms, wrists) or ``1 / head_hold_steps`` (head): the joints are
+    damped, so fresh noise every 5 ms would only make them tremble; independent switching
+    keeps the arms' speeds uncorrelated with the head's; a slower, gentler head (actions
+    scaled by ``head_scale``) keeps the scene mostly still in view and the hands near it, while
+    visiting many gaze directions. Every episode starts from the rest pose.
 
     Args:
         steps: Steps to record (paper: 10,000).
         seed: Seed of the actions and the initial poses.
-        hold_steps: Steps each random action is held (>= 1).
+        hold_steps: Mean steps an arm action is held (>= 1).
+        head_hold_steps: Mean steps a head action is held (>= 1).
+        head_scale: Largest head action (the arms use the full [-1, 1]).
         infant: A sitting infant with eyes and proprioception (built and closed here if None).
         episode_steps: Steps between resets (default: the infant's episode length).
     Returns:
         The recording.
     """
-    if steps < 2 or hold_steps < 1:
-        raise ValueError(f"babbling needs steps >= 2 and hold_steps >= 1, got {steps}, "
-                         f"{hold_steps}")
+    if steps < 2 or hold_steps < 1 or head_hold_steps < 1:
+        raise ValueError(f"babbling needs steps >= 2 and hold steps >= 1, got {steps}, "
+                         f"{hold_steps}, {head_hold_steps}")
     own = infant is None
     if own:
         from devlearn.infant import build_infant
@@ -74,18 +95,26 @@ def babble(steps: int, seed: int = 0, hold_steps: int = 8, infant=None,
     try:
         rng = np.random.default_rng(seed)
         length = int(episode_steps or infant.episode_steps)
-        eyes, proprio, actions, speeds, episode = [], [], [], [], []
+        switch = np.full(infant.action_dim, 1.0 / hold_steps)
+        switch[infant.actuator_groups["head"]] = 1.0 / head_hold_steps
+        scale = np.ones(infant.action_dim)
+        scale[infant.actuator_groups["head"]] = head_scale
+        groups = {k: np.asarray(v) for k, v in infant.actuator_groups.items()}
+        eyes, proprio, actions, speeds, heads, episode = [], [], [], [], [], []
         action = np.zeros(infant.action_dim)
         for t in range(steps):
             if t % length == 0:
-                infant.reset(rng, random_pose=t > 0)
-            if t % hold_steps == 0:
-                action = rng.uniform(-1.0, 1.0, infant.action_dim)
+                infant.reset(rng)
+            redraw = rng.random(infant.action_dim) < switch
+            action = np.where(redraw, rng.uniform(-scale, scale), action)
             infant.step(action)
+            p = np.asarray(infant.proprioception(), dtype=np.float32)
+            speed, head = joint_state(p, groups)
             eyes.append(infant.eyes())
-            proprio.append(np.asarray(infant.proprioception(), dtype=np.float32))
+            proprio.append(p)
             actions.append(action.astype(np.float32))
-            speeds.append(arm_speeds(infant))
+            speeds.append(speed)
+            heads.append(head)
             episode.append(t // length)
         return BabblingData(
             eyes=np.stack(eyes),
@@ -93,6 +122,7 @@ def babble(steps: int, seed: int = 0, hold_steps: int = 8, infant=None,
             actions=np.stack(actions),
             arm_speed=np.stack(speeds),
             episode=np.asarray(episode),
+            head_pose=np.stack(heads),
         )
     finally:
         if own:

@@ -75,7 +75,9 @@ class HandRegard(Behavior):
         if not path.exists():
             cfg = self.config
             data = babble(cfg.babbling_steps, seed=cfg.babbling_seed,
-                          hold_steps=cfg.babbling_hold_steps)
+                          hold_steps=cfg.babbling_hold_steps,
+                          head_hold_steps=cfg.babbling_head_hold_steps,
+                          head_scale=cfg.babbling_head_scale)
             calibrate(data, threshold=cfg.correlation_threshold).save(path)
         self.config.detector_file = str(path.resolve())
         self._detector = None
@@ -115,7 +117,11 @@ class HandRegard(Behavior):
             self._flow.reset()
         self._last_time = time
         eyes = infant.eyes()
-        detections, masks = self.detector.detect(eyes)
+        head_pose = None
+        if "head" in infant.actuator_groups:
+            proprioception = np.asarray(infant.proprioception())
+            head_pose = proprioception[np.asarray(infant.actuator_groups["head"])]  # qpos part
+        detections, masks = self.detector.detect(eyes, head_pose)
         flow, pixels = self._flow.update(eyes, masks)
         facts = {
             "eyes": eyes,

@@ -23,7 +23,8 @@ import cv2
 import numpy as np
 
 from devlearn_hand_regard.babbling import BabblingData
-from devlearn_hand_regard.detector import DetectorParams, colour_blobs
+from devlearn_hand_regard.detector import DetectorParams, HandDetector, colour_blobs
+from devlearn_hand_regard.static_body import fit_static_body
 
 
 @dataclass
@@ -144,10 +145,28 @@ def ego_motion(tracks: list[Track], steps: int, n_eyes: int, window: int) -> np.
     return out
 
 
-def track_correlation(track: Track, arm_speed: np.ndarray, ego: np.ndarray, window: int,
-                      max_lag: int) -> tuple[float, int]:
-    """Best Pearson correlation of a track's own motion with either arm's speed.
+def _residual(y: np.ndarray, covariate: np.ndarray) -> np.ndarray:
+    """``y`` minus its least-squares fit on [1, covariate] (covariate (n, k), k may be 0)."""
+    x = np.c_[np.ones(len(y)), covariate]
+    return y - x @ np.linalg.lstsq(x, y, rcond=None)[0]
 
+
+def track_correlation(track: Track, arm_speed: np.ndarray, head_speed: np.ndarray,
+                      ego: np.ndarray, window: int, max_lag: int) -> tuple[float, int]:
+    """Best correlation of a track's own motion with either arm's speed, head motion removed.
+
+    The centroid's displacement over ``window`` steps (minus the eye's median displacement)
+    is compared with each arm's mean joint speed over the same steps, ``lag`` steps earlier.
+    Both are first regressed on the head's mean speed (a partial correlation): a toy block
+    moves in view only when the head turns, and the head also sways when the arms swing.
+
+    Args:
+        track: The track.
+        arm_speed: (T, 2) arm joint-speed magnitudes.
+        head_speed: (T,) head joint-speed magnitude (zeros when unknown).
+        ego: (T, n_eyes, 2) from :func:`ego_motion`.
+        window: Steps per displacement.
+        max_lag: Largest lag tried.
     Returns:
         (rho, side): the correlation and the arm (0 left, 1 right) achieving it.
     """
@@ -159,18 +178,30 @@ def track_correlation(track: Track, arm_speed: np.ndarray, ego: np.ndarray, wind
     displacement = np.linalg.norm(move, axis=1)
     best, side = 0.0, -1
     for lag in range(max_lag + 1):
-        # Mean arm speed over the same window, ``lag`` steps earlier.
         idx = steps[window:, None] - lag - np.arange(window)[None, :]
         if idx.min() < 0:
             continue
-        speed = arm_speed[idx].mean(axis=1)  # (n, 2)
+        head = head_speed[idx].mean(axis=1)[:, None]
+        d = _residual(displacement, head)
         for s in range(arm_speed.shape[1]):
-            if displacement.std() < 1e-9 or speed[:, s].std() < 1e-9:
+            a = _residual(arm_speed[idx, s].mean(axis=1), head)
+            if d.std() < 1e-9 or a.std() < 1e-9:
                 continue
-            rho = float(np.corrcoef(displacement, speed[:, s])[0, 1])
+            rho = float(np.corrcoef(d, a)[0, 1])
             if rho > best:
                 best, side = rho, s
     return best, side
+
+
+def head_speeds(data: BabblingData) -> np.ndarray:
+    """Return (T,) head joint-speed magnitude from the recorded head pose (finite differences;
+    zeros when the recording has no head pose)."""
+    if data.head_pose.shape[1] == 0:
+        return np.zeros(len(data))
+    speed = np.zeros(len(data))
+    speed[1:] = np.linalg.norm(np.diff(data.head_pose, axis=0), axis=1)
+    speed[1:][data.episode[1:] != data.episode[:-1]] = 0.0  # no motion across a reset
+    return speed
 
 
 class CalibrationError(RuntimeError):
@@ -205,9 +236,26 @@ def hsv_boxes(hsv: np.ndarray, low: float = 1.0, high: float = 99.0,
     return boxes
 
 
+def _drop_background_boxes(boxes: list[list[int]], data: BabblingData, max_coverage: float,
+                           frames: int = 200) -> tuple[list[list[int]], list[list[int]]]:
+    """Split boxes into kept and dropped by their mean pixel coverage over sample frames.
+
+    A hand never fills most of the view, so a colour box covering more than ``max_coverage``
+    of the image on average must be catching background colours too.
+    """
+    index = np.linspace(0, len(data) - 1, min(frames, len(data))).astype(int)
+    images = data.eyes[index].reshape(-1, *data.eyes.shape[2:])
+    hsv = np.stack([cv2.cvtColor(np.ascontiguousarray(im), cv2.COLOR_RGB2HSV) for im in images])
+    kept, dropped = [], []
+    for box in boxes:
+        inside = np.all((hsv >= box[:3]) & (hsv <= box[3:]), axis=-1)
+        (kept if inside.mean() <= max_coverage else dropped).append(box)
+    return kept, dropped
+
+
 def calibrate(data: BabblingData, threshold: float = 0.6, clusters: int = 8, seed: int = 0,
               window: int = 4, max_lag: int = 2, min_track: int = 60,
-              min_cluster_share: float = 0.2) -> DetectorParams:
+              min_cluster_share: float = 0.2, max_coverage: float = 0.25) -> DetectorParams:
     """Discover the hands in a babbling recording and calibrate the detector.
 
     Args:
@@ -220,6 +268,8 @@ def calibrate(data: BabblingData, threshold: float = 0.6, clusters: int = 8, see
         min_track: Shortest track (steps) whose correlation is trusted.
         min_cluster_share: A colour cluster joins the hand colours when it holds at least this
             share of the hand tracks' frames.
+        max_coverage: A colour box selecting more than this share of all pixels (mean over the
+            recording) is background-like (the floor seen between the fingers) and dropped.
     Returns:
         The detector parameters, with a ``calibration`` report.
     Raises:
@@ -228,10 +278,11 @@ def calibrate(data: BabblingData, threshold: float = 0.6, clusters: int = 8, see
     n_steps, n_eyes, height, width, _ = data.eyes.shape
     centres = colour_palette(data, clusters, seed)
     tracks = track_blobs(data, centres)
+    head = head_speeds(data)
     ego = ego_motion([t for t in tracks if len(t.steps) > window], n_steps, n_eyes, window)
     candidates = [t for t in tracks if len(t.steps) >= min_track]
     for tr in candidates:
-        tr.rho, tr.side = track_correlation(tr, data.arm_speed, ego, window, max_lag)
+        tr.rho, tr.side = track_correlation(tr, data.arm_speed, head, ego, window, max_lag)
     hands = [t for t in candidates if t.rho > threshold]
     report = {
         "babbling_steps": int(n_steps),
@@ -258,6 +309,10 @@ def calibrate(data: BabblingData, threshold: float = 0.6, clusters: int = 8, see
                   for t in hands if t.cluster == k for s, p in zip(t.steps, t.pixels)]
         rgb = np.concatenate(pixels)[:, None, :]
         boxes += hsv_boxes(cv2.cvtColor(rgb, cv2.COLOR_RGB2HSV)[:, 0, :])
+    boxes, dropped = _drop_background_boxes(boxes, data, max_coverage)
+    if not boxes:
+        raise CalibrationError("every hand colour found also covers most of the view "
+                               f"(background); dropped {dropped}")
     areas = np.concatenate([t.areas for t in hands])
     means = np.zeros((n_eyes, 2, 2))
     for eye in range(n_eyes):
@@ -271,12 +326,13 @@ def calibrate(data: BabblingData, threshold: float = 0.6, clusters: int = 8, see
                 means[eye, side] = (width - 1 - x, y) if other else (x, y)
     report.update(
         hand_clusters={str(k): int(frames[k]) for k in keep},
+        dropped_background_boxes=dropped,
         hand_frames={f"eye{e}_side{s}": int(sum(len(t.steps) for t in hands
                                                 if t.eye == e and t.side == s))
                      for e in range(n_eyes) for s in range(2)},
         palette_lab=np.round(centres, 1).tolist(),
     )
-    return DetectorParams(
+    params = DetectorParams(
         hsv_ranges=boxes,
         min_area=float(max(0.5 * np.percentile(areas, 2), 0.002 * height * width)),
         max_area=float(2.0 * np.percentile(areas, 98)),
@@ -285,3 +341,7 @@ def calibrate(data: BabblingData, threshold: float = 0.6, clusters: int = 8, see
         image_size=(height, width),
         calibration=report,
     )
+    if data.head_pose.shape[1] > 0:  # learn the static body (legs) in view per head pose
+        colour = HandDetector(params).colour_mask
+        params.static_body = fit_static_body(data.head_pose, data.eyes, colour).to_json()
+    return params

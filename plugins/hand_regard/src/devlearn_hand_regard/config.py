@@ -15,8 +15,12 @@ class HandRegardConfig:
     babbling_seed: int = 0
     """Seed of the babbling episode's random actions and initial state."""
     babbling_hold_steps: int = 8
-    """Steps each random babbling action is held (piecewise-constant noise: 200 Hz i.i.d. noise
-    barely moves the arms through their damping, so the hands would hardly move)."""
+    """Mean steps an arm's random babbling action is held (each actuator redraws independently;
+    200 Hz i.i.d. noise barely moves the damped arms, so the hands would hardly move)."""
+    babbling_head_hold_steps: int = 50
+    """Mean steps a head action is held while babbling (a slow head keeps the view steady)."""
+    babbling_head_scale: float = 0.3
+    """Largest head action while babbling (a gentle head keeps the hands near the view)."""
     correlation_threshold: float = 0.6
     """A blob track whose motion correlates above this with the arm proprioception is a hand
     (paper: rho_k > 0.6)."""

@@ -15,6 +15,8 @@ from typing import Any
 import cv2
 import numpy as np
 
+from devlearn_hand_regard.static_body import StaticBody
+
 FORMAT_VERSION = 1
 
 
@@ -34,6 +36,8 @@ class DetectorParams:
         image_size: (H, W) of the eye images the sizes refer to.
         kernel: Side of the square morphology kernel, in pixels.
         calibration: Report of the calibration (tracks, correlations); informative only.
+        static_body: :meth:`StaticBody.to_json` of the body parts always in view per head pose
+            (removed before blob search), or None.
     """
 
     hsv_ranges: list[list[int]]
@@ -44,6 +48,7 @@ class DetectorParams:
     image_size: tuple[int, int] = (64, 64)
     kernel: int = 3
     calibration: dict[str, Any] = field(default_factory=dict)
+    static_body: dict[str, Any] | None = None
 
     def save(self, path: str | Path) -> Path:
         """Write the parameters as JSON; return the path."""
@@ -116,6 +121,9 @@ class HandDetector:
     def __init__(self, params: DetectorParams | None, max_hands: int = 2) -> None:
         self.params = params
         self.max_hands = max_hands
+        self.static_body = None
+        if params is not None and params.static_body is not None:
+            self.static_body = StaticBody.from_json(params.static_body)
 
     def colour_mask(self, image: np.ndarray) -> np.ndarray:
         """Return (H, W) bool: pixels inside the learned hand colour boxes of an RGB image."""
@@ -126,13 +134,21 @@ class HandDetector:
             mask |= cv2.inRange(hsv, lo, hi)
         return mask > 0
 
-    def blobs(self, image: np.ndarray) -> list[Blob]:
-        """Return the hand blobs of one (H, W, 3) RGB image, largest first (at most max_hands)."""
+    def blobs(self, image: np.ndarray, exclude: np.ndarray | None = None) -> list[Blob]:
+        """Return the hand blobs of one (H, W, 3) RGB image, largest first (at most max_hands).
+
+        Args:
+            image: (H, W, 3) uint8 RGB.
+            exclude: (H, W) bool pixels never to count (the static body), or None.
+        """
         if self.params is None:
             return []
         scale = image.shape[0] * image.shape[1] / float(np.prod(self.params.image_size))
+        mask = self.colour_mask(image)
+        if exclude is not None and exclude.shape == mask.shape:
+            mask &= ~exclude
         found = colour_blobs(
-            self.colour_mask(image),
+            mask,
             self.params.min_area * scale,
             self.params.max_area * scale,
             self.params.kernel,
@@ -161,11 +177,14 @@ class HandDetector:
         crossed = dist[0, 1] + dist[1, 0]
         return [blobs[0], blobs[1]] if straight <= crossed else [blobs[1], blobs[0]]
 
-    def detect(self, eyes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def detect(self, eyes: np.ndarray, head_pose: np.ndarray | None = None
+               ) -> tuple[np.ndarray, np.ndarray]:
         """Detect and attribute the hands in both eyes.
 
         Args:
             eyes: (2, H, W, 3) uint8 RGB, [left eye, right eye].
+            head_pose: (D,) head joint angles; when given (and calibrated), the static body
+                expected in view at that pose is ignored.
         Returns:
             detections: (2 eyes, 2 hands) bool, hands ordered [left, right].
             masks: (2 eyes, 2 hands, H, W) bool, each detected hand's pixels.
@@ -173,8 +192,12 @@ class HandDetector:
         n_eyes, height, width = eyes.shape[:3]
         detections = np.zeros((n_eyes, 2), dtype=bool)
         masks = np.zeros((n_eyes, 2, height, width), dtype=bool)
+        static = None
+        if self.static_body is not None and head_pose is not None:
+            static = self.static_body.mask(head_pose)
         for eye in range(n_eyes):
-            for hand, blob in enumerate(self.attribute(self.blobs(eyes[eye]), eye, width)):
+            found = self.blobs(eyes[eye], None if static is None else static[eye])
+            for hand, blob in enumerate(self.attribute(found, eye, width)):
                 if blob is not None:
                     detections[eye, hand] = True
                     masks[eye, hand] = blob.mask
