@@ -5,8 +5,9 @@ from __future__ import annotations
 import cv2
 import numpy as np
 import pytest
-from devlearn_hand_regard.calibration import CalibrationError, calibrate, hsv_boxes
+from devlearn_hand_regard.calibration import CalibrationError, calibrate
 from devlearn_hand_regard.detector import DetectorParams, HandDetector, HandFlow
+from devlearn_hand_regard.hand_colour import hsv_boxes
 from synthetic import BLOCKS, SKIN, draw, synthetic_babbling
 
 BLOCK_POSITIONS = np.array([[12.0, 52.0], [32.0, 56.0], [52.0, 50.0]])

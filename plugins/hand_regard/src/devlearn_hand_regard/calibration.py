@@ -7,12 +7,14 @@
 2. **Tracks.** Blob centroids are linked frame to frame by nearest-neighbour matching within
    each eye and colour cluster; a track ends when its blob is not found, and at resets.
 3. **Correlation.** For every track, the centroid's displacement over a short window (minus
-   the eye's median displacement over all tracks, which removes the head's own motion) is
-   correlated in time with each arm's joint-speed magnitude. ``rho_k`` is the best Pearson
-   correlation over both arms and lags 0..``max_lag``.
+   the eye's median displacement over all tracks) is correlated in time with each arm's
+   joint-speed magnitude, both first regressed on the head's speed (a partial correlation: the
+   head's own motion moves everything in view). ``rho_k`` is the best over both arms and lags
+   0..``max_lag``.
 4. **Hands.** Tracks with ``rho_k > 0.6`` are hands, of the arm that correlates best. The HSV
-   ranges (1st..99th percentiles per channel, per colour cluster holding hands), the
-   expected size and each hand's mean image position are taken from their blobs.
+   ranges (percentiles per colour cluster holding hands, background-like boxes dropped), the
+   expected size and each hand's mean image position come from their blobs; the static body
+   in view per head pose is learned last (:mod:`devlearn_hand_regard.static_body`).
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ import numpy as np
 
 from devlearn_hand_regard.babbling import BabblingData
 from devlearn_hand_regard.detector import DetectorParams, HandDetector, colour_blobs
+from devlearn_hand_regard.hand_colour import drop_background_boxes, hsv_boxes
 from devlearn_hand_regard.static_body import fit_static_body
 
 
@@ -208,51 +211,6 @@ class CalibrationError(RuntimeError):
     """Babbling found no hand (too short a recording, or hands never in view)."""
 
 
-def hsv_boxes(hsv: np.ndarray, low: float = 1.0, high: float = 99.0,
-              margin: tuple[int, int, int] = (2, 8, 8)) -> list[list[int]]:
-    """Percentile box of (N, 3) OpenCV HSV pixels, widened by ``margin``.
-
-    Hue is circular (0..179): when the colours sit around red's wrap, the box is computed on
-    shifted hues and returned as two boxes.
-    """
-    h = hsv[:, 0].astype(float)
-    spans = []
-    for shift in (0, 90):
-        hs = (h + shift) % 180
-        lo, hi = np.percentile(hs, [low, high])
-        spans.append((hi - lo, shift, lo, hi))
-    _, shift, h_lo, h_hi = min(spans)
-    s_lo, v_lo = np.percentile(hsv[:, 1:], low, axis=0)
-    s_hi, v_hi = np.percentile(hsv[:, 1:], high, axis=0)
-    s_lo, v_lo = max(0, s_lo - margin[1]), max(0, v_lo - margin[2])
-    s_hi, v_hi = min(255, s_hi + margin[1]), min(255, v_hi + margin[2])
-    h_lo, h_hi = h_lo - margin[0] - shift, h_hi + margin[0] - shift
-    boxes = []
-    for lo, hi in ((h_lo, h_hi), (h_lo + 180, h_hi + 180), (h_lo - 180, h_hi - 180)):
-        lo, hi = max(lo, 0), min(hi, 179)
-        if lo <= hi:
-            boxes.append([int(np.floor(lo)), int(np.floor(s_lo)), int(np.floor(v_lo)),
-                          int(np.ceil(hi)), int(np.ceil(s_hi)), int(np.ceil(v_hi))])
-    return boxes
-
-
-def _drop_background_boxes(boxes: list[list[int]], data: BabblingData, max_coverage: float,
-                           frames: int = 200) -> tuple[list[list[int]], list[list[int]]]:
-    """Split boxes into kept and dropped by their mean pixel coverage over sample frames.
-
-    A hand never fills most of the view, so a colour box covering more than ``max_coverage``
-    of the image on average must be catching background colours too.
-    """
-    index = np.linspace(0, len(data) - 1, min(frames, len(data))).astype(int)
-    images = data.eyes[index].reshape(-1, *data.eyes.shape[2:])
-    hsv = np.stack([cv2.cvtColor(np.ascontiguousarray(im), cv2.COLOR_RGB2HSV) for im in images])
-    kept, dropped = [], []
-    for box in boxes:
-        inside = np.all((hsv >= box[:3]) & (hsv <= box[3:]), axis=-1)
-        (kept if inside.mean() <= max_coverage else dropped).append(box)
-    return kept, dropped
-
-
 def calibrate(data: BabblingData, threshold: float = 0.6, clusters: int = 8, seed: int = 0,
               window: int = 4, max_lag: int = 2, min_track: int = 60,
               min_cluster_share: float = 0.2, max_coverage: float = 0.25) -> DetectorParams:
@@ -309,7 +267,7 @@ def calibrate(data: BabblingData, threshold: float = 0.6, clusters: int = 8, see
                   for t in hands if t.cluster == k for s, p in zip(t.steps, t.pixels)]
         rgb = np.concatenate(pixels)[:, None, :]
         boxes += hsv_boxes(cv2.cvtColor(rgb, cv2.COLOR_RGB2HSV)[:, 0, :])
-    boxes, dropped = _drop_background_boxes(boxes, data, max_coverage)
+    boxes, dropped = drop_background_boxes(boxes, data.eyes, max_coverage)
     if not boxes:
         raise CalibrationError("every hand colour found also covers most of the view "
                                f"(background); dropped {dropped}")
