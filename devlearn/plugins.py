@@ -163,6 +163,18 @@ class PluginRegistry:
                 register = getattr(self, "_" + hook_name)(info)
                 impl.function(register=register)
 
+    def _claim(self, kind: str, name: str, info: PluginInfo) -> bool:
+        """Record that ``info`` owns ``kind`` ``name``; on a clash report both plugins."""
+        other = self._owner.get((kind, name))
+        if other is not None:
+            self.errors.append(
+                f"plugin '{info.name}' ({info.distribution}): {kind} '{name}' is already "
+                f"registered by plugin '{other}'; ignoring this one"
+            )
+            return False
+        self._owner[(kind, name)] = info.name
+        return True
+
     def _register_behaviors(self, info: PluginInfo):
         def register(behavior: type) -> None:
             if not (inspect.isclass(behavior) and issubclass(behavior, Behavior)):
@@ -172,16 +184,9 @@ class PluginRegistry:
                 raise TypeError(f"{behavior.__name__}.name must be a lower_snake_case string")
             if not dataclasses.is_dataclass(getattr(behavior, "config_class", None)):
                 raise TypeError(f"{behavior.__name__}.config_class must be a dataclass")
-            if ("behavior", name) in self._owner:
-                other = self._owner[("behavior", name)]
-                self.errors.append(
-                    f"plugin '{info.name}' ({info.distribution}): behavior '{name}' is already "
-                    f"registered by plugin '{other}'; ignoring this one"
-                )
-                return
-            self._owner[("behavior", name)] = info.name
-            self._behaviors[name] = behavior
-            info.behaviors.append(name)
+            if self._claim("behavior", name, info):
+                self._behaviors[name] = behavior
+                info.behaviors.append(name)
 
         return register
 
@@ -189,16 +194,9 @@ class PluginRegistry:
         def register(name: str, encoder: type) -> None:
             if not (inspect.isclass(encoder) and issubclass(encoder, SensorEncoder)):
                 raise TypeError(f"register_encoders got {encoder!r}, not a SensorEncoder subclass")
-            if ("encoder", name) in self._owner:
-                other = self._owner[("encoder", name)]
-                self.errors.append(
-                    f"plugin '{info.name}' ({info.distribution}): encoder '{name}' is already "
-                    f"registered by plugin '{other}'; ignoring this one"
-                )
-                return
-            self._owner[("encoder", name)] = info.name
-            self._encoders[name] = encoder
-            info.encoders.append(name)
+            if self._claim("encoder", name, info):
+                self._encoders[name] = encoder
+                info.encoders.append(name)
 
         return register
 
