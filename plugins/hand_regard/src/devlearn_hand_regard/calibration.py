@@ -267,7 +267,10 @@ def calibrate(data: BabblingData, threshold: float = 0.6, clusters: int = 8, see
                   for t in hands if t.cluster == k for s, p in zip(t.steps, t.pixels)]
         rgb = np.concatenate(pixels)[:, None, :]
         boxes += hsv_boxes(cv2.cvtColor(rgb, cv2.COLOR_RGB2HSV)[:, 0, :])
-    boxes, dropped = drop_background_boxes(boxes, data.eyes, max_coverage)
+    index = np.linspace(0, n_steps - 1, min(200, n_steps)).astype(int)
+    sample = data.eyes[index].reshape(-1, height, width, 3)
+    hand_pixels = np.isin(np.stack([label_image(im, centres) for im in sample]), keep)
+    boxes, dropped = drop_background_boxes(boxes, sample, hand_pixels, max_coverage)
     if not boxes:
         raise CalibrationError("every hand colour found also covers most of the view "
                                f"(background); dropped {dropped}")

@@ -6,7 +6,7 @@ import cv2
 import numpy as np
 
 
-def hsv_boxes(hsv: np.ndarray, low: float = 1.0, high: float = 99.0,
+def hsv_boxes(hsv: np.ndarray, low: float = 2.0, high: float = 98.0,
               margin: tuple[int, int, int] = (2, 8, 8)) -> list[list[int]]:
     """Percentile box of (N, 3) OpenCV HSV pixels, widened by ``margin``.
 
@@ -34,24 +34,30 @@ def hsv_boxes(hsv: np.ndarray, low: float = 1.0, high: float = 99.0,
     return boxes
 
 
-def drop_background_boxes(boxes: list[list[int]], eyes: np.ndarray, max_coverage: float,
-                          frames: int = 200) -> tuple[list[list[int]], list[list[int]]]:
-    """Split boxes into kept and dropped by their mean pixel coverage over sample frames.
+def drop_background_boxes(boxes: list[list[int]], eyes: np.ndarray, hand_pixels: np.ndarray,
+                          max_coverage: float = 0.25, min_purity: float = 0.6
+                          ) -> tuple[list[list[int]], list[list[int]]]:
+    """Split boxes into kept and dropped by what they select in sample frames.
+
+    A hand never fills most of the view, so a box covering more than ``max_coverage`` of the
+    image on average catches background colours. A box whose selected pixels are mostly *not*
+    of the hand colour clusters (``purity`` below ``min_purity``; e.g. the shaded faces of toy
+    blocks, as dark as shaded skin) catches other objects.
 
     Args:
         boxes: HSV boxes (see :func:`hsv_boxes`).
-        eyes: (T, 2, H, W, 3) uint8 RGB babbling frames.
+        eyes: (N, H, W, 3) uint8 RGB sample images.
+        hand_pixels: (N, H, W) bool, pixels whose palette colour is a hand colour.
         max_coverage: Largest mean share of pixels a kept box may select.
-        frames: Frames sampled.
-
-    A hand never fills most of the view, so a colour box covering more than ``max_coverage``
-    of the image on average must be catching background colours too.
+        min_purity: Smallest share of a kept box's pixels that are hand-coloured clusters.
+    Returns:
+        (kept, dropped) boxes.
     """
-    index = np.linspace(0, len(eyes) - 1, min(frames, len(eyes))).astype(int)
-    images = eyes[index].reshape(-1, *eyes.shape[2:])
-    hsv = np.stack([cv2.cvtColor(np.ascontiguousarray(im), cv2.COLOR_RGB2HSV) for im in images])
+    hsv = np.stack([cv2.cvtColor(np.ascontiguousarray(im), cv2.COLOR_RGB2HSV) for im in eyes])
     kept, dropped = [], []
     for box in boxes:
         inside = np.all((hsv >= box[:3]) & (hsv <= box[3:]), axis=-1)
-        (kept if inside.mean() <= max_coverage else dropped).append(box)
+        purity = hand_pixels[inside].mean() if inside.any() else 0.0
+        ok = inside.mean() <= max_coverage and purity >= min_purity
+        (kept if ok else dropped).append(box)
     return kept, dropped
