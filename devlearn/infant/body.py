@@ -12,6 +12,8 @@ from devlearn.infant.body_table import (
     BODY_TABLE,
     EXCLUDED_PAIRS,
     EYE_RGBA,
+    MITTEN_BODIES,
+    MITTEN_RGBA,
     SIDES,
     SKIN_RGBA,
     BodySpec,
@@ -144,7 +146,7 @@ def add_infant(
                     size=geom.size,
                     contype=collide,
                     conaffinity=collide,
-                    rgba=SKIN_RGBA if spec.collides else EYE_RGBA,
+                    rgba=_colour(spec),
                     **kwargs,
                 )
             if spec.camera:
@@ -170,3 +172,10 @@ def add_infant(
                 continue
             root.contact.add("exclude", body1=na, body2=nb)
     return actuated
+
+
+def _colour(spec) -> tuple[float, float, float, float]:
+    """RGBA of a body's geoms: eyes dark, mitten hands purple, the rest skin."""
+    if not spec.collides:
+        return EYE_RGBA
+    return MITTEN_RGBA if spec.name in MITTEN_BODIES else SKIN_RGBA

@@ -9,6 +9,11 @@ from dataclasses import astuple, dataclass
 Vec3 = tuple[float, float, float]
 
 SKIN_RGBA = (0.95, 0.78, 0.66, 1.0)
+MITTEN_RGBA = (0.62, 0.38, 0.78, 1.0)
+"""The mitten hands (hand and fingers bodies) wear purple mittens: a colour apart from the skin
+and from the toys, as an infant's mittens would be. Nothing in devlearn tells a behaviour this
+colour: hand_regard learns what its hands look like from motor babbling."""
+MITTEN_BODIES = ("hand", "fingers")
 EYE_RGBA = (0.15, 0.10, 0.08, 1.0)
 
 
