@@ -92,6 +92,7 @@ def test_network_fuses_576_features(behavior):
     shapes = {"left_eye": (64, 64, 3), "right_eye": (64, 64, 3), "proprioception": (21,)}
     dims = {k: spec.encoders[k].out_dim(s) for k, s in shapes.items()}
     assert sum(dims.values()) == 576 and spec.fusion_dims == (256,) and spec.trunk_dims == ()
+    assert spec.normalize == ("proprioception",)  # running mean/var before the MLP
     eye = spec.encoders["left_eye"].build((64, 64, 3))
     images = torch.randint(0, 256, (2, 64, 64, 3), dtype=torch.uint8)
     assert eye(images).shape == (2, 256)

@@ -154,6 +154,8 @@ class HandRegard(Behavior):
             fusion_dims=(cfg.fusion_dim,),  # 256 + 256 + 64 = 576 -> 256 (sec. II-B3)
             trunk_dims=(),  # the paper's heads sit directly on the fused features
             init_std=cfg.init_std,
+            # Joint angles, velocities and torques have mixed scales: running standardisation.
+            normalize=("proprioception",),
         )
 
     # --- rewards, actions, curriculum -------------------------------------------------------

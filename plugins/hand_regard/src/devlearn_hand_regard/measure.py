@@ -1,0 +1,166 @@
+"""Measure a babbling-calibrated detector against the renderer's segmentation.
+
+``python -m devlearn_hand_regard.measure`` babbles (default 10,000 steps, seed 0), calibrates,
+then babbles fresh steps (seed 1) while recording the segmentation, and prints JSON: per
+(eye, hand) pair precision, recall and accuracy of the detections, recall on clearly visible
+hands, and which labels the detected pixels carry (hand, other body, scene/toys, background).
+The segmentation is used here only, never by the detector.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+from devlearn_hand_regard.babbling import BabblingData, babble
+from devlearn_hand_regard.calibration import calibrate
+from devlearn_hand_regard.detector import DetectorParams, HandDetector
+from devlearn_hand_regard.evaluation import PAIRS, pair_name
+
+LABELS = ("background", "left_hand", "right_hand", "body", "scene")
+"""Segmentation labels (``devlearn.infant.vision``): 0..4."""
+
+
+class SegmentationRecorder:
+    """Wraps an infant; records the segmentation render whenever the eyes are read."""
+
+    def __init__(self, infant) -> None:
+        self.infant, self.segmentation = infant, []
+
+    def __getattr__(self, name):
+        return getattr(self.infant, name)
+
+    def eyes(self):
+        """The eye images; their segmentation is kept in ``self.segmentation``."""
+        self.segmentation.append(self.infant.eyes_segmentation().copy())
+        return self.infant.eyes()
+
+
+def held_out(infant, steps: int, seed: int) -> tuple[BabblingData, np.ndarray]:
+    """Fresh babbling with the segmentation of every frame ((T, 2, H, W) int)."""
+    recorder = SegmentationRecorder(infant)
+    data = babble(steps, seed=seed, infant=recorder)
+    return data, np.stack(recorder.segmentation)
+
+
+def score(detector: HandDetector, data: BabblingData, segmentation: np.ndarray,
+          clear_pixels: int = 20) -> dict:
+    """Compare the detector's output with the segmentation, frame by frame.
+
+    Args:
+        detector: The detector.
+        data: Frames (and head poses) to detect in.
+        segmentation: (T, 2, H, W) labels of the same frames.
+        clear_pixels: A hand showing at least this many pixels is "clearly visible".
+    Returns:
+        ``pairs``: per (eye, hand) name precision, recall, accuracy, recall on clearly visible
+        hands and the share of steps the hand is in view; ``any_hand``: the same with the
+        hands' identity ignored (is any hand in this eye?); ``pixels``: share of detected
+        pixels per segmentation label; ``hand_pixel_recall``: share of hand pixels detected.
+    """
+    conf = np.zeros((4, 2, 2))  # tp, fp, fn, tn per (eye, hand)
+    clear = np.zeros((2, 2, 2))  # clearly visible: (found, visible) per (eye, hand)
+    anyh = np.zeros(4)
+    labels = np.zeros(len(LABELS))
+    hand_px = np.zeros(2)  # hand pixels detected, hand pixels in view
+    for t in range(len(data)):
+        detections, masks = detector.detect(data.eyes[t], data.head_pose[t])
+        for eye in range(2):
+            seg = segmentation[t, eye]
+            detected = masks[eye].any(0)
+            labels += np.bincount(seg[detected], minlength=len(LABELS))[: len(LABELS)]
+            is_hand = (seg == 1) | (seg == 2)
+            hand_px += [(detected & is_hand).sum(), is_hand.sum()]
+            for hand in range(2):
+                n = int((seg == hand + 1).sum())
+                truth, found = n > 0, bool(detections[eye, hand])
+                conf[_cell(truth, found), eye, hand] += 1
+                if n >= clear_pixels:
+                    clear[:, eye, hand] += [found, 1]
+            truth, found = bool(is_hand.any()), bool(detections[eye].any())
+            anyh[_cell(truth, found)] += 1
+    pairs = {}
+    for eye, hand in PAIRS:
+        tp, fp, fn, tn = conf[:, eye, hand]
+        pairs[pair_name(eye, hand)] = _stats(tp, fp, fn, tn) | {
+            "clear_recall": round(clear[0, eye, hand] / max(clear[1, eye, hand], 1), 3),
+            "clear_steps": int(clear[1, eye, hand]),
+        }
+    tp, fp, fn, tn = conf.sum(axis=(1, 2))
+    return {
+        "steps": len(data),
+        "pairs": pairs,
+        "pairs_pooled": _stats(tp, fp, fn, tn) | {
+            "clear_recall": round(clear[0].sum() / max(clear[1].sum(), 1), 3)},
+        "any_hand": _stats(*anyh),
+        "pixels": {k: round(v / max(labels.sum(), 1), 3) for k, v in zip(LABELS, labels)},
+        "hand_pixel_recall": round(hand_px[0] / max(hand_px[1], 1), 3),
+    }
+
+
+def _cell(truth: bool, found: bool) -> int:
+    """Confusion index: 0 true positive, 1 false positive, 2 false negative, 3 true negative."""
+    return (0 if truth else 1) if found else (2 if truth else 3)
+
+
+def _stats(tp: float, fp: float, fn: float, tn: float) -> dict:
+    return {
+        "precision": round(tp / max(tp + fp, 1), 3),
+        "recall": round(tp / max(tp + fn, 1), 3),
+        "accuracy": round((tp + tn) / max(tp + fp + fn + tn, 1), 3),
+        "in_view": round((tp + fn) / max(tp + fp + fn + tn, 1), 3),
+    }
+
+
+def main(argv: list[str] | None = None) -> dict:
+    """Command line: see the module docstring and ``--help``."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--babbling-steps", type=int, default=10_000)
+    parser.add_argument("--seed", type=int, default=0, help="babbling seed of the calibration")
+    parser.add_argument("--test-steps", type=int, default=2000)
+    parser.add_argument("--test-seed", type=int, default=1)
+    parser.add_argument("--detector", help="score this detector JSON instead of calibrating")
+    parser.add_argument("--save", help="write the calibrated detector JSON here")
+    parser.add_argument("--out", help="write the JSON result here too")
+    args = parser.parse_args(argv)
+    from devlearn.infant import build_infant
+
+    infant = build_infant("sitting", senses=("proprioception", "eyes"))
+    result: dict = {}
+    try:
+        start = time.perf_counter()
+        if args.detector:
+            params = DetectorParams.load(args.detector)
+        else:
+            data = babble(args.babbling_steps, seed=args.seed, infant=infant)
+            result["babbling_s"] = round(time.perf_counter() - start, 1)
+            start = time.perf_counter()
+            params = calibrate(data)
+            result["calibration_s"] = round(time.perf_counter() - start, 1)
+            del data
+        if args.save:
+            path = params.save(args.save)
+            result["detector_bytes"] = path.stat().st_size
+        result["calibration"] = params.calibration
+        result["hsv_ranges"] = params.hsv_ranges
+        result["area"] = [round(params.min_area), round(params.expected_area),
+                          round(params.max_area)]
+        test, segmentation = held_out(infant, args.test_steps, args.test_seed)
+        start = time.perf_counter()
+        result["score"] = score(HandDetector(params), test, segmentation)
+        result["detect_ms_per_step"] = round(1000 * (time.perf_counter() - start) / len(test), 2)
+    finally:
+        infant.close()
+    text = json.dumps(result, indent=1)
+    print(text)
+    if args.out:
+        Path(args.out).write_text(text + "\n")
+    return result
+
+
+if __name__ == "__main__":
+    main()
