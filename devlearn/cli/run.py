@@ -23,7 +23,11 @@ def add_parser(subparsers) -> list[str]:
     p.add_argument("behavior", help="behaviour name (see `devlearn plugins`)")
     p.add_argument("--steps", metavar="N", help="total environment steps (e.g. 8e6)")
     p.add_argument("--envs", metavar="N", help="environments per process")
-    p.add_argument("--workers", metavar="N", help="environment worker processes (0: in process)")
+    p.add_argument(
+        "--workers",
+        metavar="N",
+        help="environment worker processes (0: in process; default -1: one per core)",
+    )
     p.add_argument("--seed", metavar="S", help="random seed")
     p.add_argument("--out", metavar="DIR", help="run directory (default runs/BEHAVIOR-TIME)")
     p.add_argument("--device", metavar="DEV", help="cpu or cuda (default cpu)")
@@ -88,8 +92,10 @@ def check_config(cfg) -> None:
         raise UsageError(f"--steps must be at least 1, got {cfg.total_steps}")
     if cfg.num_envs < 1:
         raise UsageError(f"--envs must be at least 1, got {cfg.num_envs}")
-    if cfg.workers < 0:
-        raise UsageError(f"--workers must be 0 or more, got {cfg.workers}")
+    if cfg.workers < -1:
+        raise UsageError(f"--workers must be 0 or more (or -1: automatic), got {cfg.workers}")
+    if cfg.torch_threads < 0 or cfg.update_threads < 0:
+        raise UsageError("torch_threads and update_threads must be 0 (torch's default) or more")
     if cfg.save_interval < 1:
         raise UsageError(f"save_interval must be at least 1, got {cfg.save_interval}")
     if not _DEVICE.match(cfg.device):

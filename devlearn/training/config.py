@@ -48,12 +48,17 @@ class RunConfig:
 
     behavior_name: str = ""
     """Registered behaviour to train (``devlearn plugins`` lists them)."""
-    total_steps: int = 1_000_000
-    """Environment steps to train for, summed over all environments and ranks."""
-    num_envs: int = 8
-    """Environments per rank."""
-    workers: int = 0
-    """Environment worker processes per rank (0: step environments in the training process)."""
+    total_steps: int = 150_000
+    """Environment steps to train for, summed over all environments and ranks. The default is a
+    demonstration (a few minutes on a 2-core CPU, docs/scaling.md); the paper's runs are
+    millions (``--steps 8e6``)."""
+    num_envs: int = 16
+    """Environments per rank. 16 amortises the policy's per-step forward pass (about 2 ms on
+    one core whatever the batch up to ~16) and gives 2,048-sample rollouts at 128 steps."""
+    workers: int = -1
+    """Environment worker processes per rank (0: step environments in the training process;
+    -1: automatic, one per CPU core but at most ``num_envs // 4``, so small batches stay in
+    process where a worker's start-up and per-step round trip would cost more than it gains)."""
     seed: int = 0
     """Seed of torch, numpy, random and (plus the env index) every environment."""
     device: str = "cpu"
@@ -63,8 +68,13 @@ class RunConfig:
     save_interval: int = 50
     """Iterations between periodic ``checkpoint_<step>.pt`` files (latest is saved as often)."""
     torch_threads: int = 1
-    """``torch.set_num_threads`` (1: small nets gain nothing from more and results stay repeatable;
-    0 leaves torch's default)."""
+    """``torch.set_num_threads`` while collecting (1: a forward pass on a few dozen observations
+    gains nothing from more, and results stay repeatable; 0 leaves torch's default)."""
+    update_threads: int = 1
+    """Threads of the PPO update (0: same as ``torch_threads``). The env workers sleep during
+    the update, so 2 can use a 2-core machine's idle core; but a core shared with any other
+    busy program makes multi-threaded updates several times slower (docs/scaling.md), and
+    results are repeatable only for the same value, so 1 is the default."""
     ppo: PPOConfig = field(default_factory=PPOConfig)
     """PPO hyper-parameters."""
     behavior: Any = None

@@ -33,6 +33,19 @@ def init_distributed(device: str) -> None:
 
 
 @contextlib.contextmanager
+def update_threads(threads: int):
+    """Run the block with ``threads`` torch intra-op threads (0: unchanged), then restore."""
+    before = torch.get_num_threads()
+    if threads > 0 and threads != before:
+        torch.set_num_threads(threads)
+    try:
+        yield
+    finally:
+        if torch.get_num_threads() != before:
+            torch.set_num_threads(before)
+
+
+@contextlib.contextmanager
 def quiet():
     """Swallow rsl-rl's console report (the progress bar and metrics.jsonl replace it)."""
     with contextlib.redirect_stdout(io.StringIO()):
@@ -154,7 +167,8 @@ class DevRunner(OnPolicyRunner):
                     collect_time = time.time() - start
                     alg.compute_returns(obs)
                 start = time.time()
-                losses = alg.update()
+                with update_threads(self.run_cfg.update_threads):
+                    losses = alg.update()
                 learn_time = time.time() - start
                 it = self.current_learning_iteration
                 self.current_learning_iteration += 1
@@ -174,7 +188,8 @@ class DevRunner(OnPolicyRunner):
                 self.episodes.extend(finished)
                 rate = per_iteration / max(collect_time + learn_time, 1e-9)
                 mean_step = step_rewards / self.cfg["num_steps_per_env"]
-                self._record(it, len(finished), mean_step, losses, rate, bar)
+                times = {"collect_s": collect_time, "update_s": learn_time}
+                self._record(it, len(finished), mean_step, losses, rate, times, bar)
                 if self.current_learning_iteration % self.cfg["save_interval"] == 0:
                     self.save_checkpoints(periodic=True)
         except KeyboardInterrupt:
@@ -199,14 +214,19 @@ class DevRunner(OnPolicyRunner):
         mean_step_reward: float,
         losses: dict,
         rate: float,
+        times: dict[str, float],
         bar: tqdm,
     ) -> None:
-        """Append one line to metrics.jsonl and refresh the progress bar (rank 0)."""
+        """Append one line to metrics.jsonl and refresh the progress bar (rank 0).
+
+        ``times`` holds the iteration's ``collect_s`` (rollout) and ``update_s`` (PPO) seconds.
+        """
         row: dict[str, Any] = {
             "step": self.env_steps,
             "iteration": it,
             "stage": self.curriculum.stage.name,
             "steps_per_s": rate,
+            **times,
             "episodes": num_finished,
             "mean_step_reward": mean_step_reward,
             "mean_reward": None,

@@ -58,6 +58,23 @@ def load_run_config(run_dir: str | Path, registry) -> RunConfig:
     return from_dict(data, registry.behavior(data.get("behavior_name", "")))
 
 
+def resolve_workers(workers: int, num_envs: int, cpus: int | None = None) -> int:
+    """The number of env worker processes per rank.
+
+    ``workers >= 0`` is taken as is. -1 (automatic) gives one worker per CPU core available to
+    this rank (the cores this process may run on, divided among torchrun's local ranks), but at
+    most ``num_envs // 4``: fewer than 8 envs, or a single core, stay in process, where a
+    worker's start-up and per-step round trip would cost more than it gains.
+    """
+    if workers >= 0:
+        return workers
+    if cpus is None:
+        cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else None
+        local_ranks = int(os.environ.get("LOCAL_WORLD_SIZE", "1"))
+        cpus = max((cores or os.cpu_count() or 1) // local_ranks, 1)
+    return 0 if cpus < 2 or num_envs < 8 else min(cpus, num_envs // 4)
+
+
 def _resolve_device(device: str, local_rank: int, world_size: int) -> str:
     if device == "cuda" and world_size > 1:
         return f"cuda:{local_rank}"
@@ -99,6 +116,7 @@ def train(
     rank = int(os.environ.get("RANK", "0"))
     world_size = int(os.environ.get("WORLD_SIZE", "1"))
     device = _resolve_device(cfg.device, int(os.environ.get("LOCAL_RANK", "0")), world_size)
+    cfg.workers = resolve_workers(cfg.workers, cfg.num_envs)  # config.json records the number
 
     # Seed. One intra-op thread by default: these networks are small, and a fixed thread
     # count keeps CPU results bit-for-bit repeatable (torch_threads=0 keeps torch's default).

@@ -133,3 +133,13 @@ def test_to_rsl_rl():
 
     params = inspect.signature(UniqueParamPPO.__mro__[1].__init__).parameters
     assert set(alg) - {"class_name"} <= set(params)
+
+
+def test_automatic_workers_one_per_core_and_none_for_small_batches():
+    from devlearn.training.train import resolve_workers
+
+    assert resolve_workers(-1, 16, cpus=2) == 2
+    assert resolve_workers(-1, 8, cpus=16) == 2  # at most num_envs // 4
+    assert resolve_workers(-1, 4, cpus=2) == 0  # too few envs to pay for a worker
+    assert resolve_workers(-1, 64, cpus=1) == 0
+    assert resolve_workers(3, 4, cpus=1) == 3  # an explicit number is kept

@@ -35,7 +35,7 @@ def test_same_seed_same_run_different_seed_different(tmp_path):
     a = run(tmp_path / "a", 64, seed=3)
     b = run(tmp_path / "b", 64, seed=3)
     c = run(tmp_path / "c", 64, seed=4)
-    drop = {"steps_per_s"}
+    drop = {"steps_per_s", "collect_s", "update_s"}  # wall-clock timings
     ra = [{k: v for k, v in r.items() if k not in drop} for r in rows(a.run_dir)]
     rb = [{k: v for k, v in r.items() if k not in drop} for r in rows(b.run_dir)]
     rc = [{k: v for k, v in r.items() if k not in drop} for r in rows(c.run_dir)]

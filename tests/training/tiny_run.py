@@ -29,7 +29,7 @@ def config(out_dir, total_steps: int = 256, *overrides: str, **top):
     """The tiny behaviour's config: 4 envs x 8 steps per iteration (32 env steps)."""
     from devlearn.training import default_config
 
-    top = {"num_envs": 4, "save_interval": 1, **top}
+    top = {"num_envs": 4, "workers": 0, "save_interval": 1, **top}
     return default_config(
         TinyBehavior, list(overrides), out_dir=str(out_dir), total_steps=total_steps, **top
     )
