@@ -27,9 +27,17 @@ from devlearn.training.config import RunConfig, to_dict
 
 
 def init_distributed(device: str) -> None:
-    """Join torchrun's process group once: gloo on the CPU, NCCL on cuda."""
+    """Join torchrun's process group once: gloo on the CPU, NCCL on cuda.
+
+    On cuda the rank's GPU (``cuda:LOCAL_RANK``) is made current first, so that NCCL's
+    barriers and object collectives use it rather than guessing from the global rank.
+    """
     if int(os.getenv("WORLD_SIZE", "1")) > 1 and not dist.is_initialized():
-        dist.init_process_group("nccl" if torch.device(device).type == "cuda" else "gloo")
+        if torch.device(device).type == "cuda":
+            torch.cuda.set_device(int(os.getenv("LOCAL_RANK", "0")))
+            dist.init_process_group("nccl")
+        else:
+            dist.init_process_group("gloo")
 
 
 @contextlib.contextmanager

@@ -43,6 +43,11 @@ def seed_everything(seed: int) -> None:
     torch.manual_seed(seed)
 
 
+def rank_seed(seed: int, rank: int, env_steps: int) -> int:
+    """A 32-bit seed for rank ``rank``'s sampling, distinct per (seed, rank, resume point)."""
+    return int(np.random.SeedSequence([seed, rank, env_steps]).generate_state(1)[0])
+
+
 def default_run_dir(behavior_name: str) -> Path:
     """``runs/<behavior>-<YYYYmmdd-HHMMSS>``."""
     return Path("runs") / f"{behavior_name}-{time.strftime('%Y%m%d-%H%M%S')}"
@@ -162,6 +167,11 @@ def train(
         )
         if checkpoint is not None:
             runner.restore(checkpoint)
+        if rank > 0:
+            # Every rank built its networks from the same seed (rank 0's are broadcast anyway);
+            # from here on each rank draws its own action noise, also after a resume, which
+            # restores rank 0's generator states everywhere.
+            seed_everything(rank_seed(cfg.seed, rank, runner.env_steps))
 
         # Learn; the runner saves checkpoints periodically, at the end and on Ctrl-C.
         runner.learn(cfg.total_steps)
