@@ -14,8 +14,8 @@ ROWS = [
     ("touch_ms_per_step", "touch per step", "ms", "3", "<= 0.2", 0),
     ("proprioception_ms_per_step", "proprioception per step", "ms", "-", "-", 0),
     ("render_ms_per_frame", "one 64x64 eye render", "ms", "several", "-", 0),
-    ("self_touch_vec_steps_per_s_1_workers", "self-touch 8 envs, 1 worker", "/s", "-", "-", 1),
-    ("self_touch_vec_steps_per_s_2_workers", "self-touch 8 envs, 2 workers", "/s", "-", "-", 1),
+    ("self_touch_vec_steps_per_s_1_workers", "self-touch 16 envs, 1 worker", "/s", "-", "-", 1),
+    ("self_touch_vec_steps_per_s_2_workers", "self-touch 16 envs, 2 workers", "/s", "-", "-", 1),
     ("self_touch_train_steps_per_s", "self-touch training steps/s", "/s", "-", ">= 1000", 1),
     ("hand_regard_train_steps_per_s", "hand-regard training steps/s", "/s", "-", "-", 1),
     ("build_s", "environment build", "s", "19", "< 3", 0),
@@ -42,8 +42,11 @@ def format_table(result: dict) -> str:
     for key, label, unit, reference, target, _ in ROWS:
         if key in result:
             value = result[key]
-            shown = f"{value:,.0f}" if value >= 100 else f"{value:.3g}"
-            lines.append(f"| {label} | {shown} {unit} | {reference} | {target} |")
+            if value is None:
+                shown = "failed (see stderr)"
+            else:
+                shown = (f"{value:,.0f}" if value >= 100 else f"{value:.3g}") + f" {unit}"
+            lines.append(f"| {label} | {shown} | {reference} | {target} |")
     return "\n".join(lines)
 
 
