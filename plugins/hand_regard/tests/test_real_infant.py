@@ -56,7 +56,6 @@ def test_babbling_finds_arm_correlated_tracks(real):
     params = real[0]
     report = params.calibration
     assert report["hand_tracks"] >= 1 and min(report["rho_hand_tracks"]) > 0.6
-    assert params.static_body is not None  # the legs in view were learned per head pose
 
 
 def test_detector_finds_hands_where_segmentation_says_and_ignores_toys(real):
@@ -72,7 +71,7 @@ def test_detector_finds_hands_where_segmentation_says_and_ignores_toys(real):
     found = visible = 0
     detected_labels = np.zeros(5)
     for t in range(len(data)):
-        detections, masks = detector.detect(data.eyes[t], data.head_pose[t])
+        detections, masks = detector.detect(data.eyes[t])
         for eye in range(2):
             detected_labels += np.bincount(segmentation[t, eye][masks[eye].any(0)], minlength=5)
             if np.isin(segmentation[t, eye], hand_ids).sum() >= 20:  # a clearly visible hand

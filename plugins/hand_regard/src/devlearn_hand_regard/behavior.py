@@ -117,11 +117,7 @@ class HandRegard(Behavior):
             self._flow.reset()
         self._last_time = time
         eyes = infant.eyes()
-        head_pose = None
-        if "head" in infant.actuator_groups:
-            proprioception = np.asarray(infant.proprioception())
-            head_pose = proprioception[np.asarray(infant.actuator_groups["head"])]  # qpos part
-        detections, masks = self.detector.detect(eyes, head_pose)
+        detections, masks = self.detector.detect(eyes)
         flow, pixels = self._flow.update(eyes, masks)
         facts = {
             "eyes": eyes,

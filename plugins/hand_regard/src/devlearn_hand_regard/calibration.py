@@ -11,10 +11,13 @@
    joint-speed magnitude, both first regressed on the head's speed (a partial correlation: the
    head's own motion moves everything in view). ``rho_k`` is the best over both arms and lags
    0..``max_lag``.
-4. **Hands.** Tracks with ``rho_k > 0.6`` are hands, of the arm that correlates best. The HSV
-   ranges (percentiles per colour cluster holding hands, background-like boxes dropped), the
-   expected size and each hand's mean image position come from their blobs; the static body
-   in view per head pose is learned last (:mod:`devlearn_hand_regard.static_body`).
+4. **Hands.** Tracks with ``rho_k > 0.6`` are hands, of the arm that correlates best. Short
+   tracks of other things (a toy whose outline the passing arm occludes) also reach 0.6 by
+   chance, but they barely move; the hand colour is the colour cluster whose correlated tracks
+   carry the most motion (frames x variance of their displacement), along with any cluster
+   carrying at least half as much. The HSV ranges (percentiles of those tracks' pixels,
+   background-like boxes dropped), the expected size and each hand's image-position
+   statistics come from their blobs.
 """
 
 from __future__ import annotations
@@ -25,9 +28,13 @@ import cv2
 import numpy as np
 
 from devlearn_hand_regard.babbling import BabblingData
-from devlearn_hand_regard.detector import DetectorParams, HandDetector, colour_blobs
-from devlearn_hand_regard.hand_colour import drop_background_boxes, hsv_boxes
-from devlearn_hand_regard.static_body import fit_static_body
+from devlearn_hand_regard.detector import DetectorParams, colour_blobs
+from devlearn_hand_regard.hand_colour import (
+    colour_palette,
+    drop_background_boxes,
+    hsv_boxes,
+    label_image,
+)
 
 
 @dataclass
@@ -43,31 +50,13 @@ class Track:
     rho: float = 0.0
     side: int = -1
 
-
-def lab_features(images: np.ndarray, lightness_weight: float = 0.5) -> np.ndarray:
-    """Return (..., 3) float32 Lab colours of RGB uint8 images, lightness scaled down."""
-    flat = np.ascontiguousarray(images.reshape(-1, 1, 3))
-    lab = cv2.cvtColor(flat, cv2.COLOR_RGB2Lab).reshape(*images.shape[:-1], 3).astype(np.float32)
-    lab[..., 0] *= lightness_weight
-    return lab
-
-
-def colour_palette(data: BabblingData, clusters: int, seed: int, frames: int = 200) -> np.ndarray:
-    """Cluster the colours of ``frames`` evenly spaced frames; return (clusters, 3) Lab centres."""
-    index = np.linspace(0, len(data) - 1, min(frames, len(data))).astype(int)
-    pixels = lab_features(data.eyes[index]).reshape(-1, 3)
-    pixels = np.random.default_rng(seed).permutation(pixels)[:200_000]
-    cv2.setRNGSeed(seed)
-    criteria = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 50, 0.5)
-    _, _, centres = cv2.kmeans(pixels, clusters, None, criteria, 3, cv2.KMEANS_PP_CENTERS)
-    return centres
-
-
-def label_image(image: np.ndarray, centres: np.ndarray) -> np.ndarray:
-    """Return (H, W) int: the nearest palette colour of every pixel of an RGB image."""
-    features = lab_features(image)
-    distance = ((features[..., None, :] - centres) ** 2).sum(-1)
-    return distance.argmin(-1)
+    def motion(self, window: int) -> float:
+        """Variance (pixels squared) of the centroid's displacement over ``window`` steps: how
+        much the blob moves around, whatever its correlation."""
+        c = np.asarray(self.centroids)
+        if len(c) <= window:
+            return 0.0
+        return float(np.linalg.norm(c[window:] - c[:-window], axis=1).var())
 
 
 def track_blobs(data: BabblingData, centres: np.ndarray, max_jump: float = 0.12,
@@ -211,21 +200,23 @@ class CalibrationError(RuntimeError):
     """Babbling found no hand (too short a recording, or hands never in view)."""
 
 
-def calibrate(data: BabblingData, threshold: float = 0.6, clusters: int = 8, seed: int = 0,
-              window: int = 4, max_lag: int = 2, min_track: int = 60,
-              min_cluster_share: float = 0.2, max_coverage: float = 0.25) -> DetectorParams:
+def calibrate(data: BabblingData, threshold: float = 0.6, clusters: int = 12, seed: int = 0,
+              window: int = 4, max_lag: int = 2, min_track: int = 30,
+              min_cluster_share: float = 0.5, max_coverage: float = 0.25) -> DetectorParams:
     """Discover the hands in a babbling recording and calibrate the detector.
 
     Args:
         data: The babbling recording.
         threshold: Correlation above which a track is a hand (paper: 0.6).
-        clusters: Colours in the palette.
+        clusters: Colours in the palette (enough that a small distinct colour, the hands', is
+            not merged with a similar toy colour).
         seed: Seed of k-means.
         window: Steps over which displacement and arm speed are compared (smooths pixel noise).
         max_lag: Largest lag (steps) of the arm speed tried.
         min_track: Shortest track (steps) whose correlation is trusted.
-        min_cluster_share: A colour cluster joins the hand colours when it holds at least this
-            share of the hand tracks' frames.
+        min_cluster_share: A colour cluster joins the hand colours when its correlated tracks
+            carry at least this share of the strongest cluster's motion (frames x
+            :meth:`Track.motion`).
         max_coverage: A colour box selecting more than this share of all pixels (mean over the
             recording) is background-like (the floor seen between the fingers) and dropped.
     Returns:
@@ -258,8 +249,9 @@ def calibrate(data: BabblingData, threshold: float = 0.6, clusters: int = 8, see
             f"tracks of >= {min_track} steps, best {report['rho_other_tracks_max']}); babble "
             "for more steps"
         )
-    frames = np.bincount([t.cluster for t in hands], [len(t.steps) for t in hands], clusters)
-    keep = [k for k in range(clusters) if frames[k] >= min_cluster_share * frames.sum()]
+    motion = np.bincount([t.cluster for t in hands],
+                         [len(t.steps) * t.motion(window) for t in hands], clusters)
+    keep = [k for k in range(clusters) if motion[k] >= min_cluster_share * motion.max()]
     hands = [t for t in hands if t.cluster in keep]
     boxes: list[list[int]] = []
     for k in keep:
@@ -286,14 +278,16 @@ def calibrate(data: BabblingData, threshold: float = 0.6, clusters: int = 8, see
                 x, y = np.mean(other, axis=0) if other else (width * (0.25 + 0.5 * side), height)
                 means[eye, side] = (width - 1 - x, y) if other else (x, y)
     report.update(
-        hand_clusters={str(k): int(frames[k]) for k in keep},
+        hand_cluster_motion={str(k): round(float(motion[k])) for k in np.argsort(-motion)
+                             if motion[k] > 0},
+        hand_clusters=[int(k) for k in keep],
         dropped_background_boxes=dropped,
         hand_frames={f"eye{e}_side{s}": int(sum(len(t.steps) for t in hands
                                                 if t.eye == e and t.side == s))
                      for e in range(n_eyes) for s in range(2)},
         palette_lab=np.round(centres, 1).tolist(),
     )
-    params = DetectorParams(
+    return DetectorParams(
         hsv_ranges=boxes,
         min_area=float(max(0.5 * np.percentile(areas, 2), 0.002 * height * width)),
         max_area=float(2.0 * np.percentile(areas, 98)),
@@ -302,7 +296,3 @@ def calibrate(data: BabblingData, threshold: float = 0.6, clusters: int = 8, see
         image_size=(height, width),
         calibration=report,
     )
-    if data.head_pose.shape[1] > 0:  # learn the static body (legs) in view per head pose
-        colour = HandDetector(params).colour_mask
-        params.static_body = fit_static_body(data.head_pose, data.eyes, colour).to_json()
-    return params

@@ -15,9 +15,8 @@ from typing import Any
 import cv2
 import numpy as np
 
-from devlearn_hand_regard.static_body import StaticBody
-
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
+"""2: no static-body masks (the mittens made them unnecessary); 1 files are refused."""
 
 
 @dataclass
@@ -36,8 +35,6 @@ class DetectorParams:
         image_size: (H, W) of the eye images the sizes refer to.
         kernel: Side of the square morphology kernel, in pixels.
         calibration: Report of the calibration (tracks, correlations); informative only.
-        static_body: :meth:`StaticBody.to_json` of the body parts always in view per head pose
-            (removed before blob search), or None.
     """
 
     hsv_ranges: list[list[int]]
@@ -48,7 +45,6 @@ class DetectorParams:
     image_size: tuple[int, int] = (64, 64)
     kernel: int = 3
     calibration: dict[str, Any] = field(default_factory=dict)
-    static_body: dict[str, Any] | None = None
 
     def save(self, path: str | Path) -> Path:
         """Write the parameters as JSON; return the path."""
@@ -66,7 +62,8 @@ class DetectorParams:
         data = json.loads(Path(path).read_text())
         version = data.pop("format_version", None)
         if version != FORMAT_VERSION:
-            raise ValueError(f"{path}: hand detector format {version}, expected {FORMAT_VERSION}")
+            raise ValueError(f"{path}: hand detector format {version}, expected {FORMAT_VERSION}; "
+                             "delete the file to calibrate again by babbling")
         data["image_size"] = tuple(data["image_size"])
         return cls(**data)
 
@@ -121,9 +118,6 @@ class HandDetector:
     def __init__(self, params: DetectorParams | None, max_hands: int = 2) -> None:
         self.params = params
         self.max_hands = max_hands
-        self.static_body = None
-        if params is not None and params.static_body is not None:
-            self.static_body = StaticBody.from_json(params.static_body)
 
     def colour_mask(self, image: np.ndarray) -> np.ndarray:
         """Return (H, W) bool: pixels inside the learned hand colour boxes of an RGB image."""
@@ -134,21 +128,14 @@ class HandDetector:
             mask |= cv2.inRange(hsv, lo, hi)
         return mask > 0
 
-    def blobs(self, image: np.ndarray, exclude: np.ndarray | None = None) -> list[Blob]:
-        """Return the hand blobs of one (H, W, 3) RGB image, largest first (at most max_hands).
-
-        Args:
-            image: (H, W, 3) uint8 RGB.
-            exclude: (H, W) bool pixels never to count (the static body), or None.
-        """
+    def blobs(self, image: np.ndarray) -> list[Blob]:
+        """Return the hand blobs of one (H, W, 3) uint8 RGB image, largest first (at most
+        ``max_hands``)."""
         if self.params is None:
             return []
         scale = image.shape[0] * image.shape[1] / float(np.prod(self.params.image_size))
-        mask = self.colour_mask(image)
-        if exclude is not None and exclude.shape == mask.shape:
-            mask &= ~exclude
         found = colour_blobs(
-            mask,
+            self.colour_mask(image),
             self.params.min_area * scale,
             self.params.max_area * scale,
             self.params.kernel,
@@ -177,14 +164,11 @@ class HandDetector:
         crossed = dist[0, 1] + dist[1, 0]
         return [blobs[0], blobs[1]] if straight <= crossed else [blobs[1], blobs[0]]
 
-    def detect(self, eyes: np.ndarray, head_pose: np.ndarray | None = None
-               ) -> tuple[np.ndarray, np.ndarray]:
+    def detect(self, eyes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Detect and attribute the hands in both eyes.
 
         Args:
             eyes: (2, H, W, 3) uint8 RGB, [left eye, right eye].
-            head_pose: (D,) head joint angles; when given (and calibrated), the static body
-                expected in view at that pose is ignored.
         Returns:
             detections: (2 eyes, 2 hands) bool, hands ordered [left, right].
             masks: (2 eyes, 2 hands, H, W) bool, each detected hand's pixels.
@@ -192,11 +176,8 @@ class HandDetector:
         n_eyes, height, width = eyes.shape[:3]
         detections = np.zeros((n_eyes, 2), dtype=bool)
         masks = np.zeros((n_eyes, 2, height, width), dtype=bool)
-        static = None
-        if self.static_body is not None and head_pose is not None:
-            static = self.static_body.mask(head_pose)
         for eye in range(n_eyes):
-            found = self.blobs(eyes[eye], None if static is None else static[eye])
+            found = self.blobs(eyes[eye])
             for hand, blob in enumerate(self.attribute(found, eye, width)):
                 if blob is not None:
                     detections[eye, hand] = True

@@ -1,9 +1,11 @@
-"""Hand colour boxes in HSV: percentiles of the hand tracks' pixels, minus background colours."""
+"""Colours: the babbling palette (k-means in Lab) and the hand colour boxes in HSV."""
 
 from __future__ import annotations
 
 import cv2
 import numpy as np
+
+from devlearn_hand_regard.babbling import BabblingData
 
 
 def hsv_boxes(hsv: np.ndarray, low: float = 2.0, high: float = 98.0,
@@ -61,3 +63,29 @@ def drop_background_boxes(boxes: list[list[int]], eyes: np.ndarray, hand_pixels:
         ok = inside.mean() <= max_coverage and purity >= min_purity
         (kept if ok else dropped).append(box)
     return kept, dropped
+
+
+def lab_features(images: np.ndarray, lightness_weight: float = 0.5) -> np.ndarray:
+    """Return (..., 3) float32 Lab colours of RGB uint8 images, lightness scaled down."""
+    flat = np.ascontiguousarray(images.reshape(-1, 1, 3))
+    lab = cv2.cvtColor(flat, cv2.COLOR_RGB2Lab).reshape(*images.shape[:-1], 3).astype(np.float32)
+    lab[..., 0] *= lightness_weight
+    return lab
+
+
+def colour_palette(data: BabblingData, clusters: int, seed: int, frames: int = 200) -> np.ndarray:
+    """Cluster the colours of ``frames`` evenly spaced frames; return (clusters, 3) Lab centres."""
+    index = np.linspace(0, len(data) - 1, min(frames, len(data))).astype(int)
+    pixels = lab_features(data.eyes[index]).reshape(-1, 3)
+    pixels = np.random.default_rng(seed).permutation(pixels)[:200_000]
+    cv2.setRNGSeed(seed)
+    criteria = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 50, 0.5)
+    _, _, centres = cv2.kmeans(pixels, clusters, None, criteria, 3, cv2.KMEANS_PP_CENTERS)
+    return centres
+
+
+def label_image(image: np.ndarray, centres: np.ndarray) -> np.ndarray:
+    """Return (H, W) int: the nearest palette colour of every pixel of an RGB image."""
+    features = lab_features(image)
+    distance = ((features[..., None, :] - centres) ** 2).sum(-1)
+    return distance.argmin(-1)

@@ -53,7 +53,7 @@ def score(detector: HandDetector, data: BabblingData, segmentation: np.ndarray,
 
     Args:
         detector: The detector.
-        data: Frames (and head poses) to detect in.
+        data: Frames to detect in.
         segmentation: (T, 2, H, W) labels of the same frames.
         clear_pixels: A hand showing at least this many pixels is "clearly visible".
     Returns:
@@ -68,7 +68,7 @@ def score(detector: HandDetector, data: BabblingData, segmentation: np.ndarray,
     labels = np.zeros(len(LABELS))
     hand_px = np.zeros(2)  # hand pixels detected, hand pixels in view
     for t in range(len(data)):
-        detections, masks = detector.detect(data.eyes[t], data.head_pose[t])
+        detections, masks = detector.detect(data.eyes[t])
         for eye in range(2):
             seg = segmentation[t, eye]
             detected = masks[eye].any(0)
