@@ -16,9 +16,11 @@ EPISODE_STEPS = 1000  # 5 simulated seconds
 TOY_COLOURS = (
     (0.85, 0.15, 0.15, 1),
     (0.15, 0.65, 0.2, 1),
-    (0.15, 0.3, 0.85, 1),
+    (0.1, 0.72, 0.8, 1),
     (0.95, 0.85, 0.1, 1),
 )
+"""Red, green, cyan and yellow toys: hues far (>= 40 of OpenCV's 180) from the purple mittens
+(hue about 138), so colour alone can tell a hand from a toy."""
 
 
 @dataclass(frozen=True)
