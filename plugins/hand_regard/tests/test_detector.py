@@ -89,3 +89,35 @@ def test_flow_measures_the_hands_motion(synthetic_params):
     assert 1.0 < left < 3.0 and right < 0.3
     flow.reset()
     assert flow.previous is None
+
+
+def test_posture_model_tells_crossed_hands_apart(synthetic_params):
+    """Hand positions linear in the joint angles: the learned model predicts them, and a blob
+    on the 'wrong' side of the mean positions is still attributed by the posture."""
+    from devlearn_hand_regard.calibration import Track, position_model
+
+    rng = np.random.default_rng(0)
+    steps, n_joints = 400, 4
+    angles = rng.uniform(-1, 1, (steps, n_joints))
+    proprioception = np.c_[angles, np.zeros((steps, 5 * n_joints))]
+
+    def where(side, q):  # left hand follows joint 0, right hand joint 1; both swing widely
+        return np.array([32 + 20 * q[side], 40 + 5 * q[2 + side]])
+
+    hands = []
+    for side in range(2):
+        for eye in range(2):
+            track = Track(eye, 0, side=side)
+            track.steps = list(range(eye, steps, 2))
+            track.centroids = [tuple(where(side, angles[s]) + [eye, 0]) for s in track.steps]
+            hands.append(track)
+    model = position_model(hands, proprioception, ridge=0.1)
+    detector = HandDetector(DetectorParams(**{**vars(synthetic_params), "position_model": model}))
+    crossed = np.array([0.8, -0.8, 0.0, 0.0])  # left hand at x ~ 48, right hand at x ~ 16
+    p = np.r_[crossed, np.zeros(5 * n_joints)]
+    np.testing.assert_allclose(detector.expected_positions(0, p), [[48, 40], [16, 40]], atol=1.0)
+    frame = draw(np.array([[48.0, 40.0], [np.nan, np.nan]]), BLOCK_POSITIONS)
+    eyes = np.stack([frame, frame])
+    assert detector.detect(eyes, p)[0].tolist() == [[True, False], [True, False]]
+    # Without proprioception the mean positions decide: x = 48 is the right hand's side.
+    assert detector.detect(eyes)[0].tolist() == [[False, True], [False, True]]

@@ -17,37 +17,28 @@ except ImportError:  # the body is built in parallel; until it lands these tests
 from devlearn_hand_regard.babbling import babble
 from devlearn_hand_regard.calibration import calibrate
 from devlearn_hand_regard.detector import HandDetector
+from devlearn_hand_regard.measure import LABELS, held_out, score
 
 pytestmark = [
     pytest.mark.slow,
     pytest.mark.skipif(build_infant is None, reason="devlearn.infant has not landed"),
 ]
-CALIBRATION_STEPS = 1500  # the paper babbles 10,000 steps; 1,500 keep this test ~30 s
-
-
-class SegmentationRecorder:
-    """Wraps an infant; records the segmentation render whenever the eyes are read."""
-
-    def __init__(self, infant) -> None:
-        self.infant, self.segmentation = infant, []
-
-    def __getattr__(self, name):
-        return getattr(self.infant, name)
-
-    def eyes(self):
-        self.segmentation.append(self.infant.eyes_segmentation().copy())
-        return self.infant.eyes()
+CALIBRATION_STEPS = 1500
+"""The paper babbles 10,000 steps; 1,500 keep this test ~30 s. Measured with these seeds
+(README, calibration table): hue box 136..140, 300 held-out steps: detected pixels 99.9% hand,
+0.1% scene; any hand in an eye precision 1.0, recall 0.92; pair-averaged precision 0.90,
+recall 0.88. (1,000 steps is too short: a skin-coloured box joins the mitten's.)"""
+HELD_OUT_STEPS = 300
 
 
 @pytest.fixture(scope="module")
 def real():
-    """A calibration from real babbling, and 300 fresh babbling steps with segmentation."""
+    """A calibration from real babbling, and its score on fresh babbling (segmentation)."""
     infant = build_infant("sitting", senses=("proprioception", "eyes"))
     try:
         params = calibrate(babble(CALIBRATION_STEPS, seed=0, infant=infant))
-        recorder = SegmentationRecorder(infant)
-        held_out = babble(300, seed=1, infant=recorder)
-        yield params, held_out, np.stack(recorder.segmentation), infant.hand_labels
+        data, segmentation = held_out(infant, HELD_OUT_STEPS, seed=1)
+        yield params, score(HandDetector(params), data, segmentation)
     finally:
         infant.close()
 
@@ -55,55 +46,65 @@ def real():
 def test_babbling_finds_arm_correlated_tracks(real):
     params = real[0]
     report = params.calibration
-    assert report["hand_tracks"] >= 1 and min(report["rho_hand_tracks"]) > 0.6
+    assert report["hand_tracks"] >= 5 and min(report["rho_hand_tracks"]) > 0.6
+    assert params.position_model, "both hands were tracked: a posture model is learned"
 
 
-def test_detector_finds_hands_where_segmentation_says_and_ignores_toys(real):
+def test_no_toy_colour_is_hand_coloured(real):
     from devlearn.infant.scenes import TOY_COLOURS
-    from devlearn.infant.vision import BODY, SCENE
 
-    params, data, segmentation, labels = real
-    detector = HandDetector(params)
-    for rgba in TOY_COLOURS:  # no toy block colour passes the learned colour test
-        patch = np.full((4, 4, 3), np.array(rgba[:3]) * 255, np.uint8)
-        assert not detector.colour_mask(patch).any()
-    hand_ids = list(labels.values())
-    found = visible = 0
-    detected_labels = np.zeros(5)
-    for t in range(len(data)):
-        detections, masks = detector.detect(data.eyes[t])
-        for eye in range(2):
-            detected_labels += np.bincount(segmentation[t, eye][masks[eye].any(0)], minlength=5)
-            if np.isin(segmentation[t, eye], hand_ids).sum() >= 20:  # a clearly visible hand
-                visible += 1
-                found += detections[eye].any()
-    share = detected_labels / max(detected_labels.sum(), 1)
-    # Detected pixels are the infant (hands, arms, some leg), never the toys or the floor.
-    assert share[SCENE] < 0.05
-    assert share[hand_ids].sum() + share[BODY] > 0.95
-    assert visible > 0 and found / visible >= 0.5
+    detector = HandDetector(real[0])
+    for rgba in TOY_COLOURS:  # flat, shaded and lit toy faces
+        for light in (0.5, 0.75, 1.0):
+            patch = np.full((4, 4, 3), np.array(rgba[:3]) * 255 * light, np.uint8)
+            assert not detector.colour_mask(patch).any(), (rgba, light)
+
+
+def test_detector_agrees_with_the_segmentation(real):
+    result = real[1]
+    pixels = result["pixels"]
+    assert set(pixels) == set(LABELS)
+    # Detected pixels are the hands (measured 0.999), never the toys or the floor.
+    assert pixels["left_hand"] + pixels["right_hand"] > 0.9
+    assert pixels["scene"] < 0.02 and pixels["background"] < 0.02
+    # Any hand in an eye (measured precision 1.0, recall 0.92).
+    assert result["any_hand"]["precision"] > 0.9 and result["any_hand"]["recall"] > 0.75
+    # Which hand (posture model; measured pair-averaged precision 0.90, recall 0.88).
+    assert result["pair_mean"]["precision"] > 0.7 and result["pair_mean"]["recall"] > 0.65
+
+
+def short_infant(scene, **kwargs):
+    """The real infant with 200-step episodes (the eval below runs one whole episode)."""
+    infant = build_infant(scene, **kwargs)
+    infant.episode_steps = 200
+    return infant
 
 
 def test_tiny_training_run_and_eval(tmp_path, real):
+    from devlearn.plugins import PluginRegistry
+    from devlearn.training.evaluate import evaluate
+
     out = tmp_path / "run"
     out.mkdir()
     real[0].save(out / "hand_detector.json")  # prepare() reuses it: no 10,000-step babbling
-    cmd = [sys.executable, "-m", "devlearn.cli", "run", "hand_regard", "--steps", "256",
-           "--envs", "2", "--seed", "1", "--out", str(out),
-           "--set", "behavior.left_arm_steps=128", "--set", "behavior.right_arm_steps=64"]
+    # Two PPO iterations of 2 envs x 16 steps: one per one-arm stage.
+    cmd = [sys.executable, "-m", "devlearn.cli", "run", "hand_regard", "--steps", "64",
+           "--envs", "2", "--workers", "0", "--seed", "1", "--out", str(out),
+           "--set", "ppo.num_steps_per_env=16",
+           "--set", "behavior.left_arm_steps=32", "--set", "behavior.right_arm_steps=16"]
     subprocess.run(cmd, check=True, timeout=600)
     rows = [json.loads(line) for line in (out / "metrics.jsonl").read_text().splitlines()]
     # Episodes last 1,000 steps, so none ends here (per-term sums appear at episode ends).
-    assert rows[-1]["step"] >= 256 and np.isfinite(rows[-1]["mean_step_reward"])
+    assert rows[-1]["step"] >= 64 and np.isfinite(rows[-1]["mean_step_reward"])
     assert [r["stage"] for r in rows] == ["left_arm", "right_arm"]
     config = json.loads((out / "config.json").read_text())
     assert config["behavior"]["detector_file"].endswith("hand_detector.json")
+    # `devlearn eval`'s code path in process, on one short (200-step) episode.
     evaluation = tmp_path / "eval"
-    cmd = [sys.executable, "-m", "devlearn.cli", "eval", "hand_regard", "--checkpoint",
-           str(out / "checkpoint_latest.pt"), "--episodes", "1", "--out", str(evaluation)]
-    subprocess.run(cmd, check=True, timeout=600)
-    summary = json.loads((evaluation / "eval.json").read_text())
-    assert summary["episodes"] == 1 and summary["steps"] == 1000
+    summary = evaluate("hand_regard", out / "checkpoint_latest.pt", 1, PluginRegistry(),
+                       out_dir=evaluation, infant_factory=short_infant)
+    assert json.loads((evaluation / "eval.json").read_text())["steps"] == 200
+    assert summary["episodes"] == 1 and summary["steps"] == 200
     assert set(summary["visibility"]) == {"left_eye_left_hand", "right_eye_left_hand",
                                           "left_eye_right_hand", "right_eye_right_hand"}
     assert 0.0 <= summary["average"] <= 1.0 and "detector_agreement" in summary

@@ -117,7 +117,9 @@ class HandRegard(Behavior):
             self._flow.reset()
         self._last_time = time
         eyes = infant.eyes()
-        detections, masks = self.detector.detect(eyes)
+        # The posture tells which blob is which hand (the position model babbling learned).
+        proprioception = np.asarray(infant.proprioception(), dtype=np.float32)
+        detections, masks = self.detector.detect(eyes, proprioception)
         flow, pixels = self._flow.update(eyes, masks)
         facts = {
             "eyes": eyes,

@@ -196,13 +196,56 @@ def head_speeds(data: BabblingData) -> np.ndarray:
     return speed
 
 
+def position_model(hands: list[Track], proprioception: np.ndarray, ridge: float = 4.0,
+                   min_frames: int = 20) -> dict:
+    """Learn where each hand appears in view from the body's posture (for left/right).
+
+    For each arm, a ridge regression from [1, eye - 0.5, standardised joint angles] to the
+    centroids of the hand tracks attributed to it (the arm they correlated with). Joint angles
+    are the first J of the proprioception's 6 J values (its documented [qpos, qvel, ...]
+    layout). Both eyes share the posture's weights; ``eye - 0.5`` gives their offset.
+
+    Args:
+        hands: Hand tracks (``side`` set).
+        proprioception: (T, P) the recording's proprioception.
+        ridge: Penalty on every weight but the intercept (standardised angles; in frames: it
+            weighs like this many frames pulling the weights to 0, so short babbling, with
+            few hand frames, relies more on the mean position).
+        min_frames: Fewest frames of either hand for a model.
+    Returns:
+        ``joint_mean``, ``joint_scale`` and ``weights`` (2 hands, 2 + J, 2), see
+        :class:`DetectorParams`; empty when a hand has too few frames or P < 6.
+    """
+    n_joints = proprioception.shape[1] // 6
+    if n_joints == 0:
+        return {}
+    angles = np.asarray(proprioception[:, :n_joints], dtype=float)
+    mean, scale = angles.mean(0), angles.std(0) + 1e-6
+    weights = []
+    for side in range(2):
+        tracks = [t for t in hands if t.side == side]
+        steps = np.concatenate([t.steps for t in tracks]) if tracks else np.zeros(0, int)
+        if len(steps) < min_frames:
+            return {}
+        eye = np.concatenate([np.full(len(t.steps), t.eye - 0.5) for t in tracks])
+        x = np.c_[np.ones(len(steps)), eye, (angles[steps] - mean) / scale]
+        y = np.concatenate([t.centroids for t in tracks])
+        penalty = np.full(x.shape[1], float(ridge))
+        penalty[0] = 0.0
+        w = np.linalg.solve(x.T @ x + np.diag(penalty), x.T @ y)
+        weights.append(np.round(w, 4).tolist())
+    return {"joint_mean": np.round(mean, 5).tolist(), "joint_scale": np.round(scale, 5).tolist(),
+            "weights": weights}
+
+
 class CalibrationError(RuntimeError):
     """Babbling found no hand (too short a recording, or hands never in view)."""
 
 
 def calibrate(data: BabblingData, threshold: float = 0.6, clusters: int = 12, seed: int = 0,
               window: int = 4, max_lag: int = 2, min_track: int = 30,
-              min_cluster_share: float = 0.5, max_coverage: float = 0.25) -> DetectorParams:
+              min_cluster_share: float = 0.5, max_coverage: float = 0.25,
+              ridge: float = 4.0) -> DetectorParams:
     """Discover the hands in a babbling recording and calibrate the detector.
 
     Args:
@@ -219,6 +262,7 @@ def calibrate(data: BabblingData, threshold: float = 0.6, clusters: int = 12, se
             :meth:`Track.motion`).
         max_coverage: A colour box selecting more than this share of all pixels (mean over the
             recording) is background-like (the floor seen between the fingers) and dropped.
+        ridge: Regularisation of the posture-to-position model (:func:`position_model`).
     Returns:
         The detector parameters, with a ``calibration`` report.
     Raises:
@@ -295,4 +339,5 @@ def calibrate(data: BabblingData, threshold: float = 0.6, clusters: int = 12, se
         hand_means=means.tolist(),
         image_size=(height, width),
         calibration=report,
+        position_model=position_model(hands, data.proprioception, ridge),
     )

@@ -35,6 +35,11 @@ class DetectorParams:
         image_size: (H, W) of the eye images the sizes refer to.
         kernel: Side of the square morphology kernel, in pixels.
         calibration: Report of the calibration (tracks, correlations); informative only.
+        position_model: Where each hand should appear given the body's posture, learned from
+            the babbling hand tracks (:func:`calibration.position_model`): ``joint_mean`` and
+            ``joint_scale`` (J,) standardise the joint angles (the first J proprioception
+            values), ``weights`` (2 hands, 2 + J, 2) map [1, eye - 0.5, standardised angles]
+            to the image position (x, y). Empty: ``hand_means`` alone attribute the blobs.
     """
 
     hsv_ranges: list[list[int]]
@@ -45,6 +50,7 @@ class DetectorParams:
     image_size: tuple[int, int] = (64, 64)
     kernel: int = 3
     calibration: dict[str, Any] = field(default_factory=dict)
+    position_model: dict[str, Any] = field(default_factory=dict)
 
     def save(self, path: str | Path) -> Path:
         """Write the parameters as JSON; return the path."""
@@ -142,19 +148,37 @@ class HandDetector:
         )
         return found[: self.max_hands]
 
-    def attribute(self, blobs: list[Blob], eye: int, width: int) -> list[Blob | None]:
+    def expected_positions(self, eye: int, proprioception: np.ndarray | None) -> np.ndarray:
+        """Return (2 hands, 2) where the left and right hand should appear in one eye, in
+        pixels of the calibration image size.
+
+        With proprioception and a learned ``position_model``: the posture's prediction (the
+        hand's image position from the joint angles, learned while babbling). Otherwise the
+        hands' mean babbling positions (``hand_means``).
+        """
+        model = self.params.position_model
+        if proprioception is None or not model:
+            return np.asarray(self.params.hand_means[eye], dtype=float)
+        mean = np.asarray(model["joint_mean"])
+        angles = np.asarray(proprioception, dtype=float)[: len(mean)]
+        features = np.r_[1.0, eye - 0.5, (angles - mean) / np.asarray(model["joint_scale"])]
+        return np.stack([features @ np.asarray(w) for w in model["weights"]])
+
+    def attribute(self, blobs: list[Blob], eye: int, width: int,
+                  proprioception: np.ndarray | None = None) -> list[Blob | None]:
         """Say which blob is the left and which the right hand, without ground truth.
 
-        Rule: each hand has a mean image position learned while babbling (``hand_means``). Two
-        blobs get the pairing with the smaller summed distance to those means; one blob goes
-        to the nearer mean. Positions are scaled from the calibration image size.
+        Rule: each hand has an expected image position (:meth:`expected_positions`: predicted
+        from the posture when ``proprioception`` is given, else its mean babbling position).
+        Two blobs get the pairing with the smaller summed distance to those positions; one
+        blob goes to the nearer one. Positions are scaled from the calibration image size.
 
         Returns:
             [left-hand blob or None, right-hand blob or None].
         """
         if not blobs:
             return [None, None]
-        means = np.asarray(self.params.hand_means[eye], dtype=float)
+        means = self.expected_positions(eye, proprioception)
         means = means * width / float(self.params.image_size[1])
         pos = np.array([b.centroid for b in blobs])
         dist = np.linalg.norm(pos[:, None, :] - means[None, :, :], axis=-1)  # (blobs, 2 hands)
@@ -164,11 +188,14 @@ class HandDetector:
         crossed = dist[0, 1] + dist[1, 0]
         return [blobs[0], blobs[1]] if straight <= crossed else [blobs[1], blobs[0]]
 
-    def detect(self, eyes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def detect(self, eyes: np.ndarray, proprioception: np.ndarray | None = None
+               ) -> tuple[np.ndarray, np.ndarray]:
         """Detect and attribute the hands in both eyes.
 
         Args:
             eyes: (2, H, W, 3) uint8 RGB, [left eye, right eye].
+            proprioception: (P,) the infant's proprioception at the same step; with it the
+                blobs are attributed by the posture's predicted hand positions.
         Returns:
             detections: (2 eyes, 2 hands) bool, hands ordered [left, right].
             masks: (2 eyes, 2 hands, H, W) bool, each detected hand's pixels.
@@ -178,7 +205,7 @@ class HandDetector:
         masks = np.zeros((n_eyes, 2, height, width), dtype=bool)
         for eye in range(n_eyes):
             found = self.blobs(eyes[eye])
-            for hand, blob in enumerate(self.attribute(found, eye, width)):
+            for hand, blob in enumerate(self.attribute(found, eye, width, proprioception)):
                 if blob is not None:
                     detections[eye, hand] = True
                     masks[eye, hand] = blob.mask

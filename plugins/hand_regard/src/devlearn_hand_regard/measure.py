@@ -48,7 +48,7 @@ def held_out(infant, steps: int, seed: int) -> tuple[BabblingData, np.ndarray]:
 
 
 def score(detector: HandDetector, data: BabblingData, segmentation: np.ndarray,
-          clear_pixels: int = 20) -> dict:
+          clear_pixels: int = 20, posture: bool = True) -> dict:
     """Compare the detector's output with the segmentation, frame by frame.
 
     Args:
@@ -56,6 +56,8 @@ def score(detector: HandDetector, data: BabblingData, segmentation: np.ndarray,
         data: Frames to detect in.
         segmentation: (T, 2, H, W) labels of the same frames.
         clear_pixels: A hand showing at least this many pixels is "clearly visible".
+        posture: Give the detector the proprioception (left/right from the predicted hand
+            positions); False: from the hands' mean positions only.
     Returns:
         ``pairs``: per (eye, hand) name precision, recall, accuracy, recall on clearly visible
         hands and the share of steps the hand is in view; ``any_hand``: the same with the
@@ -68,7 +70,8 @@ def score(detector: HandDetector, data: BabblingData, segmentation: np.ndarray,
     labels = np.zeros(len(LABELS))
     hand_px = np.zeros(2)  # hand pixels detected, hand pixels in view
     for t in range(len(data)):
-        detections, masks = detector.detect(data.eyes[t])
+        proprioception = data.proprioception[t] if posture else None
+        detections, masks = detector.detect(data.eyes[t], proprioception)
         for eye in range(2):
             seg = segmentation[t, eye]
             detected = masks[eye].any(0)
@@ -99,6 +102,8 @@ def score(detector: HandDetector, data: BabblingData, segmentation: np.ndarray,
         "any_hand": _stats(*anyh),
         "pixels": {k: round(v / max(labels.sum(), 1), 3) for k, v in zip(LABELS, labels)},
         "hand_pixel_recall": round(hand_px[0] / max(hand_px[1], 1), 3),
+        "pair_mean": {k: round(float(np.mean([p[k] for p in pairs.values()])), 3)
+                      for k in ("precision", "recall", "clear_recall")},
     }
 
 
@@ -153,6 +158,8 @@ def main(argv: list[str] | None = None) -> dict:
         start = time.perf_counter()
         result["score"] = score(HandDetector(params), test, segmentation)
         result["detect_ms_per_step"] = round(1000 * (time.perf_counter() - start) / len(test), 2)
+        means_only = score(HandDetector(params), test, segmentation, posture=False)
+        result["score_mean_positions"] = {k: means_only[k] for k in ("pairs", "pair_mean")}
     finally:
         infant.close()
     text = json.dumps(result, indent=1)
