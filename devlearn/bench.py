@@ -39,7 +39,8 @@ def bench_infant(steps: int = 2000, frames: int = 100) -> dict[str, float]:
     """Physics, touch, proprioception and eye-render cost on the bare infant.
 
     Returns:
-        ``build_s`` (crib build), ``physics_ms_per_step``, ``touch_ms_per_step``,
+        ``build_s`` (crib build), ``physics_ms_per_step``, ``touch_ms_per_step`` (the dense
+        (N, 3) vector), ``touch_sparse_ms_per_step`` (only the sensors that feel a force),
         ``proprioception_ms_per_step``, ``render_ms_per_frame`` (one 64x64 eye),
         ``touch_sensors``, ``contacts_per_step``.
     """
@@ -64,6 +65,8 @@ def bench_infant(steps: int = 2000, frames: int = 100) -> dict[str, float]:
 
     touch = _per_call_ms(crib.touch, steps, before=step_and_count)
     it = iter(actions)
+    sparse = _per_call_ms(crib.touch_sparse, steps, before=lambda: crib.step(next(it)))
+    it = iter(actions)
     proprio = _per_call_ms(crib.proprioception, steps, before=lambda: crib.step(next(it)))
     crib.close()
 
@@ -80,6 +83,7 @@ def bench_infant(steps: int = 2000, frames: int = 100) -> dict[str, float]:
         "build_s": build_s,
         "physics_ms_per_step": physics,
         "touch_ms_per_step": touch,
+        "touch_sparse_ms_per_step": sparse,
         "proprioception_ms_per_step": proprio,
         "render_ms_per_frame": render,
         "touch_sensors": int(crib.skin.num_sensors),

@@ -130,6 +130,13 @@ def touch_from_contacts(skin: Skin, sides: ContactSides | None) -> np.ndarray:
     return skin.spread(sides.body, sides.point, sides.force, sides.cand, sides.dist)
 
 
+def sparse_touch_from_contacts(skin: Skin, sides: ContactSides | None):
+    """The sensors that feel a force, (M,) int64 sorted, and those forces, (M, 3) float32."""
+    if sides is None:
+        return np.zeros(0, dtype=np.int64), np.zeros((0, 3), dtype=np.float32)
+    return skin.spread_sparse(sides.body, sides.point, sides.force, sides.cand, sides.dist)
+
+
 def hand_contacts(skin: Skin, sides: ContactSides | None, hand_of_body: np.ndarray) -> np.ndarray:
     """Which regions each hand touches.
 

@@ -147,8 +147,9 @@ class Infant:
         value = self._cache.get(key)
         if value is None:
             value = compute()
-            if isinstance(value, np.ndarray):
-                value.flags.writeable = False
+            for array in value if isinstance(value, tuple) else (value,):
+                if isinstance(array, np.ndarray):
+                    array.flags.writeable = False
             self._cache[key] = value
         return value
 
@@ -162,9 +163,16 @@ class Infant:
 
     def touch(self) -> np.ndarray:
         """Returns (num_sensors, 3) float32: force on each sensor in its body's frame (N)."""
+        sensors, values = self.touch_sparse()
+        return self._cached("touch", lambda: _densify(self.skin.num_sensors, sensors, values))
+
+    def touch_sparse(self) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`touch` as (sensors (M,) int64 sorted, forces (M, 3) float32): only the few
+        sensors that feel a force (the others read zero). Cheaper than the dense vector."""
         self._need("touch")
         return self._cached(
-            "touch", lambda: contacts.touch_from_contacts(self.skin, self._sides(True))
+            "touch_sparse",
+            lambda: contacts.sparse_touch_from_contacts(self.skin, self._sides(True)),
         )
 
     def proprioception(self) -> np.ndarray:
@@ -243,6 +251,12 @@ class Infant:
     def close(self) -> None:
         """Free renderers (GL contexts); rendering again opens new ones."""
         _free_gl(self._gl)
+
+
+def _densify(num_sensors: int, sensors: np.ndarray, values: np.ndarray) -> np.ndarray:
+    out = np.zeros((num_sensors, 3), dtype=np.float32)
+    out[sensors] = values
+    return out
 
 
 def _free_gl(gl: dict[str, Any]) -> None:

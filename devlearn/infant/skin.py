@@ -146,9 +146,21 @@ class Skin:
         Returns:
             (num_sensors, 3) float32 summed sensor forces.
         """
-        n3 = 3 * (self.num_sensors + 1)  # + the padding sensor, dropped at the end
+        sensors, values = self.spread_sparse(bodies, points, forces, cand, dist)
+        out = np.zeros((self.num_sensors, 3), dtype=np.float32)
+        out[sensors] = values
+        return out
+
+    def spread_sparse(self, bodies, points, forces, cand=None, dist=None):
+        """:meth:`spread`, returning only the sensors that received force (the hot path).
+
+        Returns:
+            sensors: (M,) int64, sorted and unique, the sensors within range of some contact.
+            values: (M, 3) float32, their summed forces (body frames, N); rows of other
+            sensors of the dense :meth:`spread` are zero.
+        """
         if len(bodies) == 0:
-            return np.zeros((self.num_sensors, 3), dtype=np.float32)
+            return np.zeros(0, dtype=np.int64), np.zeros((0, 3), dtype=np.float32)
         if cand is None:
             cand, dist = self.candidates(bodies, points)
         weight = 1.0 - dist * self._inv_radius.take(bodies)[:, None]
@@ -161,7 +173,10 @@ class Skin:
             cand[rows, 0], weight[rows], total[rows] = nearest, 0.0, 1.0
             weight[rows, 0] = 1.0
         weight /= total[:, None]
-        index = cand[:, :, None] * 3 + _XYZ
-        values = weight[:, :, None] * forces[:, None, :]
-        out = np.bincount(index.ravel(), values.ravel(), minlength=n3)
-        return out[: n3 - 3].reshape(-1, 3).astype(np.float32)
+        keep = np.flatnonzero(weight.ravel())  # in range (drops the padding sensor too)
+        flat = cand.ravel().take(keep)
+        sensors, slot = np.unique(flat, return_inverse=True)
+        values = weight.ravel().take(keep)[:, None] * np.repeat(forces, cand.shape[1], 0)[keep]
+        index = (slot[:, None] * 3 + _XYZ).ravel()
+        out = np.bincount(index, values.ravel(), minlength=3 * len(sensors))
+        return sensors, out.reshape(-1, 3).astype(np.float32)

@@ -57,6 +57,21 @@ def test_senses_are_cached_until_the_next_step(crib):
     assert crib.touch() is not first
 
 
+def test_sparse_touch_is_the_dense_touch_without_its_zeros(crib):
+    rng = np.random.default_rng(3)
+    crib.reset(rng, random_pose=True)
+    felt = 0
+    for _ in range(300):
+        crib.step(rng.uniform(-1, 1, 30))
+        sensors, forces = crib.touch_sparse()
+        dense = crib.touch()
+        assert np.all(np.diff(sensors) > 0) and not forces.flags.writeable
+        assert np.array_equal(np.flatnonzero(dense.any(axis=1)), sensors[forces.any(axis=1)])
+        np.testing.assert_allclose(dense[sensors], forces, rtol=1e-6, atol=1e-6)
+        felt += len(sensors)
+    assert felt > 300  # lying on the mattress: contacts on most steps
+
+
 def test_senses_not_enabled_raise_clearly():
     infant = build_infant("crib", senses=("proprioception",))
     for sense in ("touch", "vestibular", "eyes"):

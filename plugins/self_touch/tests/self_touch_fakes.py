@@ -70,6 +70,10 @@ class FakeInfant:
     def touch(self) -> np.ndarray:
         return self._touch
 
+    def touch_sparse(self) -> tuple[np.ndarray, np.ndarray]:
+        sensors = np.flatnonzero(self._touch.any(axis=1))
+        return sensors, self._touch[sensors]
+
     def hand_contacts(self) -> np.ndarray:
         return self._contacts
 

@@ -9,7 +9,7 @@ import json
 import numpy as np
 import pytest
 from devlearn_self_touch import SelfTouch, SelfTouchConfig, SelfTouchEvaluator
-from devlearn_self_touch.body_map import body_map, hand_touched_parts
+from devlearn_self_touch.body_map import body_map, hand_touched_parts, sparse_body_map
 from self_touch_fakes import FakeInfant, make_ctx
 
 from devlearn import Behavior, Curriculum
@@ -36,6 +36,8 @@ def test_body_map_is_mean_force_magnitude_per_region():
     assert g[1] == pytest.approx(3.0 / 3)
     assert g[67] == pytest.approx(6.0)
     assert g[2:67].sum() == 0.0
+    sparse = sparse_body_map(np.array([0, 2, 3, 5]), touch[[0, 2, 3, 5]], sensor_region, sizes)
+    assert np.array_equal(sparse, g)
 
 
 def test_hand_parts_merge_sides(fake_regions):

@@ -16,9 +16,9 @@ from devlearn import (
     Stage,
 )
 from devlearn_self_touch.body_map import (
-    body_map,
     body_map_observation,
     hand_touched_parts,
+    sparse_body_map,
 )
 from devlearn_self_touch.config import SelfTouchConfig
 from devlearn_self_touch.evaluation import SelfTouchEvaluator
@@ -63,7 +63,7 @@ class SelfTouch(Behavior):
         """
         cfg = self.config
         skin = infant.skin
-        g = body_map(infant.touch(), skin.sensor_region, skin.region_sizes)
+        g = sparse_body_map(*infant.touch_sparse(), skin.sensor_region, skin.region_sizes)
         contacts = np.asarray(infant.hand_contacts(), dtype=bool)
         by_hand = contacts.any(axis=0)
         above = g > cfg.touch_threshold

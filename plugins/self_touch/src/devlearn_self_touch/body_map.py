@@ -23,8 +23,28 @@ def body_map(touch: np.ndarray, sensor_region: np.ndarray, region_sizes: np.ndar
     Returns:
         (68,) float32 mean force magnitude per region; 0 for a region without sensors.
     """
-    magnitude = np.linalg.norm(np.asarray(touch, dtype=np.float64).reshape(-1, 3), axis=1)
-    sums = np.bincount(sensor_region, weights=magnitude, minlength=NUM_REGIONS)
+    touch = np.asarray(touch).reshape(-1, 3)
+    sensors = np.flatnonzero(touch.any(axis=1))
+    return sparse_body_map(sensors, touch[sensors], sensor_region, region_sizes)
+
+
+def sparse_body_map(
+    sensors: np.ndarray, forces: np.ndarray, sensor_region: np.ndarray, region_sizes: np.ndarray
+) -> np.ndarray:
+    """:func:`body_map` from the sensors that feel a force (``Infant.touch_sparse()``).
+
+    Args:
+        sensors: (M,) int indices of the sensors with a force; every other sensor reads 0.
+        forces: (M, 3) their forces (N).
+        sensor_region, region_sizes: as in :func:`body_map`.
+
+    Returns:
+        (68,) float32, equal to ``body_map`` of the dense vector.
+    """
+    f = np.asarray(forces, dtype=np.float64).reshape(-1, 3)
+    magnitude = np.sqrt(np.einsum("ij,ij->i", f, f))
+    regions = np.asarray(sensor_region).take(np.asarray(sensors, dtype=np.int64))
+    sums = np.bincount(regions, weights=magnitude, minlength=NUM_REGIONS)
     sizes = np.asarray(region_sizes, dtype=np.float64)
     return (sums / np.maximum(sizes, 1.0)).astype(np.float32)
 
