@@ -1,0 +1,73 @@
+"""The curriculum ablation table (paper sec. III-A): one row per evaluated run.
+
+Each run directory holds ``config.json`` (written by ``devlearn run``) and ``eval/eval.json``
+(written by ``devlearn eval self_touch ... --json --out RUN/eval``). Usage::
+
+    python -m devlearn_self_touch.ablation runs/ablation_fixed_only runs/ablation_random_only \\
+        runs/ablation_two_stage
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+from typing import Any
+
+COLUMNS = ("coverage_left", "coverage_right", "coverage_total", "balance", "score")
+"""Eval figures shown per run (``devlearn eval self_touch --json``)."""
+
+
+def ablation_row(run_dir: Path) -> dict[str, Any]:
+    """The curriculum, budget and eval figures of one run.
+
+    Raises:
+        FileNotFoundError: the run has no ``config.json`` or no ``eval/eval.json``, with the
+            command that makes it.
+    """
+    run_dir = Path(run_dir)
+    config_file, eval_file = run_dir / "config.json", run_dir / "eval" / "eval.json"
+    if not config_file.is_file():
+        raise FileNotFoundError(f"{config_file} missing: is {run_dir} a `devlearn run` folder?")
+    if not eval_file.is_file():
+        raise FileNotFoundError(
+            f"{eval_file} missing: run `devlearn eval self_touch --checkpoint "
+            f"{run_dir}/checkpoint_latest.pt --episodes 100 --json --out {run_dir}/eval`"
+        )
+    config = json.loads(config_file.read_text())
+    result = json.loads(eval_file.read_text())
+    behavior = config.get("behavior") or {}
+    curriculum = behavior.get("curriculum", "two_stage")
+    if curriculum == "two_stage":
+        curriculum += f" (fixed pose for {behavior.get('fixed_pose_steps', 0):,} steps)"
+    row = {"run": run_dir.name, "curriculum": curriculum, "steps": config["total_steps"]}
+    row["episodes"] = result["episodes"]
+    row.update({key: result[key] for key in COLUMNS})
+    return row
+
+
+def ablation_table(run_dirs: list[Path]) -> str:
+    """A Markdown table of :func:`ablation_row` for each run."""
+    header = ["run", "curriculum", "steps", "episodes", *COLUMNS]
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    for run_dir in run_dirs:
+        row = ablation_row(run_dir)
+        cells = [f"{row[k]:,}" if k == "steps" else str(row[k]) for k in header]
+        cells[-1] = f"{row['score']:.2f}"
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("runs", nargs="+", type=Path, help="run directories with eval/eval.json")
+    args = parser.parse_args(argv)
+    try:
+        print(ablation_table(args.runs))
+    except FileNotFoundError as error:
+        parser.exit(2, f"error: {error}\n")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
