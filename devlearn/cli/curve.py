@@ -1,4 +1,4 @@
-"""``devlearn curve RUN_DIR``: plot a run's learning curve from its metrics.jsonl."""
+"""``devlearn curve RUN_DIR [RUN_DIR ...]``: plot learning curves from runs' metrics.jsonl."""
 
 from __future__ import annotations
 
@@ -12,7 +12,13 @@ from devlearn.errors import UsageError
 def add_parser(subparsers) -> list[str]:
     """Register the ``curve`` sub-command."""
     p = subparsers.add_parser("curve", help="plot metrics of a run against environment steps")
-    p.add_argument("run_dir", type=Path, help="a run folder holding metrics.jsonl")
+    p.add_argument(
+        "run_dirs",
+        type=Path,
+        nargs="+",
+        metavar="RUN_DIR",
+        help="run folders holding metrics.jsonl (several: one line each, e.g. an ablation)",
+    )
     p.add_argument(
         "--metric",
         action="append",
@@ -20,7 +26,7 @@ def add_parser(subparsers) -> list[str]:
         help="metrics.jsonl key to plot (repeatable; default: every metrics/* key)",
     )
     p.add_argument("--smooth", type=int, default=10, help="moving-average window (iterations)")
-    p.add_argument("--out", type=Path, help="PNG path (default RUN_DIR/learning_curve.png)")
+    p.add_argument("--out", type=Path, help="PNG path (default: FIRST_RUN_DIR/learning_curve.png)")
     return ["curve"]
 
 
@@ -48,28 +54,35 @@ def run(args: argparse.Namespace, registry) -> int:
     import matplotlib.pyplot as plt
     import numpy as np
 
-    rows = read_metrics(args.run_dir)
-    keys = args.metric or sorted({k for r in rows for k in r if k.startswith("metrics/")})
-    unknown = [k for k in keys if not any(k in r for r in rows)]
+    runs = [(run_dir, read_metrics(run_dir)) for run_dir in args.run_dirs]
+    every = {k for _, rows in runs for r in rows for k in r}
+    keys = args.metric or sorted(k for k in every if k.startswith("metrics/"))
+    unknown = [k for k in keys if k not in every]
     if unknown or not keys:
-        valid = ", ".join(sorted({k for r in rows for k in r}))
-        raise UsageError(f"no such metric(s) {unknown}; valid: {valid}")
+        raise UsageError(f"no such metric(s) {unknown}; valid: {', '.join(sorted(every))}")
     if args.smooth < 1:
         raise UsageError("--smooth must be at least 1")
     fig, axes = plt.subplots(len(keys), 1, figsize=(7, 2.4 * len(keys)), squeeze=False)
     for ax, key in zip(axes[:, 0], keys):
-        points = [(r["step"], r[key]) for r in rows if r.get(key) is not None]
-        steps, values = (np.array(v, dtype=float) for v in zip(*points))
-        window = min(args.smooth, len(values))
-        smooth = np.convolve(values, np.ones(window) / window, mode="valid")
-        ax.plot(steps, values, color="0.8", lw=0.8)
-        ax.plot(steps[window - 1 :], smooth, lw=1.6)
+        for run_dir, rows in runs:
+            points = [(r["step"], r[key]) for r in rows if r.get(key) is not None]
+            if not points:
+                continue
+            steps, values = (np.array(v, dtype=float) for v in zip(*points))
+            window = min(args.smooth, len(values))
+            smooth = np.convolve(values, np.ones(window) / window, mode="valid")
+            if len(runs) == 1:
+                ax.plot(steps, values, color="0.8", lw=0.8)
+            ax.plot(steps[window - 1 :], smooth, lw=1.6, label=run_dir.name)
         ax.set_ylabel(key.split("/")[-1])
         ax.grid(alpha=0.3)
+    if len(runs) > 1:
+        axes[0, 0].legend(fontsize=8)
     axes[-1, 0].set_xlabel("environment steps")
-    fig.suptitle(f"{args.run_dir.name}: mean over episodes ending in each iteration")
+    title = args.run_dirs[0].name if len(runs) == 1 else f"{len(runs)} runs"
+    fig.suptitle(f"{title}: mean over episodes ending in each iteration")
     fig.tight_layout()
-    out = args.out or args.run_dir / "learning_curve.png"
+    out = args.out or args.run_dirs[0] / "learning_curve.png"
     fig.savefig(out, dpi=110)
     print(out)
     return 0

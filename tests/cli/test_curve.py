@@ -12,7 +12,7 @@ from devlearn.errors import UsageError
 
 
 def _args(run_dir, **kw):
-    base = {"run_dir": run_dir, "metric": None, "smooth": 3, "out": None}
+    base = {"run_dirs": [run_dir], "metric": None, "smooth": 3, "out": None}
     return argparse.Namespace(**{**base, **kw})
 
 
@@ -32,3 +32,19 @@ def test_curve_errors(tmp_path):
     (tmp_path / "metrics.jsonl").write_text('{"step": 1, "metrics/score": 0.1}\n')
     with pytest.raises(UsageError, match="valid: metrics/score, step"):
         curve.run(_args(tmp_path, metric=["metrics/nope"]), None)
+
+
+def test_curve_compares_runs(tmp_path):
+    for name, slope in (("a", 1.0), ("b", 2.0)):
+        (tmp_path / name).mkdir()
+        rows = [{"step": 100 * i, "metrics/score": slope * i} for i in range(6)]
+        (tmp_path / name / "metrics.jsonl").write_text("\n".join(json.dumps(r) for r in rows))
+    out = tmp_path / "both.png"
+    args = _args(tmp_path / "a", out=out, metric=["metrics/score"])
+    args.run_dirs.append(tmp_path / "b")
+    assert curve.run(args, None) == 0
+    assert out.read_bytes()[:4] == b"\x89PNG"
+    (tmp_path / "c").mkdir()
+    args.run_dirs.append(tmp_path / "c")
+    with pytest.raises(UsageError, match="c/metrics.jsonl does not exist"):
+        curve.run(args, None)
