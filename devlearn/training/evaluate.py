@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -10,6 +11,7 @@ import numpy as np
 import torch
 from rsl_rl.utils import resolve_class, resolve_obs_groups
 from tensordict import TensorDict
+from tqdm import tqdm
 
 from devlearn.env.behavior_env import BehaviorEnv
 from devlearn.training.checkpoint import check_behavior, load_checkpoint
@@ -59,6 +61,7 @@ def evaluate(
     seed: int = 0,
     out_dir: str | Path | None = None,
     infant_factory=None,
+    progress: bool = True,
 ) -> dict[str, Any]:
     """Run ``episodes`` deterministic episodes (the policy's mean action) and summarise them.
 
@@ -73,6 +76,7 @@ def evaluate(
         seed: Seed of the env's initial poses.
         out_dir: Write ``eval.json`` and the evaluator's artifacts here.
         infant_factory: Infant builder (tests); default the real infant.
+        progress: Show a progress bar (steps, episodes) on stderr.
     Returns:
         ``evaluator.summary()`` (JSON-serialisable).
     Raises:
@@ -96,13 +100,24 @@ def evaluate(
             Path(video).parent.mkdir(parents=True, exist_ok=True)
             writer = imageio.get_writer(str(video), fps=VIDEO_FPS, macro_block_size=1)
             stride = max(1, round(1.0 / (env.step_dt * VIDEO_FPS)))
+        bar = tqdm(
+            total=episodes * env.episode_steps,
+            unit="step",
+            disable=not progress,
+            desc=f"eval {behavior_name}",
+            file=sys.stderr,
+            dynamic_ncols=True,
+        )
         for episode in range(episodes):
+            bar.set_postfix(episode=f"{episode + 1}/{episodes}")
             for t in range(env.episode_steps):
+                bar.update()
                 if writer is not None and episode == 0 and t % stride == 0:
                     writer.append_data(render_frame(env))
                 with torch.inference_mode():
                     action = actor(_batch(obs))[0].numpy()
                 obs, _, _, _, _ = env.step(action)
+        bar.close()
         summary = env.evaluator.summary()
         if out_dir is not None:
             out = Path(out_dir)
