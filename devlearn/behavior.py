@@ -154,3 +154,11 @@ class Behavior(ABC):
         Called in the main process once per run, before environments are built; on resume
         it is called again and should reuse what it saved in ``run_dir``.
         """
+
+    def render_frame(self, infant: Infant) -> np.ndarray:
+        """One frame of ``devlearn eval --video``, (H, W, 3) uint8.
+
+        Default: the scene's third-person view (``infant.render_view()``); override to add
+        what this behaviour attends to (hand regard puts both eyes' views beside it).
+        """
+        return infant.render_view()

@@ -45,13 +45,6 @@ def load_actor(
     return actor.eval()
 
 
-def render_frame(env: BehaviorEnv) -> np.ndarray:
-    """One video frame, (H, W, 3) uint8: the behaviour's ``render_frame(infant)`` if it defines
-    one (e.g. to add its eyes' views), else the infant's third-person ``render_view()``."""
-    custom = getattr(env.behavior, "render_frame", None)
-    return custom(env.infant) if callable(custom) else env.infant.render_view()
-
-
 def evaluate(
     behavior_name: str,
     checkpoint: str | Path,
@@ -117,7 +110,7 @@ def evaluate(
             for t in range(env.episode_steps):
                 bar.update()
                 if writer is not None and episode == 0 and t % stride == 0:
-                    writer.append_data(render_frame(env))
+                    writer.append_data(env.behavior.render_frame(env.infant))
                 with torch.inference_mode():
                     action = actor(_batch(obs))[0].numpy()
                 obs, _, _, _, _ = env.step(action)

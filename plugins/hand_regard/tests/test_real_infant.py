@@ -101,11 +101,16 @@ def test_tiny_training_run_and_eval(tmp_path, real):
     assert config["behavior"]["detector_file"].endswith("hand_detector.json")
     # `devlearn eval`'s code path in process, on one short (200-step) episode.
     evaluation = tmp_path / "eval"
+    video = evaluation / "episode.mp4"
     summary = evaluate("hand_regard", out / "checkpoint_latest.pt", 1, PluginRegistry(),
-                       out_dir=evaluation, infant_factory=short_infant)
+                       out_dir=evaluation, infant_factory=short_infant, video=video)
     assert json.loads((evaluation / "eval.json").read_text())["steps"] == 200
     assert summary["episodes"] == 1 and summary["steps"] == 200
     assert set(summary["visibility"]) == {"left_eye_left_hand", "right_eye_left_hand",
                                           "left_eye_right_hand", "right_eye_right_hand"}
     assert 0.0 <= summary["average"] <= 1.0 and "detector_agreement" in summary
     assert (evaluation / "hand_regard_visibility.png").stat().st_size > 0
+    import imageio.v2 as imageio
+
+    frame = imageio.get_reader(video).get_data(0)  # left eye | right eye | third person
+    assert frame.shape == (256, 896, 3) and frame[:, :512].std() > 5

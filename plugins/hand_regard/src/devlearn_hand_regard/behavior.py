@@ -156,6 +156,15 @@ class HandRegard(Behavior):
             normalize=("proprioception",),
         )
 
+    def render_frame(self, infant: Infant) -> np.ndarray:
+        """``devlearn eval --video`` frame: left eye, right eye (64x64 shown 4x), third person.
+
+        Returns:
+            (256, 896, 3) uint8.
+        """
+        eyes = np.asarray(infant.eyes()).repeat(4, axis=1).repeat(4, axis=2)  # (2, 256, 256, 3)
+        return np.concatenate([eyes[0], eyes[1], infant.render_view(384, 256)], axis=1)
+
     # --- rewards, actions, curriculum -------------------------------------------------------
     def reward_terms(self) -> list[IntrinsicReward]:
         """The paper's three terms and ``bilateral_balance``; zero-weight terms are left out."""
