@@ -22,42 +22,17 @@ from rsl_rl.utils import check_nan
 from tqdm import tqdm
 
 from devlearn.curriculum import Curriculum
-from devlearn.training.checkpoint import FORMAT, LATEST, link_atomic, save_atomic
+from devlearn.training.checkpoint import (
+    FORMAT,
+    LATEST,
+    forget_metrics_after,
+    link_atomic,
+    save_atomic,
+)
 from devlearn.training.config import RunConfig, to_dict
+from devlearn.training.process import init_distributed, quiet, update_threads
 
-
-def init_distributed(device: str) -> None:
-    """Join torchrun's process group once: gloo on the CPU, NCCL on cuda.
-
-    On cuda the rank's GPU (``cuda:LOCAL_RANK``) is made current first, so that NCCL's
-    barriers and object collectives use it rather than guessing from the global rank.
-    """
-    if int(os.getenv("WORLD_SIZE", "1")) > 1 and not dist.is_initialized():
-        if torch.device(device).type == "cuda":
-            torch.cuda.set_device(int(os.getenv("LOCAL_RANK", "0")))
-            dist.init_process_group("nccl")
-        else:
-            dist.init_process_group("gloo")
-
-
-@contextlib.contextmanager
-def update_threads(threads: int):
-    """Run the block with ``threads`` torch intra-op threads (0: unchanged), then restore."""
-    before = torch.get_num_threads()
-    if threads > 0 and threads != before:
-        torch.set_num_threads(threads)
-    try:
-        yield
-    finally:
-        if torch.get_num_threads() != before:
-            torch.set_num_threads(before)
-
-
-@contextlib.contextmanager
-def quiet():
-    """Swallow rsl-rl's console report (the progress bar and metrics.jsonl replace it)."""
-    with contextlib.redirect_stdout(io.StringIO()):
-        yield
+__all__ = ["DevRunner", "init_distributed", "quiet", "update_threads"]
 
 
 class DevRunner(OnPolicyRunner):
@@ -261,23 +236,6 @@ class DevRunner(OnPolicyRunner):
         bar.set_postfix(postfix, refresh=False)
         bar.update(self.env_steps - bar.n)
 
-    def _forget_metrics_after(self, step: int) -> None:
-        """Drop metrics.jsonl rows past ``step``: a killed run may have logged iterations after
-        its last checkpoint, and the resumed run redoes (and logs) them again."""
-        path = self.run_dir / "metrics.jsonl"
-        if not path.exists():
-            return
-        kept = []
-        for line in path.read_text().splitlines():
-            try:
-                if json.loads(line)["step"] <= step:
-                    kept.append(line)
-            except (ValueError, KeyError, TypeError):
-                pass  # a line cut short by the kill
-        tmp = path.with_name(path.name + ".tmp")
-        tmp.write_text("".join(line + "\n" for line in kept))
-        os.replace(tmp, path)
-
     # --- checkpoints ----------------------------------------------------------------------
     def checkpoint_state(self, gather: bool = True) -> dict[str, Any]:
         """Everything needed to resume (collective when distributed and ``gather``)."""
@@ -328,7 +286,7 @@ class DevRunner(OnPolicyRunner):
         if self.gpu_global_rank < len(ranks):
             self.env.load_state_dict(ranks[self.gpu_global_rank])
         if self.is_main:
-            self._forget_metrics_after(self.env_steps)
+            forget_metrics_after(self.run_dir / "metrics.jsonl", self.env_steps)
         torch.set_rng_state(state["rng"]["torch"])
         np.random.set_state(state["rng"]["numpy"])
         random.setstate(state["rng"]["random"])

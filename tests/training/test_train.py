@@ -182,3 +182,14 @@ def test_kill_mid_write_keeps_previous_checkpoint(tmp_path):
     assert path.read_bytes() == before
     assert load_checkpoint(path)["n"] == 1
     assert list(tmp_path.glob(".checkpoint_latest.pt.tmp-*"))  # the partial file, not latest
+
+
+def test_resume_forgets_metrics_logged_after_the_checkpoint(tmp_path):
+    from devlearn.training.checkpoint import forget_metrics_after
+
+    path = tmp_path / "metrics.jsonl"
+    rows = [json.dumps({"step": s}) for s in (100, 200, 300)]
+    path.write_text("\n".join(rows) + '\n{"step": 4')  # last line cut short by a kill
+    forget_metrics_after(path, 200)
+    assert [json.loads(line)["step"] for line in path.read_text().splitlines()] == [100, 200]
+    forget_metrics_after(tmp_path / "none.jsonl", 1)  # no file yet: nothing to do
