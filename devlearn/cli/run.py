@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import re
+import signal
 from pathlib import Path
 
 from devlearn.errors import UsageError
@@ -18,7 +20,7 @@ def add_parser(subparsers) -> list[str]:
         "run",
         help="train a behaviour with PPO",
         description="Train a behaviour; writes config.json, checkpoints, metrics.jsonl and "
-        "TensorBoard logs to the run directory. Ctrl-C saves a checkpoint; --resume continues.",
+        "TensorBoard logs to the run directory. Ctrl-C or SIGTERM saves a checkpoint; --resume continues.",
     )
     p.add_argument("behavior", help="behaviour name (see `devlearn plugins`)")
     p.add_argument("--steps", metavar="N", help="total environment steps (e.g. 8e6)")
@@ -75,7 +77,8 @@ def run(args: argparse.Namespace, registry) -> int:
 
         cfg.out_dir = str(default_run_dir(cfg.behavior_name))
     print(f"run directory: {cfg.out_dir}", flush=True)
-    result = train(cfg, registry, resume=args.resume)
+    with _interrupt_on_signals():
+        result = train(cfg, registry, resume=args.resume)
     summary = {
         "run_dir": str(result.run_dir),
         "env_steps": result.env_steps,
@@ -105,3 +108,26 @@ def check_config(cfg) -> None:
     for name in ("num_steps_per_env", "num_learning_epochs", "num_mini_batches"):
         if getattr(cfg.ppo, name) < 1:
             raise UsageError(f"ppo.{name} must be at least 1, got {getattr(cfg.ppo, name)}")
+
+
+@contextlib.contextmanager
+def _interrupt_on_signals():
+    """Within the block, SIGTERM (cluster schedulers, ``kill``) acts as Ctrl-C, which saves a
+    checkpoint, and Ctrl-C works even where the shell started us with it ignored (``cmd &`` in
+    a script); the previous handlers come back afterwards."""
+
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt
+
+    try:
+        before = {
+            s: signal.signal(s, h)
+            for s, h in ((signal.SIGTERM, interrupt), (signal.SIGINT, signal.default_int_handler))
+        }
+    except ValueError:  # not the main thread (an embedding program): leave its handlers
+        before = {}
+    try:
+        yield
+    finally:
+        for signum, handler in before.items():
+            signal.signal(signum, handler)

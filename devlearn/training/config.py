@@ -66,7 +66,8 @@ class RunConfig:
     out_dir: str = ""
     """Run directory (config, checkpoints, metrics.jsonl, TensorBoard); default runs/NAME-TIME."""
     save_interval: int = 50
-    """Iterations between periodic ``checkpoint_<step>.pt`` files (latest is saved as often)."""
+    """Iterations between periodic ``checkpoint_<step>.pt`` files; ``checkpoint_latest.pt`` is
+    also written every ``save_interval // 10`` iterations (at least every iteration)."""
     torch_threads: int = 1
     """``torch.set_num_threads`` while collecting (1: a forward pass on a few dozen observations
     gains nothing from more, and results stay repeatable; 0 leaves torch's default)."""

@@ -42,8 +42,8 @@ class DevRunner(OnPolicyRunner):
     (``iterations * num_steps_per_env * num_envs * world_size``) before each iteration; a tqdm
     bar and ``metrics.jsonl``; checkpoints (model, optimiser, iteration, env steps,
     curriculum, every env's reward-term state, rng states, behaviour name, config) written
-    atomically as ``checkpoint_latest.pt`` every iteration that is a multiple of
-    ``save_interval`` (plus ``checkpoint_<step>.pt``), at the end and on Ctrl-C; and
+    atomically as ``checkpoint_latest.pt`` every ``save_interval // 10`` iterations, plus
+    ``checkpoint_<step>.pt`` every ``save_interval``, at the end and on Ctrl-C or SIGTERM; and
     CPU distributed training over gloo. ``current_learning_iteration`` counts *completed*
     iterations, so a resumed run logs each iteration index once.
 
@@ -173,8 +173,11 @@ class DevRunner(OnPolicyRunner):
                 mean_step = step_rewards / self.cfg["num_steps_per_env"]
                 times = {"collect_s": collect_time, "update_s": learn_time}
                 self._record(it, len(finished), mean_step, losses, rate, times, bar)
-                if self.current_learning_iteration % self.cfg["save_interval"] == 0:
+                interval = self.cfg["save_interval"]
+                if self.current_learning_iteration % interval == 0:
                     self.save_checkpoints(periodic=True)
+                elif self.current_learning_iteration % max(1, interval // 10) == 0:
+                    self.save_checkpoints(periodic=False)  # latest only: little lost on a kill
         except KeyboardInterrupt:
             self.save_checkpoints(periodic=False, gather=False)
             if self.is_main:

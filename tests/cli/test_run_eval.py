@@ -125,3 +125,26 @@ def test_eval_errors(cli, tmp_path, capsys):
     assert "--episodes must be at least 1" in error(
         cli, capsys, "eval", "tiny", "--checkpoint", str(ckpt), "--episodes", "0"
     )
+
+
+def test_sigterm_saves_a_checkpoint_and_restores_handlers(cli, tmp_path, monkeypatch):
+    import os
+    import signal
+
+    from devlearn.training.checkpoint import load_checkpoint
+    from devlearn.training.runner import DevRunner
+
+    record = DevRunner._record
+
+    def record_then_terminate(self, *args, **kwargs):
+        record(self, *args, **kwargs)
+        if self.env_steps == 32:  # the scheduler's SIGTERM, mid-run
+            os.kill(os.getpid(), signal.SIGTERM)
+
+    monkeypatch.setattr(DevRunner, "_record", record_then_terminate)
+    before = signal.getsignal(signal.SIGTERM)
+    out = tmp_path / "run"
+    small = ["--envs", "2", "--seed", "1", "--set", "save_interval=1000"]
+    assert cli(["run", "tiny", "--steps", "100000", "--out", str(out), *small]) == 130
+    assert load_checkpoint(out / "checkpoint_latest.pt")["env_steps"] == 32
+    assert signal.getsignal(signal.SIGTERM) is before
