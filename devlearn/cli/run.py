@@ -20,7 +20,8 @@ def add_parser(subparsers) -> list[str]:
         "run",
         help="train a behaviour with PPO",
         description="Train a behaviour; writes config.json, checkpoints, metrics.jsonl and "
-        "TensorBoard logs to the run directory. Ctrl-C or SIGTERM saves a checkpoint; --resume continues.",
+        "TensorBoard logs to the run directory. Ctrl-C or SIGTERM saves a checkpoint; "
+        "--resume continues.",
     )
     p.add_argument("behavior", help="behaviour name (see `devlearn plugins`)")
     p.add_argument("--steps", metavar="N", help="total environment steps (e.g. 8e6)")
