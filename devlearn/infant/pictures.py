@@ -101,10 +101,7 @@ def body_map_picture(path: str | Path, width: int = 420, height: int = 900) -> P
         picture = np.concatenate(views + [_legend(height, 260)], axis=1)
     finally:
         infant.close()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    cv2.imwrite(str(path), picture)
-    return path
+    return _write_png(path, picture)
 
 
 def eyes_picture(path: str | Path, scale: int = 4) -> Path:
@@ -135,6 +132,11 @@ def eyes_picture(path: str | Path, scale: int = 4) -> Path:
         picture = np.concatenate([frames[0], gap, frames[1]], axis=1)
     finally:
         infant.close()
+    return _write_png(path, picture)
+
+
+def _write_png(path, picture: np.ndarray) -> Path:
+    """Write a BGR uint8 picture to ``path`` (parent folders made); return the path."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     cv2.imwrite(str(path), picture)
