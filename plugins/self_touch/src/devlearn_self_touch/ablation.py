@@ -5,6 +5,9 @@ Each run directory holds ``config.json`` (written by ``devlearn run``) and ``eva
 
     python -m devlearn_self_touch.ablation runs/ablation_fixed_only runs/ablation_random_only \\
         runs/ablation_two_stage
+
+When some variant was run with several seeds, a second table follows: per curriculum and
+budget, the mean over seeds and the range (min-max) of each figure.
 """
 
 from __future__ import annotations
@@ -41,6 +44,7 @@ def ablation_row(run_dir: Path) -> dict[str, Any]:
     if curriculum == "two_stage":
         curriculum += f" (fixed pose for {behavior.get('fixed_pose_steps', 0):,} steps)"
     row = {"run": run_dir.name, "curriculum": curriculum, "steps": config["total_steps"]}
+    row["seed"] = config.get("seed", "-")
     row["episodes"] = result["episodes"]
     row.update({key: result[key] for key in COLUMNS})
     return row
@@ -48,12 +52,33 @@ def ablation_row(run_dir: Path) -> dict[str, Any]:
 
 def ablation_table(run_dirs: list[Path]) -> str:
     """A Markdown table of :func:`ablation_row` for each run."""
-    header = ["run", "curriculum", "steps", "episodes", *COLUMNS]
+    header = ["run", "curriculum", "steps", "seed", "episodes", *COLUMNS]
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    for run_dir in run_dirs:
-        row = ablation_row(run_dir)
+    rows = [ablation_row(run_dir) for run_dir in run_dirs]
+    for row in rows:
         cells = [f"{row[k]:,}" if k == "steps" else str(row[k]) for k in header]
         cells[-1] = f"{row['score']:.2f}"
+        lines.append("| " + " | ".join(cells) + " |")
+    if len({(row["curriculum"], row["steps"]) for row in rows}) < len(rows):
+        lines += ["", seed_summary(rows)]
+    return "\n".join(lines)
+
+
+def seed_summary(rows: list[dict[str, Any]]) -> str:
+    """A Markdown table: per (curriculum, steps), the mean over seeds and the min-max range."""
+    groups: dict[tuple[str, int], list[dict[str, Any]]] = {}
+    for row in rows:
+        groups.setdefault((row["curriculum"], row["steps"]), []).append(row)
+    header = ["curriculum", "steps", "seeds", *(f"{key} mean (min-max)" for key in COLUMNS)]
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    for (curriculum, steps), members in groups.items():
+        cells = [curriculum, f"{steps:,}", str(len(members))]
+        for key in COLUMNS:
+            values = [float(member[key]) for member in members]
+            digits = 2 if key == "score" else 1
+            mean, low, high = sum(values) / len(values), min(values), max(values)
+            low_high = f"{low:.2f}-{high:.2f}" if key == "score" else f"{low:g}-{high:g}"
+            cells.append(f"{mean:.{digits}f} ({low_high})")
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
