@@ -1,4 +1,9 @@
-"""``devlearn curve RUN_DIR [RUN_DIR ...]``: plot learning curves from runs' metrics.jsonl."""
+"""``devlearn curve DIR [DIR ...]``: plot learning curves.
+
+Run folders (``metrics.jsonl``, from ``devlearn run``) give one line each: training metrics per
+iteration. Evaluation folders (``eval.json``, from ``devlearn eval --out``) of checkpoints of one
+run give together one line: each evaluation is a point at its checkpoint's environment steps.
+"""
 
 from __future__ import annotations
 
@@ -16,17 +21,19 @@ def add_parser(subparsers) -> list[str]:
         "run_dirs",
         type=Path,
         nargs="+",
-        metavar="RUN_DIR",
-        help="run folders holding metrics.jsonl (several: one line each, e.g. an ablation)",
+        metavar="DIR",
+        help="run folders holding metrics.jsonl (several: one line each, e.g. an ablation), "
+        "or evaluation folders holding eval.json (together: one point per checkpoint)",
     )
     p.add_argument(
         "--metric",
         action="append",
         default=None,
-        help="metrics.jsonl key to plot (repeatable; default: every metrics/* key)",
+        help="metrics.jsonl or eval.json key to plot (repeatable; default: every metrics/* "
+        "key of runs, every numeric key of evaluations)",
     )
     p.add_argument("--smooth", type=int, default=10, help="moving-average window (iterations)")
-    p.add_argument("--out", type=Path, help="PNG path (default: FIRST_RUN_DIR/learning_curve.png)")
+    p.add_argument("--out", type=Path, help="PNG path (default: FIRST_DIR/learning_curve.png)")
     return ["curve"]
 
 
@@ -46,6 +53,36 @@ def read_metrics(run_dir: Path) -> list[dict]:
     return rows
 
 
+def read_evaluations(eval_dirs: list[Path]) -> list[dict]:
+    """Each folder's ``eval.json`` as a ``step``-keyed row (``checkpoint_env_steps``), by step."""
+    rows = []
+    for eval_dir in eval_dirs:
+        path = eval_dir / "eval.json"
+        if not path.exists():
+            raise UsageError(
+                f"{eval_dir} holds neither metrics.jsonl (a run) nor eval.json (an evaluation)"
+            )
+        summary = json.loads(path.read_text())
+        if "checkpoint_env_steps" not in summary:
+            raise UsageError(
+                f"{path} has no checkpoint_env_steps (written by devlearn eval since 0.1): "
+                "evaluate the checkpoint again"
+            )
+        numbers = {k: v for k, v in summary.items() if isinstance(v, (int, float))}
+        rows.append({**numbers, "step": summary["checkpoint_env_steps"]})
+    return sorted(rows, key=lambda row: row["step"])
+
+
+def _load(dirs: list[Path]) -> tuple[list[tuple[Path, list[dict]]], bool]:
+    """(label, rows) per line, and whether these are evaluations; one kind of folder only."""
+    evaluations = [d for d in dirs if not (d / "metrics.jsonl").exists()]
+    if not evaluations:
+        return [(run_dir, read_metrics(run_dir)) for run_dir in dirs], False
+    if len(evaluations) < len(dirs):
+        raise UsageError("give either run folders or evaluation folders, not both")
+    return [(Path("evaluation"), read_evaluations(dirs))], True
+
+
 def run(args: argparse.Namespace, registry) -> int:
     """Plot the chosen metrics (moving average) against steps and write a PNG."""
     import matplotlib
@@ -54,9 +91,12 @@ def run(args: argparse.Namespace, registry) -> int:
     import matplotlib.pyplot as plt
     import numpy as np
 
-    runs = [(run_dir, read_metrics(run_dir)) for run_dir in args.run_dirs]
+    runs, evaluations = _load(args.run_dirs)
     every = {k for _, rows in runs for r in rows for k in r}
-    keys = args.metric or sorted(k for k in every if k.startswith("metrics/"))
+    default = (k for k in every if k not in ("step", "checkpoint_env_steps", "episodes"))
+    if not evaluations:
+        default = (k for k in every if k.startswith("metrics/"))
+    keys = args.metric or sorted(default)
     unknown = [k for k in keys if k not in every]
     if unknown or not keys:
         raise UsageError(f"no such metric(s) {unknown}; valid: {', '.join(sorted(every))}")
@@ -69,6 +109,9 @@ def run(args: argparse.Namespace, registry) -> int:
             if not points:
                 continue
             steps, values = (np.array(v, dtype=float) for v in zip(*points))
+            if evaluations:
+                ax.plot(steps, values, marker="o", lw=1.6)
+                continue
             window = min(args.smooth, len(values))
             smooth = np.convolve(values, np.ones(window) / window, mode="valid")
             if len(runs) == 1:
@@ -80,7 +123,11 @@ def run(args: argparse.Namespace, registry) -> int:
         axes[0, 0].legend(fontsize=8)
     axes[-1, 0].set_xlabel("environment steps")
     title = args.run_dirs[0].name if len(runs) == 1 else f"{len(runs)} runs"
-    fig.suptitle(f"{title}: mean over episodes ending in each iteration")
+    if evaluations:
+        axes[-1, 0].set_xlabel("environment steps of the checkpoint")
+        fig.suptitle(f"evaluations of {len(args.run_dirs)} checkpoints")
+    else:
+        fig.suptitle(f"{title}: mean over episodes ending in each iteration")
     fig.tight_layout()
     out = args.out or args.run_dirs[0] / "learning_curve.png"
     fig.savefig(out, dpi=110)

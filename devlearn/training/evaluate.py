@@ -71,7 +71,9 @@ def evaluate(
         infant_factory: Infant builder (tests); default the real infant.
         progress: Show a progress bar (steps, episodes) on stderr.
     Returns:
-        ``evaluator.summary()`` (JSON-serialisable).
+        ``evaluator.summary()`` (JSON-serialisable) and ``checkpoint_env_steps``, the
+        environment steps the checkpoint was trained for (x axis of ``devlearn curve`` on
+        evaluation folders).
     Raises:
         UsageError: Missing, corrupt or foreign checkpoint.
     """
@@ -116,6 +118,7 @@ def evaluate(
                 obs, _, _, _, _ = env.step(action)
         bar.close()
         summary = env.evaluator.summary()
+        summary["checkpoint_env_steps"] = int(state.get("env_steps", 0))
         if out_dir is not None:
             out = Path(out_dir)
             out.mkdir(parents=True, exist_ok=True)

@@ -27,7 +27,7 @@ def test_curve_writes_png(tmp_path):
 
 
 def test_curve_errors(tmp_path):
-    with pytest.raises(UsageError, match="metrics.jsonl does not exist"):
+    with pytest.raises(UsageError, match="holds neither metrics.jsonl .* nor eval.json"):
         curve.run(_args(tmp_path), None)
     (tmp_path / "metrics.jsonl").write_text('{"step": 1, "metrics/score": 0.1}\n')
     with pytest.raises(UsageError, match="valid: metrics/score, step"):
@@ -46,5 +46,28 @@ def test_curve_compares_runs(tmp_path):
     assert out.read_bytes()[:4] == b"\x89PNG"
     (tmp_path / "c").mkdir()
     args.run_dirs.append(tmp_path / "c")
-    with pytest.raises(UsageError, match="c/metrics.jsonl does not exist"):
+    with pytest.raises(UsageError, match="either run folders or evaluation folders, not both"):
         curve.run(args, None)
+
+
+def test_curve_of_evaluations_orders_checkpoints_by_steps(tmp_path):
+    dirs = []
+    for steps, score in ((2000, 0.5), (1000, 0.25), (3000, 0.75)):
+        eval_dir = tmp_path / f"eval_{steps}"
+        eval_dir.mkdir()
+        summary = {"episodes": 4, "score": score, "coverage": [1, 2], "checkpoint_env_steps": steps}
+        (eval_dir / "eval.json").write_text(json.dumps(summary))
+        dirs.append(eval_dir)
+    rows = curve.read_evaluations(dirs)
+    assert [(r["step"], r["score"]) for r in rows] == [(1000, 0.25), (2000, 0.5), (3000, 0.75)]
+    assert "coverage" not in rows[0]  # only numbers are plotted
+    out = tmp_path / "evals.png"
+    args = _args(dirs[0], out=out)
+    args.run_dirs = dirs
+    assert curve.run(args, None) == 0
+    assert out.read_bytes()[:4] == b"\x89PNG"
+    with pytest.raises(UsageError, match="valid: checkpoint_env_steps, episodes, score, step"):
+        curve.run(_args(dirs[0], metric=["nope"]), None)
+    (dirs[0] / "eval.json").write_text(json.dumps({"score": 0.1}))
+    with pytest.raises(UsageError, match="no checkpoint_env_steps .* evaluate the checkpoint"):
+        curve.run(_args(dirs[0]), None)

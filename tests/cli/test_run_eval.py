@@ -43,7 +43,7 @@ def test_run_then_eval(cli, tmp_path, capsys):
     ckpt = out / "checkpoint_latest.pt"
     assert cli(["eval", "tiny", "--checkpoint", str(ckpt), "--episodes", "2", "--json"]) == 0
     result = json.loads(capsys.readouterr().out)
-    assert result["episodes"] == 2
+    assert result["episodes"] == 2 and result["checkpoint_env_steps"] == 64
     assert (out / "eval" / "eval.json").exists() and (out / "eval" / "close.txt").exists()
 
     assert cli(["run", "tiny", "--resume", str(out), "--steps", "96"]) == 0
