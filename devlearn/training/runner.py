@@ -282,6 +282,10 @@ class DevRunner(OnPolicyRunner):
     def restore(self, state: dict[str, Any]) -> None:
         """Resume from a checkpoint: networks, optimiser, counters, curriculum, envs, rngs."""
         self.alg.load(state, None, strict=True)  # also takes the adaptive lr from the optimiser
+        if self.run_cfg.ppo.schedule == "fixed":  # a fixed schedule means the configured lr
+            self.alg.learning_rate = self.run_cfg.ppo.learning_rate
+            for group in self.alg.optimizer.param_groups:
+                group["lr"] = self.alg.learning_rate
         self.current_learning_iteration = int(state["iteration"])
         self.env_steps = int(state["env_steps"])
         self.curriculum.load_state_dict(state["curriculum"])

@@ -193,3 +193,15 @@ def test_resume_forgets_metrics_logged_after_the_checkpoint(tmp_path):
     forget_metrics_after(path, 200)
     assert [json.loads(line)["step"] for line in path.read_text().splitlines()] == [100, 200]
     forget_metrics_after(tmp_path / "none.jsonl", 1)  # no file yet: nothing to do
+
+
+def test_resume_with_a_fixed_schedule_uses_the_configured_learning_rate(tmp_path):
+    out = tmp_path / "run"
+    run(out, 64, "ppo.learning_rate=0.002")  # adaptive: the rate moves with the KL
+    adapted = load_checkpoint(out / "checkpoint_latest.pt")["learning_rate"]
+    assert adapted != 0.002  # else this test would not tell the two apart
+    fixed = tiny_run.config(out, 96, "ppo.schedule=fixed", "ppo.learning_rate=0.0005")
+    train(fixed, tiny_run.registry(), resume=out, infant_factory=tiny_run.factory, progress=False)
+    final = load_checkpoint(out / "checkpoint_latest.pt")
+    assert final["learning_rate"] == 0.0005
+    assert final["optimizer_state_dict"]["param_groups"][0]["lr"] == 0.0005
