@@ -65,7 +65,7 @@ def read_evaluations(eval_dirs: list[Path]) -> list[dict]:
         summary = json.loads(path.read_text())
         if "checkpoint_env_steps" not in summary:
             raise UsageError(
-                f"{path} has no checkpoint_env_steps (written by devlearn eval since 0.1): "
+                f"{path} has no checkpoint_env_steps (older evaluations lack it): "
                 "evaluate the checkpoint again"
             )
         numbers = {k: v for k, v in summary.items() if isinstance(v, (int, float))}
@@ -121,12 +121,12 @@ def run(args: argparse.Namespace, registry) -> int:
         ax.grid(alpha=0.3)
     if len(runs) > 1:
         axes[0, 0].legend(fontsize=8)
-    axes[-1, 0].set_xlabel("environment steps")
     title = args.run_dirs[0].name if len(runs) == 1 else f"{len(runs)} runs"
     if evaluations:
         axes[-1, 0].set_xlabel("environment steps of the checkpoint")
         fig.suptitle(f"evaluations of {len(args.run_dirs)} checkpoints")
     else:
+        axes[-1, 0].set_xlabel("environment steps")
         fig.suptitle(f"{title}: mean over episodes ending in each iteration")
     fig.tight_layout()
     out = args.out or args.run_dirs[0] / "learning_curve.png"

@@ -44,8 +44,7 @@ def ablation_row(run_dir: Path) -> dict[str, Any]:
     if curriculum == "two_stage":
         curriculum += f" (fixed pose for {behavior.get('fixed_pose_steps', 0):,} steps)"
     row = {"run": run_dir.name, "curriculum": curriculum, "steps": config["total_steps"]}
-    row["seed"] = config.get("seed", "-")
-    row["episodes"] = result["episodes"]
+    row.update(seed=config.get("seed", "-"), episodes=result["episodes"])
     row.update({key: result[key] for key in COLUMNS})
     return row
 
