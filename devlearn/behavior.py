@@ -33,6 +33,8 @@ class NetworkSpec:
         fusion_dims: Fusion layers after concatenation (paper Model I: ``(512,)``).
         trunk_dims: Shared trunk layers before the heads (paper Model I: ``(256, 256)``).
         init_std: Initial standard deviation of the policy (softplus bias is set to match).
+        max_std: Upper bound on the policy's standard deviation (a sigmoid replaces the
+            softplus); 0: unbounded, as in the paper.
         normalize: Observations standardised by a running mean and variance before their
             encoder (rsl-rl's ``EmpiricalNormalization``, updated during rollouts), e.g.
             ``("proprioception",)`` whose joint velocities and torques have mixed scales.
@@ -42,6 +44,7 @@ class NetworkSpec:
     fusion_dims: tuple[int, ...] = (512,)
     trunk_dims: tuple[int, ...] = (256, 256)
     init_std: float = 0.5
+    max_std: float = 0.0
     normalize: tuple[str, ...] = ()
 
 

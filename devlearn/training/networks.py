@@ -127,18 +127,33 @@ class TanhSoftplusGaussian(Distribution):
     stays finite when the softplus underflows; samples are not squashed (the env clips them
     to [-1, 1]) and the deterministic action is the mean.
 
+    With ``max_std`` set, the spread is bounded instead: ``std = min_std + (max_std - min_std) *
+    sigmoid(W_s h + b_s)``. Because actions are clipped, an unbounded std meets no resistance
+    from the clipped returns and grows under the entropy bonus until every action is +-1 noise
+    (our 8M self_touch run ended near std 1000, see ``results/self_touch/README.md``).
+
     Args:
         output_dim: Action size.
         init_std: Standard deviation at initialisation (sets the softplus bias).
         min_std: Small positive floor added to the standard deviation.
+        max_std: Upper bound on the standard deviation; ``None`` or 0: unbounded (the paper).
     """
 
-    def __init__(self, output_dim: int, init_std: float = 0.5, min_std: float = 1e-3) -> None:
+    def __init__(
+        self,
+        output_dim: int,
+        init_std: float = 0.5,
+        min_std: float = 1e-3,
+        max_std: float | None = None,
+    ) -> None:
         super().__init__(output_dim)
         if init_std <= min_std:
             raise ValueError(f"init_std must exceed min_std={min_std}, got {init_std}")
+        if max_std and max_std <= init_std:
+            raise ValueError(f"max_std must exceed init_std={init_std} (or be 0), got {max_std}")
         self.init_std = float(init_std)
         self.min_std = float(min_std)
+        self.max_std = float(max_std) if max_std else None
         self._distribution: Normal | None = None
         Normal.set_default_validate_args(False)
 
@@ -149,7 +164,10 @@ class TanhSoftplusGaussian(Distribution):
 
     def update(self, mlp_output: torch.Tensor) -> None:
         raw_mean, raw_std = torch.unbind(mlp_output, dim=-2)
-        std = F.softplus(raw_std) + self.min_std
+        if self.max_std is None:
+            std = F.softplus(raw_std) + self.min_std
+        else:
+            std = self.min_std + (self.max_std - self.min_std) * torch.sigmoid(raw_std)
         self._distribution = Normal(torch.tanh(raw_mean), std)
 
     def sample(self) -> torch.Tensor:
@@ -186,12 +204,17 @@ class TanhSoftplusGaussian(Distribution):
         return torch.distributions.kl_divergence(old, new).sum(dim=-1)
 
     def init_mlp_weights(self, mlp: nn.Module) -> None:
-        """Start near mean 0 and std ``init_std``: small head weights, matching softplus bias."""
+        """Start near mean 0 and std ``init_std``: small head weights, matching std bias."""
         head = mlp[-2]  # the last Linear (followed by Unflatten to (2, output_dim))
         with torch.no_grad():
             head.weight.mul_(0.01)
             head.bias[: self.output_dim].zero_()
-            head.bias[self.output_dim :].fill_(inverse_softplus(self.init_std - self.min_std))
+            if self.max_std is None:
+                bias = inverse_softplus(self.init_std - self.min_std)
+            else:
+                frac = (self.init_std - self.min_std) / (self.max_std - self.min_std)
+                bias = math.log(frac / (1.0 - frac))  # inverse sigmoid
+            head.bias[self.output_dim :].fill_(bias)
 
 
 class _TanhFirstSlice(nn.Module):

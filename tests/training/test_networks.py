@@ -119,3 +119,20 @@ def test_optimiser_holds_shared_parameters_once():
     moved = (shared.detach() - before).abs()
     changed = moved > 0
     torch.testing.assert_close(moved[changed], torch.full_like(moved[changed], 0.1))
+
+
+def test_max_std_bounds_the_spread_and_starts_at_init_std():
+    raw_huge = torch.tensor([[[0.0, 0.0], [50.0, -50.0]]])
+    unbounded = TanhSoftplusGaussian(2, init_std=0.5)
+    unbounded.update(raw_huge)
+    assert unbounded.std[0, 0] > 49  # softplus: the paper's spread has no ceiling
+    bounded = TanhSoftplusGaussian(2, init_std=0.5, max_std=1.0)
+    bounded.update(raw_huge)
+    assert bounded.std.max() <= 1.0 and bounded.std.min() > 0
+    obs = batch()
+    torch.manual_seed(0)
+    actor = MultiSenseModel(obs, GROUPS, "actor", 4, spec(), distribution_cfg={**DIST, "max_std": 1.0})
+    actor(obs, stochastic_output=True)
+    torch.testing.assert_close(actor.output_std, torch.full((5, 4), 0.3), atol=0.02, rtol=0)
+    with pytest.raises(ValueError, match="max_std must exceed init_std"):
+        TanhSoftplusGaussian(2, init_std=0.5, max_std=0.4)

@@ -91,6 +91,7 @@ class SelfTouch(Behavior):
             },
             fusion_dims=(512,),
             trunk_dims=(256, 256),
+            max_std=self.config.max_std,
             # joint velocities and torques have mixed scales: standardise them (running stats)
             normalize=("proprioception",),
         )

@@ -77,6 +77,12 @@ class SelfTouchConfig:
     """Extra condition N_L + N_R >= this (paper: none, i.e. 0; then an episode without any
     touch also pays the bonus). Set 1 or more to stop rewarding idleness."""
 
+    # --- policy (sec. II-A4) -----------------------------------------------------------------
+    max_std: float = 0.0
+    """Upper bound on the policy's standard deviation; 0: unbounded softplus (the paper). The
+    environment clips actions to [-1, 1], so an unbounded spread can grow until actions are
+    +-1 noise; 1.0 bounds it with a sigmoid (see ``results/self_touch/README.md``)."""
+
     # --- curriculum (sec. II-A5) ------------------------------------------------------------
     curriculum: str = "two_stage"
     """``"two_stage"`` (fixed pose then random pose), ``"fixed_only"`` or ``"random_only"``
@@ -92,6 +98,8 @@ class SelfTouchConfig:
 
     def validate(self) -> None:
         """Raise ValueError naming a wrong choice and the valid ones; normalise milestones."""
+        if self.max_std < 0:
+            raise ValueError(f"max_std must be 0 (unbounded) or above 0.5, got {self.max_std}")
         if self.curriculum not in CURRICULA:
             raise ValueError(
                 f"unknown curriculum '{self.curriculum}'; valid: {', '.join(CURRICULA)}"
