@@ -2,13 +2,15 @@
 
 Run folders (``metrics.jsonl``, from ``devlearn run``) give one line each: training metrics per
 iteration. Evaluation folders (``eval.json``, from ``devlearn eval --out``) of checkpoints of one
-run give together one line: each evaluation is a point at its checkpoint's environment steps.
+run give together one line: each evaluation is a point at its checkpoint's environment steps;
+``--vs`` adds another line (say, the evaluations of a second run, to compare the two).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 from pathlib import Path
 
 from devlearn.errors import UsageError
@@ -31,6 +33,15 @@ def add_parser(subparsers) -> list[str]:
         default=None,
         help="metrics.jsonl or eval.json key to plot (repeatable; default: every metrics/* "
         "key of runs, every numeric key of evaluations)",
+    )
+    p.add_argument(
+        "--vs",
+        action="append",
+        nargs="+",
+        type=Path,
+        default=None,
+        metavar="DIR",
+        help="another line to compare: evaluation folders of another run (repeatable)",
     )
     p.add_argument("--smooth", type=int, default=10, help="moving-average window (iterations)")
     p.add_argument("--out", type=Path, help="PNG path (default: FIRST_DIR/learning_curve.png)")
@@ -73,14 +84,22 @@ def read_evaluations(eval_dirs: list[Path]) -> list[dict]:
     return sorted(rows, key=lambda row: row["step"])
 
 
-def _load(dirs: list[Path]) -> tuple[list[tuple[Path, list[dict]]], bool]:
-    """(label, rows) per line, and whether these are evaluations; one kind of folder only."""
+def _load(groups: list[list[Path]]) -> tuple[list[tuple[Path, list[dict]]], bool]:
+    """(label, rows) per line, and whether these are evaluations; one kind of folder only.
+
+    Runs: one line per folder. Evaluations: one line per group (the positional folders, then
+    each ``--vs``), labelled by the folders' common parent.
+    """
+    dirs = [d for group in groups for d in group]
     evaluations = [d for d in dirs if not (d / "metrics.jsonl").exists()]
     if not evaluations:
         return [(run_dir, read_metrics(run_dir)) for run_dir in dirs], False
     if len(evaluations) < len(dirs):
         raise UsageError("give either run folders or evaluation folders, not both")
-    return [(Path("evaluation"), read_evaluations(dirs))], True
+    if len(groups) == 1:
+        return [(Path("evaluation"), read_evaluations(dirs))], True
+    common = [Path(os.path.commonpath([d.resolve() for d in g])) for g in groups]
+    return [(Path(os.path.relpath(c)), read_evaluations(g)) for c, g in zip(common, groups)], True
 
 
 def run(args: argparse.Namespace, registry) -> int:
@@ -91,7 +110,7 @@ def run(args: argparse.Namespace, registry) -> int:
     import matplotlib.pyplot as plt
     import numpy as np
 
-    runs, evaluations = _load(args.run_dirs)
+    runs, evaluations = _load([list(args.run_dirs), *(getattr(args, "vs", None) or [])])
     every = {k for _, rows in runs for r in rows for k in r}
     default = (k for k in every if k not in ("step", "checkpoint_env_steps", "episodes"))
     if not evaluations:
@@ -110,7 +129,7 @@ def run(args: argparse.Namespace, registry) -> int:
                 continue
             steps, values = (np.array(v, dtype=float) for v in zip(*points))
             if evaluations:
-                ax.plot(steps, values, marker="o", lw=1.6)
+                ax.plot(steps, values, marker="o", lw=1.6, label=str(run_dir))
                 continue
             window = min(args.smooth, len(values))
             smooth = np.convolve(values, np.ones(window) / window, mode="valid")
@@ -124,7 +143,8 @@ def run(args: argparse.Namespace, registry) -> int:
     title = args.run_dirs[0].name if len(runs) == 1 else f"{len(runs)} runs"
     if evaluations:
         axes[-1, 0].set_xlabel("environment steps of the checkpoint")
-        fig.suptitle(f"evaluations of {len(args.run_dirs)} checkpoints")
+        count = sum(len(rows) for _, rows in runs)
+        fig.suptitle(f"evaluations of {count} checkpoints")
     else:
         axes[-1, 0].set_xlabel("environment steps")
         fig.suptitle(f"{title}: mean over episodes ending in each iteration")

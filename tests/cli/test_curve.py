@@ -12,7 +12,7 @@ from devlearn.errors import UsageError
 
 
 def _args(run_dir, **kw):
-    base = {"run_dirs": [run_dir], "metric": None, "smooth": 3, "out": None}
+    base = {"run_dirs": [run_dir], "metric": None, "smooth": 3, "out": None, "vs": None}
     return argparse.Namespace(**{**base, **kw})
 
 
@@ -71,3 +71,28 @@ def test_curve_of_evaluations_orders_checkpoints_by_steps(tmp_path):
     (dirs[0] / "eval.json").write_text(json.dumps({"score": 0.1}))
     with pytest.raises(UsageError, match="no checkpoint_env_steps .* evaluate the checkpoint"):
         curve.run(_args(dirs[0]), None)
+
+
+def test_curve_compares_the_evaluations_of_two_runs(tmp_path, monkeypatch):
+    def evals(run, scores):
+        dirs = []
+        for steps, score in scores:
+            eval_dir = tmp_path / run / "evals" / f"at_{steps}"
+            eval_dir.mkdir(parents=True)
+            summary = {"score": score, "checkpoint_env_steps": steps}
+            (eval_dir / "eval.json").write_text(json.dumps(summary))
+            dirs.append(eval_dir)
+        return dirs
+
+    first = evals("a", ((1000, 0.5), (2000, 0.6)))
+    second = evals("b", ((2000, 0.9), (1000, 0.7)))
+    monkeypatch.chdir(tmp_path)
+    lines, evaluations = curve._load([first, second])
+    assert evaluations
+    assert [str(label) for label, _ in lines] == ["a/evals", "b/evals"]
+    assert [r["score"] for r in lines[1][1]] == [0.7, 0.9]  # each line by steps
+    out = tmp_path / "vs.png"
+    args = _args(first[0], out=out, metric=["score"], vs=[second])
+    args.run_dirs = first
+    assert curve.run(args, None) == 0
+    assert out.read_bytes()[:4] == b"\x89PNG"
