@@ -110,7 +110,7 @@ def run(args: argparse.Namespace, registry) -> int:
     import matplotlib.pyplot as plt
     import numpy as np
 
-    runs, evaluations = _load([list(args.run_dirs), *(getattr(args, "vs", None) or [])])
+    runs, evaluations = _load([list(args.run_dirs), *(args.vs or [])])
     every = {k for _, rows in runs for r in rows for k in r}
     default = (k for k in every if k not in ("step", "checkpoint_env_steps", "episodes"))
     if not evaluations:
