@@ -253,7 +253,7 @@ def to_rsl_rl(cfg: RunConfig, behavior: Any, observation_names: list[str] | None
             "distribution_cfg": {
                 "class_name": "devlearn.training.networks:TanhSoftplusGaussian",
                 "init_std": spec.init_std,
-                "max_std": spec.max_std or None,
+                "max_std": spec.max_std,
             },
         },
         "critic": {"class_name": model, "spec": spec},

@@ -136,7 +136,7 @@ class TanhSoftplusGaussian(Distribution):
         output_dim: Action size.
         init_std: Standard deviation at initialisation (sets the softplus bias).
         min_std: Small positive floor added to the standard deviation.
-        max_std: Upper bound on the standard deviation; ``None`` or 0: unbounded (the paper).
+        max_std: Upper bound on the standard deviation; 0: unbounded (the paper).
     """
 
     def __init__(
@@ -144,16 +144,16 @@ class TanhSoftplusGaussian(Distribution):
         output_dim: int,
         init_std: float = 0.5,
         min_std: float = 1e-3,
-        max_std: float | None = None,
+        max_std: float = 0.0,
     ) -> None:
         super().__init__(output_dim)
         if init_std <= min_std:
             raise ValueError(f"init_std must exceed min_std={min_std}, got {init_std}")
-        if max_std and max_std <= init_std:
+        if max_std and max_std <= init_std:  # 0 means unbounded
             raise ValueError(f"max_std must exceed init_std={init_std} (or be 0), got {max_std}")
         self.init_std = float(init_std)
         self.min_std = float(min_std)
-        self.max_std = float(max_std) if max_std else None
+        self.max_std = float(max_std)
         self._distribution: Normal | None = None
         Normal.set_default_validate_args(False)
 
@@ -164,7 +164,7 @@ class TanhSoftplusGaussian(Distribution):
 
     def update(self, mlp_output: torch.Tensor) -> None:
         raw_mean, raw_std = torch.unbind(mlp_output, dim=-2)
-        if self.max_std is None:
+        if not self.max_std:
             std = F.softplus(raw_std) + self.min_std
         else:
             std = self.min_std + (self.max_std - self.min_std) * torch.sigmoid(raw_std)
@@ -209,7 +209,7 @@ class TanhSoftplusGaussian(Distribution):
         with torch.no_grad():
             head.weight.mul_(0.01)
             head.bias[: self.output_dim].zero_()
-            if self.max_std is None:
+            if not self.max_std:
                 bias = inverse_softplus(self.init_std - self.min_std)
             else:
                 frac = (self.init_std - self.min_std) / (self.max_std - self.min_std)

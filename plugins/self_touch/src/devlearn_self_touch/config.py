@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from devlearn import NetworkSpec
+
 CURRICULA = ("two_stage", "fixed_only", "random_only")
 """Valid values of :attr:`SelfTouchConfig.curriculum` (paper sec. II-A5 and its ablation)."""
 
@@ -98,8 +100,12 @@ class SelfTouchConfig:
 
     def validate(self) -> None:
         """Raise ValueError naming a wrong choice and the valid ones; normalise milestones."""
-        if self.max_std < 0:
-            raise ValueError(f"max_std must be 0 (unbounded) or above 0.5, got {self.max_std}")
+        init_std = NetworkSpec.init_std  # the policy's starting spread (this behaviour's)
+        if self.max_std < 0 or 0 < self.max_std <= init_std:
+            raise ValueError(
+                f"max_std must be 0 (unbounded) or above the initial std {init_std}, "
+                f"got {self.max_std}"
+            )
         if self.curriculum not in CURRICULA:
             raise ValueError(
                 f"unknown curriculum '{self.curriculum}'; valid: {', '.join(CURRICULA)}"
