@@ -180,7 +180,7 @@ def test_kill_mid_write_keeps_previous_checkpoint(tmp_path):
     done = subprocess.run([sys.executable, "-c", KILL_MID_WRITE, str(path)], timeout=60)
     assert done.returncode == -signal.SIGKILL
     assert path.read_bytes() == before
-    assert load_checkpoint(path)["n"] == 1
+    assert load_checkpoint(path, required=())["n"] == 1
     assert list(tmp_path.glob(".checkpoint_latest.pt.tmp-*"))  # the partial file, not latest
 
 
