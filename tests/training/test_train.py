@@ -82,6 +82,8 @@ def test_interrupt_saves_a_checkpoint(tmp_path):
     state = load_checkpoint(tmp_path / "r" / "checkpoint_latest.pt")
     # each infant steps 8 times per iteration: 8 iterations complete, the 9th is interrupted
     assert state["env_steps"] == 8 * PER_ITERATION
+    # lifetime memory is that of the last complete iteration, not of the rollout thrown away
+    assert [e["terms"]["counter"]["count"] for e in state["env"]["ranks"][0]["envs"]] == [64] * 4
 
 
 def test_resume_after_kill(tmp_path):
