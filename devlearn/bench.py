@@ -14,6 +14,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -92,20 +93,26 @@ def bench_infant(steps: int = 2000, frames: int = 100) -> dict[str, float]:
 
 
 def bench_behavior_env(behavior, steps: int) -> float:
-    """Single-process environment steps per second of one BehaviorEnv (random actions)."""
+    """Single-process environment steps per second of one BehaviorEnv (random actions).
+
+    The behaviour is not prepared (hand regard's detector is uncalibrated); its warnings about
+    that are silenced here, as this measures speed, not what is learnt.
+    """
     from devlearn.env import BehaviorEnv
 
-    env = BehaviorEnv(behavior, seed=0)
-    env.reset()
-    rng = np.random.default_rng(0)
-    actions = rng.uniform(-1, 1, (steps + 50, env.action_dim))
-    for a in actions[:50]:
-        env.step(a)
-    start = time.perf_counter()
-    for a in actions[50:]:
-        env.step(a)
-    rate = steps / (time.perf_counter() - start)
-    env.close()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        env = BehaviorEnv(behavior, seed=0)
+        env.reset()
+        rng = np.random.default_rng(0)
+        actions = rng.uniform(-1, 1, (steps + 50, env.action_dim))
+        for a in actions[:50]:
+            env.step(a)
+        start = time.perf_counter()
+        for a in actions[50:]:
+            env.step(a)
+        rate = steps / (time.perf_counter() - start)
+        env.close()
     return rate
 
 
