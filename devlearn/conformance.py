@@ -59,7 +59,9 @@ def pickle_problem(obj: Any, label: str, depth: int = 0) -> str | None:
 def check_picklable(obj: Any, what: str, label: str = "self") -> None:
     """Raise ConformanceError naming the attribute that stops ``obj`` from pickling."""
     problem = pickle_problem(obj, label)
-    require(problem is None, f"{what} cannot be pickled (it is sent to worker processes): {problem}")
+    require(
+        problem is None, f"{what} cannot be pickled (it is sent to worker processes): {problem}"
+    )
 
 
 def check_observations(

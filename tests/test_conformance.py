@@ -238,7 +238,9 @@ def test_non_float_term_values_name_the_term(kind, shown):
 
 
 def test_observation_shape_depending_on_contacts_names_the_observation():
-    with pytest.raises(ConformanceError, match=r"observation 'x' changed shape from \(3,\) to \(4,\)"):
+    with pytest.raises(
+        ConformanceError, match=r"observation 'x' changed shape from \(3,\) to \(4,\)"
+    ):
         check_behavior(ContactShapedObservation, **FAST)
 
 

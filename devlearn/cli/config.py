@@ -55,8 +55,12 @@ def run(args: argparse.Namespace, registry) -> int:
             section = head
             print(f"\n[{section}]")
         mark = {"behavior": "  (set by the behaviour)", "override": "  (--set)"}
-        print(f"  {row['key']}: {row['type']} = {json.dumps(row['default'])}"
-              f"{mark.get(row.get('set_by', ''), '')}")
+        print(
+            f"  {row['key']}: {row['type']} = {json.dumps(row['default'])}"
+            f"{mark.get(row.get('set_by', ''), '')}"
+        )
         if row["doc"]:
-            print(textwrap.fill(row["doc"], 96, initial_indent="      ", subsequent_indent="      "))
+            print(
+                textwrap.fill(row["doc"], 96, initial_indent="      ", subsequent_indent="      ")
+            )
     return 0

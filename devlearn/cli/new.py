@@ -59,7 +59,9 @@ def write_plugin(name: str, out: str | Path | None = None, registry=None) -> lis
     subs = names_for(name)
     if registry is not None and name in registry.behaviors():
         plugin = registry.plugin_of(name)
-        raise UsageError(f"behaviour '{name}' already exists (plugin '{plugin.name}'); pick another")
+        raise UsageError(
+            f"behaviour '{name}' already exists (plugin '{plugin.name}'); pick another"
+        )
     root = Path(out) if out else Path(subs["dist"])
     if root.exists() and (not root.is_dir() or any(root.iterdir())):
         raise UsageError(f"{root} already exists and is not empty; choose another --out")

@@ -53,12 +53,24 @@ def test_table_groups_sections(capsys):
 
 @pytest.mark.parametrize(
     "typo, key",
-    [("ppo.lr", "ppo.learning_rate"), ("ppo.clip", "ppo.clip_param"), ("seeds", "seed"),
-     ("stepz", None), ("behavior.fixed_steps", "behavior.fixed_pose_steps")],
+    [
+        ("ppo.lr", "ppo.learning_rate"),
+        ("ppo.clip", "ppo.clip_param"),
+        ("seeds", "seed"),
+        ("stepz", None),
+        ("behavior.fixed_steps", "behavior.fixed_pose_steps"),
+    ],
 )
 def test_suggestions(typo, key):
-    keys = ["seed", "total_steps", "ppo.learning_rate", "ppo.lam", "ppo.clip_param",
-            "behavior.fixed_pose_steps", "behavior.random_pose_steps"]
+    keys = [
+        "seed",
+        "total_steps",
+        "ppo.learning_rate",
+        "ppo.lam",
+        "ppo.clip_param",
+        "behavior.fixed_pose_steps",
+        "behavior.random_pose_steps",
+    ]
     assert suggest_key(typo, keys) == key
 
 

@@ -1,4 +1,4 @@
-"""``devlearn new``: the plugin it writes installs and passes its tests; the plugin guide is true."""
+"""`devlearn new`: the plugin it writes installs and passes its tests; the guide is true."""
 
 from __future__ import annotations
 
@@ -80,7 +80,9 @@ def _run_guide_command(words: list[str], cwd: Path, env: dict) -> subprocess.Com
     else:
         words = doc_commands.shrink(words)
     result = subprocess.run(words, cwd=cwd, env=env, capture_output=True, text=True, timeout=900)
-    assert result.returncode == 0, f"{' '.join(words)}\n{result.stdout[-3000:]}\n{result.stderr[-3000:]}"
+    assert result.returncode == 0, (
+        f"{' '.join(words)}\n{result.stdout[-3000:]}\n{result.stderr[-3000:]}"
+    )
     return result
 
 
@@ -90,7 +92,10 @@ def test_the_guide_from_an_empty_folder_to_a_trained_evaluated_plugin(tmp_path):
     walk = doc_commands.commands(doc_commands.blocks(GUIDE.read_text(), "bash")[0])
     assert [w[:2] for w in walk][:2] == [["devlearn", "new"], ["pip", "install"]]
     site = tmp_path / "site"
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(site), os.environ.get("PYTHONPATH", "")])}
+    env = {
+        **os.environ,
+        "PYTHONPATH": os.pathsep.join([str(site), os.environ.get("PYTHONPATH", "")]),
+    }
     outputs = {}
     for words in walk:
         outputs[" ".join(words[:2])] = _run_guide_command(words, tmp_path, env).stdout

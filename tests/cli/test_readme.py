@@ -53,7 +53,18 @@ def test_the_readme_has_the_commands_this_test_expects():
 
 def test_shrink_substitutes_tiny_budgets():
     words = doc_commands.shrink("devlearn run x --steps 2e5 --envs 8 --seed 1".split())
-    assert words[3:] == ["run", "x", "--steps", "256", "--envs", "2", "--seed", "1", "--workers", "0"]
+    assert words[3:] == [
+        "run",
+        "x",
+        "--steps",
+        "256",
+        "--envs",
+        "2",
+        "--seed",
+        "1",
+        "--workers",
+        "0",
+    ]
     resume = doc_commands.shrink("devlearn run x --resume runs/a".split())
     assert "--steps" not in resume  # a resumed run keeps its own budget
     assert doc_commands.shrink(["devlearn", "eval", "--episodes", "100"])[-1] == "1"

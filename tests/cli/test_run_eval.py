@@ -35,7 +35,7 @@ def test_run_then_eval(cli, tmp_path, capsys):
     assert cli(["run", "tiny", "--steps", "64", "--out", str(out), *SMALL]) == 0
     printed = capsys.readouterr().out
     assert f"run directory: {out}" in printed
-    assert "finished: 64 environment steps, 4 iterations" in printed  # tests/cli/test_run_summary.py
+    assert "finished: 64 environment steps, 4 iterations" in printed  # see test_run_summary
     assert json.loads((out / "config.json").read_text())["num_envs"] == 2
 
     ckpt = out / "checkpoint_latest.pt"

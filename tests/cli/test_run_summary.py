@@ -37,7 +37,9 @@ def test_finished_run_prints_where_how_far_and_what_next(cli, tmp_path, capsys):
     assert "{" not in printed  # no JSON dump of the last iteration
     assert "finished: 64 environment steps, 4 iterations" in printed
     assert f"checkpoint  {out / 'checkpoint_latest.pt'}" in printed
-    assert f"logs        {out / 'metrics.jsonl'}, TensorBoard: tensorboard --logdir {out}" in printed
+    assert (
+        f"logs        {out / 'metrics.jsonl'}, TensorBoard: tensorboard --logdir {out}" in printed
+    )
     assert "metrics/close" in printed and "at the start (step 16)" in printed
     assert f"devlearn eval tiny --checkpoint {out / 'checkpoint_latest.pt'}" in printed
     assert f"devlearn curve {out}" in printed
@@ -57,7 +59,11 @@ def test_resuming_a_finished_run_says_so_and_writes_nothing(cli, tmp_path, capsy
 
 
 def test_headline_prefers_the_behaviour_metric_then_mean_reward():
-    rows = [{"mean_reward": None}, {"mean_reward": 1.0, "metrics/x": 2.0}, {"mean_reward": 3.0, "metrics/x": 5.0}]
+    rows = [
+        {"mean_reward": None},
+        {"mean_reward": 1.0, "metrics/x": 2.0},
+        {"mean_reward": 3.0, "metrics/x": 5.0},
+    ]
     assert headline(rows, "x") == ("metrics/x", 2.0, 5.0)
     assert headline(rows, "") == ("mean_reward", 1.0, 3.0)
     assert headline([], "x") == ("mean_reward", None, None)

@@ -77,7 +77,7 @@ def test_sequence_fields_convert():
 @pytest.mark.parametrize(
     "override, message",
     [
-        ("ppo.learnin_rate=1", "unknown config key 'ppo.learnin_rate'; did you mean 'ppo.learning_rate'?"),
+        ("ppo.learnin_rate=1", "key 'ppo.learnin_rate'; did you mean 'ppo.learning_rate'?"),
         ("learning_rate=1", "did you mean 'ppo.learning_rate'?"),
         ("behavior.stage_step=1", "did you mean 'behavior.stage_steps'?"),
         ("behavior.nope=1", "unknown config key 'behavior.nope'; behavior keys: behavior.target,"),
