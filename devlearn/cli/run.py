@@ -34,6 +34,9 @@ def add_parser(subparsers) -> list[str]:
     p.add_argument("--out", metavar="DIR", help="run directory (default runs/BEHAVIOR-TIME)")
     p.add_argument("--device", metavar="DEV", help="cpu or cuda (default cpu)")
     p.add_argument(
+        "--logger", choices=("tensorboard", "wandb"), help="also log to W&B (default tensorboard)"
+    )
+    p.add_argument(
         "--set",
         dest="overrides",
         action="append",
@@ -58,6 +61,7 @@ def run(args: argparse.Namespace, registry) -> int:
         "workers": args.workers,
         "seed": args.seed,
         "device": args.device,
+        "logger": args.logger,
     }
     if args.resume:
         if args.out:

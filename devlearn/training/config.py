@@ -76,6 +76,12 @@ class RunConfig:
     the update, so 2 can use a 2-core machine's idle core; but a core shared with any other
     busy program makes multi-threaded updates several times slower (docs/scaling.md), and
     results are repeatable only for the same value, so 1 is the default."""
+    logger: str = "tensorboard"
+    """Where metrics go besides metrics.jsonl: ``tensorboard``, or ``wandb`` (Weights & Biases
+    through rsl-rl's writer, which also writes TensorBoard; needs ``devlearn[wandb]``;
+    ``WANDB_MODE=offline`` keeps it local)."""
+    wandb_project: str = "devlearn"
+    """W&B project of the run (with ``logger=wandb``); the run is named after its directory."""
     ppo: PPOConfig = field(default_factory=PPOConfig)
     """PPO hyper-parameters."""
     behavior: Any = None

@@ -17,6 +17,7 @@ from devlearn.env import DevVecEnv
 from devlearn.errors import UsageError
 from devlearn.training.checkpoint import check_behavior, resume_checkpoint
 from devlearn.training.config import RunConfig, from_dict, to_dict, to_rsl_rl
+from devlearn.training.loggers import logger_config
 from devlearn.training.runner import DevRunner, init_distributed
 
 CONFIG_FILE = "config.json"
@@ -155,6 +156,7 @@ def train(
     try:
         env.cfg = cfg
         train_cfg = to_rsl_rl(cfg, behavior, list(env.observation_shapes))
+        train_cfg["logger"] = logger_config(cfg)
         runner = DevRunner(
             env,
             train_cfg,
