@@ -199,7 +199,7 @@ def apply_overrides(cfg: RunConfig, overrides: list[str] | dict[str, Any]) -> Ru
     """Apply ``["ppo.learning_rate=3e-4", ...]`` (or a dict of dotted keys) to ``cfg`` in place.
 
     Raises:
-        UsageError: An item without ``=``, an unknown key (the valid keys are listed) or a value
+        UsageError: An item without ``=``, an unknown key (the closest valid one is suggested) or a value
             that does not convert to the field's type.
     """
     if isinstance(overrides, dict):
