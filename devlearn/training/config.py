@@ -199,8 +199,8 @@ def apply_overrides(cfg: RunConfig, overrides: list[str] | dict[str, Any]) -> Ru
     """Apply ``["ppo.learning_rate=3e-4", ...]`` (or a dict of dotted keys) to ``cfg`` in place.
 
     Raises:
-        UsageError: An item without ``=``, an unknown key (the closest valid one is suggested) or a value
-            that does not convert to the field's type.
+        UsageError: An item without ``=``, an unknown key (the closest valid one is
+            suggested) or a value that does not convert to the field's type.
     """
     if isinstance(overrides, dict):
         items = list(overrides.items())
