@@ -6,6 +6,7 @@ actions; nothing here is a test and nothing is asserted.
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import platform
@@ -92,27 +93,35 @@ def bench_infant(steps: int = 2000, frames: int = 100) -> dict[str, float]:
     }
 
 
-def bench_behavior_env(behavior, steps: int) -> float:
-    """Single-process environment steps per second of one BehaviorEnv (random actions).
+def _without_user_warnings(function):
+    """Run ``function`` with UserWarnings silenced: a speed figure of an unprepared behaviour
+    (hand regard's uncalibrated detector) does not depend on what it would perceive."""
 
-    The behaviour is not prepared (hand regard's detector is uncalibrated); its warnings about
-    that are silenced here, as this measures speed, not what is learnt.
-    """
+    @functools.wraps(function)
+    def wrapper(*args, **kwargs):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)
+            return function(*args, **kwargs)
+
+    return wrapper
+
+
+@_without_user_warnings
+def bench_behavior_env(behavior, steps: int) -> float:
+    """Single-process environment steps per second of one BehaviorEnv (random actions)."""
     from devlearn.env import BehaviorEnv
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UserWarning)
-        env = BehaviorEnv(behavior, seed=0)
-        env.reset()
-        rng = np.random.default_rng(0)
-        actions = rng.uniform(-1, 1, (steps + 50, env.action_dim))
-        for a in actions[:50]:
-            env.step(a)
-        start = time.perf_counter()
-        for a in actions[50:]:
-            env.step(a)
-        rate = steps / (time.perf_counter() - start)
-        env.close()
+    env = BehaviorEnv(behavior, seed=0)
+    env.reset()
+    rng = np.random.default_rng(0)
+    actions = rng.uniform(-1, 1, (steps + 50, env.action_dim))
+    for a in actions[:50]:
+        env.step(a)
+    start = time.perf_counter()
+    for a in actions[50:]:
+        env.step(a)
+    rate = steps / (time.perf_counter() - start)
+    env.close()
     return rate
 
 
