@@ -74,7 +74,7 @@ def _run_guide_command(words: list[str], cwd: Path, env: dict) -> subprocess.Com
             pip.append("--no-build-isolation")
         except ImportError:
             pass
-        words = [*pip, words[3]]
+        words = [*pip, str(cwd / words[3])]  # a path, not a name on the index
     elif words[:3] == ["python", "-m", "pytest"]:
         words = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", *words[3:]]
     else:

@@ -77,3 +77,18 @@ def test_progress_bar_stops_at_its_total_and_draws_the_end_once(cli, tmp_path, c
     assert bars and "70.0/70.0" in bars[-1] and bars[-1].startswith("100%")
     assert not any("80.0" in line for line in bars)
     assert sum(line.startswith("100%") for line in bars) == 1
+
+
+def test_the_suggested_curve_works_before_any_episode_ended(tmp_path):
+    import argparse
+    import json
+
+    from devlearn.cli import curve
+
+    rows = [
+        {"step": 256 * (i + 1), "mean_step_reward": 0.1 * i, "mean_reward": None} for i in range(3)
+    ]
+    (tmp_path / "metrics.jsonl").write_text("".join(json.dumps(r) + "\n" for r in rows))
+    args = {"run_dirs": [tmp_path], "metric": None, "smooth": 3, "out": None, "vs": None}
+    assert curve.run(argparse.Namespace(**args), None) == 0  # plots mean_step_reward
+    assert (tmp_path / "learning_curve.png").exists()
