@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from typing import Any
 
 import numpy as np
@@ -30,7 +31,11 @@ def describe_behavior(behavior: Behavior, infant_factory=None) -> dict[str, Any]
         infant = infant_factory(behavior.scene, behavior.senses)
     try:
         infant.reset(np.random.default_rng(0), random_pose=False)
-        observations = behavior.observe(infant, behavior.facts(infant))
+        # Shapes only: warnings about what an unprepared behaviour would perceive or learn
+        # (hand regard's uncalibrated detector) do not change them, so they are not shown.
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)
+            observations = behavior.observe(infant, behavior.facts(infant))
         body = infant.describe()
     finally:
         infant.close()

@@ -19,9 +19,10 @@ class StepContext:
     Attributes:
         infant: The simulated infant after the step (read-only use: senses, contacts).
         observations: The behaviour's observations for this step, name -> array (unbatched).
-        facts: Behaviour-computed facts for this step (e.g. ``"touched"``: (68,) bool,
-            ``"hand_contacts"``: (2, 68) bool, ``"hand_count"``: int). Computed once per step by
-            :meth:`devlearn.Behavior.facts` and shared by all terms.
+        facts: Exactly what the behaviour's own :meth:`devlearn.Behavior.facts` returned for
+            this step (the core adds none), e.g. self-touch's ``"touched"``: (68,) bool,
+            ``"hand_contacts"``: (2, 68) bool, ``"hand_count"``: int. Computed once per step
+            and shared by observations, all terms and the evaluator.
         step: Index of this step inside the episode, starting at 0.
         last_step: True on the episode's final step (time-out); terms paying at episode end
             (e.g. balance) pay here.

@@ -5,7 +5,10 @@ Use :func:`check_behavior` in a plugin's tests::
     from devlearn.testing import check_behavior
 
     def test_conformance():
-        check_behavior(MyBehavior, steps=20)
+        check_behavior(MyBehavior)
+
+It raises :class:`ConformanceError` naming the first broken part of the contract (a term, an
+observation, an evaluator metric, an attribute that does not pickle).
 
 and :func:`registry_for` to build a plugin registry from classes, without installing anything.
 Fixtures ``crib_infant`` and ``sitting_infant`` (module-scoped) are available after
@@ -23,18 +26,32 @@ import numpy as np
 import torch
 
 from devlearn.behavior import Behavior, NetworkSpec
+from devlearn.conformance import (
+    CheckedEvaluator,
+    CheckedTerm,
+    ConformanceError,
+    check_number,
+    check_observations,
+    check_picklable,
+    check_summaries,
+    place_hand_on_body,
+)
+from devlearn.conformance import require as _require
 from devlearn.curriculum import Curriculum
 from devlearn.plugins import PluginRegistry, PluginSource
 from devlearn.rewards import IntrinsicReward
 
-
-class ConformanceError(AssertionError):
-    """A behaviour breaks the devlearn contract; the message says which part."""
-
-
-def _require(condition: bool, message: str) -> None:
-    if not condition:
-        raise ConformanceError(message)
+__all__ = [
+    "ConformanceError",
+    "check_behavior",
+    "check_behavior_class",
+    "check_curriculum",
+    "check_network",
+    "check_reward_terms",
+    "crib_infant",
+    "registry_for",
+    "sitting_infant",
+]
 
 
 def check_behavior_class(behavior_cls: type[Behavior]) -> None:
@@ -47,7 +64,7 @@ def check_behavior_class(behavior_cls: type[Behavior]) -> None:
     _require(dataclasses.is_dataclass(behavior_cls.config_class), "config_class: a dataclass")
     _require(bool(behavior_cls.__doc__), f"{behavior_cls.__name__} needs a docstring")
     config = behavior_cls.config_class()
-    pickle.loads(pickle.dumps(behavior_cls(config)))  # must travel to worker processes
+    check_picklable(behavior_cls(config), f"behavior '{name}'")  # travels to worker processes
 
 
 def check_reward_terms(terms: list[IntrinsicReward]) -> None:
@@ -57,8 +74,10 @@ def check_reward_terms(terms: list[IntrinsicReward]) -> None:
     for term in terms:
         _require(isinstance(term, IntrinsicReward), f"{term!r} is not an IntrinsicReward")
         _require(bool(type(term).__doc__), f"reward term '{term.name}' needs a docstring")
-        state = pickle.loads(pickle.dumps(term.state_dict()))
-        term.load_state_dict(state)
+        state = term.state_dict()
+        _require(isinstance(state, dict), f"reward term '{term.name}': state_dict() -> a dict")
+        check_picklable(state, f"reward term '{term.name}' state_dict()", "state")
+        term.load_state_dict(pickle.loads(pickle.dumps(state)))
 
 
 def check_curriculum(curriculum: Curriculum) -> None:
@@ -89,37 +108,115 @@ def check_network(spec: NetworkSpec, observations: dict[str, np.ndarray], groups
         )
 
 
-def check_behavior(behavior_cls: type[Behavior], steps: int = 20, seed: int = 0) -> dict[str, Any]:
-    """Run the full conformance check: class, terms, curriculum, network, and real env steps.
+def check_behavior(
+    behavior_cls: type[Behavior],
+    steps: int = 20,
+    seed: int = 0,
+    *,
+    episodes: int = 2,
+    episode_steps: int = 200,
+    contact_steps: int = 3,
+    config: Any | None = None,
+) -> dict[str, tuple[int, ...]]:
+    """Run the full conformance check: what training and ``devlearn eval`` will exercise.
 
-    Builds the behaviour's real environment, takes ``steps`` random actions and checks
-    observation shapes and dtypes stay fixed, rewards are finite, episode info is well formed.
+    In order: the class contract (name, scene, senses, documented config, picklable instance,
+    naming the attribute that is not); reward terms (unique names, docstrings, picklable state);
+    the curriculum's save/restore; then the behaviour's real environment:
 
+    1. ``steps`` random actions from the first stage's initial pose;
+    2. ``episodes`` episodes from random poses (cycling through the curriculum's stages, each
+       cut to ``episode_steps`` steps so it ends quickly), so episode ends run too;
+    3. ``contact_steps`` steps with a hand placed on the body (a scripted contact), so facts,
+       observations and terms that depend on contacts run.
+
+    On every step observations must keep their names and shapes and be finite float32 (or
+    uint8) arrays; every reward term must return a finite Python float (the message names the
+    term). A training and an evaluation evaluator (``evaluator(training=...)``) record every
+    step; their ``end_episode()`` metrics must be finite numbers and their ``summary()``
+    JSON-serialisable, and ``write_artifacts`` must return files that exist.
+
+    Args:
+        behavior_cls: The Behavior subclass.
+        steps: Random-action steps of phase 1.
+        seed: Seed of the environment and of the random actions.
+        episodes: Random-pose episodes of phase 2 (at least 1).
+        episode_steps: Length of each of those episodes (at most the infant's own).
+        contact_steps: Steps with a hand on the body in phase 3.
+        config: The behaviour's config (default ``config_class()``).
     Returns:
-        The first step's observations' shapes, name -> tuple.
+        The observations' shapes, name -> tuple.
+    Raises:
+        ConformanceError: The first broken part of the contract, by name.
     """
+    import tempfile
+    from pathlib import Path
+
     from devlearn.env import BehaviorEnv
 
     check_behavior_class(behavior_cls)
-    behavior = behavior_cls(behavior_cls.config_class())
+    behavior = behavior_cls(config if config is not None else behavior_cls.config_class())
     check_reward_terms(behavior.reward_terms())
-    check_curriculum(behavior.curriculum())
+    curriculum = behavior.curriculum()
+    check_curriculum(curriculum)
+    phase = ["after reset"]  # where the check is, for messages (CheckedTerm reads it)
     env = BehaviorEnv(behavior, seed=seed)
     try:
-        obs = env.reset()
-        shapes = {k: v.shape for k, v in obs.items()}
-        check_network(behavior.network(), obs, behavior.obs_groups(list(obs)))
+        env.terms = [CheckedTerm(term, phase) for term in env.terms]
+        checked = CheckedEvaluator(env.evaluator, behavior.evaluator(training=False), phase)
+        env.evaluator = checked
+        env.episode_steps = max(1, min(env.episode_steps, episode_steps))
+        first = env.reset()
+        shapes = check_observations(first, None, "after reset")
+        check_network(behavior.network(), first, behavior.obs_groups(list(shapes)))
         rng = np.random.default_rng(seed)
+
+        def step(action: np.ndarray, where: str) -> bool:
+            phase[0] = where
+            obs, reward, done, _, info = env.step(action)
+            check_number(reward, "the summed reward", where)
+            check_observations(obs, shapes, where)
+            return done
+
         for _ in range(steps):
-            action = rng.uniform(-1, 1, env.action_dim)
-            obs, reward, done, time_out, info = env.step(action)
-            _require(np.isfinite(reward), f"non-finite reward {reward}")
-            for key, value in obs.items():
-                _require(value.shape == shapes[key], f"observation '{key}' changed shape")
-                _require(np.all(np.isfinite(value)), f"observation '{key}' has NaN or inf")
+            step(rng.uniform(-1, 1, env.action_dim), "on random actions from the initial pose")
+        for i in range(max(1, episodes)):
+            stage = curriculum.stages[i % len(curriculum.stages)]
+            env.set_stage({**stage.options, "random_pose": True})
+            env.reset()
+            where = f"in random-pose episode {i + 1} (stage '{stage.name}')"
+            while not step(rng.uniform(-1, 1, env.action_dim), where):
+                pass
+        _require(checked.episodes >= 1, "no episode ended: the evaluator was never closed")
+        env.set_stage(behavior.eval_stage())
+        _scripted_contacts(env, rng, contact_steps, step)
+        check_summaries(checked)
+        with tempfile.TemporaryDirectory() as tmp:
+            paths = checked.evaluation.write_artifacts(Path(tmp))
+            _require(isinstance(paths, list), "write_artifacts() must return a list of paths")
+            missing = [str(p) for p in paths if not Path(p).exists()]
+            _require(not missing, f"write_artifacts() returned files that do not exist: {missing}")
     finally:
         env.close()
     return shapes
+
+
+def _scripted_contacts(env: Any, rng: np.random.Generator, count: int, step) -> None:
+    """Take ``count`` steps on which a hand touches the body (placed there before each step)."""
+    infant = env.infant
+    if count <= 0 or not hasattr(infant, "_qpos_index"):  # a fake infant: nothing to place
+        return
+    done = 0
+    for _ in range(20 * count):
+        if env.episode_step >= env.episode_steps - 1:
+            env.reset()  # keep the placed pose clear of an automatic reset
+        if not place_hand_on_body(infant, rng):
+            continue
+        step(np.zeros(env.action_dim), "on a step with a hand placed on the body")
+        done += bool(infant.hand_contacts().any())
+        if done >= count:
+            return
+    raise RuntimeError(f"devlearn.testing could not script a hand contact in {infant.scene}")
 
 
 def registry_for(*behaviors: type[Behavior], name: str = "test_plugin") -> PluginRegistry:

@@ -115,7 +115,7 @@ def run(args: argparse.Namespace, registry) -> int:
     default = (k for k in every if k not in ("step", "checkpoint_env_steps", "episodes"))
     if not evaluations:
         default = (k for k in every if k.startswith("metrics/"))
-    keys = args.metric or sorted(default)
+    keys = args.metric or sorted(default) or ["mean_step_reward"]  # before any episode ended
     unknown = [k for k in keys if k not in every]
     if unknown or not keys:
         raise UsageError(f"no such metric(s) {unknown}; valid: {', '.join(sorted(every))}")

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import json
 import signal
 from pathlib import Path
 
@@ -33,6 +32,9 @@ def add_parser(subparsers) -> list[str]:
     p.add_argument("--out", metavar="DIR", help="run directory (default runs/BEHAVIOR-TIME)")
     p.add_argument("--device", metavar="DEV", help="cpu or cuda (default cpu)")
     p.add_argument(
+        "--logger", choices=("tensorboard", "wandb"), help="also log to W&B (default tensorboard)"
+    )
+    p.add_argument(
         "--set",
         dest="overrides",
         action="append",
@@ -52,6 +54,7 @@ def add_parser(subparsers) -> list[str]:
 
 def run(args: argparse.Namespace, registry) -> int:
     """Build the config, train, print the run directory and a final summary."""
+    from devlearn.cli.summary import finished_message, run_summary
     from devlearn.training.config import apply_overrides, default_config
     from devlearn.training.train import load_run_config, train
 
@@ -62,6 +65,7 @@ def run(args: argparse.Namespace, registry) -> int:
         "workers": args.workers,
         "seed": args.seed,
         "device": args.device,
+        "logger": args.logger,
     }
     if args.resume:
         if args.out:
@@ -83,16 +87,13 @@ def run(args: argparse.Namespace, registry) -> int:
         from devlearn.training.train import default_run_dir
 
         cfg.out_dir = str(default_run_dir(cfg.behavior_name))
+    if args.resume and (message := finished_message(args.resume, cfg)):
+        print(message)
+        return 0
     print(f"run directory: {cfg.out_dir}", flush=True)
     with _interrupt_on_signals():
         result = train(cfg, registry, resume=args.resume, force=args.force)
-    summary = {
-        "run_dir": str(result.run_dir),
-        "env_steps": result.env_steps,
-        "iterations": result.iterations,
-    }
-    summary.update({k: v for k, v in result.last.items() if not k.startswith("loss/")})
-    print(json.dumps(summary, indent=2))
+    print(run_summary(result, cfg.behavior_name, behavior_cls.headline_metric, cfg.total_steps))
     return 0
 
 

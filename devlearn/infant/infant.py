@@ -202,7 +202,8 @@ class Infant:
         return self._cached("segmentation", lambda: self._eye_renderer().segmentation(self.data))
 
     def hand_visibility(self) -> np.ndarray:
-        """Returns (2 eyes, 2 hands) bool: some pixel of the hand is in that eye's image."""
+        """Returns (2 eyes, 2 hands) bool: some pixel of the hand is in that eye's image; rows
+        [left eye, right eye], columns [left hand, right hand]."""
         seg = self.eyes_segmentation()
         return self._cached(
             "visibility",
@@ -215,7 +216,8 @@ class Infant:
         )
 
     def hand_contacts(self) -> np.ndarray:
-        """Returns (2 hands, 68) bool: regions each hand (palm or fingers) touches this step."""
+        """Returns (2 hands, 68) bool: regions each hand (palm or fingers) touches this step;
+        row 0 is the left hand, row 1 the right."""
         return self._cached(
             "hand_contacts",
             lambda: contacts.hand_contacts(self.skin, self._sides(False), self.hand_of_body),

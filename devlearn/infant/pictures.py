@@ -51,6 +51,10 @@ def _sensor_view(infant, camera: mujoco.MjvCamera, size: tuple[int, int]) -> np.
         for pos, r, colour in zip(world, radius, rgba):
             geom = scene.geoms[scene.ngeom]
             mujoco.mjv_initGeom(geom, mujoco.mjtGeom.mjGEOM_SPHERE, [r, r, r], pos, eye, colour)
+            # mjv_initGeom leaves these as whatever the buffer held (a random ``transparent``
+            # changed the picture from run to run): set them so the picture is deterministic.
+            geom.category, geom.transparent = mujoco.mjtCatBit.mjCAT_DECOR, 0
+            geom.objtype, geom.objid, geom.segid, geom.camdist = 0, -1, -1, 0.0
             scene.ngeom += 1
         image = renderer.render()
         renderer.enable_depth_rendering()

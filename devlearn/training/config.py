@@ -76,6 +76,12 @@ class RunConfig:
     the update, so 2 can use a 2-core machine's idle core; but a core shared with any other
     busy program makes multi-threaded updates several times slower (docs/scaling.md), and
     results are repeatable only for the same value, so 1 is the default."""
+    logger: str = "tensorboard"
+    """Where metrics go besides metrics.jsonl: ``tensorboard``, or ``wandb`` (Weights & Biases
+    through rsl-rl's writer, which also writes TensorBoard; needs ``devlearn[wandb]``;
+    ``WANDB_MODE=offline`` keeps it local)."""
+    wandb_project: str = "devlearn"
+    """W&B project of the run (with ``logger=wandb``); the run is named after its directory."""
     ppo: PPOConfig = field(default_factory=PPOConfig)
     """PPO hyper-parameters."""
     behavior: Any = None
@@ -105,13 +111,12 @@ def convert(value: Any, kind: Any, key: str) -> Any:
         if value is None or (isinstance(value, str) and value.lower() in ("none", "null")):
             if type(None) in args:
                 return None
-        errors = []
         for arg in (a for a in args if a is not type(None)):
             try:
                 return convert(value, arg, key)
-            except (UsageError, ValueError, TypeError) as exc:
-                errors.append(str(exc))
-        raise UsageError(errors[0] if errors else f"bad value {value!r} for {key}")
+            except (UsageError, ValueError, TypeError):
+                pass
+        raise UsageError(f"bad value {value!r} for {key}: expected {_expected(kind)}")
     try:
         if kind is bool:
             if isinstance(value, str):
@@ -143,10 +148,30 @@ def convert(value: Any, kind: Any, key: str) -> Any:
             return tuple(items) if (origin or kind) is tuple else list(items)
         if isinstance(value, str) and (origin is dict or kind is dict):
             return json.loads(value)
-    except (ValueError, TypeError) as exc:
-        name = getattr(kind, "__name__", str(kind))
-        raise UsageError(f"bad value {value!r} for {key} (expected {name}): {exc}") from None
+    except (ValueError, TypeError):
+        raise UsageError(f"bad value {value!r} for {key}: expected {_expected(kind)}") from None
     return value
+
+
+def _expected(kind: Any) -> str:
+    """``int (a whole number, e.g. 16 or 2e6)``: a field's type, for error messages."""
+    from devlearn.training.config_help import type_name
+
+    origin = typing.get_origin(kind) or kind
+    examples = {
+        int: "a whole number, e.g. 16 or 2e6",
+        float: "a number, e.g. 3e-4",
+        bool: "true or false",
+        tuple: "comma-separated values or a JSON list",
+        list: "comma-separated values or a JSON list",
+        dict: "a JSON object",
+    }
+    if origin in (typing.Union, types.UnionType):
+        return " or ".join(_expected(a) for a in typing.get_args(kind))
+    if kind is type(None):
+        return "none"
+    example = examples.get(origin)
+    return f"{type_name(kind)} ({example})" if example else type_name(kind)
 
 
 def _hints(obj: Any) -> dict[str, Any]:
@@ -164,7 +189,9 @@ def set_value(cfg: RunConfig, key: str, value: Any) -> None:
         obj = getattr(obj, part, None) if dataclasses.is_dataclass(obj) else None
     names = {f.name for f in dataclasses.fields(obj)} if dataclasses.is_dataclass(obj) else set()
     if leaf not in names or dataclasses.is_dataclass(getattr(obj, leaf)):
-        raise UsageError(f"unknown config key '{key}'; valid keys: {', '.join(valid_keys(cfg))}")
+        from devlearn.training.config_help import unknown_key_message
+
+        raise UsageError(unknown_key_message(key, cfg))
     setattr(obj, leaf, convert(value, _hints(obj).get(leaf, Any), key))
 
 
@@ -172,8 +199,8 @@ def apply_overrides(cfg: RunConfig, overrides: list[str] | dict[str, Any]) -> Ru
     """Apply ``["ppo.learning_rate=3e-4", ...]`` (or a dict of dotted keys) to ``cfg`` in place.
 
     Raises:
-        UsageError: An item without ``=``, an unknown key (the valid keys are listed) or a value
-            that does not convert to the field's type.
+        UsageError: An item without ``=``, an unknown key (the closest valid one is
+            suggested) or a value that does not convert to the field's type.
     """
     if isinstance(overrides, dict):
         items = list(overrides.items())

@@ -257,7 +257,11 @@ class DevRunner(OnPolicyRunner):
         if headline is not None:
             postfix[self.headline_metric] = f"{headline:.3g}"
         bar.set_postfix(postfix, refresh=False)
-        bar.update(self.env_steps - bar.n)
+        total = getattr(bar, "total", None) or self.env_steps
+        if self.env_steps >= total:  # the last iteration: stop at the total; close() draws it once
+            bar.n = total
+        else:
+            bar.update(self.env_steps - bar.n)
 
     # --- checkpoints ----------------------------------------------------------------------
     def _snapshot(self) -> dict[str, Any]:

@@ -21,6 +21,7 @@ from devlearn.errors import UsageError
 from devlearn.training.checkpoint import check_behavior, remove_temporaries, resume_checkpoint
 from devlearn.training.checks import check_config, check_memory, check_out_dir, holds_run
 from devlearn.training.config import RunConfig, from_dict, to_dict, to_rsl_rl
+from devlearn.training.loggers import logger_config
 from devlearn.training.runner import DevRunner, init_distributed
 
 CONFIG_FILE = "config.json"
@@ -88,6 +89,17 @@ def resolve_workers(workers: int, num_envs: int, cpus: int | None = None) -> int
     return 0 if cpus < 2 or num_envs < 8 else min(cpus, num_envs // 4)
 
 
+def check_resumable(cfg: RunConfig, checkpoint: dict[str, Any], path: str | Path) -> None:
+    """Raise UsageError unless ``checkpoint`` (at ``path``) can continue under ``cfg``: same
+    behaviour, same number of environments per rank."""
+    check_behavior(checkpoint, path, cfg.behavior_name)
+    saved = checkpoint["env"]["ranks"][0]["envs"]
+    if len(saved) != cfg.num_envs:
+        raise UsageError(
+            f"checkpoint has {len(saved)} envs per rank; resume with --envs {len(saved)}"
+        )
+
+
 def _resolve_device(device: str, local_rank: int, world_size: int) -> str:
     if device == "cuda" and world_size > 1:
         return f"cuda:{local_rank}"
@@ -132,12 +144,7 @@ def train(
         run_dir = Path(resume)
         ckpt_path, checkpoint = resume_checkpoint(run_dir)
         cfg = cfg or load_run_config(run_dir, registry)
-        check_behavior(checkpoint, ckpt_path, cfg.behavior_name)
-        saved = checkpoint["env"]["ranks"][0]["envs"]
-        if len(saved) != cfg.num_envs:
-            raise UsageError(
-                f"checkpoint has {len(saved)} envs per rank; resume with --envs {len(saved)}"
-            )
+        check_resumable(cfg, checkpoint, ckpt_path)
     elif cfg is None:
         raise UsageError("train() needs a config or a run directory to resume")
     else:
@@ -208,6 +215,7 @@ def _build(cfg, registry, run_dir, checkpoint, infant_factory, progress, rank, w
     try:
         env.cfg = cfg
         train_cfg = to_rsl_rl(cfg, behavior, list(env.observation_shapes))
+        train_cfg["logger"] = logger_config(cfg)
         runner = DevRunner(
             env,
             train_cfg,

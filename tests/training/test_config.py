@@ -77,12 +77,18 @@ def test_sequence_fields_convert():
 @pytest.mark.parametrize(
     "override, message",
     [
-        ("ppo.lr=1", "unknown config key 'ppo.lr'; valid keys: "),
-        ("behavior.nope=1", "unknown config key 'behavior.nope'"),
-        ("ppo=1", "unknown config key 'ppo'"),
-        ("ppo.num_mini_batches=two", "bad value 'two' for ppo.num_mini_batches (expected int)"),
-        ("total_steps=1.5", "expected an integer"),
-        ("behavior.use_eyes=maybe", "expected true or false"),
+        ("ppo.learnin_rate=1", "key 'ppo.learnin_rate'; did you mean 'ppo.learning_rate'?"),
+        ("learning_rate=1", "did you mean 'ppo.learning_rate'?"),
+        ("behavior.stage_step=1", "did you mean 'behavior.stage_steps'?"),
+        ("behavior.nope=1", "unknown config key 'behavior.nope'; behavior keys: behavior.target,"),
+        ("ppo.clip=1", "did you mean 'ppo.clip_param'?"),
+        ("bogus=1", "unknown config key 'bogus' (`devlearn config tiny` lists all"),
+        ("ppo=1", "config key 'ppo' is a section; set one of its keys, e.g. ppo.learning_rate"),
+        ("ppo.num_mini_batches=two", "bad value 'two' for ppo.num_mini_batches: expected int ("),
+        ("num_envs=abc", "bad value 'abc' for num_envs: expected int (a whole number"),
+        ("total_steps=1.5", "for total_steps: expected int"),
+        ("ppo.desired_kl=abc", "expected float (a number, e.g. 3e-4) or none"),
+        ("behavior.use_eyes=maybe", "expected bool (true or false)"),
         ("seed", "override 'seed' must look like key=value"),
     ],
 )
@@ -91,8 +97,7 @@ def test_override_errors_are_clear(override, message):
     with pytest.raises(UsageError) as info:
         apply_overrides(cfg, [override])
     assert message in str(info.value)
-    if "valid keys" in message:
-        assert "ppo.learning_rate" in str(info.value) and "behavior.stage_steps" in str(info.value)
+    assert "could not convert" not in str(info.value) and len(str(info.value)) < 160
 
 
 def test_precedence_defaults_behaviour_cli_set():

@@ -1,0 +1,226 @@
+"""Runtime checks behind devlearn.testing.check_behavior: values, pickling, scripted contact."""
+
+from __future__ import annotations
+
+import json
+import math
+import numbers
+import pickle
+from typing import Any
+
+import mujoco
+import numpy as np
+
+OBS_DTYPES = (np.float32, np.uint8)
+"""Observation dtypes the networks accept (float32 features, uint8 images)."""
+
+
+class ConformanceError(AssertionError):
+    """A behaviour breaks the devlearn contract; the message says which part."""
+
+
+def require(condition: bool, message: str) -> None:
+    """Raise :class:`ConformanceError` with ``message`` unless ``condition``."""
+    if not condition:
+        raise ConformanceError(message)
+
+
+def pickle_problem(obj: Any, label: str, depth: int = 0) -> str | None:
+    """Return why ``obj`` cannot be pickled, naming the innermost attribute at fault, or None.
+
+    Args:
+        obj: The object to pickle.
+        label: How to name it in the message (``behavior 'x'``, ``self.cache``...).
+        depth: Recursion depth (attributes of attributes, up to 4 levels).
+    """
+    try:
+        pickle.dumps(obj)
+        return None
+    except Exception as exc:  # noqa: BLE001 - any pickling failure is reported by name
+        error = f"{type(exc).__name__}: {exc}"
+    children: list[tuple[str, Any]] = []
+    if isinstance(obj, dict):
+        children = [(f"{label}[{k!r}]", v) for k, v in obj.items()]
+    elif isinstance(obj, (list, tuple, set)):
+        children = [(f"{label}[{i}]", v) for i, v in enumerate(obj)]
+    elif hasattr(obj, "__dict__") and not callable(obj):
+        children = [(f"{label}.{k}", v) for k, v in vars(obj).items()]
+    if depth < 4:
+        for child_label, child in children:
+            found = pickle_problem(child, child_label, depth + 1)
+            if found:
+                return found
+    hint = ""
+    if "attribute lookup" in error or "<locals>" in error:
+        hint = " (define the class at module level, where pickle can import it)"
+    return f"{label} (a {type(obj).__module__}.{type(obj).__qualname__}): {error}{hint}"
+
+
+def check_picklable(obj: Any, what: str, label: str = "self") -> None:
+    """Raise ConformanceError naming the attribute that stops ``obj`` from pickling."""
+    problem = pickle_problem(obj, label)
+    require(
+        problem is None, f"{what} cannot be pickled (it is sent to worker processes): {problem}"
+    )
+
+
+def check_observations(
+    obs: Any, shapes: dict[str, tuple] | None, where: str
+) -> dict[str, tuple[int, ...]]:
+    """Check one step's observations: a dict of fixed-shape, finite float32/uint8 arrays.
+
+    Args:
+        obs: What ``Behavior.observe`` returned.
+        shapes: The first step's shapes (None on the first step: they are recorded).
+        where: Which phase of the check this is, for messages.
+    Returns:
+        Name -> shape.
+    """
+    require(isinstance(obs, dict), f"observe() must return a dict, got {type(obs).__name__}")
+    if shapes is not None:
+        require(
+            set(obs) == set(shapes),
+            f"observation names changed {where}: {sorted(shapes)} -> {sorted(obs)}",
+        )
+    out = {}
+    for key, value in obs.items():
+        require(
+            isinstance(value, np.ndarray),
+            f"observation '{key}' is a {type(value).__name__}, not a numpy array {where}",
+        )
+        require(
+            value.dtype in OBS_DTYPES,
+            f"observation '{key}' has dtype {value.dtype}; use float32 (or uint8 images) {where}",
+        )
+        if shapes is not None:
+            require(
+                value.shape == shapes[key],
+                f"observation '{key}' changed shape from {shapes[key]} to {value.shape} {where}",
+            )
+        require(bool(np.all(np.isfinite(value))), f"observation '{key}' has NaN or inf {where}")
+        out[key] = tuple(value.shape)
+    return out
+
+
+def check_number(value: Any, what: str, where: str = "") -> float:
+    """Return ``value`` as a float if it is a finite real number (not a bool); else raise.
+
+    Args:
+        value: What a term or an evaluator returned.
+        what: Who returned it (``reward term 'x'``), for the message.
+        where: When (``on a step with a hand placed on the body``), for the message.
+    """
+    is_number = isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
+    finite = is_number and math.isfinite(float(value))
+    if not finite:
+        shown = " ".join(repr(value).split())[:60]
+        when = f" {where}" if where else ""
+        raise ConformanceError(
+            f"{what} returned {shown} (a {type(value).__name__}){when}; "
+            "it must return a finite Python float"
+        )
+    return float(value)
+
+
+def json_problem(value: Any, label: str) -> str | None:
+    """Return the first part of ``value`` that ``json.dumps`` rejects (with its path), or None."""
+    try:
+        json.dumps(value, allow_nan=True)
+        return None
+    except (TypeError, ValueError):
+        pass
+    if isinstance(value, dict):
+        for key, item in value.items():
+            if not isinstance(key, (str, int, float, bool)) and key is not None:
+                return f"{label} has a key {key!r} of type {type(key).__name__}"
+            found = json_problem(item, f"{label}[{key!r}]")
+            if found:
+                return found
+    elif isinstance(value, (list, tuple)):
+        for i, item in enumerate(value):
+            found = json_problem(item, f"{label}[{i}]")
+            if found:
+                return found
+    return f"{label} is a {type(value).__module__}.{type(value).__qualname__}"
+
+
+class CheckedTerm:
+    """A reward term whose every value is checked (finite Python float), naming the term."""
+
+    def __init__(self, term: Any, phase: list[str]) -> None:
+        self.term = term
+        self.phase = phase
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.term, name)
+
+    def __call__(self, ctx: Any) -> float:
+        value = self.term(ctx)
+        return check_number(value, f"reward term '{self.term.name}'", self.phase[0])
+
+
+class CheckedEvaluator:
+    """Feeds a training and an evaluation evaluator the same steps; checks what they return."""
+
+    def __init__(self, training: Any, evaluation: Any, phase: list[str]) -> None:
+        self.training = training
+        self.evaluation = evaluation
+        self.phase = phase
+        self.episodes = 0
+
+    def record(self, ctx: Any) -> None:
+        self.training.record(ctx)
+        self.evaluation.record(ctx)
+
+    def end_episode(self) -> dict[str, float]:
+        self.episodes += 1
+        out = {}
+        for label, evaluator in (("training", self.training), ("evaluation", self.evaluation)):
+            metrics = evaluator.end_episode()
+            what = f"{label} evaluator's end_episode()"
+            require(isinstance(metrics, dict), f"{what} must return a dict, got {metrics!r}")
+            for key, value in metrics.items():
+                require(isinstance(key, str), f"{what} has a non-string key {key!r}")
+                value = check_number(value, f"{what} metric '{key}'", self.phase[0])
+                if label == "training":
+                    out[key] = value
+        return out
+
+    def summary(self) -> dict[str, Any]:
+        return self.training.summary()
+
+
+def check_summaries(checked: CheckedEvaluator) -> dict[str, Any]:
+    """Check both evaluators' ``summary()`` is a JSON-serialisable dict; return the eval one."""
+    result: dict[str, Any] = {}
+    for label, evaluator in (("training", checked.training), ("evaluation", checked.evaluation)):
+        summary = evaluator.summary()
+        what = f"{label} evaluator's summary()"
+        require(isinstance(summary, dict), f"{what} must return a dict, got {type(summary)}")
+        problem = json_problem(summary, "summary()")
+        require(problem is None, f"{what} is not JSON-serialisable: {problem}")
+        result = summary
+    return result
+
+
+def place_hand_on_body(infant: Any, rng: np.random.Generator, tries: int = 200) -> bool:
+    """Put the infant in a random pose where a hand touches its body (a scripted contact).
+
+    Joint angles are drawn uniformly within their ranges until a hand (palm or fingers) is in
+    contact with a body-map region and nothing penetrates deeper than 1 cm (so the next physics
+    step does not fling the limbs apart).
+
+    Returns:
+        True if such a pose was found (the infant is left in it), else False.
+    """
+    index, ranges = infant._qpos_index, infant._ranges
+    for _ in range(tries):
+        infant.data.qpos[index] = rng.uniform(ranges[:, 0], ranges[:, 1])
+        infant.data.qvel[:] = 0.0
+        mujoco.mj_forward(infant.model, infant.data)
+        infant._cache.clear()
+        ncon = infant.data.ncon
+        depth = float(-infant.data.contact.dist[:ncon].min()) if ncon else 0.0
+        if depth < 0.01 and infant.hand_contacts().any():
+            return True
+    return False

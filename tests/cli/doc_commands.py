@@ -1,0 +1,42 @@
+"""Commands from the docs' bash blocks, shrunk to tiny budgets so tests can run them."""
+
+from __future__ import annotations
+
+import re
+import shlex
+import sys
+
+TINY = {"--steps": "256", "--envs": "2", "--episodes": "1", "--workers": "0"}
+"""Option -> the small value a test substitutes (added to ``devlearn run`` when missing)."""
+
+
+def blocks(markdown: str, language: str) -> list[str]:
+    """The bodies of the ```language fenced blocks, in order."""
+    return re.findall(rf"^```{language}\n(.*?)^```", markdown, flags=re.S | re.M)
+
+
+def commands(block: str) -> list[list[str]]:
+    """A bash block's commands as argument lists (comments dropped, ``&&`` chains split)."""
+    out: list[list[str]] = []
+    for line in block.replace("\\\n", " ").splitlines():
+        words = shlex.split(line, comments=True)
+        while words:
+            cut = words.index("&&") if "&&" in words else len(words)
+            if words[:cut]:
+                out.append(words[:cut])
+            words = words[cut + 1 :]
+    return out
+
+
+def shrink(words: list[str]) -> list[str]:
+    """``devlearn run/eval/...`` with :data:`TINY` budgets; other commands unchanged."""
+    if not words or words[0].rsplit("/", 1)[-1] != "devlearn":
+        return list(words)
+    words = [sys.executable, "-m", "devlearn.cli", *words[1:]]
+    for option, value in TINY.items():
+        if option in words:
+            words[words.index(option) + 1] = value
+        elif option in ("--steps", "--envs", "--workers") and "run" in words[3:4]:
+            if option != "--steps" or "--resume" not in words:
+                words += [option, value]
+    return words

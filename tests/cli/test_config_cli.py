@@ -1,0 +1,80 @@
+"""``devlearn config BEHAVIOR``: every key with type, default and docstring, before any run."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from devlearn.cli import main
+from devlearn.training.config import RunConfig, valid_keys
+from devlearn.training.config_help import describe_keys, field_docs, suggest_key
+
+
+def config_json(capsys, *args: str) -> list[dict]:
+    assert main(["config", *args, "--json"]) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+def test_json_lists_run_ppo_and_behavior_keys_with_docs(capsys):
+    rows = {r["key"]: r for r in config_json(capsys, "self_touch")}
+    assert rows["ppo.learning_rate"]["type"] == "float"
+    assert rows["ppo.desired_kl"]["type"] == "float | None"
+    assert rows["num_envs"] == {**rows["num_envs"], "type": "int", "default": 16, "set_by": "core"}
+    assert rows["behavior.fixed_pose_steps"]["type"] == "int"
+    assert "stage 1" in rows["behavior.fixed_pose_steps"]["doc"]
+    assert rows["behavior.milestones"]["default"] == [5, 10, 15, 20, 25, 30]
+    assert all(r["doc"] for r in rows.values()), [k for k, r in rows.items() if not r["doc"]]
+    from devlearn_self_touch import SelfTouch  # every key `run --set` accepts is listed
+
+    cfg = RunConfig(behavior_name="self_touch", behavior=SelfTouch.config_class())
+    assert set(rows) == set(valid_keys(cfg))
+
+
+def test_behavior_train_defaults_are_marked(capsys):
+    rows = {r["key"]: r for r in config_json(capsys, "hand_regard")}
+    assert rows["total_steps"]["set_by"] == "behavior"
+    assert rows["total_steps"]["default"] != RunConfig().total_steps
+
+
+def test_overrides_are_shown_and_checked(capsys):
+    rows = {r["key"]: r for r in config_json(capsys, "self_touch", "--set", "ppo.gamma=0.9")}
+    assert rows["ppo.gamma"]["default"] == 0.9 and rows["ppo.gamma"]["set_by"] == "override"
+    assert main(["config", "self_touch", "--set", "ppo.gama=0.9"]) == 2
+    assert "did you mean 'ppo.gamma'?" in capsys.readouterr().err
+
+
+def test_table_groups_sections(capsys):
+    assert main(["config", "self_touch"]) == 0
+    out = capsys.readouterr().out
+    assert "[run]" in out and "[ppo]" in out and "[behavior]" in out
+    assert "  ppo.clip_param: float = 0.2" in out
+
+
+@pytest.mark.parametrize(
+    "typo, key",
+    [
+        ("ppo.lr", "ppo.learning_rate"),
+        ("ppo.clip", "ppo.clip_param"),
+        ("seeds", "seed"),
+        ("stepz", None),
+        ("behavior.fixed_steps", "behavior.fixed_pose_steps"),
+    ],
+)
+def test_suggestions(typo, key):
+    keys = [
+        "seed",
+        "total_steps",
+        "ppo.learning_rate",
+        "ppo.lam",
+        "ppo.clip_param",
+        "behavior.fixed_pose_steps",
+        "behavior.random_pose_steps",
+    ]
+    assert suggest_key(typo, keys) == key
+
+
+def test_field_docs_reads_the_string_under_each_field():
+    docs = field_docs(RunConfig)
+    assert docs["seed"].startswith("Seed of torch") and set(docs) >= {"ppo", "behavior"}
+    assert describe_keys(RunConfig(behavior_name="x"))[0]["key"] == "behavior_name"

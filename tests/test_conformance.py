@@ -1,0 +1,271 @@
+"""devlearn.testing.check_behavior reports each runtime fault by name (on the real infant)."""
+
+from __future__ import annotations
+
+import threading
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pytest
+
+import devlearn
+from devlearn.testing import ConformanceError, check_behavior
+
+# The faulty behaviours' episodes are short so each check takes well under a second.
+FAST = {"steps": 5, "episodes": 1, "episode_steps": 30, "contact_steps": 2}
+
+
+@dataclass
+class ProbeConfig:
+    """Options of the probe behaviour."""
+
+    scale: float = 1.0
+    """Unused; a config needs a field."""
+
+
+class Touching(devlearn.IntrinsicReward):
+    """1.0 on steps where a hand touches the body (fact ``contact``)."""
+
+    name = "touching"
+
+    def __call__(self, ctx):
+        return 1.0 if ctx.facts["contact"] else 0.0
+
+
+class CountEvaluator(devlearn.Evaluator):
+    """Counts contact steps."""
+
+    def __init__(self) -> None:
+        self.contacts = 0
+        self.episodes = 0
+
+    def record(self, ctx) -> None:
+        self.contacts += int(ctx.facts["contact"])
+
+    def end_episode(self) -> dict[str, float]:
+        self.episodes += 1
+        return {"contact_steps": float(self.contacts)}
+
+    def summary(self) -> dict[str, Any]:
+        return {"episodes": self.episodes, "contacts": self.contacts}
+
+
+class Probe(devlearn.Behavior):
+    """A correct crib behaviour; the tests below break one part of it at a time."""
+
+    name = "probe"
+    scene = "crib"
+    senses = ("proprioception",)
+    config_class = ProbeConfig
+
+    def facts(self, infant):
+        return {"contact": bool(infant.hand_contacts().any())}
+
+    def observe(self, infant, facts):
+        return {"proprioception": infant.proprioception().astype(np.float32)}
+
+    def network(self):
+        return devlearn.NetworkSpec({"proprioception": devlearn.MLPEncoder((16,))}, (16,), (16,))
+
+    def reward_terms(self):
+        return [Touching()]
+
+    def evaluator(self, training):
+        return CountEvaluator()
+
+
+# Each broken behaviour is a module-level class (so it pickles, as a plugin's would), named after
+# the fault it carries.
+
+
+class Broken(devlearn.IntrinsicReward):
+    """Returns ``bad`` on steps with a hand contact (or always, with ``always``)."""
+
+    name = "broken_term"
+
+    def __init__(self, bad: Any, always: bool = False) -> None:
+        super().__init__()
+        self.bad, self.always = bad, always
+
+    def __call__(self, ctx):
+        return self.bad if (self.always or ctx.facts["contact"]) else 0.0
+
+
+class NanOnContact(Probe):
+    """Its second term is NaN only on contact steps."""
+
+    def reward_terms(self):
+        return [Touching(), Broken(float("nan"))]
+
+
+BAD_VALUES = {"array": np.ones((2, 2)), "none": None, "text": "1.0", "bool": True}
+
+
+@dataclass
+class BadValueConfig:
+    """Which bad value the term returns."""
+
+    kind: str = "array"
+    """A key of BAD_VALUES."""
+
+
+class BadTermValue(Probe):
+    """Its second term returns a non-float (``config.kind``) on every step."""
+
+    config_class = BadValueConfig
+
+    def reward_terms(self):
+        return [Touching(), Broken(BAD_VALUES[self.config.kind], always=True)]
+
+
+class ContactShapedObservation(Probe):
+    """Observation ``x`` has 4 entries on contact steps, 3 otherwise."""
+
+    def observe(self, infant, facts):
+        obs = super().observe(infant, facts)
+        return {**obs, "x": np.zeros(4 if facts["contact"] else 3, np.float32)}
+
+    def network(self):
+        encoders = {"proprioception": devlearn.MLPEncoder((16,)), "x": devlearn.MLPEncoder((4,))}
+        return devlearn.NetworkSpec(encoders, (16,), (16,))
+
+
+@dataclass
+class DtypeConfig:
+    """The dtype of the observation."""
+
+    dtype: str = "float64"
+    """A numpy dtype name."""
+
+
+class WrongDtype(Probe):
+    """Its observation has dtype ``config.dtype``."""
+
+    config_class = DtypeConfig
+
+    def observe(self, infant, facts):
+        return {"proprioception": infant.proprioception().astype(self.config.dtype)}
+
+
+class ArraySummary(CountEvaluator):
+    """Its summary holds a numpy array."""
+
+    def summary(self):
+        return {"episodes": self.episodes, "per_region": np.zeros(68)}
+
+
+class ArraySummaryBehavior(Probe):
+    """Its evaluator's summary() is not JSON-serialisable."""
+
+    def evaluator(self, training):
+        return ArraySummary()
+
+
+class TextMetric(CountEvaluator):
+    """end_episode returns a string."""
+
+    def end_episode(self):
+        return {"reached": "yes"}
+
+
+class TextMetricBehavior(Probe):
+    """Its evaluator's episode metric is a string."""
+
+    def evaluator(self, training):
+        return TextMetric()
+
+
+class HoldsALock(Probe):
+    """Keeps a lock (unpicklable) in a dict attribute."""
+
+    def __init__(self, config=None):
+        super().__init__(config)
+        self.cache = {"lock": threading.Lock()}
+
+
+class LambdaState(Touching):
+    """Keeps a lambda in its state."""
+
+    def state_dict(self):
+        return {"fn": lambda x: x}
+
+
+class UnpicklableTermState(Probe):
+    """Its term's state_dict() holds a lambda."""
+
+    def reward_terms(self):
+        return [LambdaState()]
+
+
+class Recording(Touching):
+    """Counts the steps it sees, and those with a contact (class-level, for the test)."""
+
+    steps = 0
+    contact_steps = 0
+
+    def __call__(self, ctx):
+        Recording.steps += 1
+        Recording.contact_steps += int(ctx.facts["contact"])
+        return super().__call__(ctx)
+
+
+class RecordingProbe(Probe):
+    """A correct behaviour whose term records what it saw."""
+
+    def reward_terms(self):
+        return [Recording()]
+
+
+def test_a_correct_behavior_passes_and_reaches_contacts():
+    shapes = check_behavior(RecordingProbe, **FAST)
+    assert shapes == {"proprioception": (180,)}
+    assert Recording.contact_steps >= FAST["contact_steps"]  # the scripted contact ran
+    assert Recording.steps >= FAST["steps"] + FAST["episode_steps"]
+
+
+def test_nan_only_on_contact_names_the_term():
+    with pytest.raises(ConformanceError, match=r"reward term 'broken_term'.*nan.*hand placed"):
+        check_behavior(NanOnContact, **FAST)
+
+
+@pytest.mark.parametrize(
+    "kind, shown", [("array", "ndarray"), ("none", "NoneType"), ("text", "str"), ("bool", "bool")]
+)
+def test_non_float_term_values_name_the_term(kind, shown):
+    with pytest.raises(ConformanceError, match=rf"reward term 'broken_term'.*\(a {shown}\)"):
+        check_behavior(BadTermValue, config=BadValueConfig(kind), **FAST)
+
+
+def test_observation_shape_depending_on_contacts_names_the_observation():
+    with pytest.raises(
+        ConformanceError, match=r"observation 'x' changed shape from \(3,\) to \(4,\)"
+    ):
+        check_behavior(ContactShapedObservation, **FAST)
+
+
+@pytest.mark.parametrize("dtype", ["float64", "bool"])
+def test_observation_dtype_names_the_observation(dtype):
+    with pytest.raises(ConformanceError, match=rf"observation 'proprioception' has dtype {dtype}"):
+        check_behavior(WrongDtype, config=DtypeConfig(dtype), **FAST)
+
+
+def test_summary_that_is_not_json_names_the_key():
+    with pytest.raises(ConformanceError, match=r"summary\(\) is not JSON.*'per_region'.*ndarray"):
+        check_behavior(ArraySummaryBehavior, **FAST)
+
+
+def test_bad_episode_metric_names_the_metric():
+    with pytest.raises(ConformanceError, match=r"metric 'reached'"):
+        check_behavior(TextMetricBehavior, **FAST)
+
+
+def test_unpicklable_behavior_names_the_attribute():
+    match = r"behavior 'probe' cannot be pickled.*self\.cache\['lock'\]"
+    with pytest.raises(ConformanceError, match=match):
+        check_behavior(HoldsALock, **FAST)
+
+
+def test_unpicklable_term_state_names_the_term():
+    with pytest.raises(ConformanceError, match=r"reward term 'touching' state_dict\(\).*\['fn'\]"):
+        check_behavior(UnpicklableTermState, **FAST)
