@@ -29,7 +29,9 @@ def describe_behavior(behavior: Behavior, infant_factory=None) -> dict[str, Any]
     else:
         infant = infant_factory(behavior.scene, behavior.senses)
     try:
-        infant.reset(np.random.default_rng(0), random_pose=False)
+        rng = np.random.default_rng(0)
+        infant.reset(rng, random_pose=False)
+        behavior.on_episode_start(infant, rng)
         observations = behavior.observe(infant, behavior.facts(infant))
         body = infant.describe()
     finally:

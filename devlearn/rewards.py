@@ -67,3 +67,72 @@ class IntrinsicReward(ABC):
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
         """Restore what :meth:`state_dict` returned."""
+
+
+@dataclass
+class BatchContext:
+    """What a batched reward term sees after one control step of a worker's environments.
+
+    Attributes:
+        contexts: One :class:`StepContext` per environment of the batch, in batch order (the
+            same objects the per-environment terms see).
+    """
+
+    contexts: list[StepContext]
+
+    def __len__(self) -> int:
+        return len(self.contexts)
+
+    def stack(self, fact: str, dtype: Any = None) -> np.ndarray:
+        """A fact of every environment stacked, (num_envs, *fact_shape)."""
+        return np.stack([np.asarray(c.facts[fact], dtype=dtype) for c in self.contexts])
+
+    @property
+    def last_step(self) -> np.ndarray:
+        """(num_envs,) bool: the environment's episode ends on this step."""
+        return np.fromiter((c.last_step for c in self.contexts), bool, len(self.contexts))
+
+    @property
+    def step(self) -> np.ndarray:
+        """(num_envs,) int64: each environment's step index inside its episode."""
+        return np.fromiter((c.step for c in self.contexts), np.int64, len(self.contexts))
+
+
+class BatchedIntrinsicReward(ABC):
+    """A reward term computed once per step for all environments of a worker, as arrays.
+
+    The batched form of :class:`IntrinsicReward`, for terms whose per-step Python cost matters:
+    a worker holds one instance for its ``num_envs`` environments, keeps every environment's
+    memory in arrays with a leading ``num_envs`` axis (allocated by :meth:`bind`), and
+    :meth:`__call__` returns one unweighted value per environment. Logging, weights and
+    checkpoints are the same as for per-environment terms: ``state_dict(env)`` returns what a
+    per-environment term would, so checkpoints do not depend on how the envs were split.
+
+    Subclasses set ``name`` and implement :meth:`bind`, :meth:`__call__` and, when stateful,
+    :meth:`reset`, :meth:`state_dict` and :meth:`load_state_dict`.
+    """
+
+    name: str = "reward"
+    """Name used in logs (``reward/<name>``) and config."""
+
+    def __init__(self, weight: float = 1.0) -> None:
+        self.weight = float(weight)
+        self.num_envs = 0
+
+    def bind(self, num_envs: int) -> None:
+        """Allocate per-environment memory for ``num_envs`` environments (called before use)."""
+        self.num_envs = int(num_envs)
+
+    @abstractmethod
+    def __call__(self, batch: BatchContext) -> np.ndarray:
+        """Return this term's unweighted rewards for one step, (num_envs,) float64."""
+
+    def reset(self, env: int) -> None:
+        """Environment ``env`` starts a new episode: forget its per-episode memory."""
+
+    def state_dict(self, env: int) -> dict[str, Any]:
+        """Return environment ``env``'s resumable state (picklable, numpy allowed)."""
+        return {}
+
+    def load_state_dict(self, env: int, state: dict[str, Any]) -> None:
+        """Restore environment ``env``'s state from what :meth:`state_dict` returned."""
