@@ -79,13 +79,20 @@ class BatchContext:
     """
 
     contexts: list[StepContext]
+    _stacks: dict = field(default_factory=dict, repr=False)
 
     def __len__(self) -> int:
         return len(self.contexts)
 
     def stack(self, fact: str, dtype: Any = None) -> np.ndarray:
-        """A fact of every environment stacked, (num_envs, *fact_shape)."""
-        return np.stack([np.asarray(c.facts[fact], dtype=dtype) for c in self.contexts])
+        """A fact of every environment stacked, (num_envs, *fact_shape); computed once per
+        step and shared by the terms (treat it as read-only)."""
+        key = (fact, None if dtype is None else np.dtype(dtype))
+        if key not in self._stacks:
+            self._stacks[key] = np.stack(
+                [np.asarray(c.facts[fact], dtype=dtype) for c in self.contexts]
+            )
+        return self._stacks[key]
 
     @property
     def last_step(self) -> np.ndarray:

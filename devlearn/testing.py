@@ -25,7 +25,7 @@ import torch
 from devlearn.behavior import Behavior, NetworkSpec
 from devlearn.curriculum import Curriculum
 from devlearn.plugins import PluginRegistry, PluginSource
-from devlearn.rewards import IntrinsicReward
+from devlearn.rewards import BatchedIntrinsicReward, IntrinsicReward
 
 
 class ConformanceError(AssertionError):
@@ -50,15 +50,22 @@ def check_behavior_class(behavior_cls: type[Behavior]) -> None:
     pickle.loads(pickle.dumps(behavior_cls(config)))  # must travel to worker processes
 
 
-def check_reward_terms(terms: list[IntrinsicReward]) -> None:
+def check_reward_terms(terms: list[IntrinsicReward | BatchedIntrinsicReward]) -> None:
     """Check reward terms: unique names, a docstring each, picklable state."""
     names = [t.name for t in terms]
     _require(len(names) == len(set(names)), f"reward term names must be unique: {names}")
     for term in terms:
-        _require(isinstance(term, IntrinsicReward), f"{term!r} is not an IntrinsicReward")
+        batched = isinstance(term, BatchedIntrinsicReward)
+        _require(
+            batched or isinstance(term, IntrinsicReward),
+            f"{term!r} is not an IntrinsicReward or BatchedIntrinsicReward",
+        )
         _require(bool(type(term).__doc__), f"reward term '{term.name}' needs a docstring")
-        state = pickle.loads(pickle.dumps(term.state_dict()))
-        term.load_state_dict(state)
+        if batched:
+            term.bind(1)
+            term.load_state_dict(0, pickle.loads(pickle.dumps(term.state_dict(0))))
+        else:
+            term.load_state_dict(pickle.loads(pickle.dumps(term.state_dict())))
 
 
 def check_curriculum(curriculum: Curriculum) -> None:
