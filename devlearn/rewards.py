@@ -89,9 +89,11 @@ class BatchContext:
         step and shared by the terms (treat it as read-only)."""
         key = (fact, None if dtype is None else np.dtype(dtype))
         if key not in self._stacks:
-            self._stacks[key] = np.stack(
-                [np.asarray(c.facts[fact], dtype=dtype) for c in self.contexts]
-            )
+            if len(self.contexts) == 1:  # one env (a lone BehaviorEnv): a view, no copy
+                stacked = np.asarray(self.contexts[0].facts[fact], dtype=dtype)[None]
+            else:
+                stacked = np.array([np.asarray(c.facts[fact], dtype=dtype) for c in self.contexts])
+            self._stacks[key] = stacked
         return self._stacks[key]
 
     @property

@@ -4,7 +4,9 @@ Each class computes, for every environment at once, exactly the number (bit for 
 per-environment twin in :mod:`devlearn_self_touch.rewards` computes, and saves the same
 per-environment state; ``plugins/self_touch/tests/test_batched_rewards.py`` checks both.
 Where a per-environment term sums floats in a Python loop, the batched one sums them in the
-same order (``np.cumsum`` is sequential), and f_decay is tabulated with the same ``math.exp``.
+same order (a loop over the few touched pairs), and f_decay is tabulated with the same
+``math.exp``. The arrays are tiny, so the terms keep numpy calls few and return early when
+nothing was touched (most steps).
 """
 
 from __future__ import annotations
@@ -54,17 +56,21 @@ class BatchedTouchNovelty(BatchedIntrinsicReward):
         return self._repeat.take(count)
 
     def __call__(self, batch: BatchContext) -> np.ndarray:
-        touched = batch.stack("touched", bool)  # (E, 68)
+        rows, cols = batch.stack("touched", bool).nonzero()  # row-major: regions ascending
+        if len(rows) == 0:
+            return np.zeros(len(batch))
+        count = self.count[rows, cols]
         pay = np.where(
-            self.ever,
-            np.where(self.count == 0, self.first_in_episode, self._repeat_pay(self.count)),
+            self.ever[rows, cols],
+            np.where(count == 0, self.first_in_episode, self._repeat_pay(count)),
             self.first_ever,
         )
-        pay[~touched] = 0.0
-        reward = np.cumsum(pay, axis=1)[:, -1]  # left to right, as the per-env loop adds
-        self.ever |= touched
-        self.count += touched
-        return reward
+        reward = [0.0] * len(batch)
+        for row, value in zip(rows.tolist(), pay.tolist()):  # the per-env loop's order of sums
+            reward[row] += value
+        self.ever[rows, cols] = True
+        self.count[rows, cols] += 1
+        return np.array(reward)
 
     def reset(self, env: int) -> None:
         self.count[env] = 0
@@ -95,6 +101,8 @@ class BatchedContactNovelty(BatchedIntrinsicReward):
 
     def __call__(self, batch: BatchContext) -> np.ndarray:
         contacts = batch.stack("hand_contacts", bool)  # (E, 2, 68)
+        if not contacts.any():
+            return np.zeros(len(batch))
         new_ever = (contacts & ~self.ever).sum(axis=(1, 2))
         new_episode = (contacts & ~self.episode & self.ever).sum(axis=(1, 2))
         self.ever |= contacts
@@ -134,8 +142,12 @@ class BatchedDiversityMilestones(BatchedIntrinsicReward):
         self.paid = np.zeros(num_envs, dtype=np.int64)
 
     def __call__(self, batch: BatchContext) -> np.ndarray:
-        self.seen |= batch.stack("touched", bool)
-        reached = (self._levels[None, :] <= self.seen.sum(axis=1)[:, None]).sum(axis=1)
+        touched = batch.stack("touched", bool)
+        if not touched.any():
+            return np.zeros(len(batch))
+        self.seen |= touched
+        # milestones m <= count: the insertion point of count among the sorted milestones
+        reached = np.searchsorted(self._levels, self.seen.sum(axis=1), side="right")
         new = reached - self.paid
         self.paid = reached
         return self.reward * new
@@ -163,9 +175,12 @@ class BatchedBalance(BatchedIntrinsicReward):
 
     def __call__(self, batch: BatchContext) -> np.ndarray:
         self.parts |= batch.stack("hand_parts", bool)
+        last = batch.last_step
+        if not last.any():
+            return np.zeros(len(batch))
         n = self.parts.sum(axis=2)  # (E, 2): parts touched by the left and right hand
         balanced = np.abs(n[:, 0] - n[:, 1]) <= self.tolerance
-        pays = batch.last_step & balanced & (n.sum(axis=1) >= self.min_parts)
+        pays = last & balanced & (n.sum(axis=1) >= self.min_parts)
         return np.where(pays, self.reward, 0.0)
 
     def reset(self, env: int) -> None:
