@@ -183,7 +183,8 @@ def term_values(envs: list[BehaviorEnv], contexts: list[StepContext]) -> np.ndar
     batch = None
     for k, term in enumerate(terms):
         if isinstance(term, BatchedIntrinsicReward):
-            batch = batch or BatchContext(contexts)
+            if batch is None:
+                batch = BatchContext(contexts)
             raw = np.asarray(term(batch), dtype=np.float64)
             if raw.shape != (len(envs),):
                 raise ValueError(

@@ -81,6 +81,7 @@ class ContactReader:
         self._acc = np.zeros((skin.num_sensors, 3))
         self._mark = np.zeros(skin.num_sensors, dtype=bool)
         self._kernel = None  # the compiled routine, imported (numba) on first use
+        self._views: tuple | None = None  # (data, data.xpos, data.xmat)
         # The kernel needs uniform pyramidal cones and candidate lists no longer than its
         # pairwise-sum block (touch_kernel.MAX_CANDIDATES = 128; this skin's are 68).
         self.compiled = self.pyramid is not None and skin._cells.shape[1] <= 128
@@ -109,11 +110,15 @@ class ContactReader:
 
             assert self.skin._cells.shape[1] <= MAX_CANDIDATES
             self._kernel = contact_touch
+        if self._views is None or self._views[0] is not data:
+            # xpos and xmat have a fixed size: their views stay valid for this MjData
+            self._views = (data, data.xpos, data.xmat)
+        _, xpos, xmat = self._views
         con = data.contact
         skin = self.skin
         return self._kernel(
-            con.geom, con.efc_address, con.pos, con.frame, data.efc_force, data.xpos,
-            data.xmat, self.geom_body, self.geom_skin, self.mu, skin._params, skin._cells,
+            con.geom, con.efc_address, con.pos, con.frame, data.efc_force, xpos,
+            xmat, self.geom_body, self.geom_skin, self.mu, skin._params, skin._cells,
             skin._cell_count, skin._pos_padded, skin._inv_radius, skin.sensor_body,
             skin.sensor_pos, skin.sensor_region, hand_of_body, self._acc, self._mark,
             NUM_REGIONS,
