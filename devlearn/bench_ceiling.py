@@ -75,12 +75,14 @@ def env_breakdown(behavior, steps: int, seed: int = 0) -> dict[str, float]:
         t1 = clock()
         infant.step(processed)
         t2 = clock()
+        t3 = t2
         if "touch" in senses:
             infant.touch_sparse()
-        t3 = clock()
+            t3 = clock()
+        t4 = t3
         if "eyes" in senses:
             infant.eyes()
-        t4 = clock()
+            t4 = clock()
         facts = behavior.facts(infant)
         t5 = clock()
         obs = behavior.observe(infant, facts)
