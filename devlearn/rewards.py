@@ -87,10 +87,13 @@ class BatchContext:
     def stack(self, fact: str, dtype: Any = None) -> np.ndarray:
         """A fact of every environment stacked, (num_envs, *fact_shape); computed once per
         step and shared by the terms (treat it as read-only)."""
-        key = (fact, None if dtype is None else np.dtype(dtype))
+        key = (fact, dtype)
         if key not in self._stacks:
             if len(self.contexts) == 1:  # one env (a lone BehaviorEnv): a view, no copy
-                stacked = np.asarray(self.contexts[0].facts[fact], dtype=dtype)[None]
+                value = self.contexts[0].facts[fact]
+                if not isinstance(value, np.ndarray) or (dtype is not None and value.dtype != dtype):
+                    value = np.asarray(value, dtype=dtype)
+                stacked = value[None]
             else:
                 stacked = np.array([np.asarray(c.facts[fact], dtype=dtype) for c in self.contexts])
             self._stacks[key] = stacked

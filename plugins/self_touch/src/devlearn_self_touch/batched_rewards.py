@@ -175,9 +175,9 @@ class BatchedBalance(BatchedIntrinsicReward):
 
     def __call__(self, batch: BatchContext) -> np.ndarray:
         self.parts |= batch.stack("hand_parts", bool)
-        last = batch.last_step
-        if not last.any():
+        if not any(ctx.last_step for ctx in batch.contexts):  # pays only at episode ends
             return np.zeros(len(batch))
+        last = batch.last_step
         n = self.parts.sum(axis=2)  # (E, 2): parts touched by the left and right hand
         balanced = np.abs(n[:, 0] - n[:, 1]) <= self.tolerance
         pays = last & balanced & (n.sum(axis=1) >= self.min_parts)
