@@ -94,7 +94,8 @@ def env_breakdown(behavior, steps: int, seed: int = 0) -> dict[str, float]:
         env.finish(ctx, values[:, 0])
         t8 = clock()
         for part, dt in zip(
-            BREAKDOWN_PARTS, (t2 - t1, t3 - t2, t4 - t3, t5 - t4, t6 - t5, t7 - t6, t8 - t7 + t1 - t0)
+            BREAKDOWN_PARTS,
+            (t2 - t1, t3 - t2, t4 - t3, t5 - t4, t6 - t5, t7 - t6, t8 - t7 + t1 - t0),
         ):
             spent[part] += dt
     env.close()

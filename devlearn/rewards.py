@@ -91,7 +91,8 @@ class BatchContext:
         if key not in self._stacks:
             if len(self.contexts) == 1:  # one env (a lone BehaviorEnv): a view, no copy
                 value = self.contexts[0].facts[fact]
-                if not isinstance(value, np.ndarray) or (dtype is not None and value.dtype != dtype):
+                ready = isinstance(value, np.ndarray) and (dtype is None or value.dtype == dtype)
+                if not ready:
                     value = np.asarray(value, dtype=dtype)
                 stacked = value[None]
             else:

@@ -94,8 +94,10 @@ def test_envs_log_the_same_sums_with_either_form():
             ends += i1 is not None
     assert ends == 9
     for a, b in zip(batch, reference):
-        assert all(_same_state(x, y) for x, y in zip(a.state_dict()["terms"].values(),
-                                                    b.state_dict()["terms"].values()))
+        assert all(
+            _same_state(x, y)
+            for x, y in zip(a.state_dict()["terms"].values(), b.state_dict()["terms"].values())
+        )
 
 
 def test_worker_batches_share_one_instance_per_term():

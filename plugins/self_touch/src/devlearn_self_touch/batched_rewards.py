@@ -51,7 +51,10 @@ class BatchedTouchNovelty(BatchedIntrinsicReward):
         if need > len(self._repeat):
             size = max(need, 2 * len(self._repeat), 64)
             self._repeat = np.array(
-                [self.repeat_scale * f_decay(float(c), self.midpoint, self.rate) for c in range(size)]
+                [
+                    self.repeat_scale * f_decay(float(c), self.midpoint, self.rate)
+                    for c in range(size)
+                ]
             )
         return self._repeat.take(count)
 
