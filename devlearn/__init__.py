@@ -16,12 +16,14 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 from devlearn.behavior import Behavior, Evaluator, NetworkSpec
 from devlearn.curriculum import Curriculum, Stage
 from devlearn.hookspecs import hookimpl
-from devlearn.rewards import IntrinsicReward, StepContext
+from devlearn.rewards import BatchContext, BatchedIntrinsicReward, IntrinsicReward, StepContext
 from devlearn.sensors import MLPEncoder, SensorEncoder
 
 __version__ = "0.1.0"
 
 __all__ = [
+    "BatchContext",
+    "BatchedIntrinsicReward",
     "Behavior",
     "Curriculum",
     "Evaluator",

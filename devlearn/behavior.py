@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 
 from devlearn.curriculum import Curriculum, Stage
-from devlearn.rewards import IntrinsicReward, StepContext
+from devlearn.rewards import BatchedIntrinsicReward, IntrinsicReward, StepContext
 from devlearn.sensors import SensorEncoder
 
 if TYPE_CHECKING:
@@ -78,6 +78,12 @@ class Behavior(ABC):
     A behaviour knows nothing of rsl-rl. It is constructed from its config dataclass
     (``config_class``) in every environment process, so it must be picklable and cheap.
     Plugins register Behavior subclasses through the ``register_behaviors`` hook.
+
+    Each environment owns its own copy of the behaviour and calls, per episode and step::
+
+        reset:  infant.reset(rng) -> on_episode_start(infant, rng) -> facts -> observe
+        step:   before_step(infant, action) -> process_action -> physics step -> facts
+                -> observe -> reward terms -> evaluator.record
     """
 
     name: ClassVar[str]
@@ -96,6 +102,29 @@ class Behavior(ABC):
 
     def __init__(self, config: Any | None = None) -> None:
         self.config = config if config is not None else self.config_class()
+
+    # --- episode hooks ------------------------------------------------------------------
+    def on_episode_start(self, infant: Infant, rng: np.random.Generator) -> None:
+        """Called at the start of every episode, after the infant's reset, before its first
+        :meth:`facts` (also in worker processes, and for the first episode of a new env).
+
+        Use it to reset per-episode state kept on the behaviour (e.g. the previous eye frame of
+        an optical-flow fact) and to read things from the infant once (actuator groups).
+
+        Args:
+            infant: The infant, already in the episode's initial pose.
+            rng: The environment's generator (the one that drew the initial pose); draw from it
+                for per-episode randomness so runs stay reproducible from the seed.
+        """
+
+    def before_step(self, infant: Infant, action: np.ndarray) -> None:
+        """Called before every control step, with the policy's action clipped to [-1, 1],
+        before :meth:`process_action` and the physics step.
+
+        Args:
+            infant: The infant before the step.
+            action: (action_dim,) float64, read-only use (e.g. an action-cost fact).
+        """
 
     # --- observations -------------------------------------------------------------------
     def facts(self, infant: Infant) -> dict[str, Any]:
@@ -116,8 +145,13 @@ class Behavior(ABC):
 
     # --- rewards, actions, curriculum ----------------------------------------------------
     @abstractmethod
-    def reward_terms(self) -> list[IntrinsicReward]:
-        """Return fresh reward-term instances for one environment."""
+    def reward_terms(self) -> list[IntrinsicReward | BatchedIntrinsicReward]:
+        """Return fresh reward-term instances for one environment.
+
+        A :class:`~devlearn.rewards.BatchedIntrinsicReward` in the list is computed once per
+        worker over all its environments (one value per environment); plain
+        :class:`IntrinsicReward` terms run in each environment. Both kinds may be mixed.
+        """
 
     def curriculum(self) -> Curriculum:
         """Return the training curriculum (default: one stage, fixed initial pose)."""

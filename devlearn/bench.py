@@ -22,6 +22,13 @@ from typing import Any
 
 import numpy as np
 
+from devlearn.bench_ceiling import (
+    env_breakdown,
+    physics_ceiling,
+    reference_env_steps_per_s,
+    touch_old_and_new,
+)
+
 
 def _per_call_ms(
     fn: Callable[[], Any], calls: int, before: Callable[[], Any] | None = None
@@ -54,8 +61,9 @@ def bench_infant(steps: int = 2000, frames: int = 100) -> dict[str, float]:
     build_s = time.perf_counter() - start
     crib.reset(rng, random_pose=True)
     actions = rng.uniform(-1, 1, (steps, crib.action_dim))
-    for a in actions[:200]:  # warm-up, and reach a state with contacts
+    for a in actions[:200]:  # warm-up (the compiled touch loads), reach a state with contacts
         crib.step(a)
+        crib.touch()
     it = iter(actions)
     physics = _per_call_ms(lambda: crib.step(next(it)), steps)
     it = iter(actions)
@@ -107,11 +115,14 @@ def _without_user_warnings(function):
 
 
 @_without_user_warnings
-def bench_behavior_env(behavior, steps: int) -> float:
-    """Single-process environment steps per second of one BehaviorEnv (random actions)."""
+def bench_behavior_env(behavior, steps: int, reference_touch: bool = False) -> float:
+    """Single-process environment steps per second of one BehaviorEnv (random actions);
+    ``reference_touch``: with the numpy touch routine instead of the compiled one."""
     from devlearn.env import BehaviorEnv
 
     env = BehaviorEnv(behavior, seed=0)
+    if reference_touch and hasattr(env.infant, "_contacts"):
+        env.infant._contacts.compiled = False
     env.reset()
     rng = np.random.default_rng(0)
     actions = rng.uniform(-1, 1, (steps + 50, env.action_dim))
@@ -173,15 +184,24 @@ def run_bench(registry, quick: bool = False, progress: Callable[[str], None] = p
     n = 300 if quick else 2000
     progress("infant: physics, touch, proprioception, eye render")
     result: dict[str, Any] = bench_infant(steps=n, frames=20 if quick else 100)
+    result.update(touch_old_and_new(n))
+    for scene in ("crib", "sitting"):
+        progress(f"{scene}: physics-only steps (the ceiling)")
+        result[f"physics_{scene}_steps_per_s"] = physics_ceiling(scene, 2 * n)
     behaviors = registry.behaviors()
     for name in ("self_touch", "hand_regard"):
         if name not in behaviors:
             progress(f"{name}: not installed, skipped")
             continue
         behavior = behaviors[name]()
-        progress(f"{name}: single-process environment steps")
+        progress(f"{name}: single-process environment steps, now and on the previous code paths")
         steps = n if name == "self_touch" else max(n // 10, 50)
         result[f"{name}_steps_per_s"] = bench_behavior_env(behavior, steps)
+        result[f"{name}_reference_steps_per_s"] = reference_env_steps_per_s(behavior, steps)
+        ceiling = result[f"physics_{behavior.scene}_steps_per_s"]
+        result[f"{name}_fraction_of_ceiling"] = result[f"{name}_steps_per_s"] / ceiling
+        progress(f"{name}: where a step's time goes")
+        result[f"{name}_breakdown_ms"] = env_breakdown(behavior, steps)
     if "self_touch" in behaviors:
         behavior = behaviors["self_touch"]()
         for workers in (1, 2):
@@ -189,6 +209,10 @@ def run_bench(registry, quick: bool = False, progress: Callable[[str], None] = p
             result[f"self_touch_vec_steps_per_s_{workers}_workers"] = bench_vec_env(
                 behavior, num_envs=16, workers=workers, steps=20 if quick else 200
             )
+        # each worker runs on its own core: the ceiling is one crib's physics per worker
+        result["self_touch_vec_2_workers_fraction_of_ceiling"] = result[
+            "self_touch_vec_steps_per_s_2_workers"
+        ] / (2 * result["physics_crib_steps_per_s"])
         progress("self_touch: end-to-end training (devlearn run defaults)")
         result["self_touch_train_steps_per_s"] = bench_training(
             "self_touch", 8192 if quick else 32768, [], progress

@@ -11,6 +11,8 @@ from typing import Any
 import mujoco
 import numpy as np
 
+from devlearn.rewards import BatchedIntrinsicReward
+
 OBS_DTYPES = (np.float32, np.uint8)
 """Observation dtypes the networks accept (float32 features, uint8 images)."""
 
@@ -157,6 +159,58 @@ class CheckedTerm:
     def __call__(self, ctx: Any) -> float:
         value = self.term(ctx)
         return check_number(value, f"reward term '{self.term.name}'", self.phase[0])
+
+
+class CheckedBatchedTerm(BatchedIntrinsicReward):
+    """A batched reward term whose every step is checked: a (num_envs,) array of finite real
+    numbers, naming the term."""
+
+    def __init__(self, term: BatchedIntrinsicReward, phase: list[str]) -> None:
+        self.term = term
+        self.phase = phase
+        self.name = term.name
+        self.weight = term.weight
+        self.num_envs = term.num_envs
+
+    def bind(self, num_envs: int) -> None:
+        self.term.bind(num_envs)
+        self.num_envs = self.term.num_envs
+
+    def __call__(self, batch: Any) -> np.ndarray:
+        values = self.term(batch)
+        what = f"batched reward term '{self.term.name}'"
+        shape = np.shape(values)
+        require(
+            shape == (len(batch.contexts),),
+            f"{what} returned shape {shape} {self.phase[0]}; "
+            f"it must return ({len(batch.contexts)},), one value per environment",
+        )
+        array = np.asarray(values)
+        require(
+            array.dtype.kind in "fiu" and bool(np.isfinite(array).all()),
+            f"{what} returned {' '.join(repr(values).split())[:60]} {self.phase[0]}; "
+            "it must return finite real numbers",
+        )
+        return array
+
+    def reset(self, env: int) -> None:
+        self.term.reset(env)
+
+    def state_dict(self, env: int) -> dict[str, Any]:
+        return self.term.state_dict(env)
+
+    def load_state_dict(self, env: int, state: dict[str, Any]) -> None:
+        self.term.load_state_dict(env, state)
+
+
+def checked_terms(terms: list[Any], phase: list[str]) -> list[Any]:
+    """Wrap every term (per-env or batched) so each value it returns is checked."""
+    return [
+        CheckedBatchedTerm(t, phase)
+        if isinstance(t, BatchedIntrinsicReward)
+        else CheckedTerm(t, phase)
+        for t in terms
+    ]
 
 
 class CheckedEvaluator:

@@ -30,7 +30,9 @@ def describe_behavior(behavior: Behavior, infant_factory=None) -> dict[str, Any]
     else:
         infant = infant_factory(behavior.scene, behavior.senses)
     try:
-        infant.reset(np.random.default_rng(0), random_pose=False)
+        rng = np.random.default_rng(0)
+        infant.reset(rng, random_pose=False)
+        behavior.on_episode_start(infant, rng)
         # Shapes only: warnings about what an unprepared behaviour would perceive or learn
         # (hand regard's uncalibrated detector) do not change them, so they are not shown.
         with warnings.catch_warnings():

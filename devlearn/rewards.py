@@ -68,3 +68,85 @@ class IntrinsicReward(ABC):
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
         """Restore what :meth:`state_dict` returned."""
+
+
+@dataclass
+class BatchContext:
+    """What a batched reward term sees after one control step of a worker's environments.
+
+    Attributes:
+        contexts: One :class:`StepContext` per environment of the batch, in batch order (the
+            same objects the per-environment terms see).
+    """
+
+    contexts: list[StepContext]
+    _stacks: dict = field(default_factory=dict, repr=False)
+
+    def __len__(self) -> int:
+        return len(self.contexts)
+
+    def stack(self, fact: str, dtype: Any = None) -> np.ndarray:
+        """A fact of every environment stacked, (num_envs, *fact_shape); computed once per
+        step and shared by the terms (treat it as read-only)."""
+        key = (fact, dtype)
+        if key not in self._stacks:
+            if len(self.contexts) == 1:  # one env (a lone BehaviorEnv): a view, no copy
+                value = self.contexts[0].facts[fact]
+                ready = isinstance(value, np.ndarray) and (dtype is None or value.dtype == dtype)
+                if not ready:
+                    value = np.asarray(value, dtype=dtype)
+                stacked = value[None]
+            else:
+                stacked = np.array([np.asarray(c.facts[fact], dtype=dtype) for c in self.contexts])
+            self._stacks[key] = stacked
+        return self._stacks[key]
+
+    @property
+    def last_step(self) -> np.ndarray:
+        """(num_envs,) bool: the environment's episode ends on this step."""
+        return np.fromiter((c.last_step for c in self.contexts), bool, len(self.contexts))
+
+    @property
+    def step(self) -> np.ndarray:
+        """(num_envs,) int64: each environment's step index inside its episode."""
+        return np.fromiter((c.step for c in self.contexts), np.int64, len(self.contexts))
+
+
+class BatchedIntrinsicReward(ABC):
+    """A reward term computed once per step for all environments of a worker, as arrays.
+
+    The batched form of :class:`IntrinsicReward`, for terms whose per-step Python cost matters:
+    a worker holds one instance for its ``num_envs`` environments, keeps every environment's
+    memory in arrays with a leading ``num_envs`` axis (allocated by :meth:`bind`), and
+    :meth:`__call__` returns one unweighted value per environment. Logging, weights and
+    checkpoints are the same as for per-environment terms: ``state_dict(env)`` returns what a
+    per-environment term would, so checkpoints do not depend on how the envs were split.
+
+    Subclasses set ``name`` and implement :meth:`bind`, :meth:`__call__` and, when stateful,
+    :meth:`reset`, :meth:`state_dict` and :meth:`load_state_dict`.
+    """
+
+    name: str = "reward"
+    """Name used in logs (``reward/<name>``) and config."""
+
+    def __init__(self, weight: float = 1.0) -> None:
+        self.weight = float(weight)
+        self.num_envs = 0
+
+    def bind(self, num_envs: int) -> None:
+        """Allocate per-environment memory for ``num_envs`` environments (called before use)."""
+        self.num_envs = int(num_envs)
+
+    @abstractmethod
+    def __call__(self, batch: BatchContext) -> np.ndarray:
+        """Return this term's unweighted rewards for one step, (num_envs,) float64."""
+
+    def reset(self, env: int) -> None:
+        """Environment ``env`` starts a new episode: forget its per-episode memory."""
+
+    def state_dict(self, env: int) -> dict[str, Any]:
+        """Return environment ``env``'s resumable state (picklable, numpy allowed)."""
+        return {}
+
+    def load_state_dict(self, env: int, state: dict[str, Any]) -> None:
+        """Restore environment ``env``'s state from what :meth:`state_dict` returned."""

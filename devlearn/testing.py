@@ -28,18 +28,18 @@ import torch
 from devlearn.behavior import Behavior, NetworkSpec
 from devlearn.conformance import (
     CheckedEvaluator,
-    CheckedTerm,
     ConformanceError,
     check_number,
     check_observations,
     check_picklable,
     check_summaries,
+    checked_terms,
     place_hand_on_body,
 )
 from devlearn.conformance import require as _require
 from devlearn.curriculum import Curriculum
 from devlearn.plugins import PluginRegistry, PluginSource
-from devlearn.rewards import IntrinsicReward
+from devlearn.rewards import BatchedIntrinsicReward, IntrinsicReward
 
 __all__ = [
     "ConformanceError",
@@ -67,17 +67,28 @@ def check_behavior_class(behavior_cls: type[Behavior]) -> None:
     check_picklable(behavior_cls(config), f"behavior '{name}'")  # travels to worker processes
 
 
-def check_reward_terms(terms: list[IntrinsicReward]) -> None:
+def check_reward_terms(terms: list[IntrinsicReward | BatchedIntrinsicReward]) -> None:
     """Check reward terms: unique names, a docstring each, picklable state."""
     names = [t.name for t in terms]
     _require(len(names) == len(set(names)), f"reward term names must be unique: {names}")
     for term in terms:
-        _require(isinstance(term, IntrinsicReward), f"{term!r} is not an IntrinsicReward")
+        batched = isinstance(term, BatchedIntrinsicReward)
+        _require(
+            batched or isinstance(term, IntrinsicReward),
+            f"{term!r} is not an IntrinsicReward or BatchedIntrinsicReward",
+        )
         _require(bool(type(term).__doc__), f"reward term '{term.name}' needs a docstring")
-        state = term.state_dict()
+        if batched:
+            term.bind(1)
+            state = term.state_dict(0)
+        else:
+            state = term.state_dict()
         _require(isinstance(state, dict), f"reward term '{term.name}': state_dict() -> a dict")
         check_picklable(state, f"reward term '{term.name}' state_dict()", "state")
-        term.load_state_dict(pickle.loads(pickle.dumps(state)))
+        if batched:
+            term.load_state_dict(0, pickle.loads(pickle.dumps(state)))
+        else:
+            term.load_state_dict(pickle.loads(pickle.dumps(state)))
 
 
 def check_curriculum(curriculum: Curriculum) -> None:
@@ -162,7 +173,7 @@ def check_behavior(
     phase = ["after reset"]  # where the check is, for messages (CheckedTerm reads it)
     env = BehaviorEnv(behavior, seed=seed)
     try:
-        env.terms = [CheckedTerm(term, phase) for term in env.terms]
+        env.terms = checked_terms(env.terms, phase)
         checked = CheckedEvaluator(env.evaluator, behavior.evaluator(training=False), phase)
         env.evaluator = checked
         env.episode_steps = max(1, min(env.episode_steps, episode_steps))

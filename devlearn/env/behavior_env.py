@@ -7,8 +7,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from devlearn.env.guards import check_observations, check_reward
-from devlearn.rewards import StepContext
+from devlearn.env.guards import REWARD_BOUND, check_observations, check_reward
+from devlearn.rewards import BatchContext, BatchedIntrinsicReward, StepContext
 
 if TYPE_CHECKING:
     from devlearn.behavior import Behavior
@@ -31,6 +31,10 @@ class BehaviorEnv:
     its summary is returned as ``episode_info`` and a new episode begins (random initial pose
     when the stage options say ``random_pose``).
 
+    Batched reward terms (:class:`~devlearn.rewards.BatchedIntrinsicReward`) are bound to this
+    env alone, unless :func:`share_batched_terms` makes several envs share them (a worker's
+    envs, stepped together by :func:`step_batch`).
+
     Args:
         behavior: The behaviour (this env's own instance; it may keep per-env state).
         seed: Seed of this env's numpy Generator (initial poses).
@@ -52,7 +56,13 @@ class BehaviorEnv:
         factory = infant_factory or build_default_infant
         self.infant = factory(behavior.scene, senses=tuple(behavior.senses))
         self.rng = np.random.default_rng(seed)
-        self.terms = behavior.reward_terms()
+        self.terms = list(behavior.reward_terms())
+        """Reward terms in the behaviour's order; batched ones may be shared with other envs."""
+        for term in self.terms:
+            if isinstance(term, BatchedIntrinsicReward):
+                term.bind(1)
+        self.batch_index = 0
+        """This env's index in its batched terms' arrays."""
         self.evaluator = behavior.evaluator(training=training)
         self.stage: dict[str, Any] = dict(behavior.curriculum().stage.options)
         self.action_dim = int(self.infant.action_dim)
@@ -64,8 +74,12 @@ class BehaviorEnv:
     def reset(self) -> dict[str, np.ndarray]:
         """Start a new episode; return its first observations (name -> array)."""
         self.infant.reset(self.rng, random_pose=bool(self.stage.get("random_pose", False)))
+        self.behavior.on_episode_start(self.infant, self.rng)
         for term in self.terms:
-            term.reset()
+            if isinstance(term, BatchedIntrinsicReward):
+                term.reset(self.batch_index)
+            else:
+                term.reset()
         self.episode_step = 0
         self._sums = {term.name: 0.0 for term in self.terms}
         obs = self.behavior.observe(self.infant, self.behavior.facts(self.infant))
@@ -88,23 +102,31 @@ class BehaviorEnv:
             GuardError: A term's value or an observation is NaN, infinite or beyond its bound
                 (:mod:`devlearn.env.guards`).
         """
+        return step_batch([self], [action])[0]
+
+    def advance(self, action: np.ndarray) -> StepContext:
+        """First half of a step: hooks, physics, facts and observations; no rewards yet."""
         action = np.clip(np.asarray(action, dtype=np.float64), -1.0, 1.0)
+        self.behavior.before_step(self.infant, action)
         self.infant.step(self.behavior.process_action(action, self.stage))
         facts = self.behavior.facts(self.infant)
         obs = self.behavior.observe(self.infant, facts)
         check_observations(obs, self.index, self.episode_step + 1)
         last_step = self.episode_step == self.episode_steps - 1
-        ctx = StepContext(self.infant, obs, facts, self.episode_step, last_step, self.stage)
+        return StepContext(self.infant, obs, facts, self.episode_step, last_step, self.stage)
+
+    def finish(
+        self, ctx: StepContext, weighted: np.ndarray
+    ) -> tuple[dict[str, np.ndarray], float, bool, bool, dict[str, float] | None]:
+        """Second half of a step: sum the weighted term values (T,), record, maybe reset."""
         reward = 0.0
-        for term in self.terms:
-            raw = check_reward(term.name, float(term(ctx)), self.index, self.episode_step)
-            value = term.weight * raw
+        for term, value in zip(self.terms, weighted.tolist()):
             self._sums[term.name] += value
             reward += value
         self.evaluator.record(ctx)
         self.episode_step += 1
-        if not last_step:
-            return obs, reward, False, False, None
+        if not ctx.last_step:
+            return ctx.observations, reward, False, False, None
         info = {f"reward/{name}": total for name, total in self._sums.items()}
         info.update({f"metrics/{k}": float(v) for k, v in self.evaluator.end_episode().items()})
         return self.reset(), reward, True, True, info
@@ -115,20 +137,89 @@ class BehaviorEnv:
 
     def state_dict(self) -> dict[str, Any]:
         """Return the resumable state: every reward term's state, the rng and the stage."""
-        return {
-            "terms": {term.name: term.state_dict() for term in self.terms},
-            "rng": self.rng.bit_generator.state,
-            "stage": dict(self.stage),
-        }
+        terms = {}
+        for term in self.terms:
+            if isinstance(term, BatchedIntrinsicReward):
+                terms[term.name] = term.state_dict(self.batch_index)
+            else:
+                terms[term.name] = term.state_dict()
+        return {"terms": terms, "rng": self.rng.bit_generator.state, "stage": dict(self.stage)}
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
         """Restore :meth:`state_dict`'s output (call :meth:`reset` afterwards)."""
         for term in self.terms:
             if term.name in state["terms"]:
-                term.load_state_dict(state["terms"][term.name])
+                if isinstance(term, BatchedIntrinsicReward):
+                    term.load_state_dict(self.batch_index, state["terms"][term.name])
+                else:
+                    term.load_state_dict(state["terms"][term.name])
         self.rng.bit_generator.state = state["rng"]
         self.stage = dict(state["stage"])
 
     def close(self) -> None:
         """Release the infant's resources."""
         self.infant.close()
+
+
+def share_batched_terms(envs: list[BehaviorEnv]) -> None:
+    """Make ``envs`` share the first env's batched terms, bound to ``len(envs)`` envs.
+
+    Call before the envs' first reset. Per-environment terms stay each env's own.
+    """
+    lead = envs[0].terms
+    for term in lead:
+        if isinstance(term, BatchedIntrinsicReward):
+            term.bind(len(envs))
+    for i, env in enumerate(envs):
+        env.terms = [
+            shared if isinstance(shared, BatchedIntrinsicReward) else own
+            for own, shared in zip(env.terms, lead)
+        ]
+        env.batch_index = i
+
+
+def term_values(envs: list[BehaviorEnv], contexts: list[StepContext]) -> np.ndarray:
+    """Every reward term's weighted value for every env: the one place terms are evaluated.
+
+    Per-environment terms are called once per env (``weight * float(term(ctx))``, as always);
+    a batched term once for the batch. Every unweighted value passes the reward guard
+    (:func:`devlearn.env.guards.check_reward`: finite, within its bound) first. ``envs`` must share their batched terms (see
+    :func:`share_batched_terms`) and be in their batch order.
+
+    Returns:
+        (num_terms, num_envs) float64, rows in the behaviour's term order.
+    """
+    terms = envs[0].terms
+    values = np.empty((len(terms), len(envs)))
+    batch = None
+    for k, term in enumerate(terms):
+        if isinstance(term, BatchedIntrinsicReward):
+            if batch is None:
+                batch = BatchContext(contexts)
+            raw = np.asarray(term(batch), dtype=np.float64)
+            if raw.shape != (len(envs),):
+                raise ValueError(
+                    f"batched reward term '{term.name}' returned shape {raw.shape}; "
+                    f"expected ({len(envs)},), one value per environment"
+                )
+            for i in np.flatnonzero(~(np.abs(raw) <= REWARD_BOUND))[:1]:  # also NaN
+                check_reward(term.name, float(raw[i]), envs[i].index, contexts[i].step)
+            values[k] = term.weight * raw
+        else:
+            for i, (env, ctx) in enumerate(zip(envs, contexts)):
+                own = env.terms[k]
+                raw_value = check_reward(own.name, float(own(ctx)), env.index, ctx.step)
+                values[k, i] = own.weight * raw_value
+    return values
+
+
+def step_batch(envs: list[BehaviorEnv], actions) -> list[tuple]:
+    """Step ``envs`` with ``actions[i]`` each: physics and facts per env, then every reward
+    term (batched ones once for all), then each env's bookkeeping and auto-reset.
+
+    Returns:
+        One ``(obs, reward, done, time_out, episode_info)`` per env, as :meth:`BehaviorEnv.step`.
+    """
+    contexts = [env.advance(action) for env, action in zip(envs, actions)]
+    values = term_values(envs, contexts)
+    return [env.finish(ctx, values[:, i]) for i, (env, ctx) in enumerate(zip(envs, contexts))]

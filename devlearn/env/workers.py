@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from devlearn.env.behavior_env import BehaviorEnv, InfantFactory
+from devlearn.env.behavior_env import BehaviorEnv, InfantFactory, share_batched_terms, step_batch
 from devlearn.env.guards import GuardError
 
 EpisodeInfos = list[tuple[int, dict[str, float]]]
@@ -101,11 +101,15 @@ def write_obs(arrays: dict[str, np.ndarray], index: int, obs: dict[str, np.ndarr
 
 
 def step_envs(envs: list[BehaviorEnv], offset: int, arrays: dict[str, np.ndarray]) -> EpisodeInfos:
-    """Step envs ``offset..offset+len(envs)`` with their rows of ``arrays["actions"]``."""
+    """Step envs ``offset..offset+len(envs)`` with their rows of ``arrays["actions"]``.
+
+    The envs are stepped as one batch (:func:`~devlearn.env.behavior_env.step_batch`), so
+    batched reward terms run once for all of them.
+    """
     infos = []
-    for i, env in enumerate(envs):
+    results = step_batch(envs, arrays["actions"][offset : offset + len(envs)])
+    for i, (obs, reward, done, time_out, info) in enumerate(results):
         j = offset + i
-        obs, reward, done, time_out, info = env.step(arrays["actions"][j])
         write_obs(arrays, j, obs)
         arrays["rewards"][j] = reward
         arrays["dones"][j] = done
@@ -118,11 +122,14 @@ def step_envs(envs: list[BehaviorEnv], offset: int, arrays: dict[str, np.ndarray
 def make_envs(
     behavior, seeds: list[int], infant_factory: InfantFactory | None, offset: int = 0
 ) -> list:
-    """Build one BehaviorEnv per seed (indices ``offset...``), each with its own behaviour copy."""
-    return [
+    """Build one BehaviorEnv per seed (indices ``offset...``), each with its own copy of the
+    behaviour; the envs share their batched reward terms (one instance over all of them)."""
+    envs = [
         BehaviorEnv(copy.deepcopy(behavior), s, infant_factory, index=offset + i)
         for i, s in enumerate(seeds)
     ]
+    share_batched_terms(envs)
+    return envs
 
 
 def _die_with_parent() -> None:

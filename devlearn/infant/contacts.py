@@ -76,7 +76,53 @@ class ContactReader:
         uniform = np.all(model.geom_condim == 3) and np.ptp(friction) == 0
         if model.opt.cone == mujoco.mjtCone.mjCONE_PYRAMIDAL and uniform:
             mu = float(friction[0])
+            self.mu = mu
             self.pyramid = np.array([[1, mu, 0], [1, -mu, 0], [1, 0, mu], [1, 0, -mu]], float)
+        self._acc = np.zeros((skin.num_sensors, 3))
+        self._mark = np.zeros(skin.num_sensors, dtype=bool)
+        self._kernel = None  # the compiled routine, imported (numba) on first use
+        self._views: tuple | None = None  # (data, data.xpos, data.xmat)
+        # The kernel needs uniform pyramidal cones and candidate lists no longer than its
+        # pairwise-sum block (touch_kernel.MAX_CANDIDATES = 128; this skin's are 68).
+        self.compiled = self.pyramid is not None and skin._cells.shape[1] <= 128
+        """True when :meth:`touch_and_hands` runs as one compiled routine."""
+
+    def touch_and_hands(self, data: mujoco.MjData, hand_of_body: np.ndarray):
+        """Sparse touch and hand contacts of this step in one compiled call (the hot path).
+
+        Equal to :func:`sparse_touch_from_contacts` and :func:`hand_contacts` of :meth:`sides`
+        (the numpy reference), which still serve models without uniform pyramidal cones.
+
+        Args:
+            data: The simulation state (after mj_step or mj_forward).
+            hand_of_body: (nbody,) int, 0 left hand, 1 right hand, -1 not a hand.
+
+        Returns:
+            sensors (M,) int64 sorted, forces (M, 3) float32 (body frames, N), and
+            (2, 68) bool regions each hand touches.
+        """
+        if not self.compiled:
+            sides = self.sides(data, with_force=True)
+            sensors, values = sparse_touch_from_contacts(self.skin, sides)
+            return sensors, values, hand_contacts(self.skin, sides, hand_of_body)
+        if self._kernel is None:
+            from devlearn.infant.touch_kernel import MAX_CANDIDATES, contact_touch
+
+            assert self.skin._cells.shape[1] <= MAX_CANDIDATES
+            self._kernel = contact_touch
+        if self._views is None or self._views[0] is not data:
+            # xpos and xmat have a fixed size: their views stay valid for this MjData
+            self._views = (data, data.xpos, data.xmat)
+        _, xpos, xmat = self._views
+        con = data.contact
+        skin = self.skin
+        return self._kernel(
+            con.geom, con.efc_address, con.pos, con.frame, data.efc_force, xpos,
+            xmat, self.geom_body, self.geom_skin, self.mu, skin._params, skin._cells,
+            skin._cell_count, skin._pos_padded, skin._inv_radius, skin.sensor_body,
+            skin.sensor_pos, skin.sensor_region, hand_of_body, self._acc, self._mark,
+            NUM_REGIONS,
+        )  # fmt: skip
 
     def sides(self, data: mujoco.MjData, with_force: bool) -> ContactSides | None:
         """Active contacts, one row per side that has skin; None when there are none.

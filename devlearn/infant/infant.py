@@ -153,14 +153,6 @@ class Infant:
             self._cache[key] = value
         return value
 
-    def _sides(self, with_force: bool) -> contacts.ContactSides | None:
-        if "sides_force" in self._cache:
-            return self._cache["sides_force"]
-        key = "sides_force" if with_force else "sides"
-        if key not in self._cache:
-            self._cache[key] = self._contacts.sides(self.data, with_force)
-        return self._cache[key]
-
     def touch(self) -> np.ndarray:
         """Returns (num_sensors, 3) float32: force on each sensor in its body's frame (N)."""
         sensors, values = self.touch_sparse()
@@ -170,9 +162,14 @@ class Infant:
         """:meth:`touch` as (sensors (M,) int64 sorted, forces (M, 3) float32): only the few
         sensors that feel a force (the others read zero). Cheaper than the dense vector."""
         self._need("touch")
+        sensors, values, _ = self._touch_and_hands()
+        return sensors, values
+
+    def _touch_and_hands(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Sparse touch and hand contacts, computed together once per step (compiled)."""
         return self._cached(
-            "touch_sparse",
-            lambda: contacts.sparse_touch_from_contacts(self.skin, self._sides(True)),
+            "touch_and_hands",
+            lambda: self._contacts.touch_and_hands(self.data, self.hand_of_body),
         )
 
     def proprioception(self) -> np.ndarray:
@@ -218,10 +215,7 @@ class Infant:
     def hand_contacts(self) -> np.ndarray:
         """Returns (2 hands, 68) bool: regions each hand (palm or fingers) touches this step;
         row 0 is the left hand, row 1 the right."""
-        return self._cached(
-            "hand_contacts",
-            lambda: contacts.hand_contacts(self.skin, self._sides(False), self.hand_of_body),
-        )
+        return self._touch_and_hands()[2]
 
     def render_view(self, width: int = 320, height: int = 240) -> np.ndarray:
         """Returns (height, width, 3) uint8 from the scene's third-person camera."""

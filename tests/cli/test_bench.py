@@ -31,8 +31,32 @@ def test_table_lists_known_figures_and_failures():
         "hand_regard_train_steps_per_s": None,
     }
     table = format_table(result)
-    assert "| self-touch env steps/s (1 process) | 1,234 /s | 400-600 | >= 2500 |" in table
-    assert "| touch per step (dense N x 3 vector) | 0.123 ms | 3 | <= 0.2 |" in table
+    assert "| self-touch env steps/s (1 process) | 1,234 /s | 283 | >= 4000 |" in table
+    assert "| touch per step (dense N x 3 vector) | 0.123 ms | 3 | - |" in table
     assert "failed (see stderr)" in table
     assert len(table.splitlines()) == 4 + 3  # title, blank, header, rule, three rows
     assert len({key for key, *_ in ROWS}) == len(ROWS)
+
+
+def test_ceiling_and_breakdown_of_a_step():
+    from devlearn_self_touch import SelfTouch
+
+    from devlearn.bench_ceiling import BREAKDOWN_PARTS, env_breakdown, physics_ceiling
+
+    assert physics_ceiling("crib", 30) > 0
+    parts = env_breakdown(SelfTouch(), steps=30)
+    assert set(parts) == {*BREAKDOWN_PARTS, "total"}
+    assert all(parts[p] >= 0 for p in BREAKDOWN_PARTS)
+    assert parts["physics"] > 0 and parts["touch"] > 0 and parts["rewards"] > 0
+    assert parts["eyes"] == 0.0  # self_touch reads no eyes
+    assert math.isclose(parts["total"], sum(parts[p] for p in BREAKDOWN_PARTS))
+
+
+def test_table_shows_fractions_and_breakdowns():
+    result = {
+        "self_touch_fraction_of_ceiling": 0.2345,
+        "self_touch_breakdown_ms": {"physics": 0.05, "touch": 0.01, "total": 0.06},
+    }
+    table = format_table(result)
+    assert "| self-touch env / crib physics | 23% | 8% | >= 20% |" in table
+    assert "self_touch, ms per step (0.060 in all): physics 0.050, touch 0.010" in table

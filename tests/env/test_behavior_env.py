@@ -68,3 +68,41 @@ def test_state_dict_restores_terms_rng_and_stage():
     assert fresh.terms[1].count == 7
     assert fresh.stage == {"random_pose": True}
     np.testing.assert_array_equal(fresh.reset()["proprioception"], expected_next)
+
+
+def test_batch_context_stacks_facts_of_any_kind():
+    from devlearn import BatchContext, StepContext
+
+    def ctx(value):
+        return StepContext(None, {}, {"f": value}, 0, False)
+
+    one = BatchContext([ctx([True, False])])
+    assert one.stack("f", bool).shape == (1, 2) and one.stack("f", bool).dtype == bool
+    many = BatchContext([ctx(np.array([1, 0])), ctx([0, 1]), ctx((1, 1))])
+    np.testing.assert_array_equal(many.stack("f", bool), [[1, 0], [0, 1], [1, 1]])
+    assert many.stack("f", bool) is many.stack("f", bool)  # computed once per step
+
+
+def test_batched_term_of_the_wrong_shape_is_named():
+    import pytest
+
+    import devlearn
+    from devlearn.env.behavior_env import share_batched_terms, term_values
+
+    class Wrong(devlearn.BatchedIntrinsicReward):
+        """Returns one value too many."""
+
+        name = "wrong"
+
+        def __call__(self, batch):
+            return np.zeros(len(batch) + 1)
+
+    class WithWrong(TinyBehavior):
+        def reward_terms(self):
+            return [Wrong()]
+
+    envs = [BehaviorEnv(WithWrong(TinyConfig()), s, infant_factory=factory) for s in (0, 1)]
+    share_batched_terms(envs)
+    contexts = [env.advance(np.zeros(3)) for env in envs if env.reset() is not None]
+    with pytest.raises(ValueError, match="'wrong' returned shape \\(3,\\); expected \\(2,\\)"):
+        term_values(envs, contexts)

@@ -39,7 +39,7 @@ def test_curriculum_stages_and_lengths():
 def test_process_action_masks_the_inactive_arm(behavior, stage, zeroed, kept):
     infant = FakeSittingInfant()
     infant.reset(None)
-    behavior.facts(infant)  # reads the arm actuator groups
+    behavior.on_episode_start(infant, None)  # reads the arm actuator groups
     action = np.linspace(-1, 1, 17)
     out = behavior.process_action(action, stage_options(behavior, stage))
     assert np.all(out[zeroed] == 0)
@@ -66,7 +66,10 @@ def test_facts_detect_hands_and_motion(behavior):
     per_pixel = facts["hand_flow"] / facts["hand_pixels"]  # (2 eyes, 2 hands) px per step
     assert np.all(per_pixel[:, 0] > 1.0) and np.all(per_pixel[:, 1] < 0.3)
     assert 0.0 < facts["motion"] < 0.08
-    infant.reset(None)  # clock back to 0: new episode, no motion from the old frame
+    infant.step(action)  # moving on, the previous frame is still remembered
+    assert behavior.facts(infant)["motion"] > 0.0
+    infant.reset(None)  # a new episode: no motion from the old frame
+    behavior.on_episode_start(infant, None)
     assert behavior.facts(infant)["motion"] == 0.0
 
 

@@ -118,9 +118,13 @@ class HandToMouth(devlearn.Behavior):
             self._target = np.isin(np.asarray(infant.regions.parts), wanted)
         return self._target
 
-    def process_action(self, action: np.ndarray, stage: dict[str, Any]) -> np.ndarray:
+    def on_episode_start(self, infant, rng: np.random.Generator) -> None:
+        # No action yet in a new episode: the first facts() pays no action cost.
+        self._last_action = np.zeros(0)
+
+    def before_step(self, infant, action: np.ndarray) -> None:
+        # The action of the step about to be taken, read by facts() after it.
         self._last_action = action
-        return action
 
     def facts(self, infant) -> dict[str, Any]:
         contacts = infant.hand_contacts()  # (2 hands, 68) bool

@@ -54,12 +54,11 @@ class HandRegard(Behavior):
         self._detector: HandDetector | None = None
         self._flow = HandFlow()
         self._arm_actuators: dict[str, np.ndarray] | None = None
-        self._last_time = -1.0
 
     def __getstate__(self) -> dict[str, Any]:
         # Travel light to worker processes: the detector is reloaded from its file there.
         state = dict(self.__dict__)
-        state.update(_detector=None, _flow=HandFlow(), _last_time=-1.0)
+        state.update(_detector=None, _flow=HandFlow())
         return state
 
     # --- set-up -----------------------------------------------------------------------------
@@ -98,6 +97,15 @@ class HandRegard(Behavior):
             self._detector = HandDetector(params)
         return self._detector
 
+    # --- episode hooks ----------------------------------------------------------------------
+    def on_episode_start(self, infant: Infant, rng: np.random.Generator) -> None:
+        """A new episode: forget the previous frame (no motion across episodes) and read the
+        arm actuator groups that :meth:`process_action` masks."""
+        self._flow.reset()
+        self._arm_actuators = {
+            side: np.asarray(infant.actuator_groups[f"{side}_arm"]) for side in HANDS
+        }
+
     # --- observations -----------------------------------------------------------------------
     def facts(self, infant: Infant) -> dict[str, Any]:
         """Detect the hands and their motion once per step.
@@ -108,14 +116,6 @@ class HandRegard(Behavior):
             (see :class:`HandFlow`); ``hand_count`` int; ``image_width`` int; ``motion`` float,
             m_t over both hands.
         """
-        if self._arm_actuators is None:
-            self._arm_actuators = {
-                side: np.asarray(infant.actuator_groups[f"{side}_arm"]) for side in HANDS
-            }
-        time = float(infant.physics.data.time)
-        if time <= self._last_time:  # the clock went back: a new episode began
-            self._flow.reset()
-        self._last_time = time
         eyes = infant.eyes()
         # The posture tells which blob is which hand (the position model babbling learned).
         proprioception = np.asarray(infant.proprioception(), dtype=np.float32)
@@ -201,7 +201,7 @@ class HandRegard(Behavior):
         if not inactive:
             return action
         if self._arm_actuators is None:
-            raise RuntimeError("hand_regard: process_action before the first facts(); the arm "
+            raise RuntimeError("hand_regard: process_action before on_episode_start(); the arm "
                                "actuator groups are read from the infant at reset")
         action = np.array(action, copy=True)
         for side in inactive:

@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from devlearn import (
+    BatchedIntrinsicReward,
     Behavior,
     Curriculum,
     Evaluator,
@@ -19,6 +20,12 @@ from devlearn_self_touch.body_map import (
     body_map_observation,
     hand_touched_parts,
     sparse_body_map,
+)
+from devlearn_self_touch.batched_rewards import (
+    BatchedBalance,
+    BatchedContactNovelty,
+    BatchedDiversityMilestones,
+    BatchedTouchNovelty,
 )
 from devlearn_self_touch.config import SelfTouchConfig
 from devlearn_self_touch.evaluation import SelfTouchEvaluator
@@ -97,24 +104,46 @@ class SelfTouch(Behavior):
         )
 
     # --- rewards and curriculum ------------------------------------------------------------
-    def reward_terms(self) -> list[IntrinsicReward]:
-        """R_t = R_touch + R_geom + R_milestones + R_balance (sec. II-A3), fresh instances."""
+    def reward_terms(self) -> list[BatchedIntrinsicReward]:
+        """R_t = R_touch + R_geom + R_milestones + R_balance (sec. II-A3), fresh instances, in
+        batched form (computed once per worker over its envs; same numbers and logs as
+        :meth:`per_env_reward_terms`)."""
         c = self.config
         return [
-            TouchNovelty(
-                c.weight_touch_novelty,
-                c.touch_first_ever,
-                c.touch_first_in_episode,
-                c.touch_repeat_scale,
-                c.decay_midpoint,
-                c.decay_rate,
+            BatchedTouchNovelty(*self._touch_args()),
+            BatchedContactNovelty(
+                c.weight_contact_novelty, c.contact_first_ever, c.contact_first_in_episode
             ),
+            BatchedDiversityMilestones(
+                c.weight_diversity_milestones, c.milestone_reward, c.milestones
+            ),
+            BatchedBalance(
+                c.weight_balance, c.balance_reward, c.balance_tolerance, c.balance_min_parts
+            ),
+        ]
+
+    def per_env_reward_terms(self) -> list[IntrinsicReward]:
+        """The same four terms as per-environment :class:`IntrinsicReward` instances."""
+        c = self.config
+        return [
+            TouchNovelty(*self._touch_args()),
             ContactNovelty(
                 c.weight_contact_novelty, c.contact_first_ever, c.contact_first_in_episode
             ),
             DiversityMilestones(c.weight_diversity_milestones, c.milestone_reward, c.milestones),
             Balance(c.weight_balance, c.balance_reward, c.balance_tolerance, c.balance_min_parts),
         ]
+
+    def _touch_args(self) -> tuple:
+        c = self.config
+        return (
+            c.weight_touch_novelty,
+            c.touch_first_ever,
+            c.touch_first_in_episode,
+            c.touch_repeat_scale,
+            c.decay_midpoint,
+            c.decay_rate,
+        )
 
     def curriculum(self) -> Curriculum:
         """``two_stage``: fixed pose for ``fixed_pose_steps``, then random initial poses;

@@ -1,0 +1,190 @@
+"""The four Model I reward terms in batched form: one instance per worker, arrays over its envs.
+
+Each class computes, for every environment at once, exactly the number (bit for bit) that its
+per-environment twin in :mod:`devlearn_self_touch.rewards` computes, and saves the same
+per-environment state; ``plugins/self_touch/tests/test_batched_rewards.py`` checks both.
+Where a per-environment term sums floats in a Python loop, the batched one sums them in the
+same order (a loop over the few touched pairs), and f_decay is tabulated with the same
+``math.exp``. The arrays are tiny, so the terms keep numpy calls few and return early when
+nothing was touched (most steps).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from devlearn import BatchContext, BatchedIntrinsicReward
+from devlearn_self_touch.body_map import HANDS, NUM_PARTS, NUM_REGIONS
+from devlearn_self_touch.rewards import f_decay
+
+
+class BatchedTouchNovelty(BatchedIntrinsicReward):
+    """R_touch (sec. II-A3) over a batch; see :class:`devlearn_self_touch.TouchNovelty`."""
+
+    name = "touch_novelty"
+
+    def __init__(
+        self,
+        weight: float = 1.0,
+        first_ever: float = 5.0,
+        first_in_episode: float = 1.0,
+        repeat_scale: float = 0.5,
+        midpoint: float = 10.0,
+        rate: float = 0.5,
+    ) -> None:
+        super().__init__(weight)
+        self.first_ever, self.first_in_episode = float(first_ever), float(first_in_episode)
+        self.repeat_scale, self.midpoint, self.rate = float(repeat_scale), midpoint, rate
+        self._repeat = np.zeros(0)  # repeat_scale * f_decay(c) for c = 0, 1, ... (grown as needed)
+        self.bind(1)
+
+    def bind(self, num_envs: int) -> None:
+        super().bind(num_envs)
+        self.ever = np.zeros((num_envs, NUM_REGIONS), dtype=bool)
+        self.count = np.zeros((num_envs, NUM_REGIONS), dtype=np.int64)
+
+    def _repeat_pay(self, count: np.ndarray) -> np.ndarray:
+        """repeat_scale * f_decay(count), elementwise, with the per-env term's float math."""
+        need = int(count.max()) + 1
+        if need > len(self._repeat):
+            size = max(need, 2 * len(self._repeat), 64)
+            self._repeat = np.array(
+                [
+                    self.repeat_scale * f_decay(float(c), self.midpoint, self.rate)
+                    for c in range(size)
+                ]
+            )
+        return self._repeat.take(count)
+
+    def __call__(self, batch: BatchContext) -> np.ndarray:
+        rows, cols = batch.stack("touched", bool).nonzero()  # row-major: regions ascending
+        if len(rows) == 0:
+            return np.zeros(len(batch))
+        count = self.count[rows, cols]
+        pay = np.where(
+            self.ever[rows, cols],
+            np.where(count == 0, self.first_in_episode, self._repeat_pay(count)),
+            self.first_ever,
+        )
+        reward = [0.0] * len(batch)
+        for row, value in zip(rows.tolist(), pay.tolist()):  # the per-env loop's order of sums
+            reward[row] += value
+        self.ever[rows, cols] = True
+        self.count[rows, cols] += 1
+        return np.array(reward)
+
+    def reset(self, env: int) -> None:
+        self.count[env] = 0
+
+    def state_dict(self, env: int) -> dict[str, Any]:
+        return {"ever": self.ever[env].copy()}
+
+    def load_state_dict(self, env: int, state: dict[str, Any]) -> None:
+        self.ever[env] = np.asarray(state["ever"], dtype=bool)
+
+
+class BatchedContactNovelty(BatchedIntrinsicReward):
+    """R_geom (sec. II-A3) over a batch; see :class:`devlearn_self_touch.ContactNovelty`."""
+
+    name = "contact_novelty"
+
+    def __init__(
+        self, weight: float = 1.0, first_ever: float = 10.0, first_in_episode: float = 2.0
+    ) -> None:
+        super().__init__(weight)
+        self.first_ever, self.first_in_episode = float(first_ever), float(first_in_episode)
+        self.bind(1)
+
+    def bind(self, num_envs: int) -> None:
+        super().bind(num_envs)
+        self.ever = np.zeros((num_envs, len(HANDS), NUM_REGIONS), dtype=bool)
+        self.episode = np.zeros((num_envs, len(HANDS), NUM_REGIONS), dtype=bool)
+
+    def __call__(self, batch: BatchContext) -> np.ndarray:
+        contacts = batch.stack("hand_contacts", bool)  # (E, 2, 68)
+        if not contacts.any():
+            return np.zeros(len(batch))
+        new_ever = (contacts & ~self.ever).sum(axis=(1, 2))
+        new_episode = (contacts & ~self.episode & self.ever).sum(axis=(1, 2))
+        self.ever |= contacts
+        self.episode |= contacts
+        return self.first_ever * new_ever + self.first_in_episode * new_episode
+
+    def reset(self, env: int) -> None:
+        self.episode[env] = False
+
+    def state_dict(self, env: int) -> dict[str, Any]:
+        return {"ever": self.ever[env].copy()}
+
+    def load_state_dict(self, env: int, state: dict[str, Any]) -> None:
+        self.ever[env] = np.asarray(state["ever"], dtype=bool)
+
+
+class BatchedDiversityMilestones(BatchedIntrinsicReward):
+    """R_milestones (sec. II-A3) over a batch; see :class:`DiversityMilestones`."""
+
+    name = "diversity_milestones"
+
+    def __init__(
+        self,
+        weight: float = 1.0,
+        reward: float = 5.0,
+        milestones: tuple[int, ...] = (5, 10, 15, 20, 25, 30),
+    ) -> None:
+        super().__init__(weight)
+        self.reward = float(reward)
+        self.milestones = tuple(sorted(int(m) for m in milestones))
+        self._levels = np.asarray(self.milestones, dtype=np.int64)
+        self.bind(1)
+
+    def bind(self, num_envs: int) -> None:
+        super().bind(num_envs)
+        self.seen = np.zeros((num_envs, NUM_REGIONS), dtype=bool)
+        self.paid = np.zeros(num_envs, dtype=np.int64)
+
+    def __call__(self, batch: BatchContext) -> np.ndarray:
+        touched = batch.stack("touched", bool)
+        if not touched.any():
+            return np.zeros(len(batch))
+        self.seen |= touched
+        # milestones m <= count: the insertion point of count among the sorted milestones
+        reached = np.searchsorted(self._levels, self.seen.sum(axis=1), side="right")
+        new = reached - self.paid
+        self.paid = reached
+        return self.reward * new
+
+    def reset(self, env: int) -> None:
+        self.seen[env] = False
+        self.paid[env] = 0
+
+
+class BatchedBalance(BatchedIntrinsicReward):
+    """R_balance (sec. II-A3) over a batch; see :class:`devlearn_self_touch.Balance`."""
+
+    name = "balance"
+
+    def __init__(
+        self, weight: float = 1.0, reward: float = 10.0, tolerance: int = 3, min_parts: int = 0
+    ) -> None:
+        super().__init__(weight)
+        self.reward, self.tolerance, self.min_parts = float(reward), int(tolerance), int(min_parts)
+        self.bind(1)
+
+    def bind(self, num_envs: int) -> None:
+        super().bind(num_envs)
+        self.parts = np.zeros((num_envs, len(HANDS), NUM_PARTS), dtype=bool)
+
+    def __call__(self, batch: BatchContext) -> np.ndarray:
+        self.parts |= batch.stack("hand_parts", bool)
+        if not any(ctx.last_step for ctx in batch.contexts):  # pays only at episode ends
+            return np.zeros(len(batch))
+        last = batch.last_step
+        n = self.parts.sum(axis=2)  # (E, 2): parts touched by the left and right hand
+        balanced = np.abs(n[:, 0] - n[:, 1]) <= self.tolerance
+        pays = last & balanced & (n.sum(axis=1) >= self.min_parts)
+        return np.where(pays, self.reward, 0.0)
+
+    def reset(self, env: int) -> None:
+        self.parts[env] = False
