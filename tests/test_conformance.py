@@ -269,3 +269,25 @@ def test_unpicklable_behavior_names_the_attribute():
 def test_unpicklable_term_state_names_the_term():
     with pytest.raises(ConformanceError, match=r"reward term 'touching' state_dict\(\).*\['fn'\]"):
         check_behavior(UnpicklableTermState, **FAST)
+
+
+class BatchedNanOnContact(devlearn.BatchedIntrinsicReward):
+    """Batched: NaN for an environment whose hand touches the body, else 0."""
+
+    name = "batched_broken"
+
+    def __call__(self, batch):
+        contact = np.array([bool(c.facts["contact"]) for c in batch.contexts])
+        return np.where(contact, np.nan, 0.0)
+
+
+class BatchedNanProbe(Probe):
+    """A behaviour whose only term is batched and breaks on contact."""
+
+    def reward_terms(self):
+        return [BatchedNanOnContact()]
+
+
+def test_batched_term_nan_on_contact_names_the_term():
+    with pytest.raises(ConformanceError, match=r"batched reward term 'batched_broken'.*hand placed"):
+        check_behavior(BatchedNanProbe, **FAST)
