@@ -88,14 +88,13 @@ class RunConfig:
     save_interval: int = 50
     """Iterations between periodic ``checkpoint_<step>.pt`` files; ``checkpoint_latest.pt`` is
     also written every ``save_interval // 10`` iterations (at least every iteration)."""
-    torch_threads: int = 1
-    """``torch.set_num_threads`` while collecting (1: a forward pass on a few dozen observations
-    gains nothing from more, and results stay repeatable; 0 leaves torch's default)."""
-    update_threads: int = 1
-    """Threads of the PPO update (0: same as ``torch_threads``). The env workers sleep during
-    the update, so 2 can use a 2-core machine's idle core; but a core shared with any other
-    busy program makes multi-threaded updates several times slower (docs/scaling.md), and
-    results are repeatable only for the same value, so 1 is the default."""
+    torch_threads: int = 0
+    """Torch threads of the training process while collecting and updating (0: automatic, all
+    cores this process may use while the env workers wait, falling back to one thread while
+    another program makes multi-threaded work slower; see ``ThreadPlan`` in
+    ``devlearn/training/process.py``). Results repeat bit for bit only for a fixed count."""
+    update_threads: int = 0
+    """Threads of the PPO update (0: the same as ``torch_threads``)."""
     ppo: PPOConfig = field(default_factory=PPOConfig)
     """PPO hyper-parameters."""
     network: NetworkConfig = field(default_factory=NetworkConfig)

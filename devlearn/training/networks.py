@@ -46,9 +46,10 @@ class SharedBody(nn.Module):
     ``actor.parameters()`` and nowhere in ``critic.parameters()`` (rsl-rl's optimiser and its
     per-network gradient clipping then treat each tensor once). The last result is reused when
     the same observation object comes again with unchanged parameters and the same autograd
-    mode, which is how rsl-rl calls actor and critic (``act``: actor, critic, critic;
-    ``update``: actor, critic per mini-batch): the body runs once per batch, not two or three
-    times, and both losses backpropagate through the one graph.
+    mode (see :meth:`forward`), which is how rsl-rl calls actor and critic (``act``: actor,
+    critic, critic; ``update``: actor, critic per mini-batch, one backward over both losses):
+    the body runs once per batch, not two or three times, and both losses backpropagate
+    through the one graph.
     """
 
     def __init__(
@@ -75,15 +76,21 @@ class SharedBody(nn.Module):
         self.out_dim = hidden[-1]
         self._last: tuple | None = None
 
-    def forward(self, obs) -> torch.Tensor:
-        """Features of a batch (``obs[group]`` of shape (N, *shape)); returns (N, out_dim)."""
-        key = (
-            next(self.trunk.parameters())._version,
-            torch.is_grad_enabled(),
-            torch.is_inference_mode_enabled(),
-        )
-        if self._last is not None and self._last[0] is obs and self._last[1] == key:
-            return self._last[2]
+    def forward(self, obs, caller: int = 0) -> torch.Tensor:
+        """Features of a batch (``obs[group]`` of shape (N, *shape)); returns (N, out_dim).
+
+        ``caller`` identifies the model asking. Without gradients a result is reused by
+        anyone; with gradients only once, by another model (the critic after the actor), so a
+        graph that a backward pass may already have freed is never handed out twice.
+        """
+        grad = torch.is_grad_enabled()
+        key = (next(self.trunk.parameters())._version, grad, torch.is_inference_mode_enabled())
+        last = self._last
+        reusable = last is not None and last[0] is obs and last[1] == key
+        if reusable and not (grad and last[3] == caller):
+            if grad:
+                self._last = None
+            return last[2]
         parts = []
         for g in self.groups:
             x = as_float(obs[g], self.legacy_uint8_scale)
@@ -91,7 +98,7 @@ class SharedBody(nn.Module):
                 x = self.normalizers[g](x)
             parts.append(self.encoders[g](x))
         features = self.trunk(torch.cat(parts, dim=-1))
-        self._last = (obs, key, features)
+        self._last = (obs, key, features, caller)
         return features
 
     def update_normalization(self, obs: TensorDict) -> None:
@@ -153,7 +160,7 @@ class MultiSenseModel(MLPModel):
         self.shared = shared or cnns is not None
         self.legacy_uint8_scale = legacy_uint8_scale
         self.activation = activation
-        self._given_body = cnns
+        self._given_body = [cnns] if cnns is not None else []  # a list: not registered
         # shared: rsl-rl's MLP needs a hidden layer; a 1-wide placeholder is replaced below
         super().__init__(
             obs,
@@ -167,7 +174,8 @@ class MultiSenseModel(MLPModel):
         )
         if self.shared:
             out = self.distribution.input_dim if self.distribution is not None else output_dim
-            head: list[nn.Module] = [nn.Linear(self._body().out_dim, math.prod(out))]
+            width = math.prod(out) if isinstance(out, list) else out
+            head: list[nn.Module] = [nn.Linear(self._body().out_dim, width)]
             if isinstance(out, list):
                 head.append(nn.Unflatten(-1, out))
             self.mlp = nn.Sequential(*head)
@@ -191,14 +199,15 @@ class MultiSenseModel(MLPModel):
         unknown = set(self.spec.normalize) - set(self.spec.encoders)
         if unknown:
             raise ValueError(f"NetworkSpec.normalize names unknown observations {sorted(unknown)}")
-        if self._given_body is not None:  # the critic borrows the actor's body, unregistered
-            if self._given_body.groups != self.obs_groups:
+        if self._given_body:  # the critic borrows the actor's body, unregistered
+            body = self._given_body[0]
+            if body.groups != self.obs_groups:
                 raise ValueError(
                     f"a shared body needs the same observations for actor and critic; got "
-                    f"{self._given_body.groups} and {self.obs_groups}"
+                    f"{body.groups} and {self.obs_groups}"
                 )
-            self._borrowed = [self._given_body]
-            return self._given_body.out_dim
+            self._borrowed = [body]
+            return body.out_dim
         if self.shared:
             self.body = SharedBody(
                 self.spec, self.obs_shapes, self.activation, self.legacy_uint8_scale
@@ -236,7 +245,7 @@ class MultiSenseModel(MLPModel):
             (N, latent_dim).
         """
         if self.shared:
-            return self._body()(obs)
+            return self._body()(obs, id(self))
         return torch.cat([self.encoders[g](self._input(obs, g)) for g in self.obs_groups], dim=-1)
 
     def update_normalization(self, obs: TensorDict) -> None:

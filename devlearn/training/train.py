@@ -123,8 +123,8 @@ def train(
     device = _resolve_device(cfg.device, int(os.environ.get("LOCAL_RANK", "0")), world_size)
     cfg.workers = resolve_workers(cfg.workers, cfg.num_envs)  # config.json records the number
 
-    # Seed. One intra-op thread by default: these networks are small, and a fixed thread
-    # count keeps CPU results bit-for-bit repeatable (torch_threads=0 keeps torch's default).
+    # Seed. The runner sets the torch threads of each rollout and update (ThreadPlan); a
+    # fixed torch_threads keeps CPU results bit-for-bit repeatable.
     seed_everything(cfg.seed)
     if cfg.torch_threads > 0:
         torch.set_num_threads(cfg.torch_threads)
