@@ -264,6 +264,50 @@ def bench_update(
     }
 
 
+OLD_LEARNER = ["network.layout=separate", "torch_threads=1", "update_threads=1"]
+"""``--set`` options that train as before the shared layout and automatic threads."""
+
+
+def bench_learner(behaviors: dict, quick: bool, progress: Callable[[str], None]) -> dict:
+    """PPO update cost per sample and training steps/s, old learner against new, one session.
+
+    Old: separate actor and critic, one torch thread (the defaults before the shared layout).
+    New: ``devlearn run`` defaults (shared body, automatic threads; the update benchmark uses
+    all cores). Keys ``<behavior>_update_us_per_sample[_old]`` and
+    ``<behavior>_train_steps_per_s[_old]``; hand regard trains with 8 envs and a short
+    babbling (speed does not depend on the detector's quality).
+    """
+    from devlearn.training.process import learner_threads
+
+    result: dict[str, Any] = {}
+    rollouts = {"self_touch": (16, 32 if quick else 128), "hand_regard": (8, 8 if quick else 32)}
+    for name, (envs, steps) in rollouts.items():
+        if name not in behaviors:
+            continue
+        for suffix, layout, threads in (("_old", "separate", 1), ("", "shared", learner_threads())):
+            progress(f"{name}: PPO update, {layout} networks, {threads} thread(s)")
+            behavior, repeats = behaviors[name](), 1 if quick else 2
+            figures = bench_update(behavior, layout, envs, steps, repeats, threads)
+            result[f"{name}_update_us_per_sample{suffix}"] = figures["update_us_per_sample"]
+            result[f"{name}_inference_ms_per_step{suffix}"] = figures["inference_ms_per_step"]
+    old = [arg for kv in OLD_LEARNER for arg in ("--set", kv)]
+    if "self_touch" in behaviors:
+        progress("self_touch: end-to-end training, old learner (separate networks, 1 thread)")
+        result["self_touch_train_steps_per_s_old"] = bench_training(
+            "self_touch", 8192 if quick else 32768, old, progress
+        )
+    if "hand_regard" in behaviors:
+        progress("hand_regard: end-to-end training, old learner (separate networks, 1 thread)")
+        short = ["behavior.babbling_steps=300", "behavior.correlation_threshold=0"]
+        result["hand_regard_train_steps_per_s_old"] = bench_training(
+            "hand_regard",
+            1024 if quick else 4096,
+            ["--envs", "8", *(arg for kv in short for arg in ("--set", kv)), *old],
+            progress,
+        )
+    return result
+
+
 def run_bench(registry, quick: bool = False, progress: Callable[[str], None] = print) -> dict:
     """Run every measurement; return the figures (see ``devlearn bench --help``)."""
     n = 300 if quick else 2000
@@ -300,6 +344,7 @@ def run_bench(registry, quick: bool = False, progress: Callable[[str], None] = p
             ["--envs", "8", *(arg for kv in short for arg in ("--set", kv))],
             progress,
         )
+    result.update(bench_learner(behaviors, quick, progress))
     usage_self = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     usage_children = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
     # the largest resident set of any one process (this one, a training run or a worker)
