@@ -30,11 +30,12 @@ class DeterministicPolicy(nn.Module):
 
     def __init__(self, actor: nn.Module) -> None:
         super().__init__()
-        self.actor = actor.eval()
+        self.actor = actor
         self.names = list(actor.obs_groups)
+        self.eval()
 
     def forward(self, *observations: torch.Tensor) -> torch.Tensor:
-        latent = self.actor.get_latent(dict(zip(self.names, observations)))
+        latent = self.actor.encode(dict(zip(self.names, observations)))
         return self.actor.distribution.deterministic_output(self.actor.mlp(latent))
 
 
@@ -122,7 +123,7 @@ def _export_onnx(policy: DeterministicPolicy, inputs: tuple[torch.Tensor, ...], 
         dynamo=True,
         input_names=policy.names,
         output_names=[ACTION],
-        dynamic_shapes=tuple({0: batch} for _ in inputs),
+        dynamic_shapes={"observations": tuple({0: batch} for _ in inputs)},
         verbose=False,
     )
     program.save(str(out))

@@ -91,15 +91,19 @@ class SharedBody(nn.Module):
             if grad:
                 self._last = None
             return last[2]
+        features = self.encode(obs)
+        self._last = (obs, key, features, caller)
+        return features
+
+    def encode(self, obs) -> torch.Tensor:
+        """:meth:`forward` without reuse (for export): (N, out_dim) features."""
         parts = []
         for g in self.groups:
             x = as_float(obs[g], self.legacy_uint8_scale)
             if g in self.normalizers:
                 x = self.normalizers[g](x)
             parts.append(self.encoders[g](x))
-        features = self.trunk(torch.cat(parts, dim=-1))
-        self._last = (obs, key, features, caller)
-        return features
+        return self.trunk(torch.cat(parts, dim=-1))
 
     def update_normalization(self, obs: TensorDict) -> None:
         """Update the running statistics of the normalised groups from a rollout batch."""
@@ -247,6 +251,10 @@ class MultiSenseModel(MLPModel):
         if self.shared:
             return self._body()(obs, id(self))
         return torch.cat([self.encoders[g](self._input(obs, g)) for g in self.obs_groups], dim=-1)
+
+    def encode(self, obs) -> torch.Tensor:
+        """:meth:`get_latent` without the shared body's reuse of results (for export)."""
+        return self._body().encode(obs) if self.shared else self.get_latent(obs)
 
     def update_normalization(self, obs: TensorDict) -> None:
         """Update the running statistics of the normalised groups from a rollout batch (the

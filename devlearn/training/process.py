@@ -81,11 +81,9 @@ class ThreadPlan:
         return self.fixed_collect or self.current, self.current
 
     def record(self, update_seconds: float) -> None:
-        """Take note of how long the iteration's update took (the first one is ignored)."""
-        if self.iteration <= 1:
-            return
-        old = self.seconds.get(self.current)
-        self.seconds[self.current] = update_seconds if old is None else (old + update_seconds) / 2
+        """Take note of how long the iteration's update took (the first is a warm-up)."""
+        if self.iteration > 1:  # the latest time of each count: the load may have changed
+            self.seconds[self.current] = update_seconds
 
 
 def set_threads(threads: int) -> None:
