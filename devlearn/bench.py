@@ -167,8 +167,8 @@ def build_learner(behavior, layout: str, num_envs: int, seed: int = 0):
 
     from devlearn.env import BehaviorEnv
     from devlearn.training.config import default_config, to_rsl_rl
-    from devlearn.training.process import quiet
     from devlearn.training.ppo import UniqueParamPPO
+    from devlearn.training.process import quiet
 
     env = BehaviorEnv(behavior, seed=seed)
     first = env.reset()

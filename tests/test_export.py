@@ -130,8 +130,10 @@ def test_bad_input_is_one_line_and_exit_2(registry, tmp_path, capsys):
         ("does not exist", ["hand_to_mouth", "--checkpoint", str(tmp_path / "none.pt")]),
         ("corrupt or unreadable", ["hand_to_mouth", "--checkpoint", str(tmp_path / "junk.pt")]),
         ("not 'self_touch'", ["self_touch", "--checkpoint", ours]),
-        ("unknown export format 'tflite'; valid: onnx, torchscript",
-         ["hand_to_mouth", "--checkpoint", ours, "--format", "tflite"]),
+        (
+            "unknown export format 'tflite'; valid: onnx, torchscript",
+            ["hand_to_mouth", "--checkpoint", ours, "--format", "tflite"],
+        ),
         ("unknown behavior", ["no_such_behavior", "--checkpoint", ours]),
     ]
     for expected, args in cases:
@@ -139,11 +141,22 @@ def test_bad_input_is_one_line_and_exit_2(registry, tmp_path, capsys):
         err = errors(capsys)
         assert code == 2 and len(err.splitlines()) == 1 and expected in err, (args, err)
     for fmt in ("onnx", "torchscript"):  # an unwritable place
-        code = main(["export", "hand_to_mouth", "--checkpoint", ours, "--format", fmt,
-                     "--out", str(tmp_path / "no" / "p")])
+        code = main(
+            [
+                "export",
+                "hand_to_mouth",
+                "--checkpoint",
+                ours,
+                "--format",
+                fmt,
+                "--out",
+                str(tmp_path / "no" / "p"),
+            ]
+        )
         err = errors(capsys)
         assert code == 2 and len(err.splitlines()) == 1 and "cannot write" in err, err
-    code = main(["export", "hand_to_mouth", "--checkpoint", ours, "--format", "torchscript",
-                 "--out", out])
+    code = main(
+        ["export", "hand_to_mouth", "--checkpoint", ours, "--format", "torchscript", "--out", out]
+    )
     assert code == 0 and Path(out).stat().st_size > 0
     assert "wrote" in capsys.readouterr().out

@@ -22,14 +22,46 @@ DATA = Path(__file__).resolve().parent / "data"
 # Raw head outputs (mean row, then std row; first 4 actions) on synthetic() observations,
 # computed with the code these runs were trained with (main at 9026bfa, before the layouts).
 TRAINED_AS = {
-    "results/self_touch/run": [-2392.8337, -2301.7483, 1694.8726, 2369.4751,
-                               10902.952, 13065.871, 12863.380, 6808.2773],
-    "results/self_touch/max_std/run": [-2.2152386, 0.55740386, -1.9742167, 5.5861535,
-                                       41.701790, 79.898872, 59.426762, 29.241865],
-    "results/self_touch/max_std_seed2/run": [8.2613440, 5.3815775, -0.81355989, 11.855684,
-                                             72.673317, 49.798161, 29.578957, 43.518071],
-    "results/hand_regard/run": [0.56497365, 10.585306, 14.386101, 10.992870,
-                                13.227118, 4.9613376, -2.6875684, 6.8206606],
+    "results/self_touch/run": [
+        -2392.8337,
+        -2301.7483,
+        1694.8726,
+        2369.4751,
+        10902.952,
+        13065.871,
+        12863.380,
+        6808.2773,
+    ],
+    "results/self_touch/max_std/run": [
+        -2.2152386,
+        0.55740386,
+        -1.9742167,
+        5.5861535,
+        41.701790,
+        79.898872,
+        59.426762,
+        29.241865,
+    ],
+    "results/self_touch/max_std_seed2/run": [
+        8.2613440,
+        5.3815775,
+        -0.81355989,
+        11.855684,
+        72.673317,
+        49.798161,
+        29.578957,
+        43.518071,
+    ],
+    "results/hand_regard/run": [
+        0.56497365,
+        10.585306,
+        14.386101,
+        10.992870,
+        13.227118,
+        4.9613376,
+        -2.6875684,
+        6.8206606,
+    ],
 }
 
 
@@ -141,7 +173,7 @@ def test_every_encoder_sees_images_in_zero_one(name, registry):
         for group, encoder in encoders.items():
             first = next(m for m in encoder.modules() if isinstance(m, (nn.Conv2d, nn.Linear)))
             first.register_forward_pre_hook(
-                lambda m, args, g=group: seen.__setitem__(g, float(args[0].max()))
+                lambda m, args, g=group, seen=seen: seen.__setitem__(g, float(args[0].max()))
             )
         images = [k for k, v in obs.items() if np.asarray(v).dtype == np.uint8]
         batch = {k: np.full_like(v, 255) if k in images else v for k, v in obs.items()}
