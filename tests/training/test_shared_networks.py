@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import importlib
 from types import SimpleNamespace
 
 import pytest
@@ -139,3 +140,26 @@ def test_layout_is_recorded_and_old_configs_mean_the_old_layout():
     old.network.layout = "tied"
     with pytest.raises(UsageError, match="unknown network.layout 'tied'; valid: shared"):
         to_rsl_rl(old, TinyBehavior(old.behavior))
+
+
+def test_rsl_rl_rnd_trains_and_logs_its_intrinsic_reward(tmp_path, monkeypatch):
+    """The runner passes rsl-rl's intrinsic rewards to its logger (None made its log fail)."""
+    train_module = importlib.import_module("devlearn.training.train")
+
+    def with_rnd(cfg, behavior, names=None):
+        train_cfg = to_rsl_rl(cfg, behavior, names)
+        train_cfg["obs_groups"]["rnd_state"] = ["proprioception"]
+        train_cfg["algorithm"]["rnd_cfg"] = {
+            "num_outputs": 4,
+            "predictor_hidden_dims": [8],
+            "target_hidden_dims": [8],
+            "weight": 1.0,
+        }
+        return train_cfg
+
+    monkeypatch.setattr(train_module, "to_rsl_rl", with_rnd)
+    cfg = tiny_run.config(tmp_path / "run", 96)  # 3 iterations of 32 steps, 10-step episodes
+    result = train_module.train(
+        cfg, tiny_run.registry(), infant_factory=tiny_run.factory, progress=False
+    )
+    assert result.iterations == 3 and result.last["loss/rnd"] > 0
