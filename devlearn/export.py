@@ -77,9 +77,18 @@ def load_policy(
     return DeterministicPolicy(actor), obs
 
 
-def example_inputs(policy: DeterministicPolicy, obs: dict[str, Any]) -> tuple[torch.Tensor, ...]:
-    """One batch of one from ``obs``, in the policy's input order: tensors (1, *shape)."""
-    return tuple(torch.from_numpy(np.array(obs[name])[None]) for name in policy.names)
+def example_inputs(
+    policy: DeterministicPolicy, obs: dict[str, Any], batch: int = 4
+) -> tuple[torch.Tensor, ...]:
+    """``obs`` repeated into a batch, in the policy's input order: tensors (batch, *shape).
+
+    More than one sample, so that the exporter keeps the batch axis dynamic (torch.export
+    specialises axes of size 1).
+    """
+    return tuple(
+        torch.from_numpy(np.repeat(np.array(obs[name])[None], batch, axis=0))
+        for name in policy.names
+    )
 
 
 def export_policy(policy: DeterministicPolicy, obs: dict[str, Any], fmt: str, out: Path) -> Path:

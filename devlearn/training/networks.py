@@ -84,7 +84,11 @@ class SharedBody(nn.Module):
         graph that a backward pass may already have freed is never handed out twice.
         """
         grad = torch.is_grad_enabled()
-        key = (next(self.trunk.parameters())._version, grad, torch.is_inference_mode_enabled())
+        # in-place updates (optimiser steps, loading, normaliser updates) bump these versions
+        versions = (next(self.trunk.parameters())._version,) + tuple(
+            n.count._version for n in self.normalizers.values()
+        )
+        key = (versions, grad, torch.is_inference_mode_enabled())
         last = self._last
         reusable = last is not None and last[0] is obs and last[1] == key
         if reusable and not (grad and last[3] == caller):

@@ -163,3 +163,16 @@ def test_rsl_rl_rnd_trains_and_logs_its_intrinsic_reward(tmp_path, monkeypatch):
         cfg, tiny_run.registry(), infant_factory=tiny_run.factory, progress=False
     )
     assert result.iterations == 3 and result.last["loss/rnd"] > 0
+
+
+def test_features_are_not_reused_after_the_normaliser_moved():
+    alg, observations = build("shared", behavior_cls=NormalisedTiny)
+    obs = observations()
+    with torch.inference_mode():
+        before = alg.actor.get_latent(obs)
+        alg.actor.train()
+        alg.actor.update_normalization(
+            TensorDict({"proprioception": 5 + obs["proprioception"]}, [ENVS])
+        )
+        after = alg.critic.get_latent(obs)
+    assert not torch.allclose(before, after)
