@@ -12,6 +12,9 @@ import os
 # MuJoCo picks its GL backend when first imported: headless EGL (no display needed) unless the
 # user chose another. Set here, before anything can import mujoco through devlearn.
 os.environ.setdefault("MUJOCO_GL", "egl")
+# OpenMP threads that wait for work sleep instead of spinning, so torch's idle threads do not
+# take cores from the env workers (read when torch loads: effective if devlearn comes first).
+os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 from devlearn.behavior import Behavior, Evaluator, NetworkSpec
 from devlearn.curriculum import Curriculum, Stage

@@ -21,23 +21,27 @@ if TYPE_CHECKING:
 class NetworkSpec:
     """How to assemble the policy and value networks from per-sense encoders.
 
-    Both networks get their own copy of every encoder (no shared parameters). Each observation
-    named in ``encoders`` goes through its encoder; the features are concatenated, passed
-    through ``fusion_dims`` (Linear+ReLU each), then ``trunk_dims`` (Linear+ReLU each). The
-    policy head is a Gaussian with ``tanh`` mean and state-dependent ``softplus`` standard
-    deviation (paper, sec. II-A4); the value head is one linear layer.
+    Each observation named in ``encoders`` goes through its encoder; the features are
+    concatenated, passed through ``fusion_dims`` (Linear+ReLU each), then ``trunk_dims``
+    (Linear+ReLU each). The policy head is a Gaussian with ``tanh`` mean and state-dependent
+    ``softplus`` standard deviation (paper, sec. II-A4); the value head is one linear layer.
+    With ``share`` (the default, the paper's layout) policy and value use one set of encoders,
+    fusion and trunk and differ only in their heads; without it each network gets its own copy
+    of everything. The run config's ``network.layout`` may override the choice.
 
     Attributes:
         encoders: Observation name -> encoder. Every observation in the behaviour's actor and
             critic groups must have one.
         fusion_dims: Fusion layers after concatenation (paper Model I: ``(512,)``).
-        trunk_dims: Shared trunk layers before the heads (paper Model I: ``(256, 256)``).
+        trunk_dims: Trunk layers before the heads (paper Model I: ``(256, 256)``).
         init_std: Initial standard deviation of the policy (softplus bias is set to match).
         max_std: Upper bound on the policy's standard deviation (a sigmoid replaces the
             softplus); 0: unbounded, as in the paper.
         normalize: Observations standardised by a running mean and variance before their
             encoder (rsl-rl's ``EmpiricalNormalization``, updated during rollouts), e.g.
             ``("proprioception",)`` whose joint velocities and torques have mixed scales.
+        share: One set of encoders, fusion and trunk feeds both heads (paper: the trunk
+            "feeds both policy and value heads"); False: separate actor and critic networks.
     """
 
     encoders: dict[str, SensorEncoder]
@@ -46,6 +50,7 @@ class NetworkSpec:
     init_std: float = 0.5
     max_std: float = 0.0
     normalize: tuple[str, ...] = ()
+    share: bool = True
 
 
 class Evaluator:

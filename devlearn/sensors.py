@@ -14,11 +14,20 @@ class SensorEncoder(ABC):
     (:mod:`devlearn.training.networks`) calls :meth:`build` with the observation's per-sample
     shape, then concatenates the encoders' outputs and applies the behaviour's fusion and
     trunk layers (see :class:`devlearn.behavior.NetworkSpec`).
+
+    Input contract: the built module receives float32 tensors of shape (batch, *obs_shape).
+    Observations that the behaviour returns as uint8 (camera images, 0..255) arrive already
+    scaled to [0, 1] (divided by 255 once, by the network builder); float observations arrive
+    as they were observed, or standardised when named in ``NetworkSpec.normalize``. A module
+    must not rescale its input again.
     """
 
     @abstractmethod
     def build(self, obs_shape: tuple[int, ...]) -> nn.Module:
-        """Return a module mapping (batch, *obs_shape) float tensors to (batch, out_dim)."""
+        """Return a module mapping (batch, *obs_shape) float32 tensors to (batch, out_dim).
+
+        uint8 observations arrive as float32 in [0, 1] (see the class docstring).
+        """
 
     @abstractmethod
     def out_dim(self, obs_shape: tuple[int, ...]) -> int:

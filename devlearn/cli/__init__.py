@@ -9,7 +9,18 @@ import sys
 from devlearn.errors import UsageError
 
 # Sub-command modules, each with add_parser(subparsers) and run(args, registry) -> int.
-COMMANDS = ("run", "evaluate", "info", "config", "new", "plugins", "bench", "picture", "curve")
+COMMANDS = (
+    "run",
+    "evaluate",
+    "info",
+    "config",
+    "new",
+    "plugins",
+    "bench",
+    "picture",
+    "curve",
+    "export",
+)
 
 
 def _load_commands() -> list:

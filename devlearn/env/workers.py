@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import ctypes
 import multiprocessing as mp
+import os
 import signal
 import sys
 import traceback
@@ -200,6 +202,32 @@ def worker_main(conn, behavior, seeds: list[int], offset: int, infant_factory) -
             block.close()
 
 
+WORKER_THREADS = {
+    "OMP_NUM_THREADS": "1",
+    "MKL_NUM_THREADS": "1",
+    "OPENBLAS_NUM_THREADS": "1",
+    "OPENCV_FOR_THREADS_NUM": "1",
+}
+"""Environment of worker processes: one thread per native pool. There is one worker per core,
+and idle pool threads that spin-wait would compete with the other workers and with the
+training process's inference and update threads."""
+
+
+@contextlib.contextmanager
+def _worker_environment():
+    """Set :data:`WORKER_THREADS` while workers are spawned (they inherit ``os.environ``)."""
+    saved = {key: os.environ.get(key) for key in WORKER_THREADS}
+    os.environ.update(WORKER_THREADS)
+    try:
+        yield
+    finally:
+        for key, value in saved.items():
+            if value is None:
+                os.environ.pop(key, None)
+            else:
+                os.environ[key] = value
+
+
 class WorkerPool:
     """Envs split over worker processes; commands go through pipes, arrays through shared memory.
 
@@ -230,7 +258,8 @@ class WorkerPool:
                     daemon=True,
                     name=f"devlearn-env-worker-{len(self.procs)}",
                 )
-                proc.start()
+                with _worker_environment():
+                    proc.start()
                 child_conn.close()
                 self.conns.append(parent_conn)
                 self.procs.append(proc)

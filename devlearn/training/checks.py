@@ -42,7 +42,7 @@ def check_config(cfg) -> None:
     if not 0 <= cfg.seed <= SEED_MAX:
         raise UsageError(f"--seed must be an integer from 0 to {SEED_MAX}, got {cfg.seed}")
     if cfg.torch_threads < 0 or cfg.update_threads < 0:
-        raise UsageError("torch_threads and update_threads must be 0 (torch's default) or more")
+        raise UsageError("torch_threads and update_threads must be 0 (automatic) or more")
     if cfg.save_interval < 1:
         raise UsageError(f"save_interval must be at least 1, got {cfg.save_interval}")
     if not _DEVICE.match(cfg.device):

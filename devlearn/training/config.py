@@ -43,6 +43,26 @@ class PPOConfig:
 
 
 @dataclass
+class NetworkConfig:
+    """How the networks are laid out; recorded so that older checkpoints rebuild as trained."""
+
+    layout: str = ""
+    """``shared``: one set of encoders, fusion and trunk feeds separate policy and value heads
+    (the paper); ``separate``: actor and critic each have their own; empty: the behaviour's
+    ``NetworkSpec.share``. A saved config without a ``network`` section (runs from before the
+    shared layout) means ``separate``."""
+    legacy_uint8_scale: bool = False
+    """Divide uint8 observations (eye images) by 255 twice, as every run before the input-scale
+    fix did (the eye CNN divided its already-scaled input again). A saved config without a
+    ``network`` section means True, so those checkpoints see the input they were trained on;
+    new runs use [0, 1] images."""
+
+
+LEGACY_NETWORK = NetworkConfig(layout="separate", legacy_uint8_scale=True)
+"""What a saved config without a ``network`` section was trained with."""
+
+
+@dataclass
 class RunConfig:
     """Everything one ``devlearn run`` needs; saved as ``config.json`` in the run directory."""
 
@@ -68,14 +88,13 @@ class RunConfig:
     save_interval: int = 50
     """Iterations between periodic ``checkpoint_<step>.pt`` files; ``checkpoint_latest.pt`` is
     also written every ``save_interval // 10`` iterations (at least every iteration)."""
-    torch_threads: int = 1
-    """``torch.set_num_threads`` while collecting (1: a forward pass on a few dozen observations
-    gains nothing from more, and results stay repeatable; 0 leaves torch's default)."""
-    update_threads: int = 1
-    """Threads of the PPO update (0: same as ``torch_threads``). The env workers sleep during
-    the update, so 2 can use a 2-core machine's idle core; but a core shared with any other
-    busy program makes multi-threaded updates several times slower (docs/scaling.md), and
-    results are repeatable only for the same value, so 1 is the default."""
+    torch_threads: int = 0
+    """Torch threads of the training process while collecting and updating (0: automatic, all
+    cores this process may use while the env workers wait, falling back to one thread while
+    another program makes multi-threaded work slower; see ``ThreadPlan`` in
+    ``devlearn/training/process.py``). Results repeat bit for bit only for a fixed count."""
+    update_threads: int = 0
+    """Threads of the PPO update (0: the same as ``torch_threads``)."""
     logger: str = "tensorboard"
     """Where metrics go besides metrics.jsonl: ``tensorboard``, or ``wandb`` (Weights & Biases
     through rsl-rl's writer, which also writes TensorBoard; needs ``devlearn[wandb]``;
@@ -84,6 +103,8 @@ class RunConfig:
     """W&B project of the run (with ``logger=wandb``); the run is named after its directory."""
     ppo: PPOConfig = field(default_factory=PPOConfig)
     """PPO hyper-parameters."""
+    network: NetworkConfig = field(default_factory=NetworkConfig)
+    """Network layout and input scale."""
     behavior: Any = None
     """The behaviour's own options (an instance of its ``config_class``)."""
 
@@ -227,7 +248,11 @@ def default_config(behavior_cls: type, overrides: list[str] | None = None, **top
     cfg = RunConfig(behavior_name=behavior_cls.name, behavior=behavior_cls.config_class())
     apply_overrides(cfg, behavior_cls(cfg.behavior).train_defaults())
     apply_overrides(cfg, {k: v for k, v in top.items() if v is not None})
-    return apply_overrides(cfg, overrides or [])
+    apply_overrides(cfg, overrides or [])
+    if not cfg.network.layout:  # record the behaviour's choice, so config.json says it
+        share = behavior_cls(cfg.behavior).network().share
+        cfg.network.layout = "shared" if share else "separate"
+    return cfg
 
 
 def to_dict(cfg: RunConfig) -> dict[str, Any]:
@@ -250,8 +275,25 @@ def _fill(obj: Any, data: dict[str, Any], prefix: str) -> None:
 def from_dict(data: dict[str, Any], behavior_cls: type) -> RunConfig:
     """Rebuild a RunConfig saved by :func:`to_dict` for the behaviour class ``behavior_cls``."""
     cfg = RunConfig(behavior_name=behavior_cls.name, behavior=behavior_cls.config_class())
+    if "network" not in data:
+        cfg.network = dataclasses.replace(LEGACY_NETWORK)
     _fill(cfg, data, "")
     return cfg
+
+
+def shared_layout(cfg: RunConfig, spec: Any) -> bool:
+    """Whether this run shares encoders, fusion and trunk between policy and value.
+
+    Raises:
+        UsageError: ``network.layout`` is neither ``shared``, ``separate`` nor empty.
+    """
+    layouts = {"shared": True, "separate": False, "": bool(spec.share)}
+    if cfg.network.layout not in layouts:
+        raise UsageError(
+            f"unknown network.layout '{cfg.network.layout}'; valid: shared, separate "
+            "(or empty: the behaviour's NetworkSpec.share)"
+        )
+    return layouts[cfg.network.layout]
 
 
 def to_rsl_rl(cfg: RunConfig, behavior: Any, observation_names: list[str] | None = None) -> dict:
@@ -259,8 +301,9 @@ def to_rsl_rl(cfg: RunConfig, behavior: Any, observation_names: list[str] | None
 
     Actor and critic are :class:`~devlearn.training.networks.MultiSenseModel`s built from the
     behaviour's :class:`~devlearn.behavior.NetworkSpec` (passed as an object; rsl-rl deep-copies
-    it, so each network gets its own encoders). The algorithm is
-    :class:`~devlearn.training.ppo.UniqueParamPPO`.
+    it). In the ``shared`` layout rsl-rl's ``share_cnn_encoders`` hands the actor's encoders,
+    fusion and trunk to the critic, which adds only its value head; in the ``separate`` layout
+    each network builds its own. The algorithm is :class:`~devlearn.training.ppo.UniqueParamPPO`.
 
     Args:
         cfg: The run config.
@@ -271,19 +314,28 @@ def to_rsl_rl(cfg: RunConfig, behavior: Any, observation_names: list[str] | None
     names = list(observation_names or spec.encoders)
     ppo = dataclasses.asdict(cfg.ppo)
     num_steps = ppo.pop("num_steps_per_env")
-    model = "devlearn.training.networks:MultiSenseModel"
+    shared = shared_layout(cfg, spec)
+    model = {
+        "class_name": "devlearn.training.networks:MultiSenseModel",
+        "spec": spec,
+        "shared": shared,
+        "legacy_uint8_scale": cfg.network.legacy_uint8_scale,
+    }
     return {
-        "algorithm": {"class_name": "devlearn.training.ppo:UniqueParamPPO", **ppo},
+        "algorithm": {
+            "class_name": "devlearn.training.ppo:UniqueParamPPO",
+            "share_cnn_encoders": shared,
+            **ppo,
+        },
         "actor": {
-            "class_name": model,
-            "spec": spec,
+            **model,
             "distribution_cfg": {
                 "class_name": "devlearn.training.networks:TanhSoftplusGaussian",
                 "init_std": spec.init_std,
                 "max_std": spec.max_std,
             },
         },
-        "critic": {"class_name": model, "spec": spec},
+        "critic": dict(model),
         "obs_groups": behavior.obs_groups(names),
         "num_steps_per_env": num_steps,
         "save_interval": cfg.save_interval,

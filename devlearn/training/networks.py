@@ -1,4 +1,4 @@
-"""Policy and value networks from a behaviour's NetworkSpec, and the tanh/softplus Gaussian."""
+"""Policy and value networks from a behaviour's NetworkSpec (separate or shared layout)."""
 
 from __future__ import annotations
 
@@ -6,28 +6,128 @@ import math
 
 import torch
 import torch.nn as nn
-import torch.nn.functional as F
 from rsl_rl.models import MLPModel
 from rsl_rl.modules import EmpiricalNormalization
-from rsl_rl.modules.distribution import Distribution
+from rsl_rl.utils import resolve_nn_activation
 from tensordict import TensorDict
-from torch.distributions import Normal
 
 from devlearn.behavior import NetworkSpec
+from devlearn.training.distribution import TanhSoftplusGaussian, inverse_softplus
+
+__all__ = ["MultiSenseModel", "SharedBody", "TanhSoftplusGaussian", "as_float", "inverse_softplus"]
 
 
-def as_float(x: torch.Tensor) -> torch.Tensor:
-    """uint8 observations (images) become floats in [0, 1]; others are cast to float32."""
-    return x.float() / 255.0 if x.dtype == torch.uint8 else x.float()
+def as_float(x: torch.Tensor, legacy_uint8_scale: bool = False) -> torch.Tensor:
+    """uint8 observations (images) become floats in [0, 1]; others are cast to float32.
+
+    ``legacy_uint8_scale`` divides uint8 values by 255 once more, as every hand-regard run
+    before the fix did (``EyeCNN`` divided its already-scaled input again), so that those
+    checkpoints see the input scale they were trained on.
+    """
+    if x.dtype != torch.uint8:
+        return x.float()
+    x = x.float() / 255.0
+    return x / 255.0 if legacy_uint8_scale else x
+
+
+def _trunk(in_dim: int, dims: tuple[int, ...], activation: str) -> nn.Sequential:
+    layers: list[nn.Module] = []
+    for dim in dims:
+        layers += [nn.Linear(in_dim, dim), resolve_nn_activation(activation)]
+        in_dim = dim
+    return nn.Sequential(*layers)
+
+
+class SharedBody(nn.Module):
+    """Encoders, normalisers, fusion and trunk that the policy and value heads both read.
+
+    ``features = trunk(fusion(concat(encoder_k(normalise(obs_k)))))``, (N, out_dim). The actor
+    owns the body; the critic holds a plain reference, so the body's parameters appear once in
+    ``actor.parameters()`` and nowhere in ``critic.parameters()`` (rsl-rl's optimiser and its
+    per-network gradient clipping then treat each tensor once). The last result is reused when
+    the same observation object comes again with unchanged parameters and the same autograd
+    mode (see :meth:`forward`), which is how rsl-rl calls actor and critic (``act``: actor,
+    critic, critic; ``update``: actor, critic per mini-batch, one backward over both losses):
+    the body runs once per batch, not two or three times, and both losses backpropagate
+    through the one graph.
+    """
+
+    def __init__(
+        self,
+        spec: NetworkSpec,
+        obs_shapes: dict[str, tuple[int, ...]],
+        activation: str,
+        legacy_uint8_scale: bool = False,
+    ) -> None:
+        super().__init__()
+        hidden = tuple(spec.fusion_dims) + tuple(spec.trunk_dims)
+        if not hidden:
+            raise ValueError("NetworkSpec needs at least one fusion or trunk layer")
+        self.groups = list(obs_shapes)
+        self.legacy_uint8_scale = legacy_uint8_scale
+        self.encoders = nn.ModuleDict(
+            {g: spec.encoders[g].build(shape) for g, shape in obs_shapes.items()}
+        )
+        self.normalizers = nn.ModuleDict(
+            {g: EmpiricalNormalization(s) for g, s in obs_shapes.items() if g in spec.normalize}
+        )
+        latent = sum(spec.encoders[g].out_dim(s) for g, s in obs_shapes.items())
+        self.trunk = _trunk(latent, hidden, activation)
+        self.out_dim = hidden[-1]
+        self._last: tuple | None = None
+
+    def forward(self, obs, caller: int = 0) -> torch.Tensor:
+        """Features of a batch (``obs[group]`` of shape (N, *shape)); returns (N, out_dim).
+
+        ``caller`` identifies the model asking. Without gradients a result is reused by
+        anyone; with gradients only once, by another model (the critic after the actor), so a
+        graph that a backward pass may already have freed is never handed out twice.
+        """
+        grad = torch.is_grad_enabled()
+        # in-place updates (optimiser steps, loading, normaliser updates) bump these versions
+        versions = (next(self.trunk.parameters())._version,) + tuple(
+            n.count._version for n in self.normalizers.values()
+        )
+        key = (versions, grad, torch.is_inference_mode_enabled())
+        last = self._last
+        reusable = last is not None and last[0] is obs and last[1] == key
+        if reusable and not (grad and last[3] == caller):
+            if grad:
+                self._last = None
+            return last[2]
+        features = self.encode(obs)
+        self._last = (obs, key, features, caller)
+        return features
+
+    def encode(self, obs) -> torch.Tensor:
+        """:meth:`forward` without reuse (for export): (N, out_dim) features."""
+        parts = []
+        for g in self.groups:
+            x = as_float(obs[g], self.legacy_uint8_scale)
+            if g in self.normalizers:
+                x = self.normalizers[g](x)
+            parts.append(self.encoders[g](x))
+        return self.trunk(torch.cat(parts, dim=-1))
+
+    def update_normalization(self, obs: TensorDict) -> None:
+        """Update the running statistics of the normalised groups from a rollout batch."""
+        for group, normalizer in self.normalizers.items():
+            normalizer.update(as_float(obs[group], self.legacy_uint8_scale))  # type: ignore
 
 
 class MultiSenseModel(MLPModel):
     """rsl-rl model: one encoder per observation, concatenated, then fusion + trunk + head.
 
     ``latent = concat(encoder_k(obs_k))`` over the set's observation groups (any per-sample
-    shape, e.g. (2, 64, 64, 3) uint8 images); rsl-rl's ``MLP`` then applies
-    ``spec.fusion_dims + spec.trunk_dims`` (Linear + activation each) and one linear head:
-    the value for the critic, ``(2, action_dim)`` for the actor's distribution.
+    shape, e.g. (2, 64, 64, 3) uint8 images, which arrive as float32 in [0, 1]); then
+    ``spec.fusion_dims + spec.trunk_dims`` (Linear + activation each) and one linear head: the
+    value for the critic, ``(2, action_dim)`` for the actor's distribution.
+
+    Two layouts. ``shared=False`` (``separate``, every run before the shared layout existed):
+    the model holds its own encoders, normalisers and fusion + trunk + head MLP. ``shared=True``
+    (the paper's Models I and II): the actor builds a :class:`SharedBody` and exposes it as
+    ``cnns``, which rsl-rl's ``share_cnn_encoders`` hands to the critic's constructor; each
+    model's ``mlp`` is then only its head.
 
     Args:
         obs: A batch of observations (groups of shape (N, *shape)).
@@ -38,6 +138,10 @@ class MultiSenseModel(MLPModel):
         activation: Activation of the fusion and trunk layers (paper: ReLU).
         obs_normalization: Not supported (encoders see raw observations); must be False.
         distribution_cfg: rsl-rl distribution config (actor only).
+        shared: Use the shared layout.
+        cnns: The actor's SharedBody (the critic of the shared layout; rsl-rl passes it).
+        legacy_uint8_scale: Divide uint8 observations by 255 twice (hand-regard runs trained
+            before the input-scale fix; see :func:`as_float`).
     """
 
     def __init__(
@@ -50,16 +154,41 @@ class MultiSenseModel(MLPModel):
         activation: str = "relu",
         obs_normalization: bool = False,
         distribution_cfg: dict | None = None,
+        shared: bool = False,
+        cnns: SharedBody | None = None,
+        legacy_uint8_scale: bool = False,
     ) -> None:
         if obs_normalization:
             raise ValueError("MultiSenseModel does not normalise observations; encoders do")
         hidden = tuple(spec.fusion_dims) + tuple(spec.trunk_dims)
         if not hidden:
             raise ValueError("NetworkSpec needs at least one fusion or trunk layer")
-        self.spec = spec  # plain attribute, read by _get_latent_dim during super().__init__
+        # plain attributes, read by _get_latent_dim during super().__init__
+        self.spec = spec
+        self.shared = shared or cnns is not None
+        self.legacy_uint8_scale = legacy_uint8_scale
+        self.activation = activation
+        self._given_body = [cnns] if cnns is not None else []  # a list: not registered
+        # shared: rsl-rl's MLP needs a hidden layer; a 1-wide placeholder is replaced below
         super().__init__(
-            obs, obs_groups, obs_set, output_dim, hidden, activation, False, distribution_cfg
+            obs,
+            obs_groups,
+            obs_set,
+            output_dim,
+            (1,) if self.shared else hidden,
+            activation,
+            False,
+            distribution_cfg,
         )
+        if self.shared:
+            out = self.distribution.input_dim if self.distribution is not None else output_dim
+            width = math.prod(out) if isinstance(out, list) else out
+            head: list[nn.Module] = [nn.Linear(self._body().out_dim, width)]
+            if isinstance(out, list):
+                head.append(nn.Unflatten(-1, out))
+            self.mlp = nn.Sequential(*head)
+            if self.distribution is not None:
+                self.distribution.init_mlp_weights(self.mlp)
 
     def _get_obs_dim(
         self, obs: TensorDict, obs_groups: dict[str, list[str]], obs_set: str
@@ -75,12 +204,26 @@ class MultiSenseModel(MLPModel):
         return groups, sum(math.prod(s) for s in self.obs_shapes.values())
 
     def _get_latent_dim(self) -> int:
-        self.encoders = nn.ModuleDict(
-            {g: self.spec.encoders[g].build(shape) for g, shape in self.obs_shapes.items()}
-        )
         unknown = set(self.spec.normalize) - set(self.spec.encoders)
         if unknown:
             raise ValueError(f"NetworkSpec.normalize names unknown observations {sorted(unknown)}")
+        if self._given_body:  # the critic borrows the actor's body, unregistered
+            body = self._given_body[0]
+            if body.groups != self.obs_groups:
+                raise ValueError(
+                    f"a shared body needs the same observations for actor and critic; got "
+                    f"{body.groups} and {self.obs_groups}"
+                )
+            self._borrowed = [body]
+            return body.out_dim
+        if self.shared:
+            self.body = SharedBody(
+                self.spec, self.obs_shapes, self.activation, self.legacy_uint8_scale
+            )
+            return self.body.out_dim
+        self.encoders = nn.ModuleDict(
+            {g: self.spec.encoders[g].build(shape) for g, shape in self.obs_shapes.items()}
+        )
         self.normalizers = nn.ModuleDict(
             {
                 g: EmpiricalNormalization(shape)
@@ -90,135 +233,45 @@ class MultiSenseModel(MLPModel):
         )
         return sum(self.spec.encoders[g].out_dim(s) for g, s in self.obs_shapes.items())
 
+    def _body(self) -> SharedBody:
+        return self._borrowed[0] if hasattr(self, "_borrowed") else self.body
+
+    @property
+    def cnns(self) -> SharedBody | None:
+        """The shared body (rsl-rl's ``share_cnn_encoders`` passes it to the critic)."""
+        return self._body() if self.shared else None
+
     def _input(self, obs: TensorDict, group: str) -> torch.Tensor:
-        x = as_float(obs[group])
+        x = as_float(obs[group], self.legacy_uint8_scale)
         return self.normalizers[group](x) if group in self.normalizers else x
 
     def get_latent(self, obs: TensorDict, masks=None, hidden_state=None) -> torch.Tensor:
-        """Normalise the groups named in ``spec.normalize``, encode every group, concatenate.
+        """Normalise the groups named in ``spec.normalize``, encode every group, concatenate
+        (separate layout), or the shared body's features (shared layout).
 
         Returns:
             (N, latent_dim).
         """
+        if self.shared:
+            return self._body()(obs, id(self))
         return torch.cat([self.encoders[g](self._input(obs, g)) for g in self.obs_groups], dim=-1)
 
+    def encode(self, obs) -> torch.Tensor:
+        """:meth:`get_latent` without the shared body's reuse of results (for export)."""
+        return self._body().encode(obs) if self.shared else self.get_latent(obs)
+
     def update_normalization(self, obs: TensorDict) -> None:
-        """Update the running statistics of the normalised groups from a rollout batch."""
+        """Update the running statistics of the normalised groups from a rollout batch (the
+        shared body's by its owner only, so each batch is counted once)."""
+        if self.shared:
+            if not hasattr(self, "_borrowed"):
+                self.body.update_normalization(obs)
+            return
         for group, normalizer in self.normalizers.items():
-            normalizer.update(as_float(obs[group]))  # type: ignore[operator]
+            normalizer.update(as_float(obs[group], self.legacy_uint8_scale))  # type: ignore
 
     def as_jit(self) -> nn.Module:
-        raise NotImplementedError("MultiSenseModel has no TorchScript export; use the checkpoint")
+        raise NotImplementedError("use devlearn.export (devlearn export) for MultiSenseModel")
 
     def as_onnx(self, verbose: bool) -> nn.Module:
-        raise NotImplementedError("MultiSenseModel has no ONNX export; use the checkpoint")
-
-
-def inverse_softplus(y: float) -> float:
-    """x such that softplus(x) = y (y > 0)."""
-    return y + math.log(-math.expm1(-y))
-
-
-class TanhSoftplusGaussian(Distribution):
-    """Diagonal Gaussian with ``mean = tanh(W_mu h + b_mu)`` and ``std = softplus(W_s h + b_s)``.
-
-    Both heads read the trunk features, so the spread is state-dependent (paper, sec. II-A4,
-    eq. for mu_t and sigma_t). ``min_std`` is added to the softplus so the log-probability
-    stays finite when the softplus underflows; samples are not squashed (the env clips them
-    to [-1, 1]) and the deterministic action is the mean.
-
-    With ``max_std`` set, the spread is bounded instead: ``std = min_std + (max_std - min_std) *
-    sigmoid(W_s h + b_s)``. Because actions are clipped, an unbounded std meets no resistance
-    from the clipped returns and grows under the entropy bonus until every action is +-1 noise
-    (our 8M self_touch run ended near std 1000, see ``results/self_touch/README.md``).
-
-    Args:
-        output_dim: Action size.
-        init_std: Standard deviation at initialisation (sets the softplus bias).
-        min_std: Small positive floor added to the standard deviation.
-        max_std: Upper bound on the standard deviation; 0: unbounded (the paper).
-    """
-
-    def __init__(
-        self,
-        output_dim: int,
-        init_std: float = 0.5,
-        min_std: float = 1e-3,
-        max_std: float = 0.0,
-    ) -> None:
-        super().__init__(output_dim)
-        if init_std <= min_std:
-            raise ValueError(f"init_std must exceed min_std={min_std}, got {init_std}")
-        if max_std and max_std <= init_std:  # 0 means unbounded
-            raise ValueError(f"max_std must exceed init_std={init_std} (or be 0), got {max_std}")
-        self.init_std = float(init_std)
-        self.min_std = float(min_std)
-        self.max_std = float(max_std)
-        self._distribution: Normal | None = None
-        Normal.set_default_validate_args(False)
-
-    @property
-    def input_dim(self) -> list[int]:
-        """The MLP outputs (..., 2, output_dim): raw mean, then raw std."""
-        return [2, self.output_dim]
-
-    def update(self, mlp_output: torch.Tensor) -> None:
-        raw_mean, raw_std = torch.unbind(mlp_output, dim=-2)
-        if not self.max_std:
-            std = F.softplus(raw_std) + self.min_std
-        else:
-            std = self.min_std + (self.max_std - self.min_std) * torch.sigmoid(raw_std)
-        self._distribution = Normal(torch.tanh(raw_mean), std)
-
-    def sample(self) -> torch.Tensor:
-        return self._distribution.sample()  # type: ignore[union-attr]
-
-    def deterministic_output(self, mlp_output: torch.Tensor) -> torch.Tensor:
-        return torch.tanh(mlp_output[..., 0, :])
-
-    def as_deterministic_output_module(self) -> nn.Module:
-        return _TanhFirstSlice()
-
-    @property
-    def mean(self) -> torch.Tensor:
-        return self._distribution.mean  # type: ignore[union-attr]
-
-    @property
-    def std(self) -> torch.Tensor:
-        return self._distribution.stddev  # type: ignore[union-attr]
-
-    @property
-    def entropy(self) -> torch.Tensor:
-        return self._distribution.entropy().sum(dim=-1)  # type: ignore[union-attr]
-
-    @property
-    def params(self) -> tuple[torch.Tensor, ...]:
-        return (self.mean, self.std)
-
-    def log_prob(self, outputs: torch.Tensor) -> torch.Tensor:
-        return self._distribution.log_prob(outputs).sum(dim=-1)  # type: ignore[union-attr]
-
-    def kl_divergence(self, old_params, new_params) -> torch.Tensor:
-        old = Normal(*old_params)
-        new = Normal(*new_params)
-        return torch.distributions.kl_divergence(old, new).sum(dim=-1)
-
-    def init_mlp_weights(self, mlp: nn.Module) -> None:
-        """Start near mean 0 and std ``init_std``: small head weights, matching std bias."""
-        head = mlp[-2]  # the last Linear (followed by Unflatten to (2, output_dim))
-        with torch.no_grad():
-            head.weight.mul_(0.01)
-            head.bias[: self.output_dim].zero_()
-            if not self.max_std:
-                bias = inverse_softplus(self.init_std - self.min_std)
-            else:
-                frac = (self.init_std - self.min_std) / (self.max_std - self.min_std)
-                bias = math.log(frac / (1.0 - frac))  # inverse sigmoid
-            head.bias[self.output_dim :].fill_(bias)
-
-
-class _TanhFirstSlice(nn.Module):
-    """Export-friendly deterministic output: tanh of the raw mean."""
-
-    def forward(self, mlp_output: torch.Tensor) -> torch.Tensor:
-        return torch.tanh(mlp_output[..., 0, :])
+        raise NotImplementedError("use devlearn.export (devlearn export) for MultiSenseModel")

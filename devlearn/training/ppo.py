@@ -25,10 +25,14 @@ class UniqueParamPPO(PPO):
     """PPO whose optimiser holds every parameter once.
 
     rsl-rl 5.5.1 builds its optimiser over ``chain(actor.parameters(), critic.parameters())``:
-    a tensor shared by actor and critic would then get two Adam steps per mini-batch. Our
-    MultiSenseModels give each network its own encoders, but a behaviour (or rsl-rl's
-    ``share_cnn_encoders``) may still share modules, so the optimiser is rebuilt here over
-    unique parameters, and gradients are all-reduced once per tensor when distributed.
+    a tensor shared by actor and critic would then get two Adam steps per mini-batch. In our
+    shared layout the critic holds the actor's body without registering it (its
+    ``parameters()`` are its head alone), so each tensor appears once anyway; but anything
+    else that shares registered modules (rsl-rl's own ``share_cnn_encoders`` with its CNN
+    models, a behaviour's own sharing) would hit the trap, so the optimiser is rebuilt here
+    over unique parameters, and gradients are all-reduced once per tensor when distributed.
+    Gradient clipping stays rsl-rl's, per network: the shared body is clipped with the
+    policy head (its gradient holds both losses), the value head on its own.
     """
 
     def __init__(self, actor, critic, storage, *args, **kwargs) -> None:

@@ -24,6 +24,74 @@ def init_distributed(device: str) -> None:
             dist.init_process_group("gloo")
 
 
+def learner_threads() -> int:
+    """The cores this process may use, shared among torchrun's local ranks (at least 1)."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else None
+    local_ranks = int(os.environ.get("LOCAL_WORLD_SIZE", "1"))
+    return max((cores or os.cpu_count() or 1) // local_ranks, 1)
+
+
+class ThreadPlan:
+    """How many torch threads the rollout inference and the PPO update of each iteration get.
+
+    A fixed count (``torch_threads`` / ``update_threads`` > 0) is used as given. Automatic (0)
+    means all cores this process may use (:func:`learner_threads`): the env workers wait while
+    the training process runs inference or updates, so those cores are idle. But torch's
+    OpenMP threads meet at a barrier after every operation, and when another program holds one
+    of the cores each of the update's thousands of operations waits for that core's next time
+    slice: measured on 2 cores with other jobs running, a self_touch update took 6.2 ms per
+    sample with 2 threads against 0.71 ms with one (docs/benchmarks.md). So the automatic plan
+    also times the update with one thread and keeps whichever count was faster, trying the
+    other again every ``probe_every`` iterations. The first update (warm-up) is not timed.
+
+    Results repeat bit for bit only for a fixed thread count (floating-point sums split
+    differently); set ``torch_threads`` for runs that must repeat exactly.
+
+    Args:
+        collect: Threads during rollouts (0: automatic, the update's count).
+        update: Threads of the update (0: ``collect`` if fixed, else automatic).
+        cores: Cores available (default :func:`learner_threads`).
+        probe_every: Iterations between trials of the slower count.
+    """
+
+    def __init__(
+        self, collect: int, update: int, cores: int | None = None, probe_every: int = 25
+    ) -> None:
+        self.cores = cores or learner_threads()
+        self.fixed_collect = collect
+        fixed = update or collect
+        self.candidates = [fixed] if fixed else sorted({self.cores, 1}, reverse=True)
+        self.probe_every = probe_every
+        self.seconds: dict[int, float] = {}
+        self.iteration = 0
+        self.current = self.candidates[0]
+
+    def next_iteration(self) -> tuple[int, int]:
+        """Choose the counts of the coming iteration; returns ``(collect, update)`` threads."""
+        unmeasured = [c for c in self.candidates if c not in self.seconds]
+        if self.iteration == 0 or len(self.candidates) == 1:
+            self.current = self.candidates[0]
+        elif unmeasured:
+            self.current = unmeasured[0]
+        else:
+            ranked = sorted(self.candidates, key=self.seconds.__getitem__)
+            probe = self.iteration % self.probe_every == 0
+            self.current = ranked[-1] if probe else ranked[0]
+        self.iteration += 1
+        return self.fixed_collect or self.current, self.current
+
+    def record(self, update_seconds: float) -> None:
+        """Take note of how long the iteration's update took (the first is a warm-up)."""
+        if self.iteration > 1:  # the latest time of each count: the load may have changed
+            self.seconds[self.current] = update_seconds
+
+
+def set_threads(threads: int) -> None:
+    """``torch.set_num_threads(threads)`` unless already so (changing it is not free)."""
+    if threads > 0 and torch.get_num_threads() != threads:
+        torch.set_num_threads(threads)
+
+
 @contextlib.contextmanager
 def update_threads(threads: int):
     """Run the block with ``threads`` torch intra-op threads (0: unchanged), then restore."""

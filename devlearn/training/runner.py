@@ -34,7 +34,13 @@ from devlearn.training.checkpoint import (
     save_atomic,
 )
 from devlearn.training.config import RunConfig, to_dict
-from devlearn.training.process import init_distributed, quiet, update_threads
+from devlearn.training.process import (
+    ThreadPlan,
+    init_distributed,
+    quiet,
+    set_threads,
+    update_threads,
+)
 
 __all__ = ["DevRunner", "init_distributed", "quiet", "update_threads"]
 
@@ -50,6 +56,14 @@ class DevRunner(OnPolicyRunner):
     ``checkpoint_<step>.pt`` every ``save_interval``, at the end and on Ctrl-C or SIGTERM; and
     CPU distributed training over gloo. ``current_learning_iteration`` counts *completed*
     iterations, so a resumed run logs each iteration index once.
+
+    ``learn`` re-implements rsl-rl's ``OnPolicyRunner.learn`` loop (same calls in the same
+    order: ``act``, ``env.step``, ``process_env_step``, ``compute_returns``, ``update``,
+    ``logger.log``, with rsl-rl's intrinsic-reward (RND) values passed to its logger) because
+    it counts environment steps rather than iterations (the curriculum and ``total_steps``
+    are in steps), sets the torch threads of each rollout and update
+    (:class:`~devlearn.training.process.ThreadPlan`), writes the progress bar and
+    ``metrics.jsonl`` and saves devlearn checkpoints instead of rsl-rl's ``model_<it>.pt``.
 
     Args:
         env: The DevVecEnv.
@@ -111,6 +125,8 @@ class DevRunner(OnPolicyRunner):
     def learn(self, total_steps: int) -> None:  # type: ignore[override]
         """Train until ``total_steps`` environment steps (all envs, all ranks) are done."""
         env, alg = self.env, self.alg
+        rnd = bool(self.cfg["algorithm"].get("rnd_cfg"))
+        threads = ThreadPlan(self.run_cfg.torch_threads, self.run_cfg.update_threads)
         per_iteration = self.cfg["num_steps_per_env"] * env.num_envs * self.gpu_world_size
         total_it = self.current_learning_iteration + max(
             math.ceil((total_steps - self.env_steps) / per_iteration), 0
@@ -140,6 +156,8 @@ class DevRunner(OnPolicyRunner):
             while self.env_steps < total_steps:
                 if self.curriculum.update(self.env_steps):
                     env.set_stage(self.curriculum.stage.options)
+                collect_threads, learn_threads = threads.next_iteration()
+                set_threads(collect_threads)  # the workers wait while the policy runs
                 start = time.time()
                 finished: list[dict[str, float]] = []
                 step_rewards = 0.0
@@ -152,15 +170,17 @@ class DevRunner(OnPolicyRunner):
                         obs, rewards = obs.to(self.device), rewards.to(self.device)
                         dones = dones.to(self.device)
                         alg.process_env_step(obs, rewards, dones, extras)
-                        self.logger.process_env_step(rewards, dones, extras, None)
+                        intrinsic = alg.intrinsic_rewards if rnd else None
+                        self.logger.process_env_step(rewards, dones, extras, intrinsic)
                         finished += extras["episode_infos"]
                         step_rewards += float(rewards.mean())
                     collect_time = time.time() - start
                     alg.compute_returns(obs)
                 start = time.time()
-                with update_threads(self.run_cfg.update_threads):
-                    losses = alg.update()
+                set_threads(learn_threads)  # the workers sleep during the update
+                losses = alg.update()
                 learn_time = time.time() - start
+                threads.record(learn_time)
                 it = self.current_learning_iteration
                 self.current_learning_iteration += 1
                 self.env_steps += per_iteration
@@ -175,12 +195,16 @@ class DevRunner(OnPolicyRunner):
                         loss_dict=losses,
                         learning_rate=alg.learning_rate,
                         action_std=alg.get_policy().output_std,
-                        rnd_weight=None,
+                        rnd_weight=alg.rnd.weight if rnd else None,
                     )
                 self.episodes.extend(finished)
                 rate = per_iteration / max(collect_time + learn_time, 1e-9)
                 mean_step = step_rewards / self.cfg["num_steps_per_env"]
-                times = {"collect_s": collect_time, "update_s": learn_time}
+                times = {
+                    "collect_s": collect_time,
+                    "update_s": learn_time,
+                    "update_threads": learn_threads,
+                }
                 self._record(it, len(finished), mean_step, losses, rate, times, bar)
                 interval = self.cfg["save_interval"]
                 if self.current_learning_iteration % interval == 0:

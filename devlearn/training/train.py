@@ -187,8 +187,8 @@ def _build(cfg, registry, run_dir, checkpoint, infant_factory, progress, rank, w
     """Start-up after the checks: seed, prepare the behaviour, write config.json, build the
     envs and the runner (restored from ``checkpoint``); return ``(env, runner)``."""
 
-    # Seed. One intra-op thread by default: these networks are small, and a fixed thread
-    # count keeps CPU results bit-for-bit repeatable (torch_threads=0 keeps torch's default).
+    # Seed. The runner sets the torch threads of each rollout and update (ThreadPlan); a
+    # fixed torch_threads keeps CPU results bit-for-bit repeatable.
     seed_everything(cfg.seed)
     if cfg.torch_threads > 0:
         torch.set_num_threads(cfg.torch_threads)

@@ -137,7 +137,8 @@ def test_to_rsl_rl():
     from devlearn.training.ppo import UniqueParamPPO
 
     params = inspect.signature(UniqueParamPPO.__mro__[1].__init__).parameters
-    assert set(alg) - {"class_name"} <= set(params)
+    # share_cnn_encoders is popped by rsl-rl's construct_algorithm before PPO sees it
+    assert set(alg) - {"class_name", "share_cnn_encoders"} <= set(params)
 
 
 def test_automatic_workers_one_per_core_and_none_for_small_batches():

@@ -96,8 +96,9 @@ def test_network_fuses_576_features(behavior):
     dims = {k: spec.encoders[k].out_dim(s) for k, s in shapes.items()}
     assert sum(dims.values()) == 576 and spec.fusion_dims == (256,) and spec.trunk_dims == ()
     assert spec.normalize == ("proprioception",)  # running mean/var before the MLP
+    assert spec.share  # one fused representation feeds both heads (paper, Model II)
     eye = spec.encoders["left_eye"].build((64, 64, 3))
-    images = torch.randint(0, 256, (2, 64, 64, 3), dtype=torch.uint8)
+    images = torch.rand(2, 64, 64, 3)  # the SensorEncoder contract: [0, 1] floats
     assert eye(images).shape == (2, 256)
     proprio = spec.encoders["proprioception"].build((21,))
     assert proprio(torch.zeros(2, 21)).shape == (2, 64)

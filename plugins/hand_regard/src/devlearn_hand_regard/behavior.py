@@ -154,6 +154,7 @@ class HandRegard(Behavior):
             init_std=cfg.init_std,
             # Joint angles, velocities and torques have mixed scales: running standardisation.
             normalize=("proprioception",),
+            share=True,  # one fused representation feeds policy and value heads (Model II)
         )
 
     def render_frame(self, infant: Infant) -> np.ndarray:

@@ -12,7 +12,11 @@ EYE_FEATURES = 256
 
 
 class EyeCNN(nn.Module):
-    """(batch, H, W, 3) images, values 0..255 -> (batch, 256) features.
+    """(batch, H, W, 3) images, float values in [0, 1] -> (batch, 256) features.
+
+    The network builder hands uint8 images over already divided by 255 (the
+    :class:`~devlearn.sensors.SensorEncoder` input contract); dividing again here made every
+    hand-regard run before the fix learn from near-black images (white became 1/255).
 
     Conv(3->32, k5 s2 p2), Conv(32->64, k3 s2 p1), Conv(64->128, k3 s2 p1),
     Conv(128->256, k3 s2 p1), each + ReLU, then global average pooling.
@@ -37,12 +41,11 @@ class EyeCNN(nn.Module):
         """Encode images.
 
         Args:
-            images: (batch, H, W, 3) channels-last, uint8 or float in 0..255.
+            images: (batch, H, W, 3) channels-last float in [0, 1].
         Returns:
             (batch, 256) float features.
         """
-        x = images.float().permute(0, 3, 1, 2) / 255.0  # to (batch, 3, H, W) in [0, 1]
-        return self.convs(x)
+        return self.convs(images.permute(0, 3, 1, 2))  # to (batch, 3, H, W)
 
 
 class EyeCNNEncoder(SensorEncoder):

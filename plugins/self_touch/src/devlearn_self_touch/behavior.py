@@ -101,6 +101,7 @@ class SelfTouch(Behavior):
             max_std=self.config.max_std,
             # joint velocities and torques have mixed scales: standardise them (running stats)
             normalize=("proprioception",),
+            share=True,  # the trunk "feeds both policy and value heads" (sec. II-A4)
         )
 
     # --- rewards and curriculum ------------------------------------------------------------

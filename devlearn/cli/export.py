@@ -1,0 +1,39 @@
+"""``devlearn export BEHAVIOR --checkpoint P --format onnx|torchscript --out FILE``."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+
+def add_parser(subparsers) -> list[str]:
+    """Register the ``export`` sub-command."""
+    p = subparsers.add_parser(
+        "export",
+        help="write a trained policy as ONNX or TorchScript",
+        description="Write the deterministic policy (observations to the mean action, in "
+        "[-1, 1]) of a checkpoint for use outside devlearn, e.g. on a robot. Inputs are the "
+        "behaviour's observations by name, batch first, in the dtypes it observes (uint8 "
+        "images, float32 otherwise); normalisation happens inside. ONNX needs the optional "
+        "packages: pip install 'devlearn[export]'.",
+    )
+    p.add_argument("behavior", help="behaviour name (see `devlearn plugins`)")
+    p.add_argument("--checkpoint", required=True, metavar="PATH", help="checkpoint file (.pt)")
+    p.add_argument("--format", default="onnx", metavar="FORMAT", help="onnx or torchscript")
+    p.add_argument("--out", required=True, metavar="FILE", help="file to write")
+    return ["export"]
+
+
+def run(args: argparse.Namespace, registry) -> int:
+    """Export and print what was written and its inputs."""
+    from devlearn.errors import UsageError
+    from devlearn.export import FORMATS, export_policy, load_policy
+
+    if args.format not in FORMATS:
+        raise UsageError(f"unknown export format '{args.format}'; valid: {', '.join(FORMATS)}")
+    registry.behavior(args.behavior)  # unknown behaviour: one clear line
+    policy, obs = load_policy(args.behavior, Path(args.checkpoint), registry)
+    out = export_policy(policy, obs, args.format, Path(args.out))
+    inputs = ", ".join(f"{n} {tuple(obs[n].shape)} {obs[n].dtype}" for n in policy.names)
+    print(f"wrote {out} ({args.format}); inputs (batch first): {inputs}; output: action")
+    return 0

@@ -1,0 +1,121 @@
+"""The policy's tanh-mean, softplus-spread Gaussian (paper, sec. II-A4)."""
+
+from __future__ import annotations
+
+import math
+
+import torch
+import torch.nn as nn
+import torch.nn.functional as F
+from rsl_rl.modules.distribution import Distribution
+from torch.distributions import Normal
+
+
+def inverse_softplus(y: float) -> float:
+    """x such that softplus(x) = y (y > 0)."""
+    return y + math.log(-math.expm1(-y))
+
+
+class TanhSoftplusGaussian(Distribution):
+    """Diagonal Gaussian with ``mean = tanh(W_mu h + b_mu)`` and ``std = softplus(W_s h + b_s)``.
+
+    Both heads read the trunk features, so the spread is state-dependent (paper, sec. II-A4,
+    eq. for mu_t and sigma_t). ``min_std`` is added to the softplus so the log-probability
+    stays finite when the softplus underflows; samples are not squashed (the env clips them
+    to [-1, 1]) and the deterministic action is the mean.
+
+    With ``max_std`` set, the spread is bounded instead: ``std = min_std + (max_std - min_std) *
+    sigmoid(W_s h + b_s)``. Because actions are clipped, an unbounded std meets no resistance
+    from the clipped returns and grows under the entropy bonus until every action is +-1 noise
+    (our 8M self_touch run ended near std 1000, see ``results/self_touch/README.md``).
+
+    Args:
+        output_dim: Action size.
+        init_std: Standard deviation at initialisation (sets the softplus bias).
+        min_std: Small positive floor added to the standard deviation.
+        max_std: Upper bound on the standard deviation; 0: unbounded (the paper).
+    """
+
+    def __init__(
+        self,
+        output_dim: int,
+        init_std: float = 0.5,
+        min_std: float = 1e-3,
+        max_std: float = 0.0,
+    ) -> None:
+        super().__init__(output_dim)
+        if init_std <= min_std:
+            raise ValueError(f"init_std must exceed min_std={min_std}, got {init_std}")
+        if max_std and max_std <= init_std:  # 0 means unbounded
+            raise ValueError(f"max_std must exceed init_std={init_std} (or be 0), got {max_std}")
+        self.init_std = float(init_std)
+        self.min_std = float(min_std)
+        self.max_std = float(max_std)
+        self._distribution: Normal | None = None
+        Normal.set_default_validate_args(False)
+
+    @property
+    def input_dim(self) -> list[int]:
+        """The MLP outputs (..., 2, output_dim): raw mean, then raw std."""
+        return [2, self.output_dim]
+
+    def update(self, mlp_output: torch.Tensor) -> None:
+        raw_mean, raw_std = torch.unbind(mlp_output, dim=-2)
+        if not self.max_std:
+            std = F.softplus(raw_std) + self.min_std
+        else:
+            std = self.min_std + (self.max_std - self.min_std) * torch.sigmoid(raw_std)
+        self._distribution = Normal(torch.tanh(raw_mean), std)
+
+    def sample(self) -> torch.Tensor:
+        return self._distribution.sample()  # type: ignore[union-attr]
+
+    def deterministic_output(self, mlp_output: torch.Tensor) -> torch.Tensor:
+        return torch.tanh(mlp_output[..., 0, :])
+
+    def as_deterministic_output_module(self) -> nn.Module:
+        return _TanhFirstSlice()
+
+    @property
+    def mean(self) -> torch.Tensor:
+        return self._distribution.mean  # type: ignore[union-attr]
+
+    @property
+    def std(self) -> torch.Tensor:
+        return self._distribution.stddev  # type: ignore[union-attr]
+
+    @property
+    def entropy(self) -> torch.Tensor:
+        return self._distribution.entropy().sum(dim=-1)  # type: ignore[union-attr]
+
+    @property
+    def params(self) -> tuple[torch.Tensor, ...]:
+        return (self.mean, self.std)
+
+    def log_prob(self, outputs: torch.Tensor) -> torch.Tensor:
+        return self._distribution.log_prob(outputs).sum(dim=-1)  # type: ignore[union-attr]
+
+    def kl_divergence(self, old_params, new_params) -> torch.Tensor:
+        old = Normal(*old_params)
+        new = Normal(*new_params)
+        return torch.distributions.kl_divergence(old, new).sum(dim=-1)
+
+    def init_mlp_weights(self, mlp: nn.Module) -> None:
+        """Start near mean 0 and std ``init_std``: small head weights, matching std bias."""
+        head = mlp[-2]  # the last Linear (followed by Unflatten to (2, output_dim))
+        with torch.no_grad():
+            head.weight.mul_(0.01)
+            head.bias[: self.output_dim].zero_()
+            if not self.max_std:
+                bias = inverse_softplus(self.init_std - self.min_std)
+            else:
+                frac = (self.init_std - self.min_std) / (self.max_std - self.min_std)
+                bias = math.log(frac / (1.0 - frac))  # inverse sigmoid
+            head.bias[self.output_dim :].fill_(bias)
+
+
+class _TanhFirstSlice(nn.Module):
+    """Export-friendly deterministic output: tanh of the raw mean."""
+
+    def forward(self, mlp_output: torch.Tensor) -> torch.Tensor:
+        return torch.tanh(mlp_output[..., 0, :])
