@@ -30,6 +30,7 @@ from devlearn.training.checkpoint import (
     save_atomic,
 )
 from devlearn.training.config import RunConfig, to_dict
+from devlearn.training.learned_rewards import LearnedRewards
 from devlearn.training.process import init_distributed, quiet, update_threads
 
 __all__ = ["DevRunner", "init_distributed", "quiet", "update_threads"]
@@ -56,6 +57,9 @@ class DevRunner(OnPolicyRunner):
         headline_metric: Evaluator key shown on the progress bar.
         device: Torch device of the networks.
         progress: Show the progress bar (rank 0 only).
+        learned: The run's learned rewards (built here, after the networks, so the networks'
+            initial parameters do not depend on them); see
+            :class:`~devlearn.training.learned_rewards.LearnedRewards`.
     """
 
     def __init__(
@@ -68,6 +72,7 @@ class DevRunner(OnPolicyRunner):
         headline_metric: str = "",
         device: str = "cpu",
         progress: bool = True,
+        learned: LearnedRewards | None = None,
     ) -> None:
         self.run_cfg = cfg
         self.run_dir = Path(run_dir)
@@ -81,6 +86,9 @@ class DevRunner(OnPolicyRunner):
         with contextlib.redirect_stdout(report):
             super().__init__(env, train_cfg, log_dir=str(self.run_dir), device=device)
         self.is_main = self.gpu_global_rank == 0
+        self.learned = (learned or LearnedRewards()).build(
+            env.observation_shapes, env.num_actions, self.device
+        )
         if self.is_main:
             (self.run_dir / "networks.txt").write_text(report.getvalue())
 
@@ -116,6 +124,7 @@ class DevRunner(OnPolicyRunner):
         alg.train_mode()
         if self.is_distributed:
             alg.broadcast_parameters()
+            self.learned.broadcast()
         with quiet():
             self.logger.init_logging_writer()
         self.curriculum.update(self.env_steps)
@@ -148,6 +157,7 @@ class DevRunner(OnPolicyRunner):
                         finished += extras["episode_infos"]
                         step_rewards += float(rewards.mean())
                     collect_time = time.time() - start
+                    self.learned.apply(alg.storage, obs, self.env_steps)  # adds to the rewards
                     alg.compute_returns(obs)
                 start = time.time()
                 with update_threads(self.run_cfg.update_threads):
@@ -225,9 +235,11 @@ class DevRunner(OnPolicyRunner):
             for key in dict.fromkeys(k for ep in self.episodes for k in ep):
                 row[key] = float(np.mean([ep[key] for ep in self.episodes if key in ep]))
         row.update({f"loss/{k}": float(v) for k, v in losses.items()})
+        row.update(self.learned.last)
         self.last_row = row
         if not self.is_main:
             return
+        self.learned.write(self.logger.writer, it)
         with open(self.run_dir / "metrics.jsonl", "a") as f:
             f.write(json.dumps(row) + "\n")
         postfix = {"steps/s": f"{rate:.0f}", "stage": row["stage"]}
@@ -257,6 +269,7 @@ class DevRunner(OnPolicyRunner):
             curriculum=self.curriculum.state_dict(),
             env={"ranks": ranks},
             learning_rate=self.alg.learning_rate,
+            learned=self.learned.state_dict(),
             rng={
                 "torch": torch.get_rng_state(),
                 "numpy": np.random.get_state(),
@@ -289,6 +302,7 @@ class DevRunner(OnPolicyRunner):
         self.current_learning_iteration = int(state["iteration"])
         self.env_steps = int(state["env_steps"])
         self.curriculum.load_state_dict(state["curriculum"])
+        self.learned.load_state_dict(state.get("learned", {}))
         ranks = state["env"]["ranks"]
         if self.gpu_global_rank < len(ranks):
             self.env.load_state_dict(ranks[self.gpu_global_rank])

@@ -17,6 +17,7 @@ from devlearn.env import DevVecEnv
 from devlearn.errors import UsageError
 from devlearn.training.checkpoint import check_behavior, resume_checkpoint
 from devlearn.training.config import RunConfig, from_dict, to_dict, to_rsl_rl
+from devlearn.training.learned_rewards import LearnedRewards
 from devlearn.training.runner import DevRunner, init_distributed
 
 CONFIG_FILE = "config.json"
@@ -122,6 +123,7 @@ def train(
     world_size = int(os.environ.get("WORLD_SIZE", "1"))
     device = _resolve_device(cfg.device, int(os.environ.get("LOCAL_RANK", "0")), world_size)
     cfg.workers = resolve_workers(cfg.workers, cfg.num_envs)  # config.json records the number
+    learned = LearnedRewards.from_config(cfg, registry)  # names checked before the slow set-up
 
     # Seed. One intra-op thread by default: these networks are small, and a fixed thread
     # count keeps CPU results bit-for-bit repeatable (torch_threads=0 keeps torch's default).
@@ -164,6 +166,7 @@ def train(
             behavior.headline_metric,
             device,
             progress,
+            learned,
         )
         if checkpoint is not None:
             runner.restore(checkpoint)
