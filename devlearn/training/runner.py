@@ -45,8 +45,10 @@ class DevRunner(OnPolicyRunner):
     curriculum, every env's reward-term state, rng states, behaviour name, config) written
     atomically as ``checkpoint_latest.pt`` every ``save_interval // 10`` iterations, plus
     ``checkpoint_<step>.pt`` every ``save_interval``, at the end and on Ctrl-C or SIGTERM; and
-    CPU distributed training over gloo. ``current_learning_iteration`` counts *completed*
-    iterations, so a resumed run logs each iteration index once.
+    CPU distributed training over gloo; learned rewards (``RunConfig.curiosity``), added to the
+    rollout's rewards and trained after each rollout, logged under ``reward/<name>/...`` and
+    saved in checkpoints (:mod:`devlearn.training.learned_rewards`). ``current_learning_iteration``
+    counts *completed* iterations, so a resumed run logs each iteration index once.
 
     Args:
         env: The DevVecEnv.
@@ -293,7 +295,8 @@ class DevRunner(OnPolicyRunner):
         return latest
 
     def restore(self, state: dict[str, Any]) -> None:
-        """Resume from a checkpoint: networks, optimiser, counters, curriculum, envs, rngs."""
+        """Resume from a checkpoint: networks, optimiser, counters, curriculum, learned rewards,
+        envs, rngs."""
         self.alg.load(state, None, strict=True)  # also takes the adaptive lr from the optimiser
         if self.run_cfg.ppo.schedule == "fixed":  # a fixed schedule means the configured lr
             self.alg.learning_rate = self.run_cfg.ppo.learning_rate

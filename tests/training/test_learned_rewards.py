@@ -129,3 +129,23 @@ def test_resume_refuses_other_learned_rewards(tmp_path):
     run(out, 32, "curiosity=linear")
     with pytest.raises(UsageError, match="resume with --set curiosity=linear"):
         run(out, 64, resume=out)
+
+
+@pytest.mark.slow
+def test_torchrun_ranks_share_one_learned_model(tmp_path):
+    import os
+    import subprocess
+
+    out = tmp_path / "run"
+    script = Path(__file__).resolve().parent / "distributed_learned_run.py"
+    cmd = [sys.executable, "-m", "torch.distributed.run", "--standalone", "--nproc_per_node",
+           "2", str(script), str(out), "128"]
+    env = {**os.environ, "OMP_NUM_THREADS": "1"}
+    done = subprocess.run(cmd, capture_output=True, text=True, timeout=120, env=env)
+    assert done.returncode == 0, done.stderr[-3000:]
+    ranks = [json.loads((out / f"learned{r}.json").read_text()) for r in (0, 1)]
+    assert ranks[0]["before"] == ranks[1]["before"]  # rank 0's initial model, broadcast
+    assert ranks[0]["after"] == ranks[1]["after"] != ranks[0]["before"]  # averaged updates
+    # Each rank rewarded its own rollout (different environments), with one shared model.
+    assert ranks[0]["last"]["reward/linear/raw"] != ranks[1]["last"]["reward/linear/raw"]
+    assert load_checkpoint(out / "checkpoint_latest.pt")["learned"]["linear"]["updates"] == 2
