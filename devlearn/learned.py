@@ -38,13 +38,17 @@ class LearnedRewardConfig:
 
     def __post_init__(self) -> None:
         if self.epochs < 1 or self.mini_batches < 1:
-            raise ValueError(f"epochs and mini_batches must be at least 1, got "
-                             f"{self.epochs} and {self.mini_batches}")
+            raise ValueError(
+                f"epochs and mini_batches must be at least 1, got "
+                f"{self.epochs} and {self.mini_batches}"
+            )
         if self.learning_rate <= 0:
             raise ValueError(f"learning_rate must be positive, got {self.learning_rate}")
         if self.final_weight is not None and self.schedule_end < self.schedule_start:
-            raise ValueError(f"schedule_end ({self.schedule_end}) is before schedule_start "
-                             f"({self.schedule_start})")
+            raise ValueError(
+                f"schedule_end ({self.schedule_end}) is before schedule_start "
+                f"({self.schedule_start})"
+            )
 
 
 @dataclass
@@ -90,11 +94,13 @@ class RunningScale(nn.Module):
 
     def update(self, values: torch.Tensor) -> None:
         """Add a batch of values, (B,). All-reduced over ranks when distributed."""
-        stats = torch.stack([
-            torch.tensor(float(values.numel()), dtype=torch.float64, device=values.device),
-            values.double().sum(),
-            values.double().square().sum(),
-        ])
+        stats = torch.stack(
+            [
+                torch.tensor(float(values.numel()), dtype=torch.float64, device=values.device),
+                values.double().sum(),
+                values.double().square().sum(),
+            ]
+        )
         if _distributed():
             torch.distributed.all_reduce(stats)
         n, total, squares = stats.tolist()

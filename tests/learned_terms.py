@@ -47,6 +47,7 @@ class ForgetfulPredictor(LinearPredictor):
 
     def state_dict(self):
         state = super().state_dict()
-        state["optimizer"] = type(self)(self.config, self.observation_shapes,
-                                        self.action_dim).optimizer.state_dict()
+        state["optimizer"] = type(self)(
+            self.config, self.observation_shapes, self.action_dim
+        ).optimizer.state_dict()
         return state

@@ -69,8 +69,13 @@ def test_transitions_pair_each_step_with_the_next_and_skip_finished_episodes():
 def test_apply_adds_the_weighted_reward_where_episodes_went_on():
     storage = _Storage()
     last = TensorDict({"proprioception": torch.tensor([[6.0], [7.0]])}, batch_size=[2])
-    cfg = tiny_run.config("unused", 32, "curiosity=linear", "learned.linear.weight=0.5",
-                          "learned.linear.normalize=false")
+    cfg = tiny_run.config(
+        "unused",
+        32,
+        "curiosity=linear",
+        "learned.linear.weight=0.5",
+        "learned.linear.normalize=false",
+    )
     learned = LearnedRewards.from_config(cfg, REGISTRY).build({"proprioception": (1,)}, 1, "cpu")
     term = learned.terms["linear"]
     batch, _ = transitions(storage, last)
@@ -138,8 +143,17 @@ def test_torchrun_ranks_share_one_learned_model(tmp_path):
 
     out = tmp_path / "run"
     script = Path(__file__).resolve().parent / "distributed_learned_run.py"
-    cmd = [sys.executable, "-m", "torch.distributed.run", "--standalone", "--nproc_per_node",
-           "2", str(script), str(out), "128"]
+    cmd = [
+        sys.executable,
+        "-m",
+        "torch.distributed.run",
+        "--standalone",
+        "--nproc_per_node",
+        "2",
+        str(script),
+        str(out),
+        "128",
+    ]
     env = {**os.environ, "OMP_NUM_THREADS": "1"}
     done = subprocess.run(cmd, capture_output=True, text=True, timeout=120, env=env)
     assert done.returncode == 0, done.stderr[-3000:]

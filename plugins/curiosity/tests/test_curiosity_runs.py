@@ -33,15 +33,25 @@ def test_both_terms_train_and_resume_with_worker_processes(tmp_path):
     sets = ["curiosity=rnd,forward_model", "behavior.use_eyes=true", "learned.rnd.weight=0.5"]
 
     def run(steps: int, workers: int, resume: Path | None = None):
-        cfg = default_config(TinyBehavior, sets, out_dir=str(out), total_steps=steps,
-                             num_envs=4, workers=workers, save_interval=1)
-        return train(cfg, registry, resume=resume, infant_factory=fake_infant_factory,
-                     progress=False)
+        cfg = default_config(
+            TinyBehavior,
+            sets,
+            out_dir=str(out),
+            total_steps=steps,
+            num_envs=4,
+            workers=workers,
+            save_interval=1,
+        )
+        return train(
+            cfg, registry, resume=resume, infant_factory=fake_infant_factory, progress=False
+        )
 
     run(64, workers=0)
     first = load_checkpoint(out / "checkpoint_latest.pt")["learned"]
     assert {name: state["updates"] for name, state in first.items()} == {
-        "rnd": 2, "forward_model": 2}
+        "rnd": 2,
+        "forward_model": 2,
+    }
     result = run(128, workers=2, resume=out)  # the models live in the learner, not the workers
     assert result.env_steps == 128
     lines = rows(out)
@@ -52,8 +62,9 @@ def test_both_terms_train_and_resume_with_worker_processes(tmp_path):
     state = load_checkpoint(out / "checkpoint_latest.pt")["learned"]
     assert {name: s["updates"] for name, s in state.items()} == {"rnd": 4, "forward_model": 4}
     predictor = "predictor.0.weight"
-    assert not (state["forward_model"]["model"][predictor]
-                == first["forward_model"]["model"][predictor]).all()
+    assert not (
+        state["forward_model"]["model"][predictor] == first["forward_model"]["model"][predictor]
+    ).all()
     config = json.loads((out / "config.json").read_text())
     assert config["learned"]["forward_model"]["observations"] == []  # default: the images
 
@@ -74,14 +85,36 @@ def test_hand_regard_trains_and_resumes_with_curiosity(tmp_path, term):
     out = tmp_path / "run"
     out.mkdir()
     _detector_file(out / "hand_detector.json")
-    base = [sys.executable, "-m", "devlearn.cli", "run", "hand_regard", "--envs", "2",
-            "--workers", "0"]
-    sets = ["--set", f"curiosity={term}", "--set", "ppo.num_steps_per_env=8",
-            "--set", "ppo.num_mini_batches=1", "--set", "ppo.num_learning_epochs=1"]
-    subprocess.run(base + ["--steps", "16", "--out", str(out), *sets], check=True, timeout=600,
-                   capture_output=True)
-    subprocess.run(base + ["--steps", "32", "--resume", str(out)], check=True, timeout=600,
-                   capture_output=True)
+    base = [
+        sys.executable,
+        "-m",
+        "devlearn.cli",
+        "run",
+        "hand_regard",
+        "--envs",
+        "2",
+        "--workers",
+        "0",
+    ]
+    sets = [
+        "--set",
+        f"curiosity={term}",
+        "--set",
+        "ppo.num_steps_per_env=8",
+        "--set",
+        "ppo.num_mini_batches=1",
+        "--set",
+        "ppo.num_learning_epochs=1",
+    ]
+    subprocess.run(
+        base + ["--steps", "16", "--out", str(out), *sets],
+        check=True,
+        timeout=600,
+        capture_output=True,
+    )
+    subprocess.run(
+        base + ["--steps", "32", "--resume", str(out)], check=True, timeout=600, capture_output=True
+    )
     lines = rows(out)
     assert [r["step"] for r in lines] == [16, 32]
     assert all(r[f"reward/{term}/raw"] > 0 for r in lines)

@@ -84,11 +84,15 @@ class ForwardModel(LearnedReward):
                 encoders[group] = nn.Flatten()
                 size += int(torch.Size(shape).numel())
         self.groups = groups
-        return nn.ModuleDict({
-            "encoders": encoders,
-            "normalizer": EmpiricalNormalization(size, until=int(1e8)),
-            "predictor": MLP(size + self.action_dim, size, list(self.config.hidden_dims), "elu"),
-        })
+        return nn.ModuleDict(
+            {
+                "encoders": encoders,
+                "normalizer": EmpiricalNormalization(size, until=int(1e8)),
+                "predictor": MLP(
+                    size + self.action_dim, size, list(self.config.hidden_dims), "elu"
+                ),
+            }
+        )
 
     def _raw_features(self, observations: dict[str, torch.Tensor]) -> torch.Tensor:
         encoders = self.model["encoders"]
