@@ -136,10 +136,11 @@ class LearnedRewards:
             UsageError: The checkpoint holds other learned rewards than ``curiosity`` names.
         """
         if sorted(state) != sorted(self.terms):
-            saved = ",".join(sorted(state)) or "none"
+            saved = ",".join(sorted(state))
             raise UsageError(
-                f"the checkpoint's learned rewards ({saved}) differ from this run's curiosity "
-                f"({','.join(sorted(self.terms)) or 'none'}); resume with --set curiosity={saved}"
+                f"the checkpoint's learned rewards ({saved or 'none'}) differ from this run's "
+                f"curiosity ({','.join(sorted(self.terms)) or 'none'}); resume with "
+                f"--set curiosity={saved}"
             )
         for name, term in self.terms.items():
             term.load_state_dict(state[name])
