@@ -5,13 +5,11 @@ from __future__ import annotations
 import argparse
 import contextlib
 import json
-import re
 import signal
 from pathlib import Path
 
 from devlearn.errors import UsageError
-
-_DEVICE = re.compile(r"^(cpu|cuda(:\d+)?)$")
+from devlearn.training.checks import check_config  # noqa: F401  (also re-exported here)
 
 
 def add_parser(subparsers) -> list[str]:
@@ -43,6 +41,12 @@ def add_parser(subparsers) -> list[str]:
         help="override a config field, e.g. ppo.learning_rate=3e-4 (repeatable)",
     )
     p.add_argument("--resume", metavar="RUN_DIR", help="continue a run from its latest checkpoint")
+    p.add_argument(
+        "--force",
+        action="store_true",
+        help="with --out: replace the run that DIR holds (deletes what DIR holds once the new "
+        "run has started); without it such a folder is refused",
+    )
     return ["run"]
 
 
@@ -62,6 +66,8 @@ def run(args: argparse.Namespace, registry) -> int:
     if args.resume:
         if args.out:
             raise UsageError("--out and --resume exclude each other (a resumed run stays put)")
+        if args.force:
+            raise UsageError("--force and --resume exclude each other (--force replaces a run)")
         run_dir = Path(args.resume)
         if not run_dir.is_dir():
             raise UsageError(f"run directory {run_dir} does not exist")
@@ -79,7 +85,7 @@ def run(args: argparse.Namespace, registry) -> int:
         cfg.out_dir = str(default_run_dir(cfg.behavior_name))
     print(f"run directory: {cfg.out_dir}", flush=True)
     with _interrupt_on_signals():
-        result = train(cfg, registry, resume=args.resume)
+        result = train(cfg, registry, resume=args.resume, force=args.force)
     summary = {
         "run_dir": str(result.run_dir),
         "env_steps": result.env_steps,
@@ -88,27 +94,6 @@ def run(args: argparse.Namespace, registry) -> int:
     summary.update({k: v for k, v in result.last.items() if not k.startswith("loss/")})
     print(json.dumps(summary, indent=2))
     return 0
-
-
-def check_config(cfg) -> None:
-    """Reject values that would fail later with a less clear error."""
-    if cfg.total_steps < 1:
-        raise UsageError(f"--steps must be at least 1, got {cfg.total_steps}")
-    if cfg.num_envs < 1:
-        raise UsageError(f"--envs must be at least 1, got {cfg.num_envs}")
-    if cfg.workers < -1:
-        raise UsageError(f"--workers must be 0 or more (or -1: automatic), got {cfg.workers}")
-    if cfg.torch_threads < 0 or cfg.update_threads < 0:
-        raise UsageError("torch_threads and update_threads must be 0 (torch's default) or more")
-    if cfg.save_interval < 1:
-        raise UsageError(f"save_interval must be at least 1, got {cfg.save_interval}")
-    if not _DEVICE.match(cfg.device):
-        raise UsageError(f"--device must be cpu, cuda or cuda:N, got '{cfg.device}'")
-    if cfg.ppo.schedule not in ("adaptive", "fixed"):
-        raise UsageError(f"ppo.schedule must be adaptive or fixed, got '{cfg.ppo.schedule}'")
-    for name in ("num_steps_per_env", "num_learning_epochs", "num_mini_batches"):
-        if getattr(cfg.ppo, name) < 1:
-            raise UsageError(f"ppo.{name} must be at least 1, got {getattr(cfg.ppo, name)}")
 
 
 @contextlib.contextmanager

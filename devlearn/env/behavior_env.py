@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from devlearn.env.guards import check_observations, check_reward
 from devlearn.rewards import StepContext
 
 if TYPE_CHECKING:
@@ -35,6 +36,7 @@ class BehaviorEnv:
         seed: Seed of this env's numpy Generator (initial poses).
         infant_factory: ``factory(scene, senses=...) -> Infant``; tests pass a fake one.
         training: Passed to ``behavior.evaluator`` (False for ``devlearn eval``).
+        index: This env's index on its rank (named by the reward and observation guards).
     """
 
     def __init__(
@@ -43,8 +45,10 @@ class BehaviorEnv:
         seed: int,
         infant_factory: InfantFactory | None = None,
         training: bool = True,
+        index: int = 0,
     ) -> None:
         self.behavior = behavior
+        self.index = index
         factory = infant_factory or build_default_infant
         self.infant = factory(behavior.scene, senses=tuple(behavior.senses))
         self.rng = np.random.default_rng(seed)
@@ -64,7 +68,9 @@ class BehaviorEnv:
             term.reset()
         self.episode_step = 0
         self._sums = {term.name: 0.0 for term in self.terms}
-        return self.behavior.observe(self.infant, self.behavior.facts(self.infant))
+        obs = self.behavior.observe(self.infant, self.behavior.facts(self.infant))
+        check_observations(obs, self.index, 0)
+        return obs
 
     def step(
         self, action: np.ndarray
@@ -78,16 +84,21 @@ class BehaviorEnv:
             and ``time_out`` are True, ``obs`` is the first observation of the next episode and
             ``episode_info`` holds ``reward/<term>`` (weighted per-episode sums) and
             ``metrics/<name>`` (evaluator); otherwise ``episode_info`` is None.
+        Raises:
+            GuardError: A term's value or an observation is NaN, infinite or beyond its bound
+                (:mod:`devlearn.env.guards`).
         """
         action = np.clip(np.asarray(action, dtype=np.float64), -1.0, 1.0)
         self.infant.step(self.behavior.process_action(action, self.stage))
         facts = self.behavior.facts(self.infant)
         obs = self.behavior.observe(self.infant, facts)
+        check_observations(obs, self.index, self.episode_step + 1)
         last_step = self.episode_step == self.episode_steps - 1
         ctx = StepContext(self.infant, obs, facts, self.episode_step, last_step, self.stage)
         reward = 0.0
         for term in self.terms:
-            value = term.weight * float(term(ctx))
+            raw = check_reward(term.name, float(term(ctx)), self.index, self.episode_step)
+            value = term.weight * raw
             self._sums[term.name] += value
             reward += value
         self.evaluator.record(ctx)

@@ -14,13 +14,19 @@ from typing import Any
 import numpy as np
 
 from devlearn.env.behavior_env import BehaviorEnv, InfantFactory
+from devlearn.env.guards import GuardError
 
 EpisodeInfos = list[tuple[int, dict[str, float]]]
 """(global env index, episode_info) for every episode that ended this step."""
 
 
 class EnvWorkerError(RuntimeError):
-    """An environment worker process failed; the message holds the worker's traceback."""
+    """An environment worker process failed; the message holds the worker's traceback.
+
+    ``died`` is True when the process ended without reporting (killed, out of memory).
+    """
+
+    died: bool = False
 
 
 def env_spec(env: BehaviorEnv, obs: dict[str, np.ndarray]) -> dict[str, Any]:
@@ -109,9 +115,14 @@ def step_envs(envs: list[BehaviorEnv], offset: int, arrays: dict[str, np.ndarray
     return infos
 
 
-def make_envs(behavior, seeds: list[int], infant_factory: InfantFactory | None) -> list:
-    """Build one BehaviorEnv per seed, each with its own copy of the behaviour."""
-    return [BehaviorEnv(copy.deepcopy(behavior), s, infant_factory) for s in seeds]
+def make_envs(
+    behavior, seeds: list[int], infant_factory: InfantFactory | None, offset: int = 0
+) -> list:
+    """Build one BehaviorEnv per seed (indices ``offset...``), each with its own behaviour copy."""
+    return [
+        BehaviorEnv(copy.deepcopy(behavior), s, infant_factory, index=offset + i)
+        for i, s in enumerate(seeds)
+    ]
 
 
 def _die_with_parent() -> None:
@@ -136,7 +147,7 @@ def worker_main(conn, behavior, seeds: list[int], offset: int, infant_factory) -
     blocks: list = []
     arrays: dict[str, np.ndarray] = {}
     try:
-        envs = make_envs(behavior, seeds, infant_factory)
+        envs = make_envs(behavior, seeds, infant_factory, offset)
         first = [env.reset() for env in envs]
         conn.send(("ok", env_spec(envs[0], first[0])))
         while True:
@@ -164,6 +175,11 @@ def worker_main(conn, behavior, seeds: list[int], offset: int, infant_factory) -
             conn.send(("ok", reply))
     except (EOFError, BrokenPipeError, KeyboardInterrupt):
         pass  # the parent is gone: nothing to report to
+    except GuardError as exc:
+        try:
+            conn.send(("guard", exc))  # re-raised as is by the parent
+        except (BrokenPipeError, OSError):
+            pass
     except BaseException:
         try:
             conn.send(("error", traceback.format_exc()))
@@ -226,10 +242,21 @@ class WorkerPool:
                 status, payload = conn.recv()
             except (EOFError, OSError):
                 proc.join(timeout=1.0)
+                code = proc.exitcode
                 self.close()
-                raise EnvWorkerError(
-                    f"env worker {k} (pid {proc.pid}) died unexpectedly, exit code {proc.exitcode}"
-                ) from None
+                how = f"exit code {code}"
+                if code is not None and code < 0:
+                    try:
+                        how = f"killed by {signal.Signals(-code).name}"
+                    except ValueError:
+                        how = f"killed by signal {-code}"
+                    how += " (out of memory?)" if code == -signal.SIGKILL else ""
+                error = EnvWorkerError(f"env worker {k} (pid {proc.pid}) died unexpectedly, {how}")
+                error.died = True
+                raise error from None
+            if status == "guard":
+                self.close()
+                raise payload
             if status == "error":
                 self.close()
                 raise EnvWorkerError(f"env worker {k} (pid {proc.pid}) failed:\n{payload}")

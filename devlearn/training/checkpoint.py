@@ -1,13 +1,18 @@
-"""Checkpoints: atomic writes, clear errors for missing, corrupt or foreign files."""
+"""Checkpoints: atomic writes, safe (data-only) loading, clear errors for unusable files."""
 
 from __future__ import annotations
 
+import errno
+import io
 import json
 import os
+import pickle
 import re
+import shutil
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import torch
 
 from devlearn.errors import UsageError
@@ -16,7 +21,45 @@ FORMAT = "devlearn-checkpoint-1"
 """Value of the ``format`` key every devlearn checkpoint holds."""
 LATEST = "checkpoint_latest.pt"
 """Name of the newest checkpoint in a run directory."""
+POLICY_KEYS = ("behavior", "config", "actor_state_dict")
+"""Keys every checkpoint must hold (enough to rebuild and evaluate the policy)."""
+RESUME_KEYS = (
+    *POLICY_KEYS,
+    "critic_state_dict",
+    "optimizer_state_dict",
+    "iteration",
+    "env_steps",
+    "curriculum",
+    "env",
+    "rng",
+)
+"""Keys a checkpoint must hold to resume training from it."""
 _PERIODIC = re.compile(r"^checkpoint_(\d+)\.pt$")
+_TEMPORARY = re.compile(r"^\.checkpoint_.*\.pt\.tmp-\d+$")
+_DTYPE_CLASSES = (
+    "Bool Int8 Int16 Int32 Int64 UInt8 UInt16 UInt32 UInt64 Byte UByte Short UShort Int UInt Long "
+    "ULong LongLong ULongLong Float16 Float32 Float64 LongDouble Complex64 Complex128 "
+    "CLongDouble Bytes Str"
+).split()
+
+
+def allowed_globals() -> list[Any]:
+    """The classes and functions (beyond torch's tensors, dicts, lists, tuples, numbers and
+    strings) a checkpoint may name: numpy arrays of numbers, bools or strings, their dtypes and
+    numpy scalars. None of them runs code of the file's choosing. docs/checkpoints.md."""
+    from numpy._core import multiarray
+
+    dtypes = [getattr(np.dtypes, f"{n}DType", None) for n in _DTYPE_CLASSES]
+    dtypes = [d for d in dtypes if d is not None]
+    return [multiarray._reconstruct, multiarray.scalar, np.ndarray, np.dtype, *dtypes]
+
+
+def _global_names() -> set[str]:
+    names = set()
+    for obj in allowed_globals():
+        for module in {obj.__module__, obj.__module__.replace("numpy._core", "numpy.core")}:
+            names.add(f"{module}.{obj.__qualname__}")
+    return names
 
 
 def _fsync_dir(directory: Path) -> None:
@@ -30,20 +73,40 @@ def _fsync_dir(directory: Path) -> None:
         os.close(fd)
 
 
+def _write_error(path: Path, exc: OSError) -> UsageError:
+    if exc.errno in (errno.ENOSPC, errno.EDQUOT):
+        try:
+            free = f"{shutil.disk_usage(path.parent).free / 2**20:.0f} MB free"
+        except OSError:
+            free = "no space"
+        return UsageError(
+            f"disk full: cannot write {path} ({free}); the previous checkpoint is kept: "
+            "free some space, then continue with --resume"
+        )
+    return UsageError(f"cannot write {path}: {exc.strerror or exc}")
+
+
 def save_atomic(state: dict[str, Any], path: Path) -> None:
     """Write ``state`` with torch.save to a temporary file, fsync it, then rename over ``path``.
 
     A crash (even kill -9) at any moment leaves either the previous file or the new one, never
     a partial file under ``path``.
+
+    Raises:
+        UsageError: The file cannot be written (disk full, read-only, ...); ``path`` is unchanged.
     """
     path = Path(path)
     tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
     try:
         with open(tmp, "wb") as f:
-            torch.save(state, f)
+            buffer = io.BytesIO()  # pickle in memory: a full disk is then a plain OSError
+            torch.save(state, buffer)
+            f.write(buffer.getbuffer())
             f.flush()
             os.fsync(f.fileno())
         os.replace(tmp, path)
+    except OSError as exc:
+        raise _write_error(path, exc) from None
     finally:
         if tmp.exists():
             tmp.unlink()
@@ -51,38 +114,118 @@ def save_atomic(state: dict[str, Any], path: Path) -> None:
 
 
 def link_atomic(source: Path, path: Path) -> None:
-    """Make ``path`` a hard link to ``source`` atomically (a copy where links are unsupported)."""
+    """Make ``path`` a hard link to ``source`` atomically (a byte copy where links are
+    unsupported; nothing is unpickled)."""
     tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
     try:
-        os.link(source, tmp)
+        try:
+            os.link(source, tmp)
+        except OSError:
+            with open(source, "rb") as src, open(tmp, "wb") as dst:
+                shutil.copyfileobj(src, dst)
+                dst.flush()
+                os.fsync(dst.fileno())
         os.replace(tmp, path)
-    except OSError:
+    except OSError as exc:
+        raise _write_error(path, exc) from None
+    finally:
         if tmp.exists():
             tmp.unlink()
-        save_atomic(torch.load(source, weights_only=False), path)
     _fsync_dir(path.parent)
 
 
-def load_checkpoint(path: str | Path) -> dict[str, Any]:
-    """Load a devlearn checkpoint (on the CPU).
+def remove_temporaries(run_dir: Path) -> list[Path]:
+    """Delete the ``.checkpoint_*.pt.tmp-PID`` files that killed runs left behind."""
+    removed = []
+    for p in Path(run_dir).glob(".checkpoint_*.pt.tmp-*"):
+        if _TEMPORARY.match(p.name) and p.is_file():
+            p.unlink(missing_ok=True)
+            removed.append(p)
+    return removed
 
+
+def _refused(path: Path, names: list[str]) -> UsageError:
+    return UsageError(
+        f"checkpoint {path} refused: it needs {', '.join(names)}, which a devlearn checkpoint "
+        "may not contain (only tensors, numbers, strings, lists, dicts and numpy arrays; "
+        "docs/checkpoints.md); nothing in it was run"
+    )
+
+
+def load_checkpoint(path: str | Path, required: tuple[str, ...] = POLICY_KEYS) -> dict[str, Any]:
+    """Load a devlearn checkpoint (on the CPU) as data: ``torch.load(weights_only=True)`` with
+    :func:`allowed_globals`; a file naming any other class or function is refused unrun.
+
+    Args:
+        path: The ``.pt`` file.
+        required: Keys the checkpoint must hold (:data:`POLICY_KEYS`, :data:`RESUME_KEYS`).
     Raises:
-        UsageError: The file is missing, truncated or unreadable, or not a devlearn checkpoint.
+        UsageError: The file is missing, truncated or unreadable, needs a type outside the
+            allow-list (named), is not a devlearn checkpoint or lacks a required key.
     """
     path = Path(path)
     if not path.is_file():
         raise UsageError(f"checkpoint {path} does not exist")
     try:
-        # weights_only=False: checkpoints hold configs and reward-term state (numpy arrays).
-        # Load only checkpoints you trust, as with any pickle.
-        state = torch.load(path, map_location="cpu", weights_only=False)
+        # A scan of the pickle's opcodes (nothing executed) names every foreign type at once.
+        unsafe = torch.serialization.get_unsafe_globals_in_checkpoint(path)
+    except Exception:
+        unsafe = []  # not a zip checkpoint: torch.load below says what is wrong
+    foreign = sorted(set(unsafe) - _global_names())
+    if foreign:
+        raise _refused(path, foreign)
+    try:
+        with torch.serialization.safe_globals(allowed_globals()):
+            state = torch.load(path, map_location="cpu", weights_only=True)
+    except pickle.UnpicklingError as exc:
+        found = re.search(r"GLOBAL (\S+) was not|but got <class '([^']+)'>", str(exc))
+        if found:
+            raise _refused(path, [found.group(1) or found.group(2)]) from None
+        raise UsageError(f"checkpoint {path} is corrupt or unreadable (UnpicklingError)") from None
     except Exception as exc:
         raise UsageError(
             f"checkpoint {path} is corrupt or unreadable ({type(exc).__name__})"
         ) from None
     if not isinstance(state, dict) or state.get("format") != FORMAT:
         raise UsageError(f"checkpoint {path} is not a devlearn checkpoint")
+    missing = [k for k in required if k not in state]
+    if missing:
+        raise UsageError(
+            f"checkpoint {path} is incomplete: it lacks {', '.join(missing)} "
+            f"(a devlearn checkpoint holds {', '.join(required)})"
+        )
+    _check_shapes(state, path, required)
     return state
+
+
+def _check_shapes(state: dict[str, Any], path: Path, required: tuple[str, ...]) -> None:
+    expected = {
+        "config": dict,
+        "actor_state_dict": dict,
+        "critic_state_dict": dict,
+        "optimizer_state_dict": dict,
+        "iteration": int,
+        "env_steps": int,
+        "curriculum": dict,
+        "env": dict,
+        "rng": dict,
+    }
+    for key in required:
+        kind = expected.get(key)
+        if kind is not None and not isinstance(state[key], kind):
+            raise UsageError(
+                f"checkpoint {path} is damaged: '{key}' is a {type(state[key]).__name__}, "
+                f"expected a {kind.__name__}"
+            )
+    if "env" in required:
+        ranks = state["env"].get("ranks")
+        if not (isinstance(ranks, list) and ranks and isinstance(ranks[0], dict)
+                and isinstance(ranks[0].get("envs"), list)):
+            raise UsageError(f"checkpoint {path} is damaged: 'env' lacks the envs' state")
+    if "rng" in required:
+        missing = [k for k in ("torch", "numpy", "random") if k not in state["rng"]]
+        if missing:
+            raise UsageError(f"checkpoint {path} is damaged: 'rng' lacks {', '.join(missing)}")
 
 
 def check_behavior(state: dict[str, Any], path: str | Path, behavior_name: str) -> None:
@@ -104,8 +247,8 @@ def periodic_checkpoints(run_dir: Path) -> list[Path]:
 
 
 def resume_checkpoint(run_dir: str | Path) -> tuple[Path, dict[str, Any]]:
-    """Return the newest readable checkpoint of a run: ``checkpoint_latest.pt``, or failing
-    that the highest-step ``checkpoint_<step>.pt`` that loads.
+    """Return the run's newest checkpoint that loads, by the env steps it holds:
+    ``checkpoint_latest.pt`` unless a ``checkpoint_<step>.pt`` that loads is further along.
 
     Raises:
         UsageError: No directory, or no readable checkpoint in it.
@@ -113,17 +256,30 @@ def resume_checkpoint(run_dir: str | Path) -> tuple[Path, dict[str, Any]]:
     run_dir = Path(run_dir)
     if not run_dir.is_dir():
         raise UsageError(f"run directory {run_dir} does not exist")
-    candidates = [run_dir / LATEST] if (run_dir / LATEST).exists() else []
-    candidates += periodic_checkpoints(run_dir)
-    if not candidates:
+    periodic = periodic_checkpoints(run_dir)
+    if not (run_dir / LATEST).exists() and not periodic:
         raise UsageError(f"no checkpoint in {run_dir} (expected {LATEST}); nothing to resume")
     errors = []
-    for path in candidates:
+    best: tuple[Path, dict[str, Any]] | None = None
+    if (run_dir / LATEST).exists():
         try:
-            return path, load_checkpoint(path)
+            best = run_dir / LATEST, load_checkpoint(run_dir / LATEST, RESUME_KEYS)
         except UsageError as exc:
             errors.append(str(exc))
-    raise UsageError(f"no readable checkpoint in {run_dir}: {errors[0]}")
+    for path in periodic:
+        if best is not None and int(_PERIODIC.match(path.name).group(1)) <= best[1]["env_steps"]:
+            break  # this and every older periodic checkpoint are no further along
+        try:
+            state = load_checkpoint(path, RESUME_KEYS)
+        except UsageError as exc:
+            errors.append(str(exc))
+            continue
+        if best is None or state["env_steps"] > best[1]["env_steps"]:
+            best = path, state
+        break
+    if best is None:
+        raise UsageError(f"no readable checkpoint in {run_dir}: {errors[0]}")
+    return best
 
 
 def forget_metrics_after(path: Path, step: int) -> None:

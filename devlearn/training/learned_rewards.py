@@ -7,6 +7,7 @@ from typing import Any
 
 import torch
 
+from devlearn.env.guards import GuardError
 from devlearn.errors import UsageError
 from devlearn.learned import LearnedReward, Transitions
 from devlearn.training.config import RunConfig, _hints, convert
@@ -103,6 +104,7 @@ class LearnedRewards:
             batch, valid = transitions(storage, last_obs)
             for name, term in self.terms.items():
                 reward, log = term.update(batch, env_steps)
+                _guard(name, reward, valid, storage.actions.shape[1])
                 added = torch.zeros(valid.shape, device=storage.rewards.device)
                 added[valid] = reward.to(added.device)
                 storage.rewards += added.view(storage.rewards.shape)
@@ -144,6 +146,28 @@ class LearnedRewards:
             )
         for name, term in self.terms.items():
             term.load_state_dict(state[name])
+
+
+class LearnedRewardGuardError(GuardError):
+    """A learned reward gave a NaN or infinite value (the run stops at the last good state)."""
+
+    def __init__(self, name: str, value: float, env_index: int, rollout_step: int) -> None:
+        self.kind, self.name, self.value = "learned reward", name, float(value)
+        self.env_index, self.step = int(env_index), int(rollout_step)
+        UsageError.__init__(
+            self,
+            f"learned reward '{name}' gave {self.value!r} for env {self.env_index} at step "
+            f"{self.step} of the rollout (values must be finite)",
+        )
+
+
+def _guard(name: str, reward: torch.Tensor, valid: torch.Tensor, envs: int) -> None:
+    """Raise :class:`LearnedRewardGuardError` at the first non-finite reward."""
+    bad = ~torch.isfinite(reward)
+    if bad.any():
+        first = int(bad.nonzero()[0, 0])
+        flat = int(valid.nonzero()[first, 0])  # back to the (step, env) of the rollout
+        raise LearnedRewardGuardError(name, float(reward[first]), flat % envs, flat // envs)
 
 
 def transitions(storage, last_obs) -> tuple[Transitions, torch.Tensor]:

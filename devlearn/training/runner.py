@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import copy
 import io
 import json
 import math
@@ -22,6 +23,9 @@ from rsl_rl.utils import check_nan
 from tqdm import tqdm
 
 from devlearn.curriculum import Curriculum
+from devlearn.env.guards import GuardError
+from devlearn.env.workers import EnvWorkerError
+from devlearn.errors import RunStopped
 from devlearn.training.checkpoint import (
     FORMAT,
     LATEST,
@@ -129,6 +133,8 @@ class DevRunner(OnPolicyRunner):
             self.learned.broadcast()
         with quiet():
             self.logger.init_logging_writer()
+        if start_it > 0:
+            _purge_tensorboard_from(self.logger.writer, start_it)
         self.curriculum.update(self.env_steps)
         env.set_stage(self.curriculum.stage.options)
         bar = tqdm(
@@ -139,7 +145,9 @@ class DevRunner(OnPolicyRunner):
             disable=not (self.is_main and self.show_progress),
             dynamic_ncols=True,
         )
+        good = None  # the state at the last iteration boundary (what a fault checkpoint saves)
         try:
+            good = self._snapshot()
             while self.env_steps < total_steps:
                 if self.curriculum.update(self.env_steps):
                     env.set_stage(self.curriculum.stage.options)
@@ -168,6 +176,7 @@ class DevRunner(OnPolicyRunner):
                 it = self.current_learning_iteration
                 self.current_learning_iteration += 1
                 self.env_steps += per_iteration
+                good = self._snapshot()
                 with quiet():
                     self.logger.log(
                         it=it,
@@ -187,15 +196,26 @@ class DevRunner(OnPolicyRunner):
                 self._record(it, len(finished), mean_step, losses, rate, times, bar)
                 interval = self.cfg["save_interval"]
                 if self.current_learning_iteration % interval == 0:
-                    self.save_checkpoints(periodic=True)
+                    self.save_checkpoints(periodic=True, good=good)
                 elif self.current_learning_iteration % max(1, interval // 10) == 0:
-                    self.save_checkpoints(periodic=False)  # latest only: little lost on a kill
+                    self.save_checkpoints(periodic=False, good=good)  # little lost on a kill
         except KeyboardInterrupt:
-            self.save_checkpoints(periodic=False, gather=False)
+            # The rollout (and update) under way is thrown away: the checkpoint holds the last
+            # iteration boundary, "first ever" memories and rng states included.
+            self.save_checkpoints(periodic=False, gather=False, good=good)
             if self.is_main:
                 print(
                     f"\ninterrupted: checkpoint saved in {self.run_dir / LATEST}", file=sys.stderr
                 )
+            raise
+        except (GuardError, EnvWorkerError) as exc:
+            saved = self._fault_checkpoint(good)
+            if isinstance(exc, GuardError) or exc.died:
+                rank = f" on rank {self.gpu_global_rank}" if self.is_distributed else ""
+                raise RunStopped(
+                    f"{exc}{rank}, in iteration {self.current_learning_iteration}; {saved}"
+                ) from None
+            print(f"devlearn: {saved}", file=sys.stderr)
             raise
         finally:
             bar.close()
@@ -254,24 +274,18 @@ class DevRunner(OnPolicyRunner):
         bar.update(self.env_steps - bar.n)
 
     # --- checkpoints ----------------------------------------------------------------------
-    def checkpoint_state(self, gather: bool = True) -> dict[str, Any]:
-        """Everything needed to resume (collective when distributed and ``gather``)."""
-        env_state = self.env.state_dict()
-        ranks = [env_state]
-        if self.is_distributed and gather:
-            ranks = [None] * self.gpu_world_size
-            dist.all_gather_object(ranks, env_state)
-        state = self.alg.save()
+    def _snapshot(self) -> dict[str, Any]:
+        """A copy of the state at an iteration boundary (the :meth:`checkpoint_state` of this
+        rank), kept while the next iteration runs so that an interrupt or fault mid-rollout
+        saves that boundary rather than half an iteration."""
+        state = copy.deepcopy(self.alg.save())
         state.update(
-            format=FORMAT,
-            behavior=self.run_cfg.behavior_name,
-            config=to_dict(self.run_cfg),
             iteration=self.current_learning_iteration,
             env_steps=self.env_steps,
-            curriculum=self.curriculum.state_dict(),
-            env={"ranks": ranks},
+            curriculum=copy.deepcopy(self.curriculum.state_dict()),
+            env=copy.deepcopy(self.env.state_dict()),
             learning_rate=self.alg.learning_rate,
-            learned=self.learned.state_dict(),
+            learned=copy.deepcopy(self.learned.state_dict()),  # live tensors otherwise
             rng={
                 "torch": torch.get_rng_state(),
                 "numpy": np.random.get_state(),
@@ -280,9 +294,44 @@ class DevRunner(OnPolicyRunner):
         )
         return state
 
-    def save_checkpoints(self, periodic: bool, gather: bool = True) -> Path | None:
-        """Write ``checkpoint_latest.pt`` (and ``checkpoint_<step>.pt`` when ``periodic``)."""
-        state = self.checkpoint_state(gather)
+    def checkpoint_state(
+        self, gather: bool = True, good: dict[str, Any] | None = None
+    ) -> dict[str, Any]:
+        """Everything needed to resume (collective when distributed and ``gather``): the live
+        state, or the boundary snapshot ``good`` taken by :meth:`_snapshot`."""
+        state = dict(good) if good is not None else self._snapshot()
+        env_state = state.pop("env")
+        ranks = [env_state]
+        if self.is_distributed and gather:
+            ranks = [None] * self.gpu_world_size
+            dist.all_gather_object(ranks, env_state)
+        state.update(
+            format=FORMAT,
+            behavior=self.run_cfg.behavior_name,
+            config=to_dict(self.run_cfg),
+            env={"ranks": ranks},
+        )
+        return state
+
+    def _fault_checkpoint(self, good: dict[str, Any] | None) -> str:
+        """Write the last good state after a fault; return a sentence saying where (or why not)."""
+        if good is None:
+            return "no checkpoint could be written (the fault came before the first iteration)"
+        try:
+            path = self.save_checkpoints(periodic=False, gather=False, good=good)
+        except Exception as exc:  # e.g. the disk is full too
+            return f"no checkpoint could be written ({exc})"
+        return (
+            f"the last good state (step {good['env_steps']}) is saved in "
+            f"{path or self.run_dir / LATEST}; continue with --resume {self.run_dir}"
+        )
+
+    def save_checkpoints(
+        self, periodic: bool, gather: bool = True, good: dict[str, Any] | None = None
+    ) -> Path | None:
+        """Write ``checkpoint_latest.pt`` (and ``checkpoint_<step>.pt`` when ``periodic``)
+        from the live state or the boundary snapshot ``good``."""
+        state = self.checkpoint_state(gather, good)
         if not self.is_main:
             return None
         latest = self.run_dir / LATEST
@@ -314,3 +363,15 @@ class DevRunner(OnPolicyRunner):
         torch.set_rng_state(state["rng"]["torch"])
         np.random.set_state(state["rng"]["numpy"])
         random.setstate(state["rng"]["random"])
+
+
+def _purge_tensorboard_from(writer, step: int) -> None:
+    """Tell TensorBoard to hide earlier event files' points at ``step`` and later (a resumed
+    run redoes the iterations a killed run logged after its last checkpoint): the
+    ``SessionLog.START`` event that ``SummaryWriter(purge_step=...)`` writes."""
+    file_writer = getattr(writer, "file_writer", None)
+    if file_writer is None:
+        return
+    from tensorboard.compat.proto.event_pb2 import Event, SessionLog
+
+    file_writer.add_event(Event(step=step, session_log=SessionLog(status=SessionLog.START)))

@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import json
 import os
 import random
+import shutil
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -15,7 +18,8 @@ import torch
 
 from devlearn.env import DevVecEnv
 from devlearn.errors import UsageError
-from devlearn.training.checkpoint import check_behavior, resume_checkpoint
+from devlearn.training.checkpoint import check_behavior, remove_temporaries, resume_checkpoint
+from devlearn.training.checks import check_config, check_memory, check_out_dir, holds_run
 from devlearn.training.config import RunConfig, from_dict, to_dict, to_rsl_rl
 from devlearn.training.learned_rewards import LearnedRewards
 from devlearn.training.runner import DevRunner, init_distributed
@@ -61,6 +65,10 @@ def load_run_config(run_dir: str | Path, registry) -> RunConfig:
         data = json.loads(path.read_text())
     except (OSError, ValueError) as exc:
         raise UsageError(f"cannot read {path}: {exc}") from None
+    if not isinstance(data, dict):
+        raise UsageError(
+            f"{path} is not a run config: it holds a JSON {type(data).__name__}, not an object"
+        )
     return from_dict(data, registry.behavior(data.get("behavior_name", "")))
 
 
@@ -96,6 +104,7 @@ def train(
     resume: str | Path | None = None,
     infant_factory=None,
     progress: bool = True,
+    force: bool = False,
 ) -> TrainResult:
     """Train ``cfg.behavior_name`` with PPO; return where and how far it got.
 
@@ -106,6 +115,17 @@ def train(
             curriculum stage, reward-term state, networks and optimiser are restored.
         infant_factory: Infant builder for the envs (tests); default the real infant.
         progress: Show a progress bar.
+        force: Start a new run in ``cfg.out_dir`` even if it holds one (its contents are
+            deleted once the new run has started); without it such a folder is refused.
+
+    Everything that can be checked (config values, the checkpoint's env count, memory, the
+    folder) is checked before anything is written; a start that fails anyway (e.g. the envs
+    cannot be built) leaves the run folder as it was.
+
+    Raises:
+        UsageError: Bad input, named; :class:`~devlearn.errors.RunStopped` when a reward or
+            observation guard or a dead env worker stopped training (a checkpoint of the
+            last good state is written first).
     """
     # Config (and, when resuming, the checkpoint it continues from).
     checkpoint = None
@@ -114,16 +134,57 @@ def train(
         ckpt_path, checkpoint = resume_checkpoint(run_dir)
         cfg = cfg or load_run_config(run_dir, registry)
         check_behavior(checkpoint, ckpt_path, cfg.behavior_name)
+        saved = checkpoint["env"]["ranks"][0]["envs"]
+        if len(saved) != cfg.num_envs:
+            raise UsageError(
+                f"checkpoint has {len(saved)} envs per rank; resume with --envs {len(saved)}"
+            )
     elif cfg is None:
         raise UsageError("train() needs a config or a run directory to resume")
     else:
         run_dir = Path(cfg.out_dir) if cfg.out_dir else default_run_dir(cfg.behavior_name)
-    cfg.out_dir = str(run_dir)
     rank = int(os.environ.get("RANK", "0"))
+    if resume is None and rank == 0 and holds_run(run_dir) and not force:
+        raise UsageError(
+            f"--out {run_dir} already holds a run; continue it with --resume {run_dir}, "
+            "or replace it with --force (deletes what the folder holds)"
+        )
+    cfg.out_dir = str(run_dir)
+    check_config(cfg)
+    check_out_dir(run_dir)
     world_size = int(os.environ.get("WORLD_SIZE", "1"))
     device = _resolve_device(cfg.device, int(os.environ.get("LOCAL_RANK", "0")), world_size)
     cfg.workers = resolve_workers(cfg.workers, cfg.num_envs)  # config.json records the number
     learned = LearnedRewards.from_config(cfg, registry)  # names checked before the slow set-up
+    check_memory(cfg.num_envs, cfg.workers)
+    with _start_up(run_dir, replace=force and resume is None, owner=rank == 0):
+        env, runner = _build(
+            cfg, registry, run_dir, checkpoint, infant_factory, progress, rank, world_size, device,
+            learned,
+        )
+    try:
+        # Learn; the runner saves checkpoints periodically, at the end and on Ctrl-C.
+        runner.learn(cfg.total_steps)
+    except OSError as exc:
+        if exc.errno not in (errno.ENOSPC, errno.EDQUOT):
+            raise
+        raise UsageError(
+            f"disk full: cannot write {exc.filename or run_dir}; free some space, then "
+            f"continue with --resume {run_dir}"
+        ) from None
+    finally:
+        env.close()
+    return TrainResult(
+        run_dir, runner.env_steps, runner.current_learning_iteration, runner.last_row
+    )
+
+
+def _build(
+    cfg, registry, run_dir, checkpoint, infant_factory, progress, rank, world_size, device, learned
+):
+    """Start-up after the checks: seed, prepare the behaviour, write config.json, build the
+    envs and the runner (restored from ``checkpoint``, with the ``learned`` rewards); return
+    ``(env, runner)``."""
 
     # Seed. One intra-op thread by default: these networks are small, and a fixed thread
     # count keeps CPU results bit-for-bit repeatable (torch_threads=0 keeps torch's default).
@@ -135,6 +196,8 @@ def train(
     # With several ranks, rank 0 prepares first; the others then reuse what it saved.
     behavior = registry.create(cfg.behavior_name, cfg.behavior)
     run_dir.mkdir(parents=True, exist_ok=True)
+    if rank == 0:
+        remove_temporaries(run_dir)
     init_distributed(device)
     if rank == 0:
         behavior.prepare(run_dir)
@@ -147,12 +210,6 @@ def train(
         (run_dir / CONFIG_FILE).write_text(json.dumps(to_dict(cfg), indent=2) + "\n")
 
     # Environments (seeded seed + rank * num_envs + index) and the runner.
-    if checkpoint is not None:
-        saved = checkpoint["env"]["ranks"][0]["envs"]
-        if len(saved) != cfg.num_envs:
-            raise UsageError(
-                f"checkpoint has {len(saved)} envs per rank; resume with --envs {len(saved)}"
-            )
     env = DevVecEnv(behavior, cfg.num_envs, cfg.seed, cfg.workers, "cpu", infant_factory, rank)
     try:
         env.cfg = cfg
@@ -175,11 +232,54 @@ def train(
             # from here on each rank draws its own action noise, also after a resume, which
             # restores rank 0's generator states everywhere.
             seed_everything(rank_seed(cfg.seed, rank, runner.env_steps))
-
-        # Learn; the runner saves checkpoints periodically, at the end and on Ctrl-C.
-        runner.learn(cfg.total_steps)
-    finally:
+    except BaseException:
         env.close()
-    return TrainResult(
-        run_dir, runner.env_steps, runner.current_learning_iteration, runner.last_row
-    )
+        raise
+    return env, runner
+
+
+_SMALL_FILE = 1 << 20  # files up to this size are restored byte for byte after a failed start
+
+
+@contextlib.contextmanager
+def _start_up(run_dir: Path, replace: bool, owner: bool):
+    """Within the block, a failure puts ``run_dir`` back as it was: new entries are deleted
+    (and the folder itself, if it was new), small files rewritten (config.json...) are restored.
+    With ``replace`` the folder's entries are set aside first and deleted once the block
+    succeeds. Only the ``owner`` (rank 0) touches the folder."""
+    if not owner:
+        yield
+        return
+    created = run_dir
+    while not created.parent.exists() and created.parent != created:
+        created = created.parent
+    existed = run_dir.exists()
+    before: dict[str, bytes | None] = {}
+    aside = run_dir / f".devlearn-replaced-{os.getpid()}"
+    if existed:
+        for p in run_dir.iterdir():
+            small = p.is_file() and p.stat().st_size <= _SMALL_FILE
+            before[p.name] = p.read_bytes() if small else None
+        if replace:
+            aside.mkdir()
+            for name in before:
+                os.replace(run_dir / name, aside / name)
+    try:
+        yield
+    except BaseException:
+        if not existed:
+            shutil.rmtree(created, ignore_errors=True)
+            raise
+        for p in run_dir.iterdir():
+            if p != aside and (replace or p.name not in before):
+                shutil.rmtree(p) if p.is_dir() and not p.is_symlink() else p.unlink()
+            elif before.get(p.name) is not None and p.is_file():
+                if p.read_bytes() != before[p.name]:
+                    p.write_bytes(before[p.name])
+        if replace:
+            for name in before:
+                os.replace(aside / name, run_dir / name)
+            aside.rmdir()
+        raise
+    if replace:
+        shutil.rmtree(aside, ignore_errors=True)

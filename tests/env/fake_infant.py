@@ -26,6 +26,7 @@ class FakeInfant:
         action_dim: int = 3,
         fail_after: int | None = None,
         interrupt_after: int | None = None,
+        die_after: int | None = None,
     ):
         self.scene = scene
         self.senses = tuple(senses)
@@ -35,6 +36,7 @@ class FakeInfant:
         self.actuator_names = [f"joint{i}" for i in range(action_dim)]
         self.fail_after = fail_after
         self.interrupt_after = interrupt_after
+        self.die_after = die_after  # SIGKILL this process (use only in env worker processes)
         self.steps_taken = 0
         self.position = np.zeros(action_dim)
 
@@ -49,6 +51,11 @@ class FakeInfant:
             raise RuntimeError("fake infant broke on purpose")
         if self.interrupt_after is not None and self.steps_taken > self.interrupt_after:
             raise KeyboardInterrupt  # as if Ctrl-C arrived mid-rollout
+        if self.die_after is not None and self.steps_taken > self.die_after:
+            import os
+            import signal
+
+            os.kill(os.getpid(), signal.SIGKILL)  # as if the OOM killer struck
         self.position = np.clip(self.position + 0.1 * np.clip(action, -1, 1), -2, 2)
 
     def proprioception(self) -> np.ndarray:

@@ -163,3 +163,19 @@ def test_torchrun_ranks_share_one_learned_model(tmp_path):
     # Each rank rewarded its own rollout (different environments), with one shared model.
     assert ranks[0]["last"]["reward/linear/raw"] != ranks[1]["last"]["reward/linear/raw"]
     assert load_checkpoint(out / "checkpoint_latest.pt")["learned"]["linear"]["updates"] == 2
+
+
+def test_a_non_finite_learned_reward_stops_the_run_at_the_last_good_state(tmp_path, monkeypatch):
+    from devlearn.errors import RunStopped
+
+    def broken(self, batch):
+        errors = self.errors(batch)
+        if self.updates == 1:  # the second iteration goes wrong
+            errors[3] = float("nan")
+        return errors
+
+    monkeypatch.setattr(LinearPredictor, "compute_reward", broken)
+    with pytest.raises(RunStopped, match="learned reward 'linear' gave nan for env"):
+        run(tmp_path / "r", 128, "curiosity=linear")
+    state = load_checkpoint(tmp_path / "r" / "checkpoint_latest.pt")
+    assert state["env_steps"] == 32 and state["learned"]["linear"]["updates"] == 1

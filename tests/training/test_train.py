@@ -82,6 +82,8 @@ def test_interrupt_saves_a_checkpoint(tmp_path):
     state = load_checkpoint(tmp_path / "r" / "checkpoint_latest.pt")
     # each infant steps 8 times per iteration: 8 iterations complete, the 9th is interrupted
     assert state["env_steps"] == 8 * PER_ITERATION
+    # lifetime memory is that of the last complete iteration, not of the rollout thrown away
+    assert [e["terms"]["counter"]["count"] for e in state["env"]["ranks"][0]["envs"]] == [64] * 4
 
 
 def test_resume_after_kill(tmp_path):
@@ -180,7 +182,7 @@ def test_kill_mid_write_keeps_previous_checkpoint(tmp_path):
     done = subprocess.run([sys.executable, "-c", KILL_MID_WRITE, str(path)], timeout=60)
     assert done.returncode == -signal.SIGKILL
     assert path.read_bytes() == before
-    assert load_checkpoint(path)["n"] == 1
+    assert load_checkpoint(path, required=())["n"] == 1
     assert list(tmp_path.glob(".checkpoint_latest.pt.tmp-*"))  # the partial file, not latest
 
 

@@ -1,0 +1,101 @@
+"""Reward and observation guards: a non-finite or huge value stops the run, named where it began."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+
+from devlearn.errors import UsageError
+
+REWARD_BOUND = 1e6
+"""Largest allowed magnitude of one reward term's (unweighted) value per step."""
+OBSERVATION_BOUND = 1e6
+"""Largest allowed magnitude of any element of a floating-point observation (integer
+observations, e.g. uint8 images, are bounded by their dtype and not checked)."""
+
+
+class GuardError(UsageError):
+    """A reward term or observation produced a value that is NaN, infinite or beyond its bound.
+
+    Attributes:
+        kind: ``"reward term"`` or ``"observation"``.
+        name: The term's or observation's name.
+        value: The offending value (the first bad element for an array).
+        env_index: Index of the environment on this rank.
+        step: For a reward term the control step inside the episode (0-based); for an
+            observation the observation's index inside the episode (0: the one after reset).
+    """
+
+    def __init__(self, kind: str, name: str, value: float, env_index: int, step: int) -> None:
+        self.kind, self.name, self.value = kind, name, float(value)
+        self.env_index, self.step = int(env_index), int(step)
+        bound = REWARD_BOUND if kind == "reward term" else OBSERVATION_BOUND
+        verb = "returned" if kind == "reward term" else "holds"
+        super().__init__(
+            f"{kind} '{name}' {verb} {self.value!r} in env {self.env_index} at episode step "
+            f"{self.step} (values must be finite with magnitude <= {bound:g})"
+        )
+
+    def __reduce__(self):  # crosses the worker-process boundary intact
+        return GuardError, (self.kind, self.name, self.value, self.env_index, self.step)
+
+
+def check_reward(name: str, value: float, env_index: int, step: int) -> float:
+    """Return ``value`` if it is finite with ``abs(value) <= REWARD_BOUND``.
+
+    Args:
+        name: The reward term's name.
+        value: Its unweighted value for this step.
+        env_index: The environment's index on this rank.
+        step: Step inside the episode.
+    Raises:
+        GuardError: Naming the term, the environment and the step.
+    """
+    if not abs(value) <= REWARD_BOUND:  # also False for NaN
+        raise GuardError("reward term", name, value, env_index, step)
+    return value
+
+
+def check_reward_batch(
+    names: Sequence[str], values: np.ndarray, env_offset: int, step: int | np.ndarray
+) -> None:
+    """Batched :func:`check_reward`: ``values`` (num_envs, num_terms), row i is env
+    ``env_offset + i``; ``step`` is one episode step for all rows or (num_envs,) per row.
+    The first offence (lowest env, then term order) is raised."""
+    bad = ~(np.abs(values) <= REWARD_BOUND)
+    if bad.any():
+        i, t = np.argwhere(bad)[0]
+        at = int(np.asarray(step).reshape(-1)[i] if np.ndim(step) else step)
+        raise GuardError("reward term", names[t], values[i, t], env_offset + int(i), at)
+
+
+def check_observations(obs: Mapping[str, np.ndarray], env_index: int, step: int) -> None:
+    """Check one env's floating-point observations elementwise (finite, ``<= OBSERVATION_BOUND``).
+
+    Raises:
+        GuardError: Naming the observation, the environment and the step.
+    """
+    for name, value in obs.items():
+        array = np.asarray(value)
+        if array.dtype.kind in "fc":
+            bad = ~(np.abs(array) <= OBSERVATION_BOUND)
+            if bad.any():
+                raise GuardError("observation", name, array[bad].flat[0].real, env_index, step)
+
+
+def check_observation_batch(
+    obs: Mapping[str, np.ndarray], env_offset: int, step: int | np.ndarray
+) -> None:
+    """Batched :func:`check_observations`: every array is (num_envs, *shape), row i is env
+    ``env_offset + i``; ``step`` as in :func:`check_reward_batch`."""
+    for name, value in obs.items():
+        array = np.asarray(value)
+        if array.dtype.kind in "fc":
+            bad = ~(np.abs(array) <= OBSERVATION_BOUND)
+            if bad.any():
+                i = int(np.argwhere(bad.reshape(len(array), -1).any(axis=1))[0][0])
+                at = int(np.asarray(step).reshape(-1)[i] if np.ndim(step) else step)
+                raise GuardError("observation", name, array[i][bad[i]].flat[0].real,
+                                 env_offset + i, at)
+

@@ -1,0 +1,211 @@
+"""``devlearn run`` / ``eval`` on bad or hostile input: one line, exit code 2, nothing run."""
+
+from __future__ import annotations
+
+import errno
+import functools
+import json
+import os
+import sys
+from pathlib import Path
+
+import pytest
+import torch
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "env"))
+
+from fake_infant import OtherBehavior, TinyBehavior, fake_infant_factory  # noqa: E402
+
+import devlearn.plugins  # noqa: E402
+from devlearn.cli import main  # noqa: E402
+from devlearn.testing import registry_for  # noqa: E402
+from devlearn.training import checkpoint as checkpoint_module  # noqa: E402
+from devlearn.training import checks  # noqa: E402
+
+SMALL = ["--envs", "2", "--seed", "1", "--workers", "0", "--set", "save_interval=1"]
+
+
+@pytest.fixture
+def cli(monkeypatch):
+    """Run ``devlearn ...`` in process with the tiny behaviours installed and a fake infant."""
+    registry = registry_for(TinyBehavior, OtherBehavior)
+    monkeypatch.setattr(devlearn.plugins, "PluginRegistry", lambda *a, **k: registry)
+    fake = functools.partial(fake_infant_factory, episode_steps=10)
+    monkeypatch.setattr("devlearn.env.behavior_env.build_default_infant", fake)
+    return main
+
+
+@pytest.fixture
+def run_dir(cli, tmp_path, capsys):
+    """A finished 2-env tiny run of 32 steps."""
+    out = tmp_path / "run"
+    assert cli(["run", "tiny", "--steps", "32", "--out", str(out), *SMALL]) == 0
+    capsys.readouterr()
+    return out
+
+
+def error(cli, capsys, *argv: str) -> str:
+    capsys.readouterr()  # drop earlier output (progress bars)
+    assert cli(list(argv)) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("devlearn: error: ") and "\n" not in err and "Traceback" not in err
+    return err
+
+
+def files(folder: Path) -> dict[str, bytes]:
+    return {str(p.relative_to(folder)): p.read_bytes() for p in folder.rglob("*") if p.is_file()}
+
+
+class Payload:
+    """Unpickling this runs ``exec``, which writes a marker file."""
+
+    def __init__(self, marker: Path) -> None:
+        self.marker = marker
+
+    def __reduce__(self):
+        return exec, (f"open({str(self.marker)!r}, 'w').write('ran')",)
+
+
+def test_a_crafted_checkpoint_runs_nothing_on_eval(cli, tmp_path, capsys):
+    marker = tmp_path / "marker"
+    crafted = tmp_path / "crafted.pt"
+    state = {"format": "devlearn-checkpoint-1", "behavior": "tiny", "x": Payload(marker)}
+    torch.save(state, crafted)
+    err = error(cli, capsys, "eval", "tiny", "--checkpoint", str(crafted), "--episodes", "1")
+    assert f"checkpoint {crafted} refused: it needs builtins.exec" in err
+    assert not marker.exists()
+
+
+def test_a_genuine_checkpoint_with_a_payload_runs_nothing_on_resume(cli, run_dir, tmp_path, capsys):
+    marker = tmp_path / "marker"
+    for path in run_dir.glob("checkpoint_*.pt"):
+        state = torch.load(path, weights_only=False)  # our own file: trusted here
+        state["env"]["ranks"][0]["extra"] = Payload(marker)
+        path.unlink()
+        torch.save(state, path)
+    err = error(cli, capsys, "run", "tiny", "--resume", str(run_dir), "--steps", "64")
+    assert "refused: it needs builtins.exec" in err and not marker.exists()
+
+
+def test_out_on_an_existing_run_is_refused_and_leaves_it_unchanged(cli, run_dir, capsys):
+    before = files(run_dir)
+    err = error(cli, capsys, "run", "tiny", "--steps", "64", "--out", str(run_dir), *SMALL)
+    assert f"--out {run_dir} already holds a run" in err
+    assert f"--resume {run_dir}" in err and "--force" in err
+    assert files(run_dir) == before
+    assert cli(["run", "tiny", "--steps", "16", "--out", str(run_dir), "--force", *SMALL]) == 0
+    steps = [json.loads(r)["step"] for r in (run_dir / "metrics.jsonl").read_text().splitlines()]
+    assert steps == [16]
+
+
+def test_a_rejected_resume_leaves_config_json_as_it_was(cli, run_dir, capsys):
+    config = (run_dir / "config.json").read_bytes()
+    err = error(cli, capsys, "run", "tiny", "--resume", str(run_dir), "--envs", "8")
+    assert "checkpoint has 2 envs per rank; resume with --envs 2" in err
+    assert (run_dir / "config.json").read_bytes() == config
+    assert cli(["run", "tiny", "--resume", str(run_dir), "--steps", "48"]) == 0
+
+
+@pytest.mark.parametrize(
+    ("argv", "expected"),
+    [
+        (["--seed", "-1"], "--seed must be an integer from 0 to 4294967295, got -1"),
+        (["--seed", "1e30"], "--seed must be an integer from 0 to 4294967295"),
+        (["--set", "ppo.learning_rate=-1"], "ppo.learning_rate must be a finite number in (0, 1]"),
+        (["--set", "ppo.learning_rate=nan"], "ppo.learning_rate must be a finite number"),
+        (["--set", "ppo.learning_rate=inf"], "ppo.learning_rate must be a finite number"),
+        (["--set", "ppo.gamma=inf"], "ppo.gamma must be a finite number in (0, 1], got inf"),
+        (["--set", "ppo.clip_param=-1"], "ppo.clip_param must be a finite number in (0, 1]"),
+    ],
+)
+def test_bad_values_are_one_line_errors(cli, tmp_path, capsys, argv, expected):
+    out = tmp_path / "run"
+    assert expected in error(cli, capsys, "run", "tiny", "--steps", "16", "--out", str(out), *argv)
+    assert not out.exists()
+
+
+def test_more_envs_than_memory_is_refused_before_building_them(cli, tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(checks, "available_memory_mb", lambda: 1000.0)
+    out = tmp_path / "run"
+    err = error(cli, capsys, "run", "tiny", "--steps", "16", "--envs", "1000", "--workers", "0",
+                "--out", str(out))
+    assert "--envs 1000 needs at least 9.8 GB of memory" in err and "use --envs 100 or fewer" in err
+    assert not out.exists()
+    assert "--envs 100000 needs at least" in error(cli, capsys, "run", "tiny", "--envs", "100000")
+
+
+def test_unusable_out_folders(cli, tmp_path, capsys):
+    a_file = tmp_path / "file"
+    a_file.write_text("x")
+    assert f"--out {a_file} is a file" in error(cli, capsys, "run", "tiny", "--out", str(a_file))
+    under = a_file / "run"
+    assert f"lies under {a_file}, which is a file" in error(
+        cli, capsys, "run", "tiny", "--out", str(under)
+    )
+    if os.geteuid() == 0:  # root writes anywhere a mode allows nothing: use sysfs
+        read_only = Path("/sys/devlearn-test-run")
+        if not Path("/sys").is_dir() or os.access("/sys", os.W_OK) and _writable("/sys"):
+            pytest.skip("no read-only folder available to root")
+    else:
+        locked = tmp_path / "locked"
+        locked.mkdir()
+        locked.chmod(0o555)
+        read_only = locked / "run"
+    err = error(cli, capsys, "run", "tiny", "--steps", "16", "--out", str(read_only))
+    assert f"--out {read_only} is not writable" in err
+
+
+def _writable(folder: str) -> bool:
+    try:
+        with open(Path(folder) / ".devlearn-probe", "w"):
+            pass
+    except OSError:
+        return False
+    os.unlink(Path(folder) / ".devlearn-probe")
+    return True
+
+
+def test_a_config_json_list_is_refused(cli, run_dir, capsys):
+    (run_dir / "config.json").write_text("[1, 2]\n")
+    err = error(cli, capsys, "run", "tiny", "--resume", str(run_dir))
+    assert "config.json is not a run config: it holds a JSON list" in err
+
+
+def test_a_checkpoint_missing_keys_is_refused(cli, run_dir, tmp_path, capsys):
+    state = torch.load(run_dir / "checkpoint_latest.pt", weights_only=False)
+    for path in run_dir.glob("checkpoint_*.pt"):
+        path.unlink()
+    del state["rng"], state["curriculum"]
+    torch.save(state, run_dir / "checkpoint_latest.pt")
+    err = error(cli, capsys, "run", "tiny", "--resume", str(run_dir))
+    assert "is incomplete: it lacks curriculum, rng" in err
+    del state["actor_state_dict"]
+    policy = tmp_path / "policy.pt"
+    torch.save(state, policy)
+    err = error(cli, capsys, "eval", "tiny", "--checkpoint", str(policy))
+    assert "is incomplete: it lacks actor_state_dict" in err
+
+
+def test_a_full_disk_is_reported_as_such(cli, run_dir, capsys, monkeypatch):
+    class FullDisk:
+        def __init__(self, *args, **kwargs):
+            open(*args, **kwargs).close()  # the temporary file exists, as on a real disk
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            return False
+
+        def write(self, data):
+            raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(checkpoint_module, "open", FullDisk, raising=False)
+    before = (run_dir / "checkpoint_latest.pt").read_bytes()
+    capsys.readouterr()
+    assert cli(["run", "tiny", "--resume", str(run_dir), "--steps", "64"]) == 2
+    printed = capsys.readouterr().err
+    err = printed.strip().splitlines()[-1]  # after the progress bar
+    assert err.startswith("devlearn: error: ") and "Traceback" not in printed
+    assert "disk full: cannot write" in err and "the previous checkpoint is kept" in err
+    assert (run_dir / "checkpoint_latest.pt").read_bytes() == before
