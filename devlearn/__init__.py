@@ -1,7 +1,8 @@
 """devlearn: developmental reinforcement learning with a simulated infant.
 
 The public API for behaviour plugins: the four interfaces (:class:`Behavior`,
-:class:`SensorEncoder`, :class:`IntrinsicReward`, :class:`Curriculum`) and the hook marker
+:class:`SensorEncoder`, :class:`IntrinsicReward`, :class:`Curriculum`), the learned-reward kind
+(:class:`LearnedReward`) and the hook marker
 :data:`hookimpl`. See ``docs/writing-a-plugin.md``.
 """
 
@@ -19,6 +20,7 @@ os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 from devlearn.behavior import Behavior, Evaluator, NetworkSpec
 from devlearn.curriculum import Curriculum, Stage
 from devlearn.hookspecs import hookimpl
+from devlearn.learned import LearnedReward, LearnedRewardConfig, Transitions
 from devlearn.rewards import BatchContext, BatchedIntrinsicReward, IntrinsicReward, StepContext
 from devlearn.sensors import MLPEncoder, SensorEncoder
 
@@ -31,10 +33,13 @@ __all__ = [
     "Curriculum",
     "Evaluator",
     "IntrinsicReward",
+    "LearnedReward",
+    "LearnedRewardConfig",
     "MLPEncoder",
     "NetworkSpec",
     "SensorEncoder",
     "Stage",
     "StepContext",
+    "Transitions",
     "hookimpl",
 ]

@@ -48,3 +48,20 @@ def register_encoders(register: Callable[[str, type], None]) -> None:
     Args:
         register: Callable taking a unique name and a SensorEncoder subclass.
     """
+
+
+@hookspec
+def register_learned_rewards(register: Callable[[type], None]) -> None:
+    """Register learned intrinsic rewards (subclasses of :class:`devlearn.LearnedReward`).
+
+    Call ``register(LearnedRewardClass)`` once per term. A learned reward is a model trained
+    in the learner on each rollout batch (e.g. random network distillation, a forward
+    model); any behaviour's run adds it by config, ``--set curiosity=NAME[,NAME...]``, with
+    options ``--set learned.NAME.OPTION=VALUE``. The class's ``name`` must be unique across
+    installed plugins (lower_snake_case) and its ``config_class`` a dataclass subclassing
+    :class:`devlearn.LearnedRewardConfig`; a duplicate is reported with both plugins' names
+    and the second registration is ignored.
+
+    Args:
+        register: Callable taking one LearnedReward subclass.
+    """

@@ -22,6 +22,7 @@ import pluggy
 from devlearn import hookspecs
 from devlearn.behavior import Behavior
 from devlearn.errors import UsageError
+from devlearn.learned import LearnedReward, LearnedRewardConfig
 from devlearn.sensors import SensorEncoder
 
 ENTRY_POINT_GROUP = "devlearn"
@@ -71,6 +72,7 @@ class PluginInfo:
     version: str
     behaviors: list[str] = field(default_factory=list)
     encoders: list[str] = field(default_factory=list)
+    learned_rewards: list[str] = field(default_factory=list)
     hooks: list[str] = field(default_factory=list)
     disabled: bool = False
     error: str | None = None
@@ -125,6 +127,7 @@ class PluginRegistry:
         self.errors: list[str] = []
         self._behaviors: dict[str, type[Behavior]] = {}
         self._encoders: dict[str, type[SensorEncoder]] = {}
+        self._learned: dict[str, type[LearnedReward]] = {}
         self._owner: dict[tuple[str, str], str] = {}
         self._pm = pluggy.PluginManager("devlearn")
         self._pm.add_hookspecs(hookspecs)
@@ -200,6 +203,22 @@ class PluginRegistry:
 
         return register
 
+    def _register_learned_rewards(self, info: PluginInfo):
+        def register(term: type) -> None:
+            if not (inspect.isclass(term) and issubclass(term, LearnedReward)):
+                raise TypeError(f"register_learned_rewards got {term!r}, not a LearnedReward")
+            name = getattr(term, "name", None)
+            if not isinstance(name, str) or not _NAME.match(name):
+                raise TypeError(f"{term.__name__}.name must be a lower_snake_case string")
+            config = getattr(term, "config_class", None)
+            if not (inspect.isclass(config) and issubclass(config, LearnedRewardConfig)):
+                raise TypeError(f"{term.__name__}.config_class must subclass LearnedRewardConfig")
+            if self._claim("learned reward", name, info):
+                self._learned[name] = term
+                info.learned_rewards.append(name)
+
+        return register
+
     # --- lookup ---------------------------------------------------------------------------
     def behaviors(self) -> dict[str, type[Behavior]]:
         """Return every registered behaviour, name -> class, sorted by name."""
@@ -229,6 +248,17 @@ class PluginRegistry:
         if name not in self._encoders:
             raise UsageError(f"unknown encoder '{name}'; registered: {', '.join(self._encoders)}")
         return self._encoders[name]
+
+    def learned_rewards(self) -> dict[str, type[LearnedReward]]:
+        """Return every registered learned reward, name -> class, sorted by name."""
+        return dict(sorted(self._learned.items()))
+
+    def learned_reward(self, name: str) -> type[LearnedReward]:
+        """Return the learned reward called ``name``; raise UsageError listing the valid ones."""
+        if name not in self._learned:
+            installed = ", ".join(sorted(self._learned)) or "none (install devlearn-curiosity)"
+            raise UsageError(f"unknown learned reward '{name}'; installed: {installed}")
+        return self._learned[name]
 
     def plugin_of(self, behavior_name: str) -> PluginInfo:
         """Return the plugin that registered a behaviour."""

@@ -47,6 +47,9 @@ class IntrinsicReward(ABC):
     Subclasses set ``name`` and implement :meth:`__call__`; stateful terms override
     :meth:`reset` (per-episode memory) and :meth:`state_dict` / :meth:`load_state_dict`
     (lifetime memory that must survive ``devlearn run --resume``).
+
+    A reward that is a model trained on batches of transitions (novelty, prediction error) is
+    a :class:`~devlearn.learned.LearnedReward` instead: it lives in the learner, not here.
     """
 
     name: str = "reward"

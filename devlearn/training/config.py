@@ -105,6 +105,14 @@ class RunConfig:
     """PPO hyper-parameters."""
     network: NetworkConfig = field(default_factory=NetworkConfig)
     """Network layout and input scale."""
+    curiosity: list[str] = field(default_factory=list)
+    """Learned intrinsic rewards added to the behaviour's reward, by registered name
+    (``--set curiosity=rnd,forward_model``; ``devlearn plugins --json`` lists them). Each is a
+    model trained on every rollout (devlearn/learned.py); none by default."""
+    learned: dict[str, Any] = field(default_factory=dict)
+    """Options of the learned rewards, name -> {option: value}, e.g. ``--set
+    learned.rnd.weight=0.5`` (the fields of the term's ``config_class``; unset ones keep their
+    defaults, and config.json records every resolved value)."""
     behavior: Any = None
     """The behaviour's own options (an instance of its ``config_class``)."""
 
@@ -204,6 +212,18 @@ def _hints(obj: Any) -> dict[str, Any]:
 
 def set_value(cfg: RunConfig, key: str, value: Any) -> None:
     """Set dotted ``key`` to ``value`` (converted to the field's type); UsageError if unknown."""
+    head, _, rest = key.partition(".")
+    if rest and isinstance(getattr(cfg, head, None), dict):
+        # A table of free-form options (``learned.rnd.weight``): kept as given here, then
+        # converted and checked against the term's own config class when the run builds it.
+        *path, leaf = rest.split(".")
+        table = getattr(cfg, head)
+        for part in path:
+            table = table.setdefault(part, {})
+            if not isinstance(table, dict):
+                raise UsageError(f"config key '{key}' goes inside a value that is not a table")
+        table[leaf] = value
+        return
     *path, leaf = key.split(".")
     obj: Any = cfg
     for part in path:

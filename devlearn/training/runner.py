@@ -34,6 +34,7 @@ from devlearn.training.checkpoint import (
     save_atomic,
 )
 from devlearn.training.config import RunConfig, to_dict
+from devlearn.training.learned_rewards import LearnedRewards
 from devlearn.training.process import (
     ThreadPlan,
     init_distributed,
@@ -54,8 +55,10 @@ class DevRunner(OnPolicyRunner):
     curriculum, every env's reward-term state, rng states, behaviour name, config) written
     atomically as ``checkpoint_latest.pt`` every ``save_interval // 10`` iterations, plus
     ``checkpoint_<step>.pt`` every ``save_interval``, at the end and on Ctrl-C or SIGTERM; and
-    CPU distributed training over gloo. ``current_learning_iteration`` counts *completed*
-    iterations, so a resumed run logs each iteration index once.
+    CPU distributed training over gloo; learned rewards (``RunConfig.curiosity``), added to the
+    rollout's rewards and trained after each rollout, logged under ``reward/<name>/...`` and
+    saved in checkpoints (:mod:`devlearn.training.learned_rewards`). ``current_learning_iteration``
+    counts *completed* iterations, so a resumed run logs each iteration index once.
 
     ``learn`` re-implements rsl-rl's ``OnPolicyRunner.learn`` loop (same calls in the same
     order: ``act``, ``env.step``, ``process_env_step``, ``compute_returns``, ``update``,
@@ -74,6 +77,9 @@ class DevRunner(OnPolicyRunner):
         headline_metric: Evaluator key shown on the progress bar.
         device: Torch device of the networks.
         progress: Show the progress bar (rank 0 only).
+        learned: The run's learned rewards (built here, after the networks, so the networks'
+            initial parameters do not depend on them); see
+            :class:`~devlearn.training.learned_rewards.LearnedRewards`.
     """
 
     def __init__(
@@ -86,6 +92,7 @@ class DevRunner(OnPolicyRunner):
         headline_metric: str = "",
         device: str = "cpu",
         progress: bool = True,
+        learned: LearnedRewards | None = None,
     ) -> None:
         self.run_cfg = cfg
         self.run_dir = Path(run_dir)
@@ -99,6 +106,9 @@ class DevRunner(OnPolicyRunner):
         with contextlib.redirect_stdout(report):
             super().__init__(env, train_cfg, log_dir=str(self.run_dir), device=device)
         self.is_main = self.gpu_global_rank == 0
+        self.learned = (learned or LearnedRewards()).build(
+            env.observation_shapes, env.num_actions, self.device
+        )
         if self.is_main:
             (self.run_dir / "networks.txt").write_text(report.getvalue())
 
@@ -136,6 +146,7 @@ class DevRunner(OnPolicyRunner):
         alg.train_mode()
         if self.is_distributed:
             alg.broadcast_parameters()
+            self.learned.broadcast()
         with quiet():
             self.logger.init_logging_writer()
         if start_it > 0:
@@ -175,6 +186,7 @@ class DevRunner(OnPolicyRunner):
                         finished += extras["episode_infos"]
                         step_rewards += float(rewards.mean())
                     collect_time = time.time() - start
+                    self.learned.apply(alg.storage, obs, self.env_steps)  # adds to the rewards
                     alg.compute_returns(obs)
                 start = time.time()
                 set_threads(learn_threads)  # the workers sleep during the update
@@ -269,9 +281,11 @@ class DevRunner(OnPolicyRunner):
             for key in dict.fromkeys(k for ep in self.episodes for k in ep):
                 row[key] = float(np.mean([ep[key] for ep in self.episodes if key in ep]))
         row.update({f"loss/{k}": float(v) for k, v in losses.items()})
+        row.update(self.learned.last)
         self.last_row = row
         if not self.is_main:
             return
+        self.learned.write(self.logger.writer, it)
         with open(self.run_dir / "metrics.jsonl", "a") as f:
             f.write(json.dumps(row) + "\n")
         postfix = {"steps/s": f"{rate:.0f}", "stage": row["stage"]}
@@ -299,6 +313,7 @@ class DevRunner(OnPolicyRunner):
             curriculum=copy.deepcopy(self.curriculum.state_dict()),
             env=copy.deepcopy(self.env.state_dict()),
             learning_rate=self.alg.learning_rate,
+            learned=copy.deepcopy(self.learned.state_dict()),  # live tensors otherwise
             rng={
                 "torch": torch.get_rng_state(),
                 "numpy": np.random.get_state(),
@@ -357,7 +372,8 @@ class DevRunner(OnPolicyRunner):
         return latest
 
     def restore(self, state: dict[str, Any]) -> None:
-        """Resume from a checkpoint: networks, optimiser, counters, curriculum, envs, rngs."""
+        """Resume from a checkpoint: networks, optimiser, counters, curriculum, learned rewards,
+        envs, rngs."""
         self.alg.load(state, None, strict=True)  # also takes the adaptive lr from the optimiser
         if self.run_cfg.ppo.schedule == "fixed":  # a fixed schedule means the configured lr
             self.alg.learning_rate = self.run_cfg.ppo.learning_rate
@@ -366,6 +382,7 @@ class DevRunner(OnPolicyRunner):
         self.current_learning_iteration = int(state["iteration"])
         self.env_steps = int(state["env_steps"])
         self.curriculum.load_state_dict(state["curriculum"])
+        self.learned.load_state_dict(state.get("learned", {}))
         ranks = state["env"]["ranks"]
         if self.gpu_global_rank < len(ranks):
             self.env.load_state_dict(ranks[self.gpu_global_rank])

@@ -21,6 +21,7 @@ from devlearn.errors import UsageError
 from devlearn.training.checkpoint import check_behavior, remove_temporaries, resume_checkpoint
 from devlearn.training.checks import check_config, check_memory, check_out_dir, holds_run
 from devlearn.training.config import RunConfig, from_dict, to_dict, to_rsl_rl
+from devlearn.training.learned_rewards import LearnedRewards
 from devlearn.training.loggers import logger_config
 from devlearn.training.runner import DevRunner, init_distributed
 
@@ -161,10 +162,12 @@ def train(
     world_size = int(os.environ.get("WORLD_SIZE", "1"))
     device = _resolve_device(cfg.device, int(os.environ.get("LOCAL_RANK", "0")), world_size)
     cfg.workers = resolve_workers(cfg.workers, cfg.num_envs)  # config.json records the number
+    learned = LearnedRewards.from_config(cfg, registry)  # names checked before the slow set-up
     check_memory(cfg.num_envs, cfg.workers)
     with _start_up(run_dir, replace=force and resume is None, owner=rank == 0):
         env, runner = _build(
-            cfg, registry, run_dir, checkpoint, infant_factory, progress, rank, world_size, device
+            cfg, registry, run_dir, checkpoint, infant_factory, progress, rank, world_size, device,
+            learned,
         )
     try:
         # Learn; the runner saves checkpoints periodically, at the end and on Ctrl-C.
@@ -183,9 +186,12 @@ def train(
     )
 
 
-def _build(cfg, registry, run_dir, checkpoint, infant_factory, progress, rank, world_size, device):
+def _build(
+    cfg, registry, run_dir, checkpoint, infant_factory, progress, rank, world_size, device, learned
+):
     """Start-up after the checks: seed, prepare the behaviour, write config.json, build the
-    envs and the runner (restored from ``checkpoint``); return ``(env, runner)``."""
+    envs and the runner (restored from ``checkpoint``, with the ``learned`` rewards); return
+    ``(env, runner)``."""
 
     # Seed. The runner sets the torch threads of each rollout and update (ThreadPlan); a
     # fixed torch_threads keeps CPU results bit-for-bit repeatable.
@@ -225,6 +231,7 @@ def _build(cfg, registry, run_dir, checkpoint, infant_factory, progress, rank, w
             behavior.headline_metric,
             device,
             progress,
+            learned,
         )
         if checkpoint is not None:
             runner.restore(checkpoint)

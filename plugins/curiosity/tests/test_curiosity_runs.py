@@ -1,0 +1,124 @@
+"""Real runs: both terms train and resume, on a tiny fake body and on hand regard."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from devlearn_curiosity import RND, ForwardModel
+
+from devlearn.testing import registry_for
+from devlearn.training import default_config, train
+from devlearn.training.checkpoint import load_checkpoint
+
+CORE_TESTS = Path(__file__).resolve().parents[3] / "tests" / "env"
+HAS_FAKE = (CORE_TESTS / "fake_infant.py").exists()
+
+
+def rows(run_dir: Path) -> list[dict]:
+    return [json.loads(line) for line in (run_dir / "metrics.jsonl").read_text().splitlines()]
+
+
+@pytest.mark.slow  # about 20 s: worker processes start
+@pytest.mark.skipif(not HAS_FAKE, reason="needs devlearn's repository (tests/env/fake_infant.py)")
+def test_both_terms_train_and_resume_with_worker_processes(tmp_path):
+    sys.path.insert(0, str(CORE_TESTS))
+    from fake_infant import TinyBehavior, fake_infant_factory
+
+    registry = registry_for(TinyBehavior, learned_rewards=(RND, ForwardModel))
+    out = tmp_path / "run"
+    sets = ["curiosity=rnd,forward_model", "behavior.use_eyes=true", "learned.rnd.weight=0.5"]
+
+    def run(steps: int, workers: int, resume: Path | None = None):
+        cfg = default_config(
+            TinyBehavior,
+            sets,
+            out_dir=str(out),
+            total_steps=steps,
+            num_envs=4,
+            workers=workers,
+            save_interval=1,
+        )
+        return train(
+            cfg, registry, resume=resume, infant_factory=fake_infant_factory, progress=False
+        )
+
+    run(64, workers=0)
+    first = load_checkpoint(out / "checkpoint_latest.pt")["learned"]
+    assert {name: state["updates"] for name, state in first.items()} == {
+        "rnd": 2,
+        "forward_model": 2,
+    }
+    result = run(128, workers=2, resume=out)  # the models live in the learner, not the workers
+    assert result.env_steps == 128
+    lines = rows(out)
+    assert [r["step"] for r in lines] == [32, 64, 96, 128]
+    for row in lines:
+        assert row["reward/rnd/weight"] == 0.5 and row["reward/forward_model/weight"] == 0.1
+        assert row["reward/rnd/raw"] > 0 and row["reward/forward_model/loss"] > 0
+    state = load_checkpoint(out / "checkpoint_latest.pt")["learned"]
+    assert {name: s["updates"] for name, s in state.items()} == {"rnd": 4, "forward_model": 4}
+    predictor = "predictor.0.weight"
+    assert not (
+        state["forward_model"]["model"][predictor] == first["forward_model"]["model"][predictor]
+    ).all()
+    config = json.loads((out / "config.json").read_text())
+    assert config["learned"]["forward_model"]["observations"] == []  # default: the images
+
+
+def _detector_file(path: Path) -> None:
+    """A plausible fixed hand detector (the pink mittens' hue), so no babbling is needed:
+    these runs test that curiosity trains and resumes, not what the detector sees."""
+    from devlearn_hand_regard.detector import DetectorParams
+
+    centre = [[[20.0, 44.0], [44.0, 44.0]], [[20.0, 44.0], [44.0, 44.0]]]
+    DetectorParams([[136, 60, 40, 140, 255, 255]], 4.0, 2000.0, 60.0, centre).save(path)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("term", ["forward_model", "rnd"])
+def test_hand_regard_trains_and_resumes_with_curiosity(tmp_path, term):
+    pytest.importorskip("devlearn_hand_regard")
+    out = tmp_path / "run"
+    out.mkdir()
+    _detector_file(out / "hand_detector.json")
+    base = [
+        sys.executable,
+        "-m",
+        "devlearn.cli",
+        "run",
+        "hand_regard",
+        "--envs",
+        "2",
+        "--workers",
+        "0",
+    ]
+    sets = [
+        "--set",
+        f"curiosity={term}",
+        "--set",
+        "ppo.num_steps_per_env=8",
+        "--set",
+        "ppo.num_mini_batches=1",
+        "--set",
+        "ppo.num_learning_epochs=1",
+    ]
+    subprocess.run(
+        base + ["--steps", "16", "--out", str(out), *sets],
+        check=True,
+        timeout=600,
+        capture_output=True,
+    )
+    subprocess.run(
+        base + ["--steps", "32", "--resume", str(out)], check=True, timeout=600, capture_output=True
+    )
+    lines = rows(out)
+    assert [r["step"] for r in lines] == [16, 32]
+    assert all(r[f"reward/{term}/raw"] > 0 for r in lines)
+    state = load_checkpoint(out / "checkpoint_latest.pt")
+    assert state["learned"][term]["updates"] == 2
+    config = json.loads((out / "config.json").read_text())
+    assert config["curiosity"] == [term]
