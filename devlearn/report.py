@@ -99,7 +99,8 @@ def collect(paths: Sequence[str | Path]) -> tuple[list[tuple[Path, dict]], list[
         notes.append(f"skipped {len(old)} evaluation(s) made before the protocol was recorded "
                      f"(e.g. {old[0]}); re-evaluate them with `devlearn eval`")
     if not found:
-        raise UsageError(f"no evaluation with a recorded protocol under {', '.join(map(str, paths))}")
+        where = ", ".join(map(str, paths))
+        raise UsageError(f"no evaluation with a recorded protocol under {where}")
     behaviors = sorted({d.get("behavior", "?") for d in found.values()})
     if len(behaviors) > 1:
         raise UsageError(f"evaluations of different behaviours mixed ({', '.join(behaviors)}); "

@@ -16,8 +16,8 @@ def add_parser(subparsers) -> list[str]:
         "needs (critic, optimiser, env and rng state). The policy file evaluates from any "
         "folder with `devlearn eval BEHAVIOR --checkpoint FILE`; it cannot resume training.",
     )
-    p.add_argument("checkpoint", metavar="CHECKPOINT", help="training checkpoint (.pt) or run folder")
-    p.add_argument("--out", metavar="PATH", help="policy file to write (default CHECKPOINT_DIR/policy.pt)")
+    p.add_argument("checkpoint", metavar="CHECKPOINT", help="training checkpoint or run folder")
+    p.add_argument("--out", metavar="PATH", help="policy file (default CHECKPOINT_DIR/policy.pt)")
     return ["slim"]
 
 

@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-import mujoco
+from typing import Any
+
 import numpy as np
 
 CONE_DEGREES = 15.0
@@ -18,16 +19,14 @@ HEADLINE = "cone"
 """The criterion behind ``visibility`` and ``average`` in a hand-regard eval JSON."""
 
 
-def axis_angles(
-    data: mujoco.MjData, cameras: np.ndarray, bodies: np.ndarray
-) -> np.ndarray:
-    """Angle between each camera's optical axis and the direction to each body's centre of mass.
+def axis_angles(data: Any, cameras: np.ndarray, bodies: np.ndarray) -> np.ndarray:
+    """Angle between each camera's optical axis and the direction to each body's centre.
 
     A MuJoCo camera looks along the negative z axis of its frame (``cam_xmat``'s third
-    column, negated).
+    column, negated). A body's centre is its centre of mass (``xipos``).
 
     Args:
-        data: Simulation state after ``mj_forward`` / ``mj_step``.
+        data: ``mujoco.MjData`` after ``mj_forward`` / ``mj_step``.
         cameras: (E,) camera ids (eyes).
         bodies: (H,) body ids (hands).
     Returns:
@@ -104,6 +103,8 @@ def measure_visibility(infant) -> dict[str, np.ndarray]:
     Returns:
         Criterion name -> (2 eyes, 2 hands) bool.
     """
+    import mujoco  # here, not at import: devlearn.infant sets MUJOCO_GL before mujoco loads
+
     model = infant.model
     cameras = np.array([mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, f"{s}_eye")
                         for s in ("left", "right")])
