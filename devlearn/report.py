@@ -19,6 +19,8 @@ NOT_METRIC = frozenset({"config", "protocol", "paper", "part_touch_steps", "dete
                         "detector_visibility", "episodes", "steps", "parts", "settle_steps",
                         "checkpoint_env_steps", "training_seed"})
 """Eval-JSON keys that are not metrics (settings, references, bookkeeping)."""
+SINGLE_VARIANT = "trained"
+"""Column name of the checkpoints when their configs differ only in seed (one variant)."""
 
 
 def _flatten(data: dict[str, Any], prefix: str = "") -> dict[str, Any]:
@@ -123,13 +125,14 @@ def group(evaluations: list[tuple[Path, dict]]) -> tuple[dict[str, list], list[s
     keys = sorted({k for c in configs for k in c if len({x.get(k) for x in configs}) > 1})
     columns: dict[str, dict] = {}
     for (path, data), config in zip(runs, configs):
-        name = ", ".join(f"{k}={json.loads(config[k]) if k in config else '-'}" for k in keys)
+        name = ", ".join(f"{k}={json.loads(config[k]) if k in config else '-'}"
+                         for k in keys) or SINGLE_VARIANT
         seed = data.get("training_seed")
-        seeds = columns.setdefault(name or "policy", {})
+        seeds = columns.setdefault(name, {})
         kept = seeds.get(seed)
         if kept is not None:
             later = data.get("checkpoint_env_steps", 0) > kept[1].get("checkpoint_env_steps", 0)
-            notes.append(f"seed {seed} of '{name or 'policy'}' evaluated more than once: kept "
+            notes.append(f"seed {seed} of '{name}' evaluated more than once: kept "
                          f"{(path if later else kept[0]).parent.name} (the later checkpoint)")
             if not later:
                 continue
@@ -140,6 +143,14 @@ def group(evaluations: list[tuple[Path, dict]]) -> tuple[dict[str, list], list[s
         if chosen:
             out[f"{policy} baseline"] = chosen
     return out, notes
+
+
+def _shown(path: Path) -> str:
+    """``path`` relative to the working directory when inside it (reports get committed)."""
+    try:
+        return str(path.relative_to(Path.cwd().resolve()))
+    except ValueError:
+        return str(path)
 
 
 def _cell(stat: dict[str, Any]) -> str:
@@ -187,7 +198,7 @@ def write_report(paths: Sequence[str | Path], out_dir: str | Path) -> dict[str, 
             table[metric][c] = {**mean_ci(values), "values": values}
     info = {c: {"kind": "variant" if c in variants else "baseline",
                 "seeds": [d.get("training_seed") for _, d in columns[c]],
-                "paths": [str(p.parent) for p, _ in columns[c]]} for c in columns}
+                "paths": [_shown(p.parent) for p, _ in columns[c]]} for c in columns}
     for c in variants:
         if len(columns[c]) == 1:
             notes.append(f"'{c}' has a single seed ({info[c]['seeds'][0]}): no interval over "

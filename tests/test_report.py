@@ -42,7 +42,7 @@ def test_three_seeds_give_scipys_interval(three_seeds, tmp_path):
     result = write_report(three_seeds, tmp_path / "report")
     scores = [0.90, 0.96, 0.81]
     low, high = stats.t.interval(0.95, 2, loc=sum(scores) / 3, scale=stats.sem(scores))
-    cell = result["table"]["score"]["policy"]
+    cell = result["table"]["score"]["trained"]
     assert cell["n"] == 3 and cell["mean"] == pytest.approx(sum(scores) / 3)
     assert (cell["ci_low"], cell["ci_high"]) == (pytest.approx(low), pytest.approx(high))
     assert result["metrics"][0] == "score"  # the headline first
