@@ -78,13 +78,15 @@ def code_version() -> dict[str, Any]:
     """The git commit of the devlearn code that runs (``commit`` None outside a git checkout).
 
     Returns:
-        ``{"commit": sha or None, "dirty": bool or None}``; dirty: tracked files modified.
+        ``{"commit": sha or None, "dirty": bool or None}``; dirty: tracked Python files
+        differ from the commit (so the code that ran is not exactly the commit's).
     """
     root = Path(__file__).resolve().parents[2]
     try:
         sha = subprocess.run(["git", "rev-parse", "HEAD"], cwd=root, capture_output=True,
                              text=True, timeout=10, check=True).stdout.strip()
-        status = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"],
+        status = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no",
+                                 "--", "*.py"],
                                 cwd=root, capture_output=True, text=True, timeout=10,
                                 check=True).stdout
     except (OSError, subprocess.SubprocessError):
