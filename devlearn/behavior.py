@@ -76,6 +76,14 @@ class Evaluator:
         """Write pictures or files that explain the summary; return their paths."""
         return []
 
+    def protocol(self) -> dict[str, Any]:
+        """How episodes are scored, recorded in every eval JSON under ``protocol``.
+
+        Returns:
+            JSON-serialisable, e.g. ``{"settle_steps": 10, "criteria": {...}, "headline": ...}``.
+        """
+        return {}
+
 
 class Behavior(ABC):
     """What the infant should learn: scene, senses, observations, rewards, curriculum, metrics.
@@ -195,6 +203,25 @@ class Behavior(ABC):
 
         Called in the main process once per run, before environments are built; on resume
         it is called again and should reuse what it saved in ``run_dir``.
+        """
+
+    def policy_artifacts(self) -> dict[str, Any]:
+        """Data evaluation needs besides the policy weights (e.g. a calibrated detector).
+
+        Stored in policy files (``devlearn slim``) so that they evaluate anywhere; plain
+        dicts, lists, numbers and strings only (checkpoints load with ``weights_only``).
+        """
+        return {}
+
+    def load_policy_artifacts(self, artifacts: dict[str, Any], folder: Path) -> None:
+        """Get ready to evaluate a checkpoint: restore :meth:`policy_artifacts`' output.
+
+        Args:
+            artifacts: What the checkpoint stored (empty for a training checkpoint).
+            folder: The checkpoint's folder; files the config names resolve against it when
+                they are not where the config says (a copied or relocated run folder).
+        Raises:
+            UsageError: Something evaluation needs is neither stored nor found.
         """
 
     def render_frame(self, infant: Infant) -> np.ndarray:

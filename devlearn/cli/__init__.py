@@ -20,6 +20,8 @@ COMMANDS = (
     "picture",
     "curve",
     "export",
+    "slim",
+    "report",
 )
 
 

@@ -1,9 +1,10 @@
-"""``devlearn eval BEHAVIOR --checkpoint PATH``: run a trained policy and report its metrics."""
+"""``devlearn eval BEHAVIOR --checkpoint PATH | --policy zero|random``: evaluate and report."""
 
 from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
 from devlearn.errors import UsageError
@@ -13,17 +14,32 @@ def add_parser(subparsers) -> list[str]:
     """Register the ``eval`` sub-command."""
     p = subparsers.add_parser(
         "eval",
-        help="evaluate a trained checkpoint",
-        description="Run deterministic episodes (the policy's mean action) in the behaviour's "
-        "evaluation stage; writes eval.json and the behaviour's pictures to --out.",
+        help="evaluate a trained checkpoint or a baseline policy",
+        description="Run episodes in the behaviour's evaluation stage (a checkpoint's mean "
+        "action, or a zero / uniform-random baseline under the same protocol); writes "
+        "eval.json (with the protocol) and the behaviour's pictures to --out.",
     )
     p.add_argument("behavior", help="behaviour name (see `devlearn plugins`)")
-    p.add_argument("--checkpoint", required=True, metavar="PATH", help="checkpoint file (.pt)")
+    source = p.add_mutually_exclusive_group(required=True)
+    source.add_argument(
+        "--checkpoint",
+        metavar="PATH",
+        help="checkpoint or policy file (.pt), or a run folder (its checkpoint_latest.pt)",
+    )
+    source.add_argument(
+        "--policy",
+        choices=("zero", "random"),
+        help="baseline instead of a checkpoint: zero action, or uniform random in [-1, 1]",
+    )
     p.add_argument("--episodes", default="10", metavar="N", help="episodes to run (default 10)")
     p.add_argument("--seed", default="0", metavar="S", help="seed of the initial poses")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
     p.add_argument("--video", metavar="PATH", help="write an MP4 of the first episode")
-    p.add_argument("--out", metavar="DIR", help="output directory (default CHECKPOINT_DIR/eval)")
+    p.add_argument(
+        "--out",
+        metavar="DIR",
+        help="output directory (default CHECKPOINT_DIR/eval; baselines: eval_BEHAVIOR_POLICY)",
+    )
     return ["eval"]
 
 
@@ -37,24 +53,54 @@ def _count(text: str, option: str, minimum: int) -> int:
     return value
 
 
+def _print(summary: dict, as_json: bool) -> None:
+    if as_json:
+        print(json.dumps(summary, indent=2, default=float))
+        return
+    shown = {k: v for k, v in summary.items() if k not in ("config", "part_touch_steps")}
+    width = max((len(k) for k in shown), default=0)
+    for key, value in shown.items():
+        text = f"{value:.4g}" if isinstance(value, float) else json.dumps(value, default=float)
+        print(f"{key.ljust(width)}  {text}")
+
+
 def run(args: argparse.Namespace, registry) -> int:
-    """Evaluate and print the summary (a table, or JSON with --json)."""
-    from devlearn.training.evaluate import evaluate
+    """Evaluate and print the summary (a table, or JSON with --json), then where files went.
+
+    The summary is printed even when writing the files failed (then exit code 2).
+    """
+    from devlearn.training.evaluate import EvalWriteError, evaluate, resolve_checkpoint
 
     registry.behavior(args.behavior)  # unknown behaviour: one clear line
     episodes = _count(args.episodes, "--episodes", 1)
     seed = _count(args.seed, "--seed", 0)
-    checkpoint = Path(args.checkpoint)
-    out_dir = Path(args.out) if args.out else checkpoint.parent / "eval"
-    summary = evaluate(
-        args.behavior, checkpoint, episodes, registry, video=args.video, seed=seed, out_dir=out_dir
+    checkpoint = resolve_checkpoint(args.checkpoint) if args.checkpoint else None
+    if args.out:
+        out_dir = Path(args.out)
+    elif checkpoint is not None:
+        out_dir = checkpoint.parent / "eval"
+    else:
+        out_dir = Path(f"eval_{args.behavior}_{args.policy}")
+    try:
+        summary = evaluate(
+            args.behavior,
+            checkpoint,
+            episodes,
+            registry,
+            video=args.video,
+            seed=seed,
+            out_dir=out_dir,
+            policy=args.policy or "checkpoint",
+        )
+    except EvalWriteError as exc:
+        _print(exc.summary, args.json)
+        raise
+    written = summary.pop("written", [])
+    _print(summary, args.json)
+    files = ", ".join(Path(p).name for p in written)
+    # stderr with --json, so that stdout stays one JSON document
+    print(
+        f"written to {out_dir}: {files}" + (f"; video {args.video}" if args.video else ""),
+        file=sys.stderr if args.json else sys.stdout,
     )
-    if args.json:
-        print(json.dumps(summary, indent=2, default=float))
-        return 0
-    width = max((len(k) for k in summary), default=0)
-    for key, value in summary.items():
-        text = f"{value:.4g}" if isinstance(value, float) else json.dumps(value, default=float)
-        print(f"{key.ljust(width)}  {text}")
-    print(f"written to {out_dir}" + (f"; video {args.video}" if args.video else ""))
     return 0

@@ -22,6 +22,9 @@ ACTUATOR_GROUPS = ("left_arm", "right_arm", "head", "trunk", "legs")
 
 MAX_START_PENETRATION = 0.005
 """Deepest contact penetration (m) accepted for a random initial pose."""
+TOY_AREA = ((0.2, 0.4), (-0.07, 0.07))
+"""Floor area (x, y ranges, m) where a random start places the toy blocks: in front of the
+sitting infant, between its legs (the lower legs' inner edges are at |y| = 0.094)."""
 
 
 class SenseNotEnabledError(RuntimeError):
@@ -84,6 +87,12 @@ class Infant:
         self._ranges = np.array([j.range for j in joints])
         rest = SCENES[scene].rest
         self._rest = np.array([rest.get(j, 0.0) for j in self.actuator_names])
+        self._toys = np.array(
+            [g for g in range(self.model.ngeom) if self.model.geom(g).name.startswith("toy_")],
+            dtype=np.int64,
+        )
+        self._toy_pose = (self.model.geom_pos[self._toys].copy(),
+                          self.model.geom_quat[self._toys].copy())
         self._gl: dict[str, Any] = {"eyes": None, "views": {}}  # renderers, made on first use
         self._cache: dict[str, Any] = {}
         self.steps = 0
@@ -91,8 +100,14 @@ class Infant:
 
     # -- simulation -------------------------------------------------------------------------
     def reset(self, rng: np.random.Generator, random_pose: bool = False) -> None:
-        """Start an episode: the scene's rest pose, or joint angles uniform within their ranges."""
+        """Start an episode: the scene's rest pose, or a random start.
+
+        A random start draws joint angles uniform within their ranges and, in a scene with toy
+        blocks, places them uniformly in :data:`TOY_AREA` with a random yaw (toys first, so
+        the pose's penetration check sees them); otherwise the toys return to their places.
+        """
         mujoco.mj_resetData(self.model, self.data)
+        self._place_toys(rng if random_pose else None)
         if random_pose:
             self._random_pose(rng)
         else:
@@ -100,6 +115,21 @@ class Infant:
             mujoco.mj_forward(self.model, self.data)
         self._cache.clear()
         self.steps = 0
+
+    def _place_toys(self, rng: np.random.Generator | None) -> None:
+        """Toy blocks at random in :data:`TOY_AREA` (``rng``), or at the scene's places (None)."""
+        if not len(self._toys):
+            return  # no draws: scenes without toys keep their random streams
+        pos, quat = (a.copy() for a in self._toy_pose)
+        if rng is not None:
+            (x0, x1), (y0, y1) = TOY_AREA
+            n = len(self._toys)
+            pos[:, 0], pos[:, 1] = rng.uniform(x0, x1, n), rng.uniform(y0, y1, n)
+            yaw = rng.uniform(-np.pi, np.pi, n)
+            quat[:] = 0.0
+            quat[:, 0], quat[:, 3] = np.cos(yaw / 2), np.sin(yaw / 2)
+        self.model.geom_pos[self._toys] = pos
+        self.model.geom_quat[self._toys] = quat
 
     def _random_pose(self, rng: np.random.Generator, tries: int = 20) -> None:
         """Joint angles uniform within their ranges, avoiding poses that start buried.

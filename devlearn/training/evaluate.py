@@ -1,9 +1,12 @@
-"""evaluate(): run a trained policy deterministically and collect the behaviour's metrics."""
+"""evaluate(): run a policy (checkpoint or baseline) under the behaviour's evaluation protocol."""
 
 from __future__ import annotations
 
 import json
+import os
+import subprocess
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -14,12 +17,81 @@ from tensordict import TensorDict
 from tqdm import tqdm
 
 from devlearn.env.behavior_env import BehaviorEnv
-from devlearn.training.checkpoint import check_behavior, load_checkpoint
-from devlearn.training.config import RunConfig, from_dict, to_rsl_rl
+from devlearn.errors import UsageError
+from devlearn.training.checkpoint import LATEST, check_behavior, load_checkpoint
+from devlearn.training.config import RunConfig, from_dict, to_dict, to_rsl_rl
 from devlearn.training.runner import quiet
 
 VIDEO_FPS = 25
 """Frame rate of evaluation videos (every k-th control step is rendered to match it)."""
+POLICY_FILE = "policy.pt"
+"""Name of a slimmed policy file (``devlearn slim``) in a published run folder."""
+POLICIES = ("checkpoint", "zero", "random")
+"""What ``evaluate`` can run: a checkpoint's mean action, or a baseline: zero action, or
+actions uniform in [-1, 1] (seeded by the evaluation seed)."""
+
+
+class EvalWriteError(UsageError):
+    """Evaluating worked but writing its files failed; ``summary`` holds the results."""
+
+    def __init__(self, message: str, summary: dict[str, Any]) -> None:
+        super().__init__(message)
+        self.summary = summary
+
+
+def resolve_checkpoint(path: str | Path) -> Path:
+    """The checkpoint file ``path`` names: the file itself, or a run folder's newest.
+
+    Raises:
+        UsageError: A folder holding neither ``checkpoint_latest.pt`` nor ``policy.pt``.
+    """
+    path = Path(path)
+    if not path.is_dir():
+        return path
+    for name in (LATEST, POLICY_FILE):
+        if (path / name).is_file():
+            return path / name
+    raise UsageError(
+        f"--checkpoint {path} is a folder without {LATEST} or {POLICY_FILE}; "
+        "a checkpoint file (.pt) is expected"
+    )
+
+
+def prepare_out_dir(out_dir: str | Path) -> Path:
+    """Create ``out_dir`` and check that files can be written there (before any episode runs).
+
+    Raises:
+        UsageError: It cannot be created or written.
+    """
+    out = Path(out_dir)
+    probe = out / f".devlearn-write-test-{os.getpid()}"
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        probe.write_text("")
+        probe.unlink()
+    except OSError as exc:
+        raise UsageError(f"cannot write to output folder {out}: {exc.strerror or exc}") from None
+    return out
+
+
+def code_version() -> dict[str, Any]:
+    """The git commit of the devlearn code that runs (``commit`` None outside a git checkout).
+
+    Returns:
+        ``{"commit": sha or None, "dirty": bool or None}``; dirty: tracked Python files
+        differ from the commit (so the code that ran is not exactly the commit's).
+    """
+    root = Path(__file__).resolve().parents[2]
+    try:
+        sha = subprocess.run(["git", "rev-parse", "HEAD"], cwd=root, capture_output=True,
+                             text=True, timeout=10, check=True).stdout.strip()
+        status = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no",
+                                 "--", "*.py"],
+                                cwd=root, capture_output=True, text=True, timeout=10,
+                                check=True).stdout
+    except (OSError, subprocess.SubprocessError):
+        return {"commit": None, "dirty": None}
+    return {"commit": sha, "dirty": bool(status.strip())}
 
 
 def _batch(obs: dict[str, np.ndarray]) -> TensorDict:
@@ -45,9 +117,26 @@ def load_actor(
     return actor.eval()
 
 
+def _policy(
+    policy: str, actor, action_dim: int, seed: int
+) -> Callable[[dict[str, np.ndarray]], np.ndarray]:
+    """``act(obs) -> (action_dim,)``: the actor's mean action, zeros, or seeded uniform noise."""
+    if policy == "zero":
+        return lambda obs: np.zeros(action_dim)
+    if policy == "random":
+        rng = np.random.default_rng([seed, 1])  # a stream apart from the env's (seed)
+        return lambda obs: rng.uniform(-1.0, 1.0, action_dim)
+
+    def act(obs: dict[str, np.ndarray]) -> np.ndarray:
+        with torch.inference_mode():
+            return actor(_batch(obs))[0].numpy()
+
+    return act
+
+
 def evaluate(
     behavior_name: str,
-    checkpoint: str | Path,
+    checkpoint: str | Path | None,
     episodes: int,
     registry,
     video: str | Path | None = None,
@@ -55,33 +144,54 @@ def evaluate(
     out_dir: str | Path | None = None,
     infant_factory=None,
     progress: bool = True,
+    policy: str = "checkpoint",
 ) -> dict[str, Any]:
-    """Run ``episodes`` deterministic episodes (the policy's mean action) and summarise them.
+    """Run ``episodes`` episodes of a policy and summarise them under the evaluation protocol.
 
     The env uses ``behavior.eval_stage()`` options and ``behavior.evaluator(training=False)``.
+    A checkpoint acts with its mean action (deterministic); the baselines ``zero`` and
+    ``random`` run through exactly the same loop with the behaviour's default config.
 
     Args:
         behavior_name: The behaviour the checkpoint must belong to.
-        checkpoint: Path of a devlearn checkpoint.
+        checkpoint: Path of a devlearn checkpoint or policy file, or a run folder (its
+            ``checkpoint_latest.pt`` or ``policy.pt``); None for a baseline.
         episodes: Number of full episodes.
         registry: Plugin registry.
         video: Write an MP4 of the first episode here (needs imageio-ffmpeg).
-        seed: Seed of the env's initial poses.
-        out_dir: Write ``eval.json`` and the evaluator's artifacts here.
+        seed: Seed of the env's initial poses (and of the ``random`` baseline's actions).
+        out_dir: Write ``eval.json`` and the evaluator's artifacts here (checked to be
+            writable before any episode runs).
         infant_factory: Infant builder (tests); default the real infant.
         progress: Show a progress bar (steps, episodes) on stderr.
+        policy: One of :data:`POLICIES`.
     Returns:
-        ``evaluator.summary()`` (JSON-serialisable) and ``checkpoint_env_steps``, the
-        environment steps the checkpoint was trained for (x axis of ``devlearn curve`` on
-        evaluation folders).
+        ``evaluator.summary()`` plus ``behavior``, ``policy``, ``checkpoint``,
+        ``checkpoint_env_steps`` (x axis of ``devlearn curve``), ``training_seed``, ``config``
+        (the checkpoint's, for ``devlearn report``'s grouping) and ``protocol`` (episodes,
+        seed, settle steps, criteria, training steps, code commit). When files were written,
+        ``written`` lists them (not part of eval.json).
     Raises:
-        UsageError: Missing, corrupt or foreign checkpoint.
+        UsageError: Missing, corrupt or foreign checkpoint; bad policy; unwritable out_dir.
+        EvalWriteError: The episodes ran but writing files failed (carries the summary).
     """
-    state = load_checkpoint(checkpoint)
-    check_behavior(state, checkpoint, behavior_name)
+    if policy not in POLICIES:
+        raise UsageError(f"unknown policy '{policy}'; valid: {', '.join(POLICIES)}")
+    if (checkpoint is None) != (policy != "checkpoint"):
+        raise UsageError("give a checkpoint, or a baseline policy (zero, random), not both")
+    out = prepare_out_dir(out_dir) if out_dir is not None else None
     behavior_cls = registry.behavior(behavior_name)
-    cfg = from_dict(state["config"], behavior_cls)
+    if checkpoint is not None:
+        checkpoint = resolve_checkpoint(checkpoint)
+        state = load_checkpoint(checkpoint)
+        check_behavior(state, checkpoint, behavior_name)
+        cfg = from_dict(state["config"], behavior_cls)
+    else:
+        state = {}
+        cfg = from_dict({}, behavior_cls)
     behavior = registry.create(behavior_name, cfg.behavior)
+    if checkpoint is not None:
+        behavior.load_policy_artifacts(dict(state.get("artifacts") or {}), checkpoint.parent)
     torch.manual_seed(seed)
     threads = torch.get_num_threads()
     # A batch of one gains nothing from more threads, and several threads on a core that
@@ -90,9 +200,13 @@ def evaluate(
     env = BehaviorEnv(behavior, seed, infant_factory, training=False)
     writer = None
     try:
-        env.set_stage(behavior.eval_stage())
+        stage = behavior.eval_stage()
+        env.set_stage(stage)
         obs = env.reset()
-        actor = load_actor(cfg, state, behavior, obs, env.action_dim)
+        actor = None
+        if checkpoint is not None:
+            actor = load_actor(cfg, state, behavior, obs, env.action_dim)
+        act = _policy(policy, actor, env.action_dim, seed)
         if video is not None:
             import imageio.v2 as imageio
 
@@ -113,17 +227,39 @@ def evaluate(
                 bar.update()
                 if writer is not None and episode == 0 and t % stride == 0:
                     writer.append_data(env.behavior.render_frame(env.infant))
-                with torch.inference_mode():
-                    action = actor(_batch(obs))[0].numpy()
-                obs, _, _, _, _ = env.step(action)
+                obs, _, _, _, _ = env.step(act(obs))
         bar.close()
         summary = env.evaluator.summary()
-        summary["checkpoint_env_steps"] = int(state.get("env_steps", 0))
-        if out_dir is not None:
-            out = Path(out_dir)
-            out.mkdir(parents=True, exist_ok=True)
-            (out / "eval.json").write_text(json.dumps(summary, indent=2, default=float) + "\n")
-            env.evaluator.write_artifacts(out)
+        steps = int(state.get("env_steps", 0))
+        summary.update(
+            behavior=behavior_name,
+            policy=policy,
+            checkpoint=str(checkpoint) if checkpoint is not None else None,
+            checkpoint_env_steps=steps,
+            training_seed=int(cfg.seed) if checkpoint is not None else None,
+            config=state["config"] if checkpoint is not None else to_dict(cfg),
+            protocol={
+                "episodes": episodes,
+                "seed": seed,
+                "policy": policy,
+                "action": "mean" if policy == "checkpoint" else policy,
+                "stage": json.loads(json.dumps(stage, default=str)),
+                "settle_steps": 0,
+                **env.evaluator.protocol(),
+                "checkpoint_env_steps": steps,
+                "code": code_version(),
+            },
+        )
+        if out is not None:
+            written = []
+            try:
+                (out / "eval.json").write_text(json.dumps(summary, indent=2, default=float) + "\n")
+                written = [out / "eval.json", *env.evaluator.write_artifacts(out)]
+            except OSError as exc:
+                raise EvalWriteError(
+                    f"evaluated, but writing to {out} failed: {exc.strerror or exc}", summary
+                ) from None
+            summary["written"] = [str(p) for p in written]
         return summary
     finally:
         if writer is not None:

@@ -7,28 +7,32 @@ import json
 import numpy as np
 import pytest
 from devlearn_hand_regard import HandRegard
+from devlearn_hand_regard.evaluation import HandRegardEvaluator
 
 from devlearn.rewards import StepContext
 
 
 class Truth:
-    """A stand-in infant whose ground-truth visibility is set per step."""
+    """A stand-in infant whose ground-truth verdicts (criterion -> (2, 2) bool) are set per step."""
 
-    visibility = np.zeros((2, 2), bool)
-
-    def hand_visibility(self):
-        return self.visibility
+    verdicts: dict = {}
 
 
-def step(evaluator, truth, detected):
+def scripted(infant):
+    return infant.verdicts
+
+
+def step(evaluator, truth, detected, cone=None):
     infant = Truth()
-    infant.visibility = np.asarray(truth, bool)
+    truth = np.asarray(truth, bool)
+    infant.verdicts = {"cone": truth if cone is None else np.asarray(cone, bool),
+                       "pixels": truth, "any_pixel": truth}
     facts = {"hand_detections": np.asarray(detected, bool)}
     evaluator.record(StepContext(infant, {}, facts, 0, False, {}))
 
 
 def test_eval_mode_visibility_and_agreement(tmp_path):
-    evaluator = HandRegard().evaluator(training=False)
+    evaluator = HandRegardEvaluator(ground_truth=True, measure=scripted)
     # Left hand seen by both eyes on all 4 steps; right hand by the right eye on 1 step.
     # The detector misses the left hand in the right eye once and fires falsely once.
     step(evaluator, [[1, 0], [1, 1]], [[1, 0], [1, 1]])
@@ -38,11 +42,12 @@ def test_eval_mode_visibility_and_agreement(tmp_path):
     metrics = evaluator.end_episode()
     assert metrics == pytest.approx({
         "left_eye_left_hand": 1.0, "right_eye_left_hand": 1.0, "left_eye_right_hand": 0.0,
-        "right_eye_right_hand": 0.25, "average": 0.5625})
+        "right_eye_right_hand": 0.25, "average": 0.5625, "average_pixels": 0.5625,
+        "average_any_pixel": 0.5625})
     summary = json.loads(json.dumps(evaluator.summary()))
     assert summary["episodes"] == 1 and summary["steps"] == 4
     assert summary["average"] == pytest.approx(0.5625)
-    assert summary["visibility_source"] == "segmentation"
+    assert summary["visibility_source"] == "scene" and summary["headline_criterion"] == "cone"
     assert summary["detector_visibility"]["left_eye_right_hand"] == pytest.approx(0.25)
     agreement = summary["detector_agreement"]
     assert agreement["right_eye_left_hand"] == pytest.approx(
@@ -63,3 +68,25 @@ def test_training_mode_uses_the_detector():
     assert metrics["average"] == pytest.approx(0.375)
     assert "detector_agreement" not in evaluator.summary()
     assert evaluator.end_episode() == {}  # nothing recorded since
+
+
+def test_headline_is_the_cone_and_episodes_have_a_spread():
+    evaluator = HandRegardEvaluator(ground_truth=True, measure=scripted)
+    # Episode 1: any pixel of the left hand in both eyes, its centre in the left eye's cone.
+    step(evaluator, [[1, 0], [1, 0]], [[0, 0], [0, 0]], cone=[[1, 0], [0, 0]])
+    step(evaluator, [[1, 0], [1, 0]], [[0, 0], [0, 0]], cone=[[0, 0], [0, 0]])
+    first = evaluator.end_episode()
+    # Episode 2: nothing in view.
+    step(evaluator, [[0, 0], [0, 0]], [[0, 0], [0, 0]])
+    evaluator.end_episode()
+    assert first["average"] == pytest.approx(0.125) and first["average_any_pixel"] == 0.5
+    summary = evaluator.summary()
+    assert summary["average"] == pytest.approx(1 / 12)  # 1 cone step of 3, over 4 pairs
+    assert summary["criteria"]["any_pixel"]["average"] == pytest.approx(2 * 2 / 12)
+    assert summary["episode_average_mean"] == pytest.approx(0.0625)
+    from scipy import stats
+
+    low, high = stats.t.interval(0.95, 1, loc=0.0625, scale=stats.sem([0.125, 0.0]))
+    assert summary["episode_average_ci_low"] == pytest.approx(low)
+    assert summary["episode_average_ci_high"] == pytest.approx(high)
+    assert evaluator.protocol()["criteria"]["pixels"]["min_pixels"] == 20

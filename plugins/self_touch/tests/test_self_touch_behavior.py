@@ -136,7 +136,7 @@ def test_behavior_contract():
 
 
 def test_evaluator_episode_and_summary(tmp_path):
-    ev = SelfTouchEvaluator(training=False)
+    ev = SelfTouchEvaluator(training=False, settle_steps=0)  # scripted steps are all step 0
     ev.record(make_ctx(hand_parts=[(0, 1), (0, 2), (1, 2)], hand_contacts=[(0, 1), (1, 36)]))
     ev.record(make_ctx(hand_parts=[(0, 1)], hand_contacts=[(0, 1)], last_step=True))
     first = ev.end_episode()

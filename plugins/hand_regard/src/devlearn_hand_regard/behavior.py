@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import json
 import warnings
+from dataclasses import asdict
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -10,9 +12,11 @@ import numpy as np
 
 from devlearn.behavior import Behavior, Evaluator, NetworkSpec
 from devlearn.curriculum import Curriculum, Stage
+from devlearn.errors import UsageError
 from devlearn.rewards import IntrinsicReward
 from devlearn.sensors import MLPEncoder
 from devlearn_hand_regard.config import HandRegardConfig
+from devlearn_hand_regard.detector import FORMAT_VERSION as DETECTOR_FORMAT
 from devlearn_hand_regard.detector import DetectorParams, HandDetector, HandFlow
 from devlearn_hand_regard.encoders import EyeCNNEncoder
 from devlearn_hand_regard.evaluation import HandRegardEvaluator
@@ -80,6 +84,48 @@ class HandRegard(Behavior):
             calibrate(data, threshold=cfg.correlation_threshold).save(path)
         self.config.detector_file = str(path.resolve())
         self._detector = None
+
+    def policy_artifacts(self) -> dict[str, Any]:
+        """The calibrated detector's parameters (policy files carry them: no path to break)."""
+        if self._detector is None and not self.config.detector_file:
+            return {}
+        params = self.detector.params
+        if params is None:
+            return {}
+        data = {"format_version": DETECTOR_FORMAT, **asdict(params)}
+        return {"hand_detector": json.loads(json.dumps(data))}  # plain lists, no tuples
+
+    def load_policy_artifacts(self, artifacts: dict[str, Any], folder: Path) -> None:
+        """Use the detector stored in the checkpoint, else find ``config.detector_file``.
+
+        A file missing where the config says (an absolute path from the machine that trained
+        it, or a relocated run folder) is looked for by name in the checkpoint's folder and
+        the folder above it; ``config.detector_file`` is updated to the file found.
+
+        Raises:
+            UsageError: Neither stored nor found.
+        """
+        stored = artifacts.get("hand_detector")
+        if stored is not None:
+            self._detector = HandDetector(DetectorParams.from_dict(stored))
+            return
+        name = self.config.detector_file
+        if not name:
+            return  # uncalibrated run: nothing is detected (the detector property warns)
+        folder = Path(folder)
+        given = Path(name)
+        candidates = [given] if given.is_absolute() else [folder / given]
+        candidates += [folder / given.name, folder.parent / given.name]
+        for path in candidates:
+            if path.is_file():
+                self.config.detector_file = str(path)
+                self._detector = None
+                return
+        raise UsageError(
+            f"hand_regard: the checkpoint's detector file {name} is missing, and no "
+            f"{given.name} is in {folder} or {folder.parent}; put it beside the checkpoint "
+            "or make a self-contained policy file with `devlearn slim`"
+        )
 
     @property
     def detector(self) -> HandDetector:
@@ -208,6 +254,12 @@ class HandRegard(Behavior):
         for side in inactive:
             action[self._arm_actuators[side]] = 0.0
         return action
+
+    def eval_stage(self) -> dict[str, Any]:
+        """Both arms, and every episode a seeded random start: head and arm joints uniform in
+        their ranges, toys placed at random (``Infant.reset``; seeded by the eval seed), so
+        that the deterministic policy's episodes differ."""
+        return {"active_arms": list(HANDS), "random_pose": True}
 
     # --- metrics and run defaults -----------------------------------------------------------
     def evaluator(self, training: bool) -> Evaluator:

@@ -65,11 +65,16 @@ class DetectorParams:
     @classmethod
     def load(cls, path: str | Path) -> DetectorParams:
         """Read parameters written by :meth:`save`."""
-        data = json.loads(Path(path).read_text())
+        return cls.from_dict(json.loads(Path(path).read_text()), source=str(path))
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any], source: str = "stored detector") -> DetectorParams:
+        """Rebuild parameters from :meth:`save`'s JSON content (e.g. stored in a policy file)."""
+        data = dict(data)
         version = data.pop("format_version", None)
         if version != FORMAT_VERSION:
-            raise ValueError(f"{path}: hand detector format {version}, expected {FORMAT_VERSION}; "
-                             "delete the file to calibrate again by babbling")
+            raise ValueError(f"{source}: hand detector format {version}, expected "
+                             f"{FORMAT_VERSION}; delete the file to calibrate again by babbling")
         data["image_size"] = tuple(data["image_size"])
         return cls(**data)
 

@@ -6,6 +6,7 @@ pairs ... reporting per-pair visibility and average across all pairs".
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -13,6 +14,8 @@ import numpy as np
 
 from devlearn.behavior import Evaluator
 from devlearn.rewards import StepContext
+from devlearn.stats import episode_stats
+from devlearn_hand_regard.visibility import CRITERIA, HEADLINE, criteria_protocol
 
 EYES = ("left", "right")
 HANDS = ("left", "right")
@@ -40,48 +43,77 @@ def visibility_dict(counts: np.ndarray, steps: int) -> dict[str, float]:
 class HandRegardEvaluator(Evaluator):
     """Counts, per (eye, hand) pair, the steps in which the hand is in view.
 
+    In evaluation (``ground_truth``) a hand is in view under three criteria side by side
+    (:mod:`devlearn_hand_regard.visibility`): ``cone`` (the headline: ``visibility`` and
+    ``average``), ``pixels`` and ``any_pixel``; the detector is scored against ``any_pixel``.
+    Each episode's average visibility is kept, so :meth:`summary` reports its mean, standard
+    deviation and 95% t-interval per criterion.
+
     Args:
-        ground_truth: True (``devlearn eval``): visibility from ``infant.hand_visibility()``
-            (the renderer's segmentation), plus the detector's agreement with it. False
+        ground_truth: True (``devlearn eval``): visibility from the scene (geometry and the
+            renderer's segmentation), plus the detector's agreement with it. False
             (training): visibility from the detector's output in the step facts, which costs
             nothing extra.
+        measure: ``measure(infant) -> {criterion: (2, 2) bool}`` (tests script it); default
+            :func:`~devlearn_hand_regard.visibility.measure_visibility`.
     """
 
-    def __init__(self, ground_truth: bool) -> None:
+    def __init__(
+        self, ground_truth: bool, measure: Callable[[Any], dict[str, np.ndarray]] | None = None
+    ) -> None:
+        if measure is None:
+            from devlearn_hand_regard.visibility import measure_visibility as measure
         self.ground_truth = ground_truth
+        self.measure = measure
         self.episodes = 0
         self.steps = 0
-        self.truth = np.zeros((2, 2), dtype=np.int64)  # steps in view, all episodes
+        names = CRITERIA if ground_truth else ("detector",)
+        self.counts = {k: np.zeros((2, 2), dtype=np.int64) for k in names}  # all episodes
+        self._episode = {k: np.zeros((2, 2), dtype=np.int64) for k in names}
+        self.episode_averages: dict[str, list[float]] = {k: [] for k in names}
         self.detected = np.zeros((2, 2), dtype=np.int64)
         # Detector vs truth confusion counts per pair: true/false positives/negatives.
         self.confusion = {k: np.zeros((2, 2), dtype=np.int64) for k in ("tp", "fp", "fn", "tn")}
         self._episode_steps = 0
-        self._episode = np.zeros((2, 2), dtype=np.int64)
+
+    @property
+    def headline(self) -> str:
+        """Criterion behind ``visibility`` and ``average``."""
+        return HEADLINE if self.ground_truth else "detector"
 
     def record(self, ctx: StepContext) -> None:
         detected = np.asarray(ctx.facts["hand_detections"], dtype=bool)
         self.detected += detected
         self._episode_steps += 1
         if self.ground_truth:
-            truth = np.asarray(ctx.infant.hand_visibility(), dtype=bool)
-            self.truth += truth
-            self._episode += truth
+            verdicts = {k: np.asarray(v, dtype=bool) for k, v in self.measure(ctx.infant).items()}
+            truth = verdicts["any_pixel"]
             self.confusion["tp"] += detected & truth
             self.confusion["fp"] += detected & ~truth
             self.confusion["fn"] += ~detected & truth
             self.confusion["tn"] += ~detected & ~truth
         else:
-            self._episode += detected
+            verdicts = {"detector": detected}
+        for k in self.counts:
+            self.counts[k] += verdicts[k]
+            self._episode[k] += verdicts[k]
 
     def end_episode(self) -> dict[str, float]:
         if self._episode_steps == 0:
             return {}
-        metrics = visibility_dict(self._episode, self._episode_steps)
-        metrics["average"] = float(np.mean(list(metrics.values())))
+        metrics: dict[str, float] = {}
+        for k, counts in self._episode.items():
+            pairs = visibility_dict(counts, self._episode_steps)
+            average = float(np.mean(list(pairs.values())))
+            self.episode_averages[k].append(average)
+            if k == self.headline:
+                metrics.update(pairs, average=average)
+            else:
+                metrics[f"average_{k}"] = average
+            counts[:] = 0
         self.episodes += 1
         self.steps += self._episode_steps
         self._episode_steps = 0
-        self._episode[:] = 0
         return metrics
 
     def agreement(self) -> dict[str, dict[str, float | None]]:
@@ -104,20 +136,37 @@ class HandRegardEvaluator(Evaluator):
 
     def summary(self) -> dict[str, Any]:
         steps = self.steps + self._episode_steps  # finished episodes and any still open
-        source = self.truth if self.ground_truth else self.detected
-        visibility = visibility_dict(source, steps)
+        criteria: dict[str, Any] = {}
+        for k in self.counts:
+            visibility = visibility_dict(self.counts[k] + self._episode[k], steps)
+            criteria[k] = {
+                "visibility": visibility,
+                "average": float(np.mean(list(visibility.values()))),
+                **episode_stats("average", self.episode_averages[k]),
+            }
+        head = criteria[self.headline]
         result: dict[str, Any] = {
             "episodes": self.episodes,
             "steps": steps,
-            "visibility_source": "segmentation" if self.ground_truth else "detector",
-            "visibility": visibility,
-            "average": float(np.mean(list(visibility.values()))),
+            "visibility_source": "scene" if self.ground_truth else "detector",
+            "headline_criterion": self.headline,
+            "visibility": head["visibility"],
+            "average": head["average"],
+            **{k: v for k, v in head.items() if k.startswith("episode_")},
+            "criteria": criteria,
             "detector_visibility": visibility_dict(self.detected, steps),
             "paper": {"visibility": PAPER_VISIBILITY, "average": 0.50625},
         }
         if self.ground_truth:
             result["detector_agreement"] = self.agreement()
         return result
+
+    def protocol(self) -> dict[str, Any]:
+        """Criteria names and thresholds (recorded in every eval JSON)."""
+        if not self.ground_truth:
+            return {"criteria": {"detector": {}}, "headline": "detector"}
+        return {"settle_steps": 0, "criteria": criteria_protocol(), "headline": HEADLINE,
+                "detector_truth": "any_pixel"}
 
     def write_artifacts(self, out_dir: Path) -> list[Path]:
         import matplotlib
@@ -130,14 +179,17 @@ class HandRegardEvaluator(Evaluator):
         labels = [n.replace("_eye_", " eye\n").replace("_hand", " hand") for n in names]
         x = np.arange(len(names))
         fig, ax = plt.subplots(figsize=(6.4, 3.6))
-        ax.bar(x - 0.2, [summary["visibility"][n] for n in names], 0.4,
-               label=f"ours ({summary['visibility_source']})")
-        ax.bar(x + 0.2, [PAPER_VISIBILITY[n] for n in names], 0.4, label="paper", alpha=0.5)
+        width = 0.8 / (len(summary["criteria"]) + 1)
+        for i, (k, c) in enumerate(summary["criteria"].items()):
+            ax.bar(x - 0.4 + (i + 0.5) * width, [c["visibility"][n] for n in names], width,
+                   label=f"ours: {k}")
+        ax.bar(x + 0.4 - 0.5 * width, [PAPER_VISIBILITY[n] for n in names], width,
+               label="paper", alpha=0.5)
         ax.set_xticks(x, labels)
         ax.set_ylim(0, 1.05)
         ax.set_ylabel("fraction of steps in view")
         ax.set_title(f"Hand regard: average {summary['average']:.3f} "
-                     f"({summary['episodes']} episodes)")
+                     f"({summary['headline_criterion']}, {summary['episodes']} episodes)")
         ax.legend(loc="upper right", fontsize=8)
         fig.tight_layout()
         out_dir = Path(out_dir)

@@ -9,7 +9,15 @@ from typing import Any
 import numpy as np
 
 from devlearn import Evaluator, StepContext
+from devlearn.stats import episode_stats
 from devlearn_self_touch.body_map import HANDS, NUM_PARTS, NUM_REGIONS
+
+SETTLE_STEPS = 10
+"""Steps at the start of an evaluation episode whose contacts are not credited: a random
+reset pose and gravity make contacts on their own (6 of 100 resets touch on step 0), and
+BabyBench likewise runs 10 steps before an episode is scored."""
+EPISODE_METRICS = ("coverage_left", "coverage_right", "coverage_total", "score")
+"""Per-episode metrics whose mean, spread and 95% interval :meth:`summary` reports."""
 
 
 class SelfTouchEvaluator(Evaluator):
@@ -23,14 +31,20 @@ class SelfTouchEvaluator(Evaluator):
 
     :meth:`end_episode` reports one episode's values; :meth:`summary` reports the union over
     every recorded episode (how the paper's evaluation over 100 episodes is reported) plus
-    episode means and per-part touch counts (steps in contact) per hand.
+    each per-episode metric's mean, standard deviation and 95% t-interval, and per-part touch
+    counts (steps in contact) per hand.
 
     Args:
         training: True inside training environments (per-episode metrics only).
+        settle_steps: In evaluation (``training=False``), steps 0 .. settle_steps - 1 of each
+            episode are not credited (see :data:`SETTLE_STEPS`). Training credits every step.
     """
 
-    def __init__(self, training: bool = True) -> None:
+    def __init__(self, training: bool = True, settle_steps: int = SETTLE_STEPS) -> None:
+        if settle_steps < 0:
+            raise ValueError(f"settle_steps must be >= 0, got {settle_steps}")
         self.training = training
+        self.settle_steps = 0 if training else int(settle_steps)
         self.region_steps = np.zeros((len(HANDS), NUM_REGIONS), dtype=np.int64)
         self.part_steps = np.zeros((len(HANDS), NUM_PARTS), dtype=np.int64)
         self.ever_parts = np.zeros((len(HANDS), NUM_PARTS), dtype=bool)
@@ -41,6 +55,8 @@ class SelfTouchEvaluator(Evaluator):
     def record(self, ctx: StepContext) -> None:
         if self.regions is None and ctx.infant is not None:
             self.regions = ctx.infant.regions
+        if ctx.step < self.settle_steps:
+            return  # the reset pose settling under gravity, not the policy
         parts = np.asarray(ctx.facts["hand_parts"], dtype=bool)
         self.episode_parts |= parts
         if not self.training:
@@ -75,17 +91,16 @@ class SelfTouchEvaluator(Evaluator):
     def summary(self) -> dict[str, Any]:
         union = self._coverage(self.ever_parts)
         names = self.part_names()
-        means = {
-            f"episode_{k}_mean": float(np.mean([e[k] for e in self.episodes]))
-            for k in ("coverage_left", "coverage_right", "coverage_total", "score")
-            if self.episodes
-        }
+        spread: dict[str, Any] = {}
+        for k in EPISODE_METRICS if self.episodes else ():
+            spread.update(episode_stats(k, [e[k] for e in self.episodes]))
         return {
             "episodes": len(self.episodes),
             **{k: int(v) if k.startswith("coverage") else v for k, v in union.items()},
             "parts": NUM_PARTS,
             "balance": int(abs(union["coverage_left"] - union["coverage_right"])),
-            **means,
+            "settle_steps": self.settle_steps,
+            **spread,
             "part_touch_steps": {
                 hand: {names[p]: int(self.part_steps[h, p]) for p in range(NUM_PARTS)}
                 for h, hand in enumerate(HANDS)
@@ -93,6 +108,17 @@ class SelfTouchEvaluator(Evaluator):
             "parts_never_touched": [
                 names[p] for p in range(NUM_PARTS) if not self.ever_parts[:, p].any()
             ],
+        }
+
+    def protocol(self) -> dict[str, Any]:
+        """Settle period and what counts as a touch (recorded in every eval JSON)."""
+        return {
+            "settle_steps": self.settle_steps,
+            "criteria": {
+                "hand_touch": "a palm or finger of the hand contacts either side's region of "
+                "a part (steps after the settle period)"
+            },
+            "headline": "score",
         }
 
     def write_artifacts(self, out_dir: Path) -> list[Path]:

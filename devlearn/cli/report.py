@@ -1,0 +1,32 @@
+"""``devlearn report PATH...``: a table and a chart of evaluations, variants beside baselines."""
+
+from __future__ import annotations
+
+import argparse
+
+
+def add_parser(subparsers) -> list[str]:
+    """Register the ``report`` sub-command."""
+    p = subparsers.add_parser(
+        "report",
+        help="table and chart of evaluations: mean and 95%% interval over seeds",
+        description="Read evaluation folders (eval.json) or run folders containing them, group "
+        "them by variant (the config keys that differ; seeds pooled) and write report.md (mean "
+        "and 95%% t-interval over seeds per metric, zero/random baselines beside them when "
+        "given or found next to the paths) and report.png.",
+    )
+    p.add_argument("paths", nargs="+", metavar="PATH", help="evaluation or run folders")
+    p.add_argument("--out", default="report", metavar="DIR", help="output folder (default report)")
+    return ["report"]
+
+
+def run(args: argparse.Namespace, registry) -> int:
+    """Write the report and print its table."""
+    from pathlib import Path
+
+    from devlearn.report import write_report
+
+    write_report(args.paths, args.out)
+    print((Path(args.out) / "report.md").read_text(), end="")
+    print(f"written to {args.out}: report.md, report.png")
+    return 0

@@ -1,0 +1,36 @@
+"""``devlearn slim CHECKPOINT``: write a policy file (weights, config, calibration) for sharing."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+
+def add_parser(subparsers) -> list[str]:
+    """Register the ``slim`` sub-command."""
+    p = subparsers.add_parser(
+        "slim",
+        help="write a small policy file from a training checkpoint",
+        description="Keep what evaluation needs (policy weights, config, training steps and "
+        "the behaviour's calibration, e.g. hand_regard's detector) and drop what only resuming "
+        "needs (critic, optimiser, env and rng state). The policy file evaluates from any "
+        "folder with `devlearn eval BEHAVIOR --checkpoint FILE`; it cannot resume training.",
+    )
+    p.add_argument("checkpoint", metavar="CHECKPOINT", help="training checkpoint or run folder")
+    p.add_argument("--out", metavar="PATH", help="policy file (default CHECKPOINT_DIR/policy.pt)")
+    return ["slim"]
+
+
+def run(args: argparse.Namespace, registry) -> int:
+    """Write the policy file and say where, and how much smaller it is."""
+    from devlearn.training.evaluate import POLICY_FILE, resolve_checkpoint
+    from devlearn.training.policy_file import slim_checkpoint
+
+    source = resolve_checkpoint(args.checkpoint)
+    target = Path(args.out) if args.out else source.parent / POLICY_FILE
+    state = slim_checkpoint(source, target, registry)
+    size, before = target.stat().st_size, source.stat().st_size
+    extras = ", ".join(state["artifacts"]) or "none"
+    print(f"wrote {target} ({size / 1e6:.1f} MB, from {before / 1e6:.1f} MB; "
+          f"{state['behavior']}, {state.get('env_steps', 0)} steps; artifacts: {extras})")
+    return 0

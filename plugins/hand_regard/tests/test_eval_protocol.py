@@ -1,0 +1,122 @@
+"""Hand-regard evaluation episodes: seeded random starts that differ; self-contained runs."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+from devlearn_hand_regard import HandRegard
+
+from devlearn.env.behavior_env import BehaviorEnv
+from devlearn.errors import UsageError
+from devlearn.infant import build_infant
+
+
+@pytest.fixture(scope="module")
+def sitting():
+    infant = build_infant("sitting", senses=("proprioception", "eyes"))
+    yield infant
+    infant.close()
+
+
+def starts(seed, episodes, sitting, detector_file):
+    """Joint angles and toy positions at the start of each evaluation episode."""
+    behavior = HandRegard()
+    behavior.config.detector_file = str(detector_file)
+    env = BehaviorEnv(behavior, seed, lambda scene, senses: sitting, training=False)
+    env.set_stage(behavior.eval_stage())
+    toys = [g for g in range(sitting.model.ngeom) if sitting.model.geom(g).name.startswith("toy")]
+    out = []
+    for _ in range(episodes):
+        env.reset()
+        out.append((sitting.data.qpos.copy(), sitting.model.geom_pos[toys].copy()))
+    return out
+
+
+def test_evaluation_episodes_differ_and_repeat_with_the_seed(sitting, detector_file):
+    first = starts(3, 3, sitting, detector_file)
+    again = starts(3, 3, sitting, detector_file)
+    other = starts(4, 1, sitting, detector_file)
+    for (q, toys), (q2, toys2) in zip(first, again):
+        np.testing.assert_array_equal(q, q2)  # same seed, same episodes
+        np.testing.assert_array_equal(toys, toys2)
+    for a, b in ((0, 1), (1, 2), (0, 2)):
+        assert np.abs(first[a][0] - first[b][0]).max() > 0.05  # postures differ
+        assert np.abs(first[a][1] - first[b][1]).max() > 0.01  # toys moved
+    assert np.abs(first[0][0] - other[0][0]).max() > 0.05
+    head, arms = sitting.actuator_groups["head"], sitting.actuator_groups["left_arm"]
+    assert np.ptp([q[head] for q, _ in first], axis=0).min() > 0  # every head joint varies
+    assert np.ptp([q[arms] for q, _ in first], axis=0).min() > 0
+    assert HandRegard().eval_stage() == {"active_arms": ["left", "right"], "random_pose": True}
+
+
+def test_training_start_keeps_the_toys_in_place(sitting):
+    toys = [g for g in range(sitting.model.ngeom) if sitting.model.geom(g).name.startswith("toy")]
+    sitting.reset(np.random.default_rng(0), random_pose=True)
+    moved = sitting.model.geom_pos[toys].copy()
+    sitting.reset(np.random.default_rng(0))
+    np.testing.assert_allclose(sitting.model.geom_pos[toys][:, :2],
+                               [[0.24, 0.05], [0.3, -0.07], [0.37, 0.02], [0.21, -0.02]])
+    assert np.abs(moved - sitting.model.geom_pos[toys]).max() > 0.01
+
+
+def test_detector_is_found_beside_a_relocated_checkpoint(tmp_path, detector_file):
+    original = tmp_path / "original"
+    original.mkdir()
+    shutil.copy(detector_file, original / "hand_detector.json")
+    behavior = HandRegard()
+    behavior.config.detector_file = str(original / "hand_detector.json")  # absolute, as saved
+    moved = tmp_path / "elsewhere" / "run"
+    shutil.copytree(original, moved)
+    shutil.rmtree(original)
+    behavior.load_policy_artifacts({}, moved)
+    assert behavior.config.detector_file == str(moved / "hand_detector.json")
+    assert behavior.detector.params is not None
+    (moved / "hand_detector.json").unlink()
+    with pytest.raises(UsageError, match="hand_detector.json"):
+        HandRegard(behavior.config).load_policy_artifacts({}, moved)
+
+
+def test_policy_artifacts_carry_the_detector(detector_file):
+    behavior = HandRegard()
+    behavior.config.detector_file = str(detector_file)
+    artifacts = json.loads(json.dumps(behavior.policy_artifacts()))  # plain data only
+    restored = HandRegard()
+    restored.config.detector_file = "/nowhere/hand_detector.json"
+    restored.load_policy_artifacts(artifacts, detector_file.parent)
+    assert restored.detector.params == behavior.detector.params
+
+
+def test_relocated_run_folder_evaluates(tmp_path):
+    """A run whose config names its detector by an absolute path, moved after training."""
+    import torch
+
+    from devlearn.plugins import PluginRegistry
+    from devlearn.training.checkpoint import save_atomic
+    from devlearn.training.evaluate import evaluate
+
+    published = Path(__file__).resolve().parents[3] / "results" / "hand_regard" / "run"
+    state = torch.load(published / "policy.pt", weights_only=True)
+    original = tmp_path / "original"
+    original.mkdir()
+    detector = state.pop("artifacts")["hand_detector"]
+    (original / "hand_detector.json").write_text(json.dumps(detector))
+    state["config"]["behavior"]["detector_file"] = str(original / "hand_detector.json")
+    save_atomic(state, original / "checkpoint_latest.pt")  # as a training run leaves it
+    moved = tmp_path / "moved" / "run"
+    shutil.copytree(original, moved)
+    shutil.rmtree(original)
+
+    def short(scene, **kwargs):
+        infant = build_infant(scene, **kwargs)
+        infant.episode_steps = 30
+        return infant
+
+    summary = evaluate("hand_regard", moved, 1, PluginRegistry(), infant_factory=short,
+                       out_dir=tmp_path / "eval", progress=False)
+    assert summary["steps"] == 30 and summary["headline_criterion"] == "cone"
+    assert set(summary["criteria"]) == {"cone", "pixels", "any_pixel"}
+    assert summary["protocol"]["criteria"]["cone"]["max_angle_deg"] == 15.0

@@ -1,0 +1,60 @@
+"""The evaluation protocol of self-touch: settle period at reset, per-episode spread."""
+
+from __future__ import annotations
+
+import pytest
+from devlearn_self_touch import SelfTouch, SelfTouchEvaluator
+from scipy import stats
+from self_touch_fakes import make_ctx
+
+
+def run_episode(evaluator, contacts_at):
+    """A 20-step episode; ``contacts_at``: step -> [(hand, part)] touched on that step."""
+    for step in range(20):
+        evaluator.record(make_ctx(hand_parts=contacts_at.get(step, []), step=step,
+                                  last_step=step == 19))
+    return evaluator.end_episode()
+
+
+def test_settle_period_does_not_credit_the_reset_contact():
+    # The reset pose lands the left hand on part 5 (steps 0-2); the policy later touches
+    # part 7 with the right hand (step 12).
+    contacts = {0: [(0, 5)], 1: [(0, 5)], 2: [(0, 5)], 12: [(1, 7)]}
+    settled = run_episode(SelfTouch().evaluator(training=False), contacts)
+    assert settled == {"coverage_left": 0.0, "coverage_right": 1.0, "coverage_total": 1.0,
+                       "score": 1 / 68}
+    unsettled = run_episode(SelfTouchEvaluator(training=False, settle_steps=0), contacts)
+    assert unsettled["coverage_left"] == 1.0 and unsettled["coverage_total"] == 2.0
+    # A contact on step 10 (the first scored step) is credited.
+    assert run_episode(SelfTouchEvaluator(training=False), {10: [(0, 3)]})["coverage_left"] == 1
+
+
+def test_settle_is_recorded_and_training_credits_every_step():
+    evaluator = SelfTouch().evaluator(training=False)
+    assert evaluator.settle_steps == 10 and evaluator.protocol()["settle_steps"] == 10
+    run_episode(evaluator, {})
+    assert evaluator.summary()["settle_steps"] == 10
+    training = SelfTouch().evaluator(training=True)
+    assert run_episode(training, {0: [(0, 5)]})["coverage_left"] == 1.0
+    with pytest.raises(ValueError, match="settle_steps"):
+        SelfTouchEvaluator(training=False, settle_steps=-1)
+
+
+def test_summary_keeps_the_union_and_adds_per_episode_spread():
+    evaluator = SelfTouchEvaluator(training=False)
+    run_episode(evaluator, {11: [(0, 1), (0, 2), (1, 2)]})  # left 2, right 1
+    run_episode(evaluator, {15: [(1, 3)]})  # right 1
+    run_episode(evaluator, {})
+    summary = evaluator.summary()
+    # Today's keys: the union over episodes.
+    assert summary["coverage_left"] == 2 and summary["coverage_right"] == 2
+    assert summary["coverage_total"] == 3 and summary["score"] == pytest.approx(4 / 68)
+    assert summary["episode_score_mean"] == pytest.approx(4 / 68 / 3)
+    scores = [3 / 68, 1 / 68, 0.0]
+    low, high = stats.t.interval(0.95, 2, loc=sum(scores) / 3, scale=stats.sem(scores))
+    assert summary["episode_score_ci_low"] == pytest.approx(low)
+    assert summary["episode_score_ci_high"] == pytest.approx(high)
+    assert summary["episode_coverage_total_std"] == pytest.approx(stats.tstd([2, 1, 0]))
+    for key in ("coverage_left", "coverage_right", "coverage_total"):
+        assert {f"episode_{key}_{s}" for s in ("mean", "std", "ci_low", "ci_high")} <= set(
+            summary)

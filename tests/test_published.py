@@ -1,0 +1,85 @@
+"""Published results: every checkpoint loads and builds its policy; the tracked tree stays small."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+MAX_TRACKED_BYTES = 40_000_000
+"""The tracked tree must stay under 40 MB so that a working tree travels to a GPU machine
+(64 MiB) with room for build outputs."""
+
+
+def tracked() -> list[Path]:
+    try:
+        out = subprocess.run(["git", "ls-files", "-z"], cwd=ROOT, capture_output=True,
+                             check=True, timeout=60).stdout
+    except (OSError, subprocess.SubprocessError):
+        pytest.skip("not a git checkout")
+    return [ROOT / p for p in out.decode().split("\0") if p]
+
+
+def published() -> list[Path]:
+    return sorted(p for p in tracked() if p.suffix == ".pt" and "results" in p.parts)
+
+
+def test_tracked_tree_is_under_40_mb():
+    sizes = {p: p.stat().st_size for p in tracked() if p.is_file()}
+    total = sum(sizes.values())
+    largest = sorted(sizes, key=sizes.get, reverse=True)[:5]
+    assert total < MAX_TRACKED_BYTES, (
+        f"tracked files total {total / 1e6:.1f} MB (limit 40 MB); largest: "
+        + ", ".join(f"{p.relative_to(ROOT)} {sizes[p] / 1e6:.1f} MB" for p in largest)
+        + ". Publish policy files (`devlearn slim`), not training checkpoints.")
+
+
+def test_published_policies_are_slim_and_documented():
+    policies = [p for p in published() if p.name == "policy.pt"]
+    assert len(policies) >= 4
+    for path in policies:
+        assert path.stat().st_size < 5_000_000, path
+        behavior = path.relative_to(ROOT / "results").parts[0]
+        readme = (ROOT / "results" / behavior / "README.md").read_text()
+        command = f"--checkpoint {path.relative_to(ROOT)}"
+        assert command in readme, f"results/{behavior}/README.md has no eval of {path}"
+
+
+@pytest.mark.parametrize("path", published(), ids=lambda p: str(p.relative_to(ROOT)))
+def test_published_checkpoint_loads_and_acts(path, tmp_path):
+    """Each published checkpoint, copied alone to a fresh folder, builds its policy and acts."""
+    import torch
+
+    from devlearn.env.behavior_env import BehaviorEnv
+    from devlearn.plugins import PluginRegistry
+    from devlearn.training.checkpoint import load_checkpoint
+    from devlearn.training.config import from_dict
+    from devlearn.training.evaluate import load_actor
+
+    copy = tmp_path / path.name
+    shutil.copy(path, copy)
+    state = load_checkpoint(copy)
+    if path.name == "policy.pt":
+        assert state["policy_only"] and "optimizer_state_dict" not in state
+        torch.load(copy, weights_only=True)  # plain data only
+    registry = PluginRegistry()
+    cls = registry.behavior(state["behavior"])
+    cfg = from_dict(state["config"], cls)
+    behavior = registry.create(state["behavior"], cfg.behavior)
+    behavior.load_policy_artifacts(dict(state.get("artifacts") or {}), copy.parent)
+    env = BehaviorEnv(behavior, 0, training=False)
+    try:
+        env.set_stage(behavior.eval_stage())
+        obs = env.reset()
+        actor = load_actor(cfg, state, behavior, obs, env.action_dim)
+        from devlearn.training.evaluate import _batch
+
+        with torch.inference_mode():
+            action = actor(_batch(obs))[0].numpy()
+    finally:
+        env.close()
+    assert action.shape == (env.action_dim,) and np.all(np.isfinite(action))

@@ -1,0 +1,147 @@
+"""``devlearn eval``'s protocol: baselines on the checkpoint's code path, the protocol in the
+JSON, run folders as --checkpoint, output folders checked first, summaries never lost."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "env"))
+
+from fake_infant import FakeInfant, TinyBehavior  # noqa: E402
+
+import devlearn.plugins  # noqa: E402
+from devlearn.cli import main  # noqa: E402
+from devlearn.errors import UsageError  # noqa: E402
+from devlearn.testing import registry_for  # noqa: E402
+from devlearn.training.evaluate import evaluate  # noqa: E402
+
+
+class RecordingInfant(FakeInfant):
+    """A fake infant that keeps every action it was given."""
+
+    log: list = []
+
+    def step(self, action):
+        RecordingInfant.log.append(np.array(action))
+        super().step(action)
+
+
+def recording(scene, senses=("proprioception",), **kwargs):
+    return RecordingInfant(scene, senses, episode_steps=10)
+
+
+@pytest.fixture
+def registry(monkeypatch):
+    registry = registry_for(TinyBehavior)
+    monkeypatch.setattr(devlearn.plugins, "PluginRegistry", lambda *a, **k: registry)
+    monkeypatch.setattr("devlearn.env.behavior_env.build_default_infant", recording)
+    RecordingInfant.log = []
+    return registry
+
+
+@pytest.fixture
+def run_dir(registry, tmp_path):
+    out = tmp_path / "run"
+    assert main(["run", "tiny", "--steps", "16", "--envs", "2", "--seed", "3", "--out",
+                 str(out)]) == 0
+    RecordingInfant.log = []
+    return out
+
+
+def actions_of(registry, checkpoint, policy, seed=0):
+    RecordingInfant.log = []
+    summary = evaluate("tiny", checkpoint, 2, registry, seed=seed, progress=False,
+                       policy=policy)
+    return np.array(RecordingInfant.log), summary
+
+
+def test_baselines_run_through_the_checkpoint_path(registry, run_dir):
+    checkpoint = run_dir / "checkpoint_latest.pt"
+    trained, s_ckpt = actions_of(registry, checkpoint, "checkpoint")
+    zero, s_zero = actions_of(registry, None, "zero")
+    rand, s_rand = actions_of(registry, None, "random")
+    again, _ = actions_of(registry, None, "random")
+    assert trained.shape == zero.shape == rand.shape == (20, 3)  # same episodes, same steps
+    assert np.abs(trained).max() > 0 and not zero.any()
+    assert np.abs(rand).max() <= 1 and rand.std() > 0.3  # uniform in [-1, 1]
+    np.testing.assert_array_equal(rand, again)  # seeded by the evaluation seed
+    assert not np.array_equal(rand, actions_of(registry, None, "random", seed=1)[0])
+    assert set(s_ckpt) == set(s_zero) == set(s_rand)
+    assert (s_ckpt["policy"], s_zero["policy"], s_rand["policy"]) == ("checkpoint", "zero",
+                                                                      "random")
+    assert s_ckpt["episodes"] == s_zero["episodes"] == 2
+    assert s_ckpt["training_seed"] == 3 and s_ckpt["config"]["seed"] == 3
+    assert s_zero["checkpoint"] is None and s_zero["training_seed"] is None
+
+
+def test_protocol_is_recorded(registry, run_dir, tmp_path):
+    out = tmp_path / "eval"
+    summary = evaluate("tiny", run_dir / "checkpoint_latest.pt", 2, registry, seed=5,
+                       out_dir=out, progress=False)
+    written = json.loads((out / "eval.json").read_text())
+    protocol = written["protocol"]
+    assert protocol["episodes"] == 2 and protocol["seed"] == 5
+    assert protocol["settle_steps"] == 0 and protocol["checkpoint_env_steps"] == 16
+    assert protocol["stage"] == {"random_pose": True} and protocol["action"] == "mean"
+    commit = protocol["code"]["commit"]
+    assert commit is None or len(commit) == 40
+    assert "written" not in written and summary["written"][0] == str(out / "eval.json")
+
+
+def test_baseline_and_bad_policy_arguments(registry):
+    with pytest.raises(UsageError, match="valid: checkpoint, zero, random"):
+        evaluate("tiny", None, 1, registry, policy="greedy")
+    with pytest.raises(UsageError, match="not both"):
+        evaluate("tiny", "x.pt", 1, registry, policy="zero")
+
+
+def test_cli_baseline(registry, tmp_path, capsys):
+    out = tmp_path / "zero"
+    assert main(["eval", "tiny", "--policy", "zero", "--episodes", "1", "--out", str(out),
+                 "--json"]) == 0
+    captured = capsys.readouterr()
+    assert json.loads(captured.out)["policy"] == "zero"  # stdout: one JSON document
+    assert f"written to {out}: eval.json, close.txt" in captured.err
+    assert json.loads((out / "eval.json").read_text())["protocol"]["policy"] == "zero"
+
+
+def test_run_folder_as_checkpoint(registry, run_dir, tmp_path, capsys):
+    assert main(["eval", "tiny", "--checkpoint", str(run_dir), "--episodes", "1"]) == 0
+    printed = capsys.readouterr().out
+    assert f"written to {run_dir / 'eval'}: eval.json, close.txt" in printed
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    assert main(["eval", "tiny", "--checkpoint", str(empty)]) == 2
+    err = capsys.readouterr().err
+    assert "folder without checkpoint_latest.pt" in err and "a checkpoint file (.pt)" in err
+
+
+def test_unwritable_out_is_refused_before_any_episode(registry, run_dir, tmp_path, capsys):
+    blocker = tmp_path / "a_file"
+    blocker.write_text("")
+    code = main(["eval", "tiny", "--checkpoint", str(run_dir), "--out", str(blocker / "eval")])
+    assert code == 2 and RecordingInfant.log == []
+    assert "cannot write to output folder" in capsys.readouterr().err
+
+
+def test_summary_is_printed_when_writing_fails(registry, run_dir, tmp_path, capsys,
+                                               monkeypatch):
+    def full_disk(self, out_dir):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr("fake_infant.CloseEvaluator.write_artifacts", full_disk)
+    code = main(["eval", "tiny", "--checkpoint", str(run_dir), "--episodes", "1", "--json",
+                 "--out", str(tmp_path / "eval")])
+    captured = capsys.readouterr()
+    assert code == 2 and "No space left on device" in captured.err
+    assert json.loads(captured.out)["episodes"] == 1
+
+
+def test_evaluate_takes_a_run_folder(registry, run_dir):
+    summary = evaluate("tiny", run_dir, 1, registry, infant_factory=recording, progress=False)
+    assert summary["checkpoint"] == str(run_dir / "checkpoint_latest.pt")
