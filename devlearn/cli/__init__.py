@@ -9,7 +9,7 @@ import sys
 from devlearn.errors import UsageError
 
 # Sub-command modules, each with add_parser(subparsers) and run(args, registry) -> int.
-COMMANDS = ("run", "evaluate", "info", "plugins", "bench", "picture", "curve")
+COMMANDS = ("run", "evaluate", "info", "plugins", "bench", "picture", "curve", "sweep")
 
 
 def _load_commands() -> list:
