@@ -10,5 +10,5 @@ fi
 # Install the pinned torch first so nothing else pulls a CUDA build.
 .venv/bin/python -m pip install -q --disable-pip-version-check -c constraints.txt torch
 .venv/bin/python -m pip install -q --disable-pip-version-check -c constraints.txt \
-  -e ".[test]" -e plugins/self_touch -e plugins/hand_regard -e examples/hand_to_mouth
+  -e ".[test,ray]" -e plugins/self_touch -e plugins/hand_regard -e examples/hand_to_mouth
 echo "devlearn is set up in .venv (activate with: source .venv/bin/activate)"
