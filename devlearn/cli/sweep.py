@@ -1,4 +1,4 @@
-"""``devlearn sweep BEHAVIOR``: a grid of config values times seeds, trained, evaluated, reported."""
+"""``devlearn sweep BEHAVIOR``: train and evaluate a grid of variants times seeds, then report."""
 
 from __future__ import annotations
 

@@ -15,7 +15,6 @@ from __future__ import annotations
 import datetime
 import fcntl
 import os
-from pathlib import Path
 from typing import Any
 
 from devlearn.errors import UsageError
@@ -105,9 +104,21 @@ class SweepFolder:
     def finished_record(self, job: RunJob) -> dict[str, Any] | None:
         """The record of a run already done and evaluated (it is not run again), else None."""
         record = read_json(job.record_path)
-        if record and record.get("status") == "done" and (job.run_dir / "eval" / "eval.json").is_file():
+        if (
+            record
+            and record.get("status") == "done"
+            and (job.run_dir / "eval" / "eval.json").is_file()
+        ):
             return record
         return None
+
+    def mark_queued(self, job: RunJob) -> None:
+        """A run about to be handed to the executor: its record (if any) says queued, not the
+        state an earlier, killed sweep left it in."""
+        record = read_json(job.record_path)
+        if record is not None and record.get("status") != "queued":
+            record["status"] = "queued"
+            write_json(job.record_path, record)
 
     def write_runs(self, records: list[dict[str, Any]]) -> None:
         """Write runs.json: every run's record, in the sweep's order."""

@@ -91,7 +91,9 @@ class LocalExecutor:
             if future.cancelled():
                 continue
             error = future.exception()
-            records.append(_failed(job, f"{type(error).__name__}: {error}") if error else future.result())
+            records.append(
+                _failed(job, f"{type(error).__name__}: {error}") if error else future.result()
+            )
         return records
 
     def interrupt(self) -> None:
@@ -185,9 +187,13 @@ class RayExecutor:
             try:
                 records.append(self.ray.get(ref))
             except Exception as exc:  # cancelled, worker or node lost, task error
-                if self._cancelled:
-                    continue
-                records.append(_failed(job, f"Ray task failed: {str(exc).splitlines()[0]}"))
+                if self._cancelled:  # what the task got to before it stopped
+                    record = read_json(job.record_path) or {"name": job.name}
+                    if record.get("status") != "done":
+                        record["status"] = "interrupted"
+                    records.append(record)
+                else:
+                    records.append(_failed(job, f"Ray task failed: {str(exc).splitlines()[0]}"))
         return records
 
     def interrupt(self) -> None:

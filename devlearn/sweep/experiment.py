@@ -133,9 +133,7 @@ def run_sweep(
     stream = stream or sys.stdout
     runs = plan_sweep(spec, registry, global_args)
     saved = check_folder(spec)
-    executor = make_executor(
-        spec.executor, spec.train.cores_per_run, spec.jobs, spec.address
-    )
+    executor = make_executor(spec.executor, spec.train.cores_per_run, spec.jobs, spec.address)
     try:
         folder = SweepFolder(spec, saved, command)
     except BaseException:
@@ -144,7 +142,9 @@ def run_sweep(
     headline = registry.behavior(spec.behavior).headline_metric
     progress = Progress(len(runs), headline, stream)
     records = {}
-    print(f"sweep {spec.out}: {len(runs)} runs of {spec.behavior}, {executor.describe()}", file=stream)
+    print(
+        f"sweep {spec.out}: {len(runs)} runs of {spec.behavior}, {executor.describe()}", file=stream
+    )
     try:
         active = []
         for run in runs:
@@ -153,25 +153,29 @@ def run_sweep(
                 records[run.job.name] = record
                 progress.earlier(record)
             else:
+                folder.mark_queued(run.job)
                 progress.line("queued", run.job.name)
                 executor.submit(run.job)
                 active.append(run.job)
         totals = {run.job.name: run.total_steps for run in runs}
+
+        def collect(timeout: float) -> None:
+            for record in executor.wait(timeout):
+                records[record["name"]] = record
+                progress.finished(record, spec.out)
+            folder.write_runs([records[r.job.name] for r in runs if r.job.name in records])
+
         try:
             while executor.pending():
-                for record in executor.wait(POLL_S):
-                    records[record["name"]] = record
-                    progress.finished(record, spec.out)
-                    active = [job for job in active if job.name != record["name"]]
-                    folder.write_runs([records[r.job.name] for r in runs if r.job.name in records])
+                collect(POLL_S)
+                active = [job for job in active if job.name not in records]
                 progress.tick(active, totals)
         except KeyboardInterrupt:
-            executor.interrupt()
-            raise
-        finally:
+            executor.interrupt()  # running runs save a checkpoint; queued ones never start
             executor.close()
-        ordered = [records[r.job.name] for r in runs if r.job.name in records]
-        folder.write_runs(ordered)
+            collect(0)
+            raise
+        executor.close()
         return _finish(spec, runs, records, stream)
     finally:
         progress.close()
@@ -197,7 +201,10 @@ def _finish(spec: SweepSpec, runs: list[PlannedRun], records: dict, stream) -> i
     try:
         write_sweep_report([r.job.run_dir for r in done], spec.out / "report")
     except ReportUnavailable as exc:
-        print(f"devlearn: error: {exc}; the evaluated runs are in {spec.out / 'runs'}", file=sys.stderr)
+        print(
+            f"devlearn: error: {exc}; the evaluated runs are in {spec.out / 'runs'}",
+            file=sys.stderr,
+        )
         return 1
     except UsageError as exc:
         print(f"devlearn: error: report step failed: {exc}", file=sys.stderr)

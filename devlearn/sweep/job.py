@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import datetime
 import fcntl
-import functools
 import json
 import os
 import shutil
@@ -85,7 +84,6 @@ def read_json(path: Path) -> dict[str, Any] | None:
     return data if isinstance(data, dict) else None
 
 
-@functools.lru_cache(maxsize=1)
 def code_version() -> dict[str, Any]:
     """The devlearn code this process runs: git commit (and whether it has local changes)."""
     import devlearn
@@ -168,7 +166,10 @@ class _Run:
             log.write(f"=== {attempt['started']} {phase}: {' '.join(argv)}\n".encode())
             log.flush()
             proc = subprocess.Popen(
-                argv, stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                argv,
+                stdout=log,
+                stderr=subprocess.STDOUT,
+                stdin=subprocess.DEVNULL,
                 pass_fds=(lock_fd,),  # the run stays locked while its process lives
             )
             if self.cores:
@@ -208,7 +209,8 @@ class _Run:
                 proc.kill()
 
     def fail(self, phase: str, returncode: int) -> dict[str, Any]:
-        if self.interrupted:
+        stopped = self.stop is not None and self.stop.is_set()
+        if self.interrupted or stopped or returncode == 130:  # 130: devlearn's Ctrl-C exit
             return self.save("interrupted")
         self.record["error"] = f"exit code {returncode} while {phase}"
         self.record["log_tail"] = log_tail(self.job.log_path)
@@ -229,6 +231,8 @@ class _Run:
                 self.record["status"] = "failed"
                 return self.record  # the record on disk belongs to the process holding it
             os.set_inheritable(lock.fileno(), True)
+            if self.stop is not None and self.stop.is_set():  # stopped before it started
+                return self.save("interrupted")
             if not self.record["trained"]:
                 run_dir = str(job.run_dir)
                 if has_checkpoint(job.run_dir):
@@ -241,6 +245,8 @@ class _Run:
                 if returncode != 0:
                     return self.fail("training", returncode)
                 self.record["trained"] = True
+            if self.stop is not None and self.stop.is_set():  # trained, but asked to stop
+                return self.save("interrupted")
             checkpoint = job.run_dir / "checkpoint_latest.pt"
             argv = [*base, "eval", job.behavior, "--checkpoint", str(checkpoint)]
             argv += ["--out", str(job.run_dir / "eval"), *job.eval_args]

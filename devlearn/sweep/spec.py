@@ -79,7 +79,7 @@ class SweepSpec:
     jobs: int | None = None
     """Local executor: runs at a time (None: as many as fit the cores)."""
     address: str | None = None
-    """Ray executor: ``auto``, ``HOST:PORT`` or ``ray://HOST:PORT`` (None: start a local instance)."""
+    """Ray executor: ``auto``, ``HOST:PORT`` or ``ray://HOST:PORT`` (None: a local instance)."""
     launcher: list[str] | None = None
     """The command that starts devlearn where a run executes (None: that process's own Python
     with ``-m devlearn.cli``), e.g. a container wrapper on a cluster."""

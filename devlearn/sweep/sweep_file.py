@@ -130,7 +130,9 @@ def build_spec(behavior: str, options: dict[str, Any], file: str | Path | None) 
     """
     data = read_sweep_file(file) if file else {}
     if data.get("behavior", behavior) != behavior:
-        raise UsageError(f"sweep file {file} is for behavior '{data['behavior']}', not '{behavior}'")
+        raise UsageError(
+            f"sweep file {file} is for behavior '{data['behavior']}', not '{behavior}'"
+        )
     train, evaluation = data.get("train", {}), data.get("eval", {})
     execution = data.get("executor", {})
 
@@ -151,10 +153,12 @@ def build_spec(behavior: str, options: dict[str, Any], file: str | Path | None) 
         raise UsageError(f"seeds must be a list of integers, got {seeds_value!r}")
     out = pick("out", data, "out")
     if not out:
-        raise UsageError("a sweep needs its folder: --out DIR (or out = \"DIR\" in the file)")
+        raise UsageError('a sweep needs its folder: --out DIR (or out = "DIR" in the file)')
     steps, envs = pick("steps", train, "steps"), pick("envs", train, "envs")
     cores = pick("cores", train, "cores")
-    overrides = _overrides(train.get("set", []), "[train] set") + list(options.get("overrides") or [])
+    overrides = _overrides(train.get("set", []), "[train] set") + list(
+        options.get("overrides") or []
+    )
     check_grid(grid, overrides)
     executor = pick("executor", execution, "kind", "local")
     if executor not in EXECUTORS:
@@ -188,5 +192,5 @@ def build_spec(behavior: str, options: dict[str, Any], file: str | Path | None) 
         report=bool(data.get("report", True)) if report is None else bool(report),
     )
     if spec.launcher is not None and not spec.launcher:
-        raise UsageError("[executor] launcher must name a command, e.g. [\"devlearn\"]")
+        raise UsageError('[executor] launcher must name a command, e.g. ["devlearn"]')
     return spec

@@ -186,6 +186,37 @@ def test_killed_in_its_second_run_a_restart_finishes_without_retraining_the_firs
 
 
 @pytest.mark.slow
+def test_sigterm_stops_the_sweep_and_its_run_saves_a_checkpoint(tmp_path):
+    from devlearn.training.checkpoint import load_checkpoint
+
+    out = tmp_path / "sweep"
+    argv = sweep_argv(out, 10**6, "--grid", "behavior.target=0.3", "--seeds", "1", "--no-report")
+    proc = subprocess.Popen(
+        [sys.executable, tiny_devlearn.__file__, *argv],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        start_new_session=True,
+    )
+    run_dir = out / "runs" / "target=0.3,seed=1"
+    try:
+        deadline = time.time() + 300
+        while not (run_dir / "checkpoint_latest.pt").exists():
+            assert proc.poll() is None and time.time() < deadline
+            time.sleep(0.05)
+        proc.send_signal(signal.SIGTERM)  # to the sweep process only, as a scheduler would
+        stdout = proc.communicate(timeout=120)[0].decode()
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 130, stdout
+    assert "interrupted target=0.3,seed=1" in stdout and "devlearn: interrupted" in stdout
+    record = records(out)["target=0.3,seed=1"]
+    assert record["status"] == "interrupted" and record["attempts"][0]["returncode"] == 130
+    saved = load_checkpoint(run_dir / "checkpoint_latest.pt")["env_steps"]
+    assert 0 < saved < 10**6 and saved == metrics(run_dir)[-1]["step"]  # saved on the way out
+
+
+@pytest.mark.slow
 def test_a_failing_combination_is_reported_and_the_others_finish(tmp_path):
     out = tmp_path / "sweep"
     argv = sweep_argv(out, 64, "--grid", "behavior.break_after=20,0", "--seeds", "3")
@@ -226,6 +257,8 @@ def test_ray_executor_gives_the_same_numbers(local_sweep, local_ray, tmp_path):
     for name in NAMES:
         assert found[name]["status"] == "done"
         ours, theirs = out / "runs" / name, local / "runs" / name
-        assert (ours / "eval" / "eval.json").read_text() == (theirs / "eval" / "eval.json").read_text()
+        assert (ours / "eval" / "eval.json").read_text() == (
+            theirs / "eval" / "eval.json"
+        ).read_text()
         assert metrics(ours) == metrics(theirs)
         assert found[name]["attempts"][0]["cores"] is None  # Ray holds the CPUs, no pinning

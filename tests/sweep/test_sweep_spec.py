@@ -58,8 +58,8 @@ def test_sweep_file_and_options_merge(tmp_path):
     path.write_text(
         'behavior = "tiny"\nout = "from_file"\nseeds = [1, 2]\n'
         '[grid]\n"behavior.target" = [0.3, 0.6]\n"behavior.use_eyes" = [true, false]\n'
-        '[train]\nsteps = 4e2\nworkers = 1\nset = { save_interval = 2 }\n'
-        '[eval]\nepisodes = 3\n[executor]\njobs = 2\n'
+        "[train]\nsteps = 4e2\nworkers = 1\nset = { save_interval = 2 }\n"
+        "[eval]\nepisodes = 3\n[executor]\njobs = 2\n"
     )
     spec = build_spec("tiny", {"out": "from_cli", "grid": ["behavior.target=0.1"]}, path)
     assert str(spec.out) == "from_cli"
@@ -149,7 +149,6 @@ def test_bad_input_is_one_line_and_starts_nothing(cli, capsys, tmp_path, monkeyp
     assert "unknown behavior 'tinyy'" in error(cli, capsys, "sweep", "tinyy", "--out", str(out))
     assert "a sweep needs its folder: --out DIR" in error(cli, capsys, "sweep", "tiny")
     assert not out.exists()
-
 
 
 def test_ray_missing_or_unreachable_is_one_line(cli, capsys, tmp_path, monkeypatch):

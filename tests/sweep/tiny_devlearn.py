@@ -15,8 +15,13 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "env"))
 
-from fake_infant import OtherBehavior, Reach, TinyBehavior, TinyConfig  # noqa: E402
-from fake_infant import fake_infant_factory  # noqa: E402
+from fake_infant import (  # noqa: E402
+    OtherBehavior,
+    Reach,
+    TinyBehavior,
+    TinyConfig,
+    fake_infant_factory,  # noqa: E402
+)
 
 from devlearn.testing import registry_for  # noqa: E402
 
