@@ -140,11 +140,11 @@ def run_sweep(
         executor.close()
         raise
     headline = registry.behavior(spec.behavior).headline_metric
-    progress = Progress(len(runs), headline, stream)
-    records = {}
     print(
         f"sweep {spec.out}: {len(runs)} runs of {spec.behavior}, {executor.describe()}", file=stream
     )
+    progress = Progress(len(runs), headline, stream)
+    records = {}
     try:
         active = []
         for run in runs:
