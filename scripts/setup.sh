@@ -11,6 +11,6 @@ fi
 # `--logger wandb` (offline). Install the pinned torch first so nothing else pulls a CUDA build.
 .venv/bin/python -m pip install -q --disable-pip-version-check -c constraints.txt torch
 .venv/bin/python -m pip install -q --disable-pip-version-check -c constraints.txt \
-  -e ".[test,wandb,export]" -e plugins/self_touch -e plugins/hand_regard -e plugins/curiosity \
+  -e ".[test,wandb,export,ray]" -e plugins/self_touch -e plugins/hand_regard -e plugins/curiosity \
   -e examples/hand_to_mouth
 echo "devlearn is set up in .venv (activate with: source .venv/bin/activate)"

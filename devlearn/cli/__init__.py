@@ -22,6 +22,7 @@ COMMANDS = (
     "export",
     "slim",
     "report",
+    "sweep",
 )
 
 

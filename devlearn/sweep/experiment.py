@@ -1,0 +1,213 @@
+"""run_sweep(): check everything, then train and evaluate every run, then write the report."""
+
+from __future__ import annotations
+
+import shutil
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from devlearn.errors import UsageError
+from devlearn.sweep.bookkeeping import SweepFolder, check_folder
+from devlearn.sweep.executors import make_executor
+from devlearn.sweep.job import RunJob
+from devlearn.sweep.progress import Progress
+from devlearn.sweep.spec import SweepSpec, Variant, variants
+
+POLL_S = 1.0
+"""Seconds between two looks at the running runs."""
+
+
+class ReportUnavailable(Exception):
+    """This devlearn has no ``devlearn.report`` (the report step cannot run)."""
+
+
+@dataclass
+class PlannedRun:
+    """A run of the sweep with its checked config."""
+
+    variant: Variant
+    """Grid values and seed."""
+    job: RunJob
+    """What the executor runs."""
+    total_steps: int
+    """The run's training budget (environment steps)."""
+
+
+def plan_sweep(spec: SweepSpec, registry, global_args: list[str] | None = None) -> list[PlannedRun]:
+    """Every run of the sweep, each config built and checked as ``devlearn run`` would.
+
+    Raises:
+        UsageError: An unknown behaviour, grid key or value, a value the behaviour rejects (the
+            run is named), or a launcher that is not installed.
+    """
+    from devlearn.cli.run import check_config
+    from devlearn.training.config import default_config, valid_keys
+
+    behavior_cls = registry.behavior(spec.behavior)
+    train = spec.train
+    keys = valid_keys(default_config(behavior_cls))
+    for key in spec.grid:
+        if key not in keys:
+            raise UsageError(f"--grid: unknown config key '{key}'; valid keys: {', '.join(keys)}")
+    runs = []
+    for variant in variants(spec.grid, spec.seeds):
+        overrides = [*train.overrides, *variant.overrides]
+        top = {"total_steps": train.steps, "num_envs": train.envs, "workers": train.workers}
+        try:
+            cfg = default_config(behavior_cls, overrides, seed=variant.seed, **top)
+            check_config(cfg)
+            registry.create(spec.behavior, cfg.behavior)
+        except UsageError as exc:
+            raise UsageError(f"run {variant.name}: {exc}") from None
+        common = ["--workers", str(train.workers)]
+        common += ["--steps", str(train.steps)] if train.steps is not None else []
+        train_args = ["--seed", str(variant.seed), *common]
+        train_args += ["--envs", str(train.envs)] if train.envs is not None else []
+        for item in overrides:
+            train_args += ["--set", item]
+        ev = spec.evaluation
+        eval_args = ["--episodes", str(ev.episodes), "--seed", str(ev.seed), "--json", *ev.args]
+        job = RunJob(
+            name=variant.name,
+            behavior=spec.behavior,
+            sweep_dir=str(spec.out.resolve()),
+            values=dict(variant.values),
+            seed=variant.seed,
+            train_args=train_args,
+            resume_args=common,
+            eval_args=eval_args,
+            launcher=spec.launcher,
+            global_args=list(global_args or []),
+        )
+        runs.append(PlannedRun(variant, job, cfg.total_steps))
+    if spec.launcher and shutil.which(spec.launcher[0]) is None:
+        raise UsageError(f"launcher command '{spec.launcher[0]}' is not found")
+    return runs
+
+
+def write_sweep_report(run_dirs: list[Path], out_dir: Path) -> dict[str, Any]:
+    """``devlearn report`` over the evaluated runs, into ``out_dir`` (report.md, report.png).
+
+    Raises:
+        ReportUnavailable: This devlearn has no ``devlearn.report``.
+    """
+    try:
+        from devlearn.report import write_report
+    except ModuleNotFoundError as exc:
+        if exc.name != "devlearn.report":
+            raise
+        raise ReportUnavailable(
+            "report step needs devlearn.report, which this devlearn does not have"
+        ) from None
+    return write_report(run_dirs, out_dir)
+
+
+def run_sweep(
+    spec: SweepSpec,
+    registry,
+    *,
+    global_args: list[str] | None = None,
+    command: str = "",
+    stream=None,
+) -> int:
+    """Run a sweep: train and evaluate every run not done yet, then write the report.
+
+    Everything that can be checked is checked before anything starts (configs, executor,
+    folder). Finished runs are kept, unfinished ones continue from their checkpoint, a failed
+    run is reported with its log's last lines and the others go on.
+
+    Args:
+        spec: The sweep.
+        registry: Plugin registry.
+        global_args: ``devlearn`` options for every command (``--disable-plugin``).
+        command: The command line, recorded in sweep.json.
+        stream: Where progress lines go (default stdout).
+    Returns:
+        0 when every run is done and the report written (or not asked for), else 1.
+    Raises:
+        UsageError: Bad input (nothing was started).
+        KeyboardInterrupt: Ctrl-C or SIGTERM; running runs saved a checkpoint.
+    """
+    stream = stream or sys.stdout
+    runs = plan_sweep(spec, registry, global_args)
+    saved = check_folder(spec)
+    executor = make_executor(spec.executor, spec.train.cores_per_run, spec.jobs, spec.address)
+    try:
+        folder = SweepFolder(spec, saved, command)
+    except BaseException:
+        executor.close()
+        raise
+    headline = registry.behavior(spec.behavior).headline_metric
+    print(
+        f"sweep {spec.out}: {len(runs)} runs of {spec.behavior}, {executor.describe()}", file=stream
+    )
+    progress = Progress(len(runs), headline, stream)
+    records = {}
+    try:
+        active = []
+        for run in runs:
+            record = folder.finished_record(run.job)
+            if record is not None:
+                records[run.job.name] = record
+                progress.earlier(record)
+            else:
+                folder.mark_queued(run.job)
+                progress.line("queued", run.job.name)
+                executor.submit(run.job)
+                active.append(run.job)
+        totals = {run.job.name: run.total_steps for run in runs}
+
+        def collect(timeout: float) -> None:
+            for record in executor.wait(timeout):
+                records[record["name"]] = record
+                progress.finished(record, spec.out)
+            folder.write_runs([records[r.job.name] for r in runs if r.job.name in records])
+
+        try:
+            while executor.pending():
+                collect(POLL_S)
+                active = [job for job in active if job.name not in records]
+                progress.tick(active, totals)
+        except KeyboardInterrupt:
+            executor.interrupt()  # running runs save a checkpoint; queued ones never start
+            executor.close()
+            collect(0)
+            raise
+        executor.close()
+        return _finish(spec, runs, records, stream)
+    finally:
+        progress.close()
+        folder.close()
+
+
+def _finish(spec: SweepSpec, runs: list[PlannedRun], records: dict, stream) -> int:
+    """Summary line, then the report over the evaluated runs."""
+    done = [r for r in runs if records.get(r.job.name, {}).get("status") == "done"]
+    failed = [r.job.name for r in runs if records.get(r.job.name, {}).get("status") != "done"]
+    print(f"{len(done)} of {len(runs)} runs done and evaluated in {spec.out / 'runs'}", file=stream)
+    if failed:
+        print(
+            f"not done: {', '.join(failed)}; start the same command again to retry them "
+            "(finished runs are kept, unfinished ones continue from their checkpoints)",
+            file=stream,
+        )
+    if not spec.report:
+        return 1 if failed else 0
+    if not done:
+        print("devlearn: error: no run finished, so there is no report", file=sys.stderr)
+        return 1
+    try:
+        write_sweep_report([r.job.run_dir for r in done], spec.out / "report")
+    except ReportUnavailable as exc:
+        print(
+            f"devlearn: error: {exc}; the evaluated runs are in {spec.out / 'runs'}",
+            file=sys.stderr,
+        )
+        return 1
+    except UsageError as exc:
+        print(f"devlearn: error: report step failed: {exc}", file=sys.stderr)
+        return 1
+    print(f"report: {spec.out / 'report' / 'report.md'}", file=stream)
+    return 1 if failed else 0

@@ -1,0 +1,276 @@
+"""Whole sweeps of the tiny behaviour: evaluated runs, report, kill and restart, a failing run,
+and the same numbers on a local Ray instance as on the local executor."""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import io
+import json
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+import tiny_devlearn
+
+from devlearn.cli import main
+
+GRID = ["--grid", "behavior.target=0.1,0.15", "--seeds", "1,2"]
+NAMES = ["target=0.1,seed=1", "target=0.15,seed=1", "target=0.1,seed=2", "target=0.15,seed=2"]
+TIMINGS = {"steps_per_s", "collect_s", "update_s"}
+
+
+def launcher_file(folder: Path) -> Path:
+    """A sweep file whose launcher trains the tiny behaviour (tiny_devlearn.py)."""
+    path = folder / "tiny_launcher.toml"
+    path.write_text(
+        f"[executor]\nlauncher = {json.dumps([sys.executable, tiny_devlearn.__file__])}\n"
+    )
+    return path
+
+
+def sweep_argv(out: Path, steps: int = 64, *extra: str) -> list[str]:
+    return [
+        "sweep", "tiny", "--file", str(launcher_file(out.parent)), "--out", str(out),
+        "--steps", str(steps), "--envs", "2", "--episodes", "2", "--set", "save_interval=1",
+        *extra,
+    ]  # fmt: skip
+
+
+def run_cli(argv: list[str]) -> tuple[int, str, str]:
+    """``devlearn ...`` in this process with the tiny behaviours; (exit code, stdout, stderr)."""
+    out, err = io.StringIO(), io.StringIO()
+    with pytest.MonkeyPatch.context() as patch:
+        tiny_devlearn.install(patch)
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            code = main(argv)
+    return code, out.getvalue(), err.getvalue()
+
+
+def records(out: Path) -> dict[str, dict]:
+    return {r["name"]: r for r in json.loads((out / "runs.json").read_text())["runs"]}
+
+
+def metrics(run_dir: Path) -> list[dict]:
+    rows = [json.loads(line) for line in (run_dir / "metrics.jsonl").read_text().splitlines()]
+    return [{k: v for k, v in row.items() if k not in TIMINGS} for row in rows]
+
+
+def results(path: Path) -> dict:
+    """An eval.json without what may differ between two sweeps: times, hosts, commits, paths."""
+    drop = re.compile(r"time|wall|date|host|commit|path|dir|_s$")
+
+    def keep(value):
+        if isinstance(value, dict):
+            return {k: keep(v) for k, v in value.items() if not drop.search(k)}
+        return None if isinstance(value, str) and "/" in value else value
+
+    return keep(json.loads(path.read_text()))
+
+
+def digest(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+@pytest.fixture(scope="module")
+def local_sweep(tmp_path_factory):
+    """The 2x2 sweep (two targets x seeds 1, 2) on the local executor, two runs at a time."""
+    out = tmp_path_factory.mktemp("local") / "sweep"
+    code, stdout, stderr = run_cli(sweep_argv(out, 64, *GRID, "--jobs", "2"))
+    return out, code, stdout, stderr
+
+
+@pytest.mark.slow
+def test_two_by_two_sweep_trains_and_evaluates_four_runs(local_sweep):
+    out, code, stdout, stderr = local_sweep
+    assert sorted(p.name for p in (out / "runs").iterdir()) == sorted(NAMES), stderr
+    found = records(out)
+    assert list(found) == NAMES  # runs.json keeps the sweep's order
+    for name in NAMES:
+        record = found[name]
+        assert record["status"] == "done", (record.get("error"), record.get("log_tail"))
+        summary = json.loads((out / "runs" / name / "eval" / "eval.json").read_text())
+        assert summary["episodes"] == 2 and summary["checkpoint_env_steps"] == 64
+        assert record["eval"] == summary
+        config = record["config"]
+        assert config["seed"] == int(name[-1]) and config["total_steps"] == 64
+        assert config["behavior"]["target"] == float(name.split(",")[0].split("=")[1])
+        assert [a["phase"] for a in record["attempts"]] == ["train", "eval"]
+        assert all(a["returncode"] == 0 and a["wall_s"] > 0 for a in record["attempts"])
+        assert record["commit"]["commit"] and len(record["commit"]["commit"]) == 40
+        assert record["wall_s"] == pytest.approx(record["train_wall_s"] + record["eval_wall_s"])
+        assert "--set" in record["attempts"][0]["argv"]
+    # two at a time, each pinned to a core of its own
+    cores = {tuple(found[n]["attempts"][0]["cores"] or ()) for n in NAMES[:2]}
+    if len(os.sched_getaffinity(0)) >= 2:
+        assert len(cores) == 2 and all(len(c) == 1 for c in cores)
+    lines = stdout.splitlines()
+    for name in NAMES:
+        for state in ("queued", "training", "evaluating", "done"):
+            assert any(line.split()[:2] == [state, name] for line in lines), (state, name)
+    sweep = json.loads((out / "sweep.json").read_text())
+    assert sweep["what"]["behavior"] == "tiny" and sweep["seeds"] == [1, 2]
+    assert sweep["grid"] == {"behavior.target": ["0.1", "0.15"]}
+
+
+def _cells(line: str) -> list[str]:
+    return [cell.strip() for cell in line.strip().strip("|").split("|")]
+
+
+def _naming(labels: list[str], value: str) -> list[str]:
+    return [label for label in labels if re.search(rf"(?<![\d.]){re.escape(value)}(?!\d)", label)]
+
+
+@pytest.mark.slow
+def test_two_by_two_sweep_reports_one_row_per_variant(local_sweep):
+    """Needs devlearn.report (from the evaluation-protocol work); fails plainly without it."""
+    out, code, stdout, stderr = local_sweep
+    assert "report step needs devlearn.report" not in stderr, stderr
+    assert code == 0, stderr
+    assert (out / "report" / "report.png").exists()
+    report = (out / "report" / "report.md").read_text()
+    table = []
+    for line in report.splitlines():
+        if line.startswith("|"):
+            table.append(line)
+        elif table:
+            break  # the first table only
+    header, rows = _cells(table[0]), [_cells(row) for row in table[2:]]
+    # one entry per variant (seeds pooled): a row each, or a column each
+    for labels in ([row[0] for row in rows], header[1:]):
+        if len(_naming(labels, "0.1")) == 1 and len(_naming(labels, "0.15")) == 1:
+            assert _naming(labels, "0.1") != _naming(labels, "0.15")
+            break
+    else:
+        raise AssertionError(f"no row or column per variant in:\n{report}")
+
+
+@pytest.mark.slow
+def test_killed_in_its_second_run_a_restart_finishes_without_retraining_the_first(tmp_path):
+    out, steps = tmp_path / "sweep", 480  # 30 iterations of 2 envs x 8 steps
+    argv = sweep_argv(out, steps, *GRID, "--jobs", "1", "--no-report")
+    log = open(tmp_path / "sweep.log", "wb")
+    proc = subprocess.Popen(
+        [sys.executable, tiny_devlearn.__file__, *argv],
+        stdout=log,
+        stderr=subprocess.STDOUT,
+        start_new_session=True,  # its own process group: killed with its runs below
+    )
+    first, second = (out / "runs" / n for n in NAMES[:2])
+    try:
+        deadline = time.time() + 300
+        while not (second / "checkpoint_latest.pt").exists():
+            assert proc.poll() is None, (tmp_path / "sweep.log").read_text()
+            assert time.time() < deadline, "the second run never wrote a checkpoint"
+            time.sleep(0.02)
+        os.killpg(proc.pid, signal.SIGKILL)  # the sweep and its running training, as a crash
+        proc.wait(timeout=30)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+        log.close()
+    killed_at = metrics(second)[-1]["step"]
+    assert killed_at < steps, "the second run finished before the kill: the test proves nothing"
+    assert json.loads((out / "records" / f"{NAMES[1]}.json").read_text())["status"] == "training"
+    assert not (out / "runs" / NAMES[2]).exists()
+    before = {p.name: digest(p) for p in first.rglob("*") if p.is_file()}
+    first_record = json.loads((out / "records" / f"{NAMES[0]}.json").read_text())
+
+    code, stdout, stderr = run_cli(argv[:-3] + ["--jobs", "2", "--no-report"])
+    assert code == 0, stdout + stderr
+    assert {p.name: digest(p) for p in first.rglob("*") if p.is_file()} == before
+    found = records(out)
+    assert found[NAMES[0]]["attempts"] == first_record["attempts"]  # not run again
+    assert any(line.split()[:3] == ["done", NAMES[0], "(earlier)"] for line in stdout.splitlines())
+    assert [a["phase"] for a in found[NAMES[1]]["attempts"]] == ["train", "resume", "eval"]
+    assert "--resume" in found[NAMES[1]]["attempts"][1]["argv"]
+    rows = metrics(second)
+    assert [r["step"] for r in rows] == list(range(16, steps + 1, 16))  # continued, no repeats
+    assert [r["iteration"] for r in rows] == list(range(steps // 16))
+    for name in NAMES:
+        assert found[name]["status"] == "done"
+        assert found[name]["eval"]["checkpoint_env_steps"] == steps
+
+
+@pytest.mark.slow
+def test_sigterm_stops_the_sweep_and_its_run_saves_a_checkpoint(tmp_path):
+    from devlearn.training.checkpoint import load_checkpoint
+
+    out = tmp_path / "sweep"
+    argv = sweep_argv(out, 10**6, "--grid", "behavior.target=0.3", "--seeds", "1", "--no-report")
+    proc = subprocess.Popen(
+        [sys.executable, tiny_devlearn.__file__, *argv],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        start_new_session=True,
+    )
+    run_dir = out / "runs" / "target=0.3,seed=1"
+    try:
+        deadline = time.time() + 300
+        while not (run_dir / "checkpoint_latest.pt").exists():
+            assert proc.poll() is None and time.time() < deadline
+            time.sleep(0.05)
+        proc.send_signal(signal.SIGTERM)  # to the sweep process only, as a scheduler would
+        stdout = proc.communicate(timeout=120)[0].decode()
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 130, stdout
+    assert "interrupted target=0.3,seed=1" in stdout and "devlearn: interrupted" in stdout
+    record = records(out)["target=0.3,seed=1"]
+    assert record["status"] == "interrupted" and record["attempts"][0]["returncode"] == 130
+    saved = load_checkpoint(run_dir / "checkpoint_latest.pt")["env_steps"]
+    assert 0 < saved < 10**6 and saved == metrics(run_dir)[-1]["step"]  # saved on the way out
+
+
+@pytest.mark.slow
+def test_a_failing_combination_is_reported_and_the_others_finish(tmp_path):
+    out = tmp_path / "sweep"
+    argv = sweep_argv(out, 64, "--grid", "behavior.break_after=20,0", "--seeds", "3")
+    argv[1] = "fragile"
+    code, stdout, stderr = run_cli([*argv, "--jobs", "1", "--no-report"])  # the failure first
+    assert code == 1
+    found = records(out)
+    statuses = {name: r["status"] for name, r in found.items()}
+    assert statuses == {"break_after=20,seed=3": "failed", "break_after=0,seed=3": "done"}
+    failed = found["break_after=20,seed=3"]
+    assert failed["error"].startswith("exit code 1 while training")
+    assert any("fragile reward broke after 20 steps" in line for line in failed["log_tail"])
+    lines = stdout.splitlines()
+    at = next(i for i, line in enumerate(lines) if line.startswith("failed      break_after=20"))
+    assert "logs/break_after=20,seed=3.log" in lines[at]
+    assert any("fragile reward broke after 20 steps" in line for line in lines[at + 1 : at + 16])
+    assert "1 of 2 runs done" in stdout and "not done: break_after=20,seed=3" in stdout
+    assert (out / "runs" / "break_after=0,seed=3" / "eval" / "eval.json").exists()
+
+
+@pytest.fixture(scope="module")
+def local_ray():
+    """A local Ray instance for this module (Ray's start-up takes seconds)."""
+    ray = pytest.importorskip("ray")
+    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
+    yield ray
+    ray.shutdown()
+
+
+@pytest.mark.slow
+def test_ray_executor_gives_the_same_numbers(local_sweep, local_ray, tmp_path):
+    local = local_sweep[0]
+    out = tmp_path / "sweep"
+    code, stdout, stderr = run_cli(sweep_argv(out, 64, *GRID, "--executor", "ray", "--no-report"))
+    assert code == 0, stdout + stderr
+    assert "as Ray tasks of 1 CPU(s) each" in stdout
+    found = records(out)
+    for name in NAMES:
+        assert found[name]["status"] == "done"
+        ours, theirs = out / "runs" / name, local / "runs" / name
+        assert results(ours / "eval" / "eval.json") == results(theirs / "eval" / "eval.json")
+        assert metrics(ours) == metrics(theirs)
+        assert found[name]["attempts"][0]["cores"] is None  # Ray holds the CPUs, no pinning
+    trained = {json.dumps(metrics(out / "runs" / name)) for name in NAMES}
+    assert len(trained) == len(NAMES)  # the runs differ, so equal numbers are no coincidence

@@ -1,0 +1,194 @@
+"""Sweep specs: grid, seeds and files parse; bad input is one line, exit 2, nothing started."""
+
+from __future__ import annotations
+
+import sys
+
+import pytest
+import tiny_devlearn
+
+from devlearn.cli import main
+from devlearn.errors import UsageError
+from devlearn.sweep import build_spec, plan_sweep, variants
+from devlearn.sweep.bookkeeping import SweepFolder
+from devlearn.sweep.executors import LocalExecutor, available_cores
+from devlearn.sweep.spec import parse_grid, parse_seeds
+
+
+@pytest.fixture
+def cli(monkeypatch):
+    tiny_devlearn.install(monkeypatch)
+    return main
+
+
+def test_seeds_and_grid_parse():
+    assert parse_seeds("1,2,3") == [1, 2, 3]
+    assert parse_seeds("1-3,7") == [1, 2, 3, 7]
+    assert parse_grid(["behavior.curriculum=fixed_only, two_stage", "ppo.gamma=0.9"]) == {
+        "behavior.curriculum": ["fixed_only", "two_stage"],
+        "ppo.gamma": ["0.9"],
+    }
+    for bad in ("1,x", "3-1", "", "1,,2", "-1"):
+        with pytest.raises(UsageError, match="--seeds must be"):
+            parse_seeds(bad)
+    with pytest.raises(UsageError, match="lists a seed twice"):
+        parse_seeds("1,1")
+
+
+def test_variants_are_named_by_their_values_seeds_outermost():
+    grid = {"behavior.curriculum": ["fixed_only", "two_stage"], "ppo.learning_rate": ["1e-3"]}
+    names = [v.name for v in variants(grid, [1, 2])]
+    assert names == [
+        "curriculum=fixed_only,learning_rate=1e-3,seed=1",
+        "curriculum=two_stage,learning_rate=1e-3,seed=1",
+        "curriculum=fixed_only,learning_rate=1e-3,seed=2",
+        "curriculum=two_stage,learning_rate=1e-3,seed=2",
+    ]
+    first = variants(grid, [1])[0]
+    assert first.overrides == ["behavior.curriculum=fixed_only", "ppo.learning_rate=1e-3"]
+    # keys sharing a last part keep their whole name; unsafe characters become _
+    clash = variants({"a.lr": ["x/y"], "b.lr": ["1"]}, [0])[0]
+    assert clash.name == "a.lr=x_y,b.lr=1,seed=0"
+    with pytest.raises(UsageError, match="give the same run folder name"):
+        variants({"behavior.name": ["a/b", "a_b"]}, [0])
+
+
+def test_sweep_file_and_options_merge(tmp_path):
+    path = tmp_path / "sweep.toml"
+    path.write_text(
+        'behavior = "tiny"\nout = "from_file"\nseeds = [1, 2]\n'
+        '[grid]\n"behavior.target" = [0.3, 0.6]\n"behavior.use_eyes" = [true, false]\n'
+        "[train]\nsteps = 4e2\nworkers = 1\nset = { save_interval = 2 }\n"
+        "[eval]\nepisodes = 3\n[executor]\njobs = 2\n"
+    )
+    spec = build_spec("tiny", {"out": "from_cli", "grid": ["behavior.target=0.1"]}, path)
+    assert str(spec.out) == "from_cli"
+    assert spec.grid == {"behavior.target": ["0.1"], "behavior.use_eyes": ["true", "false"]}
+    assert spec.seeds == [1, 2] and spec.jobs == 2 and spec.evaluation.episodes == 3
+    assert (spec.train.steps, spec.train.workers, spec.train.cores_per_run) == (400, 1, 1)
+    assert spec.train.overrides == ["save_interval=2"]
+    path.write_text('behavior = "tiny"\n[train]\nstep = 5\n')
+    with pytest.raises(UsageError, match=r"unknown key 'step' in \[train\]; valid: cores, envs"):
+        build_spec("tiny", {"out": "x"}, path)
+    path.write_text('behavior = "tiny"\n[train\n')
+    with pytest.raises(UsageError, match="is not valid TOML"):
+        build_spec("tiny", {"out": "x"}, path)
+    with pytest.raises(UsageError, match="is for behavior 'tiny', not 'other'"):
+        path.write_text('behavior = "tiny"\n')
+        build_spec("other", {"out": "x"}, path)
+
+
+def test_plan_builds_each_runs_commands(tmp_path):
+    options = {
+        "out": str(tmp_path / "s"),
+        "grid": ["behavior.target=0.3,0.6"],
+        "seeds": "4",
+        "steps": "64",
+        "envs": "2",
+        "overrides": ["save_interval=1"],
+        "eval_args": ["--video", "x.mp4"],
+    }
+    runs = plan_sweep(build_spec("tiny", options, None), tiny_devlearn.registry())
+    assert [r.job.name for r in runs] == ["target=0.3,seed=4", "target=0.6,seed=4"]
+    job = runs[1].job
+    assert job.train_args == [
+        "--seed", "4", "--workers", "0", "--steps", "64", "--envs", "2",
+        "--set", "save_interval=1", "--set", "behavior.target=0.6",
+    ]  # fmt: skip
+    assert job.resume_args == ["--workers", "0", "--steps", "64"]
+    assert job.eval_args == ["--episodes", "10", "--seed", "0", "--json", "--video", "x.mp4"]
+    assert job.run_dir == (tmp_path / "s" / "runs" / "target=0.6,seed=4").resolve()
+    assert runs[0].total_steps == 64
+
+
+def test_local_executor_gives_each_job_its_own_cores():
+    cores = available_cores()
+    executor = LocalExecutor(1)
+    try:
+        assert executor.jobs == len(cores) and executor.pinned
+        given = [executor._free.get() for _ in range(executor.jobs)]
+        assert sorted(c for chunk in given for c in chunk) == cores
+    finally:
+        executor.close()
+    if len(cores) >= 2:
+        two = LocalExecutor(2)
+        assert two.jobs == len(cores) // 2
+        two.close()
+    with pytest.raises(UsageError, match=f"needs {len(cores) + 1} cores but this machine gives"):
+        LocalExecutor(len(cores) + 1)
+
+
+def error(cli, capsys, *argv: str) -> str:
+    capsys.readouterr()
+    assert cli(list(argv)) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("devlearn: error: ") and "\n" not in err and "Traceback" not in err
+    return err
+
+
+def test_bad_input_is_one_line_and_starts_nothing(cli, capsys, tmp_path, monkeypatch):
+    out = tmp_path / "sweep"
+    base = ["sweep", "tiny", "--out", str(out), "--steps", "64"]
+    cases = {
+        "--grid: unknown config key 'behavior.targt'; valid keys:": ["--grid", "behavior.targt=1"],
+        "run target=far,seed=0: bad value 'far' for behavior.target": [
+            "--grid", "behavior.target=0.3,far",
+        ],
+        "--seeds must be seeds >= 0 separated by commas": ["--seeds", "1,two"],
+        "--grid cannot vary 'seed'; use --seeds": ["--grid", "seed=1,2"],
+        "'save_interval' is both in --grid and in --set": [
+            "--grid", "save_interval=1,2", "--set", "save_interval=3",
+        ],
+        "--grid behavior.target lists a value twice": ["--grid", "behavior.target=1,1"],
+        "--steps must be at least 1, got 0": ["--steps", "0"],
+        "unknown executor 'slurm'; valid: local, ray": ["--executor", "slurm"],
+        "needs 999 cores but this machine gives": ["--cores", "999"],
+    }  # fmt: skip
+    for message, extra in cases.items():
+        assert message in error(cli, capsys, *base, *extra), message
+    assert "unknown behavior 'tinyy'" in error(cli, capsys, "sweep", "tinyy", "--out", str(out))
+    assert "a sweep needs its folder: --out DIR" in error(cli, capsys, "sweep", "tiny")
+    assert not out.exists()
+
+
+def test_ray_missing_or_unreachable_is_one_line(cli, capsys, tmp_path, monkeypatch):
+    out = tmp_path / "sweep"
+    base = ["sweep", "tiny", "--out", str(out), "--executor", "ray"]
+    with monkeypatch.context() as patch:
+        patch.setitem(sys.modules, "ray", None)  # as if not installed
+        err = error(cli, capsys, *base)
+    assert "needs Ray, which is not installed: pip install 'devlearn[ray]'" in err
+    pytest.importorskip("ray")
+    err = error(cli, capsys, *base, "--address", "127.0.0.1:9")
+    assert "cannot reach the Ray cluster at 127.0.0.1:9" in err
+    assert "--jobs is for the local executor" in error(cli, capsys, *base, "--jobs", "2")
+    assert not out.exists()
+
+
+def test_a_folder_of_another_sweep_or_behaviour_is_refused(cli, capsys, tmp_path):
+    out = tmp_path / "sweep"
+    other = build_spec("other", {"out": str(out), "grid": ["behavior.target=0.3"]}, None)
+    SweepFolder(other, None, "devlearn sweep other ...").close()
+    before = sorted(p.name for p in out.iterdir())
+    err = error(cli, capsys, "sweep", "tiny", "--out", str(out))
+    assert f"sweep folder {out} holds a sweep of 'other', not 'tiny'" in err
+    err = error(cli, capsys, "sweep", "other", "--out", str(out), "--steps", "99")
+    assert "was started with other settings (train.steps was None, now 99)" in err
+    assert sorted(p.name for p in out.iterdir()) == before
+    run_dir = tmp_path / "a_run"
+    run_dir.mkdir()
+    (run_dir / "config.json").write_text("{}")
+    err = error(cli, capsys, "sweep", "tiny", "--out", str(run_dir))
+    assert "is not a sweep folder (no readable sweep.json) and not empty" in err
+
+
+def test_dry_run_lists_the_runs(cli, capsys, tmp_path):
+    out = tmp_path / "sweep"
+    argv = ["sweep", "tiny", "--out", str(out), "--grid", "behavior.target=0.3,0.6", "--dry-run"]
+    assert cli([*argv, "--seeds", "1-2"]) == 0
+    printed = capsys.readouterr().out.splitlines()
+    assert [line.split(":")[0] for line in printed[:4]] == [
+        "target=0.3,seed=1", "target=0.6,seed=1", "target=0.3,seed=2", "target=0.6,seed=2",
+    ]  # fmt: skip
+    assert "--set behavior.target=0.6" in printed[1] and "--seed 1" in printed[1]
+    assert printed[-1].startswith("4 runs in") and not out.exists()
