@@ -12,12 +12,35 @@ from devlearn.stats import CONFIDENCE, mean_ci
 
 BASELINES = ("zero", "random")
 """Baseline policies (``devlearn eval BEHAVIOR --policy ...``) shown beside every variant."""
-NOT_VARIANT = frozenset({"seed", "out_dir", "device", "workers", "torch_threads",
-                         "update_threads", "save_interval", "behavior.detector_file"})
+NOT_VARIANT = frozenset(
+    {
+        "seed",
+        "out_dir",
+        "device",
+        "workers",
+        "torch_threads",
+        "update_threads",
+        "save_interval",
+        "behavior.detector_file",
+    }
+)
 """Config keys that never make a variant: the seed (pooled) and where or how a run ran."""
-NOT_METRIC = frozenset({"config", "protocol", "paper", "part_touch_steps", "detector_agreement",
-                        "detector_visibility", "episodes", "steps", "parts", "settle_steps",
-                        "checkpoint_env_steps", "training_seed"})
+NOT_METRIC = frozenset(
+    {
+        "config",
+        "protocol",
+        "paper",
+        "part_touch_steps",
+        "detector_agreement",
+        "detector_visibility",
+        "episodes",
+        "steps",
+        "parts",
+        "settle_steps",
+        "checkpoint_env_steps",
+        "training_seed",
+    }
+)
 """Eval-JSON keys that are not metrics (settings, references, bookkeeping)."""
 SINGLE_VARIANT = "trained"
 """Column name of the checkpoints when their configs differ only in seed (one variant)."""
@@ -50,8 +73,10 @@ def _metrics(summary: dict[str, Any]) -> dict[str, float]:
 
 def _eval_files(path: Path) -> list[Path]:
     if not path.exists():
-        raise UsageError(f"{path} does not exist; give evaluation folders (with eval.json) "
-                         "or run folders that contain them")
+        raise UsageError(
+            f"{path} does not exist; give evaluation folders (with eval.json) "
+            "or run folders that contain them"
+        )
     if path.is_file():
         return [path] if path.name == "eval.json" else []
     if (path / "eval.json").is_file():
@@ -98,15 +123,19 @@ def collect(paths: Sequence[str | Path]) -> tuple[list[tuple[Path, dict]], list[
             if data is not None and data.get("policy") in BASELINES:
                 found.setdefault(file.resolve(), data)
     if old:
-        notes.append(f"skipped {len(old)} evaluation(s) made before the protocol was recorded "
-                     f"(e.g. {old[0]}); re-evaluate them with `devlearn eval`")
+        notes.append(
+            f"skipped {len(old)} evaluation(s) made before the protocol was recorded "
+            f"(e.g. {old[0]}); re-evaluate them with `devlearn eval`"
+        )
     if not found:
         where = ", ".join(map(str, paths))
         raise UsageError(f"no evaluation with a recorded protocol under {where}")
     behaviors = sorted({d.get("behavior", "?") for d in found.values()})
     if len(behaviors) > 1:
-        raise UsageError(f"evaluations of different behaviours mixed ({', '.join(behaviors)}); "
-                         "report one behaviour at a time")
+        raise UsageError(
+            f"evaluations of different behaviours mixed ({', '.join(behaviors)}); "
+            "report one behaviour at a time"
+        )
     return sorted(found.items()), notes
 
 
@@ -120,20 +149,30 @@ def group(evaluations: list[tuple[Path, dict]]) -> tuple[dict[str, list], list[s
     """
     notes: list[str] = []
     runs = [(p, d) for p, d in evaluations if d.get("policy", "checkpoint") == "checkpoint"]
-    configs = [{k: json.dumps(v) for k, v in _flatten(d.get("config") or {}).items()
-                if k not in NOT_VARIANT} for _, d in runs]
+    configs = [
+        {
+            k: json.dumps(v)
+            for k, v in _flatten(d.get("config") or {}).items()
+            if k not in NOT_VARIANT
+        }
+        for _, d in runs
+    ]
     keys = sorted({k for c in configs for k in c if len({x.get(k) for x in configs}) > 1})
     columns: dict[str, dict] = {}
     for (path, data), config in zip(runs, configs):
-        name = ", ".join(f"{k}={json.loads(config[k]) if k in config else '-'}"
-                         for k in keys) or SINGLE_VARIANT
+        name = (
+            ", ".join(f"{k}={json.loads(config[k]) if k in config else '-'}" for k in keys)
+            or SINGLE_VARIANT
+        )
         seed = data.get("training_seed")
         seeds = columns.setdefault(name, {})
         kept = seeds.get(seed)
         if kept is not None:
             later = data.get("checkpoint_env_steps", 0) > kept[1].get("checkpoint_env_steps", 0)
-            notes.append(f"seed {seed} of '{name}' evaluated more than once: kept "
-                         f"{(path if later else kept[0]).parent.name} (the later checkpoint)")
+            notes.append(
+                f"seed {seed} of '{name}' evaluated more than once: kept "
+                f"{(path if later else kept[0]).parent.name} (the later checkpoint)"
+            )
             if not later:
                 continue
         seeds[seed] = (path, data)
@@ -184,8 +223,9 @@ def write_report(paths: Sequence[str | Path], out_dir: str | Path) -> dict[str, 
         raise UsageError("only baseline evaluations given; add a checkpoint's evaluation")
     behavior = evaluations[0][1].get("behavior", "?")
     per_eval = {c: [_metrics(d) for _, d in columns[c]] for c in columns}
-    names = [k for k in per_eval[variants[0]][0]
-             if all(k in m for c in variants for m in per_eval[c])]
+    names = [
+        k for k in per_eval[variants[0]][0] if all(k in m for c in variants for m in per_eval[c])
+    ]
     headline = evaluations[0][1]["protocol"].get("headline")
     if headline in names:
         names.remove(headline)
@@ -196,21 +236,39 @@ def write_report(paths: Sequence[str | Path], out_dir: str | Path) -> dict[str, 
         for c in columns:
             values = [m[metric] for m in per_eval[c] if metric in m]
             table[metric][c] = {**mean_ci(values), "values": values}
-    info = {c: {"kind": "variant" if c in variants else "baseline",
-                "seeds": [d.get("training_seed") for _, d in columns[c]],
-                "paths": [_shown(p.parent) for p, _ in columns[c]]} for c in columns}
+    info = {
+        c: {
+            "kind": "variant" if c in variants else "baseline",
+            "seeds": [d.get("training_seed") for _, d in columns[c]],
+            "paths": [_shown(p.parent) for p, _ in columns[c]],
+        }
+        for c in columns
+    }
     for c in variants:
         if len(columns[c]) == 1:
-            notes.append(f"'{c}' has a single seed ({info[c]['seeds'][0]}): no interval over "
-                         "seeds; its eval.json holds the per-episode interval")
-    protocols = {json.dumps({k: d["protocol"].get(k) for k in ("episodes", "settle_steps",
-                                                                "criteria")}, sort_keys=True)
-                 for _, d in evaluations}
+            notes.append(
+                f"'{c}' has a single seed ({info[c]['seeds'][0]}): no interval over "
+                "seeds; its eval.json holds the per-episode interval"
+            )
+    protocols = {
+        json.dumps(
+            {k: d["protocol"].get(k) for k in ("episodes", "settle_steps", "criteria")},
+            sort_keys=True,
+        )
+        for _, d in evaluations
+    }
     if len(protocols) > 1:
-        notes.append("the evaluations used different protocols (episodes, settle steps or "
-                     "criteria): compare with care")
-    result = {"behavior": behavior, "metrics": names, "columns": info, "table": table,
-              "notes": notes}
+        notes.append(
+            "the evaluations used different protocols (episodes, settle steps or "
+            "criteria): compare with care"
+        )
+    result = {
+        "behavior": behavior,
+        "metrics": names,
+        "columns": info,
+        "table": table,
+        "notes": notes,
+    }
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     (out / "report.md").write_text(_markdown(result, evaluations))
@@ -223,11 +281,15 @@ def write_report(paths: Sequence[str | Path], out_dir: str | Path) -> dict[str, 
 def _markdown(result: dict[str, Any], evaluations: list[tuple[Path, dict]]) -> str:
     cols = list(result["columns"])
     protocol = evaluations[0][1]["protocol"]
-    lines = [f"# {result['behavior']}: evaluation report", "",
-             f"Mean and {CONFIDENCE:.0%} t-interval over seeds (baselines: over their "
-             f"evaluations). Protocol: {protocol.get('episodes')} episodes, eval seed "
-             f"{protocol.get('seed')}, settle {protocol.get('settle_steps')} steps, headline "
-             f"`{protocol.get('headline')}`.", ""]
+    lines = [
+        f"# {result['behavior']}: evaluation report",
+        "",
+        f"Mean and {CONFIDENCE:.0%} t-interval over seeds (baselines: over their "
+        f"evaluations). Protocol: {protocol.get('episodes')} episodes, eval seed "
+        f"{protocol.get('seed')}, settle {protocol.get('settle_steps')} steps, headline "
+        f"`{protocol.get('headline')}`.",
+        "",
+    ]
     header = ["metric"] + [f"{c} (n={len(result['columns'][c]['seeds'])})" for c in cols]
     lines += ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     for metric, row in result["table"].items():

@@ -30,17 +30,20 @@ def draw_report(result: dict[str, Any], path: Path) -> Path:
     for ax, metric in zip(axes, metrics):
         row = result["table"][metric]
         means = [row[c]["mean"] if row[c]["mean"] is not None else np.nan for c in columns]
-        low = [m - row[c]["ci_low"] if row[c]["ci_low"] is not None else 0.0
-               for m, c in zip(means, columns)]
-        high = [row[c]["ci_high"] - m if row[c]["ci_high"] is not None else 0.0
-                for m, c in zip(means, columns)]
+        low = [
+            m - row[c]["ci_low"] if row[c]["ci_low"] is not None else 0.0
+            for m, c in zip(means, columns)
+        ]
+        high = [
+            row[c]["ci_high"] - m if row[c]["ci_high"] is not None else 0.0
+            for m, c in zip(means, columns)
+        ]
         x = np.arange(len(columns))
         ax.bar(x, means, color=colours, yerr=[low, high], capsize=4)
         for i, c in enumerate(columns):  # the seeds themselves
             values = row[c]["values"]
             ax.plot(np.full(len(values), i), values, "k.", markersize=4)
-        ax.set_xticks(x, [f"{c}\n(n={row[c]['n']})" for c in columns], fontsize=7,
-                      rotation=20)
+        ax.set_xticks(x, [f"{c}\n(n={row[c]['n']})" for c in columns], fontsize=7, rotation=20)
         ax.set_title(metric, fontsize=9)
     fig.suptitle(f"{result['behavior']}: mean and 95% interval over seeds", fontsize=10)
     fig.savefig(path, dpi=110, metadata={"Software": None})

@@ -289,8 +289,10 @@ def check_learned_reward(
     term.observe(batch)
     with torch.no_grad():
         first, second = term.compute_reward(batch), term.compute_reward(batch)
-    _require(tuple(first.shape) == (batch_size,), f"compute_reward gave {tuple(first.shape)}, "
-             f"expected ({batch_size},)")
+    _require(
+        tuple(first.shape) == (batch_size,),
+        f"compute_reward gave {tuple(first.shape)}, expected ({batch_size},)",
+    )
     _require(bool(torch.isfinite(first).all()), "compute_reward gave NaN or inf")
     _require(torch.equal(first, second), "compute_reward changed on the same batch")
     before = [p.detach().clone() for p in term.model.parameters() if p.requires_grad]

@@ -49,7 +49,7 @@ ROWS = [
         "-",
         1,
     ),
-    ("self_touch_train_steps_per_s", "self-touch training steps/s", "/s", "-", ">= 2500 (>= 1500 learner)", 1),
+    ("self_touch_train_steps_per_s", "self-touch training steps/s", "/s", "-", ">= 2500", 1),
     ("hand_regard_train_steps_per_s", "hand-regard training steps/s", "/s", "-", ">= 60", 1),
     ("self_touch_update_us_per_sample_old", "self-touch update/sample, old", "us", "-", "-", 0),
     ("self_touch_update_us_per_sample", "self-touch update/sample", "us", "-", "<= 1/3 before", 0),

@@ -31,6 +31,8 @@ def run(args: argparse.Namespace, registry) -> int:
     state = slim_checkpoint(source, target, registry)
     size, before = target.stat().st_size, source.stat().st_size
     extras = ", ".join(state["artifacts"]) or "none"
-    print(f"wrote {target} ({size / 1e6:.1f} MB, from {before / 1e6:.1f} MB; "
-          f"{state['behavior']}, {state.get('env_steps', 0)} steps; artifacts: {extras})")
+    print(
+        f"wrote {target} ({size / 1e6:.1f} MB, from {before / 1e6:.1f} MB; "
+        f"{state['behavior']}, {state.get('env_steps', 0)} steps; artifacts: {extras})"
+    )
     return 0

@@ -183,8 +183,8 @@ def term_values(envs: list[BehaviorEnv], contexts: list[StepContext]) -> np.ndar
 
     Per-environment terms are called once per env (``weight * float(term(ctx))``, as always);
     a batched term once for the batch. Every unweighted value passes the reward guard
-    (:func:`devlearn.env.guards.check_reward`: finite, within its bound) first. ``envs`` must share their batched terms (see
-    :func:`share_batched_terms`) and be in their batch order.
+    (:func:`devlearn.env.guards.check_reward`: finite, within its bound) first. ``envs`` must
+    share their batched terms (see :func:`share_batched_terms`) and be in their batch order.
 
     Returns:
         (num_terms, num_envs) float64, rows in the behaviour's term order.

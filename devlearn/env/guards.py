@@ -96,6 +96,6 @@ def check_observation_batch(
             if bad.any():
                 i = int(np.argwhere(bad.reshape(len(array), -1).any(axis=1))[0][0])
                 at = int(np.asarray(step).reshape(-1)[i] if np.ndim(step) else step)
-                raise GuardError("observation", name, array[i][bad[i]].flat[0].real,
-                                 env_offset + i, at)
-
+                raise GuardError(
+                    "observation", name, array[i][bad[i]].flat[0].real, env_offset + i, at
+                )

@@ -91,8 +91,10 @@ class Infant:
             [g for g in range(self.model.ngeom) if self.model.geom(g).name.startswith("toy_")],
             dtype=np.int64,
         )
-        self._toy_pose = (self.model.geom_pos[self._toys].copy(),
-                          self.model.geom_quat[self._toys].copy())
+        self._toy_pose = (
+            self.model.geom_pos[self._toys].copy(),
+            self.model.geom_quat[self._toys].copy(),
+        )
         self._gl: dict[str, Any] = {"eyes": None, "views": {}}  # renderers, made on first use
         self._cache: dict[str, Any] = {}
         self.steps = 0

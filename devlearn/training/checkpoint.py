@@ -219,8 +219,12 @@ def _check_shapes(state: dict[str, Any], path: Path, required: tuple[str, ...]) 
             )
     if "env" in required:
         ranks = state["env"].get("ranks")
-        if not (isinstance(ranks, list) and ranks and isinstance(ranks[0], dict)
-                and isinstance(ranks[0].get("envs"), list)):
+        if not (
+            isinstance(ranks, list)
+            and ranks
+            and isinstance(ranks[0], dict)
+            and isinstance(ranks[0].get("envs"), list)
+        ):
             raise UsageError(f"checkpoint {path} is damaged: 'env' lacks the envs' state")
     if "rng" in required:
         missing = [k for k in ("torch", "numpy", "random") if k not in state["rng"]]

@@ -166,7 +166,15 @@ def train(
     check_memory(cfg.num_envs, cfg.workers)
     with _start_up(run_dir, replace=force and resume is None, owner=rank == 0):
         env, runner = _build(
-            cfg, registry, run_dir, checkpoint, infant_factory, progress, rank, world_size, device,
+            cfg,
+            registry,
+            run_dir,
+            checkpoint,
+            infant_factory,
+            progress,
+            rank,
+            world_size,
+            device,
             learned,
         )
     try:

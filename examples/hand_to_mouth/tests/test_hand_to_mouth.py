@@ -8,11 +8,11 @@ import sys
 from importlib.metadata import entry_points
 
 import pytest
+from devlearn_hand_to_mouth import HandToMouth
+from devlearn_hand_to_mouth.behavior import ActionCost, MouthContact
 
 from devlearn import StepContext
 from devlearn.testing import check_behavior, registry_for
-from devlearn_hand_to_mouth import HandToMouth
-from devlearn_hand_to_mouth.behavior import ActionCost, MouthContact
 
 
 def _ctx(contact: bool, energy: float = 0.0) -> StepContext:

@@ -19,11 +19,11 @@ class FakeSittingInfant:
     scene = "sitting"
     action_dim = 17
 
-    def __init__(self, scene: str = "sitting", senses=("proprioception", "eyes"),
-                 episode_steps: int = 20) -> None:
+    def __init__(
+        self, scene: str = "sitting", senses=("proprioception", "eyes"), episode_steps: int = 20
+    ) -> None:
         self.episode_steps = episode_steps
-        self.actuator_groups = {"head": np.arange(3), "left_arm": LEFT_ARM,
-                                "right_arm": RIGHT_ARM}
+        self.actuator_groups = {"head": np.arange(3), "left_arm": LEFT_ARM, "right_arm": RIGHT_ARM}
         self.actuator_names = [f"a{i}" for i in range(17)]
         self.physics = SimpleNamespace(data=SimpleNamespace(time=0.0))
         self.last_action = np.zeros(17)

@@ -26,15 +26,23 @@ def stage_options(behavior, name):
 def test_curriculum_stages_and_lengths():
     stages = HandRegard(HandRegardConfig(left_arm_steps=10, right_arm_steps=20)).curriculum()
     assert [(s.name, s.steps) for s in stages.stages] == [
-        ("left_arm", 10), ("right_arm", 20), ("both_arms", None)]
+        ("left_arm", 10),
+        ("right_arm", 20),
+        ("both_arms", None),
+    ]
     assert [(s.name, s.steps) for s in HandRegard().curriculum().stages[:2]] == [
-        ("left_arm", 175_000), ("right_arm", 175_000)]
+        ("left_arm", 175_000),
+        ("right_arm", 175_000),
+    ]
 
 
 @pytest.mark.parametrize(
     ("stage", "zeroed", "kept"),
-    [("left_arm", RIGHT_ARM, LEFT_ARM), ("right_arm", LEFT_ARM, RIGHT_ARM),
-     ("both_arms", np.array([], int), np.concatenate([LEFT_ARM, RIGHT_ARM]))],
+    [
+        ("left_arm", RIGHT_ARM, LEFT_ARM),
+        ("right_arm", LEFT_ARM, RIGHT_ARM),
+        ("both_arms", np.array([], int), np.concatenate([LEFT_ARM, RIGHT_ARM])),
+    ],
 )
 def test_process_action_masks_the_inactive_arm(behavior, stage, zeroed, kept):
     infant = FakeSittingInfant()

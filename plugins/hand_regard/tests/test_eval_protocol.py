@@ -58,8 +58,10 @@ def test_training_start_keeps_the_toys_in_place(sitting):
     sitting.reset(np.random.default_rng(0), random_pose=True)
     moved = sitting.model.geom_pos[toys].copy()
     sitting.reset(np.random.default_rng(0))
-    np.testing.assert_allclose(sitting.model.geom_pos[toys][:, :2],
-                               [[0.24, 0.05], [0.3, -0.07], [0.37, 0.02], [0.21, -0.02]])
+    np.testing.assert_allclose(
+        sitting.model.geom_pos[toys][:, :2],
+        [[0.24, 0.05], [0.3, -0.07], [0.37, 0.02], [0.21, -0.02]],
+    )
     assert np.abs(moved - sitting.model.geom_pos[toys]).max() > 0.01
 
 
@@ -115,8 +117,15 @@ def test_relocated_run_folder_evaluates(tmp_path):
         infant.episode_steps = 30
         return infant
 
-    summary = evaluate("hand_regard", moved, 1, PluginRegistry(), infant_factory=short,
-                       out_dir=tmp_path / "eval", progress=False)
+    summary = evaluate(
+        "hand_regard",
+        moved,
+        1,
+        PluginRegistry(),
+        infant_factory=short,
+        out_dir=tmp_path / "eval",
+        progress=False,
+    )
     assert summary["steps"] == 30 and summary["headline_criterion"] == "cone"
     assert set(summary["criteria"]) == {"cone", "pixels", "any_pixel"}
     assert summary["protocol"]["criteria"]["cone"]["max_angle_deg"] == 15.0

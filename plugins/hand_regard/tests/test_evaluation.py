@@ -25,8 +25,11 @@ def scripted(infant):
 def step(evaluator, truth, detected, cone=None):
     infant = Truth()
     truth = np.asarray(truth, bool)
-    infant.verdicts = {"cone": truth if cone is None else np.asarray(cone, bool),
-                       "pixels": truth, "any_pixel": truth}
+    infant.verdicts = {
+        "cone": truth if cone is None else np.asarray(cone, bool),
+        "pixels": truth,
+        "any_pixel": truth,
+    }
     facts = {"hand_detections": np.asarray(detected, bool)}
     evaluator.record(StepContext(infant, {}, facts, 0, False, {}))
 
@@ -40,10 +43,17 @@ def test_eval_mode_visibility_and_agreement(tmp_path):
     step(evaluator, [[1, 0], [1, 0]], [[1, 1], [1, 0]])
     step(evaluator, [[1, 0], [1, 0]], [[1, 0], [1, 0]])
     metrics = evaluator.end_episode()
-    assert metrics == pytest.approx({
-        "left_eye_left_hand": 1.0, "right_eye_left_hand": 1.0, "left_eye_right_hand": 0.0,
-        "right_eye_right_hand": 0.25, "average": 0.5625, "average_pixels": 0.5625,
-        "average_any_pixel": 0.5625})
+    assert metrics == pytest.approx(
+        {
+            "left_eye_left_hand": 1.0,
+            "right_eye_left_hand": 1.0,
+            "left_eye_right_hand": 0.0,
+            "right_eye_right_hand": 0.25,
+            "average": 0.5625,
+            "average_pixels": 0.5625,
+            "average_any_pixel": 0.5625,
+        }
+    )
     summary = json.loads(json.dumps(evaluator.summary()))
     assert summary["episodes"] == 1 and summary["steps"] == 4
     assert summary["average"] == pytest.approx(0.5625)
@@ -51,9 +61,9 @@ def test_eval_mode_visibility_and_agreement(tmp_path):
     assert summary["detector_visibility"]["left_eye_right_hand"] == pytest.approx(0.25)
     agreement = summary["detector_agreement"]
     assert agreement["right_eye_left_hand"] == pytest.approx(
-        {"accuracy": 0.75, "precision": 1.0, "recall": 0.75})
-    assert agreement["left_eye_right_hand"] == {"accuracy": 0.75, "precision": 0.0,
-                                                "recall": None}
+        {"accuracy": 0.75, "precision": 1.0, "recall": 0.75}
+    )
+    assert agreement["left_eye_right_hand"] == {"accuracy": 0.75, "precision": 0.0, "recall": None}
     paths = evaluator.write_artifacts(tmp_path)
     assert paths == [tmp_path / "hand_regard_visibility.png"]
     assert paths[0].read_bytes()[:4] == b"\x89PNG"

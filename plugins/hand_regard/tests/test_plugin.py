@@ -34,8 +34,12 @@ def test_class_terms_and_curriculum_conform():
     behavior = HandRegard()
     terms = behavior.reward_terms()
     check_reward_terms(terms)
-    assert [t.name for t in terms] == ["hand_count", "motion", "living_penalty",
-                                       "bilateral_balance"]
+    assert [t.name for t in terms] == [
+        "hand_count",
+        "motion",
+        "living_penalty",
+        "bilateral_balance",
+    ]
     check_curriculum(behavior.curriculum())
 
 

@@ -88,10 +88,29 @@ def test_tiny_training_run_and_eval(tmp_path, real):
     out.mkdir()
     real[0].save(out / "hand_detector.json")  # prepare() reuses it: no 10,000-step babbling
     # Two PPO iterations of 2 envs x 16 steps: one per one-arm stage.
-    cmd = [sys.executable, "-m", "devlearn.cli", "run", "hand_regard", "--steps", "64",
-           "--envs", "2", "--workers", "0", "--seed", "1", "--out", str(out),
-           "--set", "ppo.num_steps_per_env=16",
-           "--set", "behavior.left_arm_steps=32", "--set", "behavior.right_arm_steps=16"]
+    cmd = [
+        sys.executable,
+        "-m",
+        "devlearn.cli",
+        "run",
+        "hand_regard",
+        "--steps",
+        "64",
+        "--envs",
+        "2",
+        "--workers",
+        "0",
+        "--seed",
+        "1",
+        "--out",
+        str(out),
+        "--set",
+        "ppo.num_steps_per_env=16",
+        "--set",
+        "behavior.left_arm_steps=32",
+        "--set",
+        "behavior.right_arm_steps=16",
+    ]
     subprocess.run(cmd, check=True, timeout=600)
     rows = [json.loads(line) for line in (out / "metrics.jsonl").read_text().splitlines()]
     # Episodes last 1,000 steps, so none ends here (per-term sums appear at episode ends).
@@ -102,12 +121,23 @@ def test_tiny_training_run_and_eval(tmp_path, real):
     # `devlearn eval`'s code path in process, on one short (200-step) episode.
     evaluation = tmp_path / "eval"
     video = evaluation / "episode.mp4"
-    summary = evaluate("hand_regard", out / "checkpoint_latest.pt", 1, PluginRegistry(),
-                       out_dir=evaluation, infant_factory=short_infant, video=video)
+    summary = evaluate(
+        "hand_regard",
+        out / "checkpoint_latest.pt",
+        1,
+        PluginRegistry(),
+        out_dir=evaluation,
+        infant_factory=short_infant,
+        video=video,
+    )
     assert json.loads((evaluation / "eval.json").read_text())["steps"] == 200
     assert summary["episodes"] == 1 and summary["steps"] == 200
-    assert set(summary["visibility"]) == {"left_eye_left_hand", "right_eye_left_hand",
-                                          "left_eye_right_hand", "right_eye_right_hand"}
+    assert set(summary["visibility"]) == {
+        "left_eye_left_hand",
+        "right_eye_left_hand",
+        "left_eye_right_hand",
+        "right_eye_right_hand",
+    }
     assert 0.0 <= summary["average"] <= 1.0 and "detector_agreement" in summary
     assert (evaluation / "hand_regard_visibility.png").stat().st_size > 0
     import imageio.v2 as imageio

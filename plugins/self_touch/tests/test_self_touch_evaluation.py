@@ -11,8 +11,9 @@ from self_touch_fakes import make_ctx
 def run_episode(evaluator, contacts_at):
     """A 20-step episode; ``contacts_at``: step -> [(hand, part)] touched on that step."""
     for step in range(20):
-        evaluator.record(make_ctx(hand_parts=contacts_at.get(step, []), step=step,
-                                  last_step=step == 19))
+        evaluator.record(
+            make_ctx(hand_parts=contacts_at.get(step, []), step=step, last_step=step == 19)
+        )
     return evaluator.end_episode()
 
 
@@ -21,8 +22,12 @@ def test_settle_period_does_not_credit_the_reset_contact():
     # part 7 with the right hand (step 12).
     contacts = {0: [(0, 5)], 1: [(0, 5)], 2: [(0, 5)], 12: [(1, 7)]}
     settled = run_episode(SelfTouch().evaluator(training=False), contacts)
-    assert settled == {"coverage_left": 0.0, "coverage_right": 1.0, "coverage_total": 1.0,
-                       "score": 1 / 68}
+    assert settled == {
+        "coverage_left": 0.0,
+        "coverage_right": 1.0,
+        "coverage_total": 1.0,
+        "score": 1 / 68,
+    }
     unsettled = run_episode(SelfTouchEvaluator(training=False, settle_steps=0), contacts)
     assert unsettled["coverage_left"] == 1.0 and unsettled["coverage_total"] == 2.0
     # A contact on step 10 (the first scored step) is credited.
@@ -56,5 +61,4 @@ def test_summary_keeps_the_union_and_adds_per_episode_spread():
     assert summary["episode_score_ci_high"] == pytest.approx(high)
     assert summary["episode_coverage_total_std"] == pytest.approx(stats.tstd([2, 1, 0]))
     for key in ("coverage_left", "coverage_right", "coverage_total"):
-        assert {f"episode_{key}_{s}" for s in ("mean", "std", "ci_low", "ci_high")} <= set(
-            summary)
+        assert {f"episode_{key}_{s}" for s in ("mean", "std", "ci_low", "ci_high")} <= set(summary)

@@ -61,9 +61,15 @@ def joint_state(proprioception: np.ndarray, groups: dict[str, np.ndarray]) -> tu
     return speed, np.asarray(qpos[groups["head"]], np.float32)
 
 
-def babble(steps: int, seed: int = 0, hold_steps: int = 8, head_hold_steps: int = 50,
-           head_scale: float = 0.3, infant=None,
-           episode_steps: int | None = None) -> BabblingData:
+def babble(
+    steps: int,
+    seed: int = 0,
+    hold_steps: int = 8,
+    head_hold_steps: int = 50,
+    head_scale: float = 0.3,
+    infant=None,
+    episode_steps: int | None = None,
+) -> BabblingData:
     """Move every actuator randomly and record eyes, proprioception, actions and arm speeds.
 
     Each actuator keeps its random action (uniform in [-1, 1]) and redraws it with probability
@@ -85,8 +91,10 @@ def babble(steps: int, seed: int = 0, hold_steps: int = 8, head_hold_steps: int 
         The recording.
     """
     if steps < 2 or hold_steps < 1 or head_hold_steps < 1:
-        raise ValueError(f"babbling needs steps >= 2 and hold steps >= 1, got {steps}, "
-                         f"{hold_steps}, {head_hold_steps}")
+        raise ValueError(
+            f"babbling needs steps >= 2 and hold steps >= 1, got {steps}, "
+            f"{hold_steps}, {head_hold_steps}"
+        )
     own = infant is None
     if own:
         from devlearn.infant import build_infant

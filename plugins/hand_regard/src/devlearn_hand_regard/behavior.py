@@ -77,10 +77,13 @@ class HandRegard(Behavior):
         path = Path(run_dir) / DETECTOR_FILE
         if not path.exists():
             cfg = self.config
-            data = babble(cfg.babbling_steps, seed=cfg.babbling_seed,
-                          hold_steps=cfg.babbling_hold_steps,
-                          head_hold_steps=cfg.babbling_head_hold_steps,
-                          head_scale=cfg.babbling_head_scale)
+            data = babble(
+                cfg.babbling_steps,
+                seed=cfg.babbling_seed,
+                hold_steps=cfg.babbling_hold_steps,
+                head_hold_steps=cfg.babbling_head_hold_steps,
+                head_scale=cfg.babbling_head_scale,
+            )
             calibrate(data, threshold=cfg.correlation_threshold).save(path)
         self.config.detector_file = str(path.resolve())
         self._detector = None
@@ -220,19 +223,25 @@ class HandRegard(Behavior):
             HandCount(cfg.hand_count_weight),
             HandMotion(cfg.motion_weight),
             LivingPenalty(cfg.living_penalty_weight),
-            BilateralBalance(cfg.bilateral_weight, cfg.bilateral_bonus, cfg.bilateral_penalty,
-                             cfg.bilateral_horizon),
+            BilateralBalance(
+                cfg.bilateral_weight,
+                cfg.bilateral_bonus,
+                cfg.bilateral_penalty,
+                cfg.bilateral_horizon,
+            ),
         ]
         return [t for t in terms if t.weight != 0.0]
 
     def curriculum(self) -> Curriculum:
         """Left arm, right arm, both arms (paper sec. II-B5: ~175k + ~175k + ~1.5M steps)."""
         cfg = self.config
-        return Curriculum([
-            Stage("left_arm", cfg.left_arm_steps, {"active_arms": ["left"]}),
-            Stage("right_arm", cfg.right_arm_steps, {"active_arms": ["right"]}),
-            Stage("both_arms", None, {"active_arms": ["left", "right"]}),
-        ])
+        return Curriculum(
+            [
+                Stage("left_arm", cfg.left_arm_steps, {"active_arms": ["left"]}),
+                Stage("right_arm", cfg.right_arm_steps, {"active_arms": ["right"]}),
+                Stage("both_arms", None, {"active_arms": ["left", "right"]}),
+            ]
+        )
 
     def process_action(self, action: np.ndarray, stage: dict[str, Any]) -> np.ndarray:
         """Zero the actions of the arm the stage switches off (paper sec. II-B5).
@@ -248,8 +257,10 @@ class HandRegard(Behavior):
         if not inactive:
             return action
         if self._arm_actuators is None:
-            raise RuntimeError("hand_regard: process_action before on_episode_start(); the arm "
-                               "actuator groups are read from the infant at reset")
+            raise RuntimeError(
+                "hand_regard: process_action before on_episode_start(); the arm "
+                "actuator groups are read from the infant at reset"
+            )
         action = np.array(action, copy=True)
         for side in inactive:
             action[self._arm_actuators[side]] = 0.0

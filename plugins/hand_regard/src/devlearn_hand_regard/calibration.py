@@ -63,8 +63,14 @@ def _residual(y: np.ndarray, covariate: np.ndarray) -> np.ndarray:
     return y - x @ np.linalg.lstsq(x, y, rcond=None)[0]
 
 
-def track_correlation(track: Track, arm_speed: np.ndarray, head_speed: np.ndarray,
-                      ego: np.ndarray, window: int, max_lag: int) -> tuple[float, int]:
+def track_correlation(
+    track: Track,
+    arm_speed: np.ndarray,
+    head_speed: np.ndarray,
+    ego: np.ndarray,
+    window: int,
+    max_lag: int,
+) -> tuple[float, int]:
     """Best correlation of a track's own motion with either arm's speed, head motion removed.
 
     The centroid's displacement over ``window`` steps (minus the eye's median displacement)
@@ -116,8 +122,9 @@ def head_speeds(data: BabblingData) -> np.ndarray:
     return speed
 
 
-def position_model(hands: list[Track], proprioception: np.ndarray, ridge: float = 4.0,
-                   min_frames: int = 20) -> dict:
+def position_model(
+    hands: list[Track], proprioception: np.ndarray, ridge: float = 4.0, min_frames: int = 20
+) -> dict:
     """Learn where each hand appears in view from the body's posture (for left/right).
 
     For each arm, a ridge regression from [1, eye - 0.5, standardised joint angles] to the
@@ -154,18 +161,29 @@ def position_model(hands: list[Track], proprioception: np.ndarray, ridge: float 
         penalty[0] = 0.0
         w = np.linalg.solve(x.T @ x + np.diag(penalty), x.T @ y)
         weights.append(np.round(w, 4).tolist())
-    return {"joint_mean": np.round(mean, 5).tolist(), "joint_scale": np.round(scale, 5).tolist(),
-            "weights": weights}
+    return {
+        "joint_mean": np.round(mean, 5).tolist(),
+        "joint_scale": np.round(scale, 5).tolist(),
+        "weights": weights,
+    }
 
 
 class CalibrationError(RuntimeError):
     """Babbling found no hand (too short a recording, or hands never in view)."""
 
 
-def calibrate(data: BabblingData, threshold: float = 0.6, clusters: int = 12, seed: int = 0,
-              window: int = 4, max_lag: int = 2, min_track: int = 30,
-              min_cluster_share: float = 0.5, max_coverage: float = 0.25,
-              ridge: float = 4.0) -> DetectorParams:
+def calibrate(
+    data: BabblingData,
+    threshold: float = 0.6,
+    clusters: int = 12,
+    seed: int = 0,
+    window: int = 4,
+    max_lag: int = 2,
+    min_track: int = 30,
+    min_cluster_share: float = 0.5,
+    max_coverage: float = 0.25,
+    ridge: float = 4.0,
+) -> DetectorParams:
     """Discover the hands in a babbling recording and calibrate the detector.
 
     Args:
@@ -204,8 +222,9 @@ def calibrate(data: BabblingData, threshold: float = 0.6, clusters: int = 12, se
         "hand_tracks": len(hands),
         "threshold": threshold,
         "rho_hand_tracks": sorted((round(t.rho, 3) for t in hands), reverse=True)[:20],
-        "rho_other_tracks_max": round(max((t.rho for t in candidates if t.rho <= threshold),
-                                          default=0.0), 3),
+        "rho_other_tracks_max": round(
+            max((t.rho for t in candidates if t.rho <= threshold), default=0.0), 3
+        ),
     }
     if not hands:
         raise CalibrationError(
@@ -213,14 +232,19 @@ def calibrate(data: BabblingData, threshold: float = 0.6, clusters: int = 12, se
             f"tracks of >= {min_track} steps, best {report['rho_other_tracks_max']}); babble "
             "for more steps"
         )
-    motion = np.bincount([t.cluster for t in hands],
-                         [len(t.steps) * t.motion(window) for t in hands], clusters)
+    motion = np.bincount(
+        [t.cluster for t in hands], [len(t.steps) * t.motion(window) for t in hands], clusters
+    )
     keep = [k for k in range(clusters) if motion[k] >= min_cluster_share * motion.max()]
     hands = [t for t in hands if t.cluster in keep]
     boxes: list[list[int]] = []
     for k in keep:
-        pixels = [data.eyes[s, t.eye].reshape(-1, 3)[p]
-                  for t in hands if t.cluster == k for s, p in zip(t.steps, t.pixels)]
+        pixels = [
+            data.eyes[s, t.eye].reshape(-1, 3)[p]
+            for t in hands
+            if t.cluster == k
+            for s, p in zip(t.steps, t.pixels)
+        ]
         rgb = np.concatenate(pixels)[:, None, :]
         boxes += hsv_boxes(cv2.cvtColor(rgb, cv2.COLOR_RGB2HSV)[:, 0, :])
     index = np.linspace(0, n_steps - 1, min(200, n_steps)).astype(int)
@@ -228,8 +252,9 @@ def calibrate(data: BabblingData, threshold: float = 0.6, clusters: int = 12, se
     hand_pixels = np.isin(np.stack([label_image(im, centres) for im in sample]), keep)
     boxes, dropped = drop_background_boxes(boxes, sample, hand_pixels, max_coverage)
     if not boxes:
-        raise CalibrationError("every hand colour found also covers most of the view "
-                               f"(background); dropped {dropped}")
+        raise CalibrationError(
+            f"every hand colour found also covers most of the view (background); dropped {dropped}"
+        )
     areas = np.concatenate([t.areas for t in hands])
     means = np.zeros((n_eyes, 2, 2))
     for eye in range(n_eyes):
@@ -242,13 +267,16 @@ def calibrate(data: BabblingData, threshold: float = 0.6, clusters: int = 12, se
                 x, y = np.mean(other, axis=0) if other else (width * (0.25 + 0.5 * side), height)
                 means[eye, side] = (width - 1 - x, y) if other else (x, y)
     report.update(
-        hand_cluster_motion={str(k): round(float(motion[k])) for k in np.argsort(-motion)
-                             if motion[k] > 0},
+        hand_cluster_motion={
+            str(k): round(float(motion[k])) for k in np.argsort(-motion) if motion[k] > 0
+        },
         hand_clusters=[int(k) for k in keep],
         dropped_background_boxes=dropped,
-        hand_frames={f"eye{e}_side{s}": int(sum(len(t.steps) for t in hands
-                                                if t.eye == e and t.side == s))
-                     for e in range(n_eyes) for s in range(2)},
+        hand_frames={
+            f"eye{e}_side{s}": int(sum(len(t.steps) for t in hands if t.eye == e and t.side == s))
+            for e in range(n_eyes)
+            for s in range(2)
+        },
         palette_lab=np.round(centres, 1).tolist(),
     )
     return DetectorParams(

@@ -73,8 +73,10 @@ class DetectorParams:
         data = dict(data)
         version = data.pop("format_version", None)
         if version != FORMAT_VERSION:
-            raise ValueError(f"{source}: hand detector format {version}, expected "
-                             f"{FORMAT_VERSION}; delete the file to calibrate again by babbling")
+            raise ValueError(
+                f"{source}: hand detector format {version}, expected "
+                f"{FORMAT_VERSION}; delete the file to calibrate again by babbling"
+            )
         data["image_size"] = tuple(data["image_size"])
         return cls(**data)
 
@@ -169,8 +171,9 @@ class HandDetector:
         features = np.r_[1.0, eye - 0.5, (angles - mean) / np.asarray(model["joint_scale"])]
         return np.stack([features @ np.asarray(w) for w in model["weights"]])
 
-    def attribute(self, blobs: list[Blob], eye: int, width: int,
-                  proprioception: np.ndarray | None = None) -> list[Blob | None]:
+    def attribute(
+        self, blobs: list[Blob], eye: int, width: int, proprioception: np.ndarray | None = None
+    ) -> list[Blob | None]:
         """Say which blob is the left and which the right hand, without ground truth.
 
         Rule: each hand has an expected image position (:meth:`expected_positions`: predicted
@@ -193,8 +196,9 @@ class HandDetector:
         crossed = dist[0, 1] + dist[1, 0]
         return [blobs[0], blobs[1]] if straight <= crossed else [blobs[1], blobs[0]]
 
-    def detect(self, eyes: np.ndarray, proprioception: np.ndarray | None = None
-               ) -> tuple[np.ndarray, np.ndarray]:
+    def detect(
+        self, eyes: np.ndarray, proprioception: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Detect and attribute the hands in both eyes.
 
         Args:

@@ -165,8 +165,12 @@ class HandRegardEvaluator(Evaluator):
         """Criteria names and thresholds (recorded in every eval JSON)."""
         if not self.ground_truth:
             return {"criteria": {"detector": {}}, "headline": "detector"}
-        return {"settle_steps": 0, "criteria": criteria_protocol(), "headline": HEADLINE,
-                "detector_truth": "any_pixel"}
+        return {
+            "settle_steps": 0,
+            "criteria": criteria_protocol(),
+            "headline": HEADLINE,
+            "detector_truth": "any_pixel",
+        }
 
     def write_artifacts(self, out_dir: Path) -> list[Path]:
         import matplotlib
@@ -181,15 +185,26 @@ class HandRegardEvaluator(Evaluator):
         fig, ax = plt.subplots(figsize=(6.4, 3.6))
         width = 0.8 / (len(summary["criteria"]) + 1)
         for i, (k, c) in enumerate(summary["criteria"].items()):
-            ax.bar(x - 0.4 + (i + 0.5) * width, [c["visibility"][n] for n in names], width,
-                   label=f"ours: {k}")
-        ax.bar(x + 0.4 - 0.5 * width, [PAPER_VISIBILITY[n] for n in names], width,
-               label="paper", alpha=0.5)
+            ax.bar(
+                x - 0.4 + (i + 0.5) * width,
+                [c["visibility"][n] for n in names],
+                width,
+                label=f"ours: {k}",
+            )
+        ax.bar(
+            x + 0.4 - 0.5 * width,
+            [PAPER_VISIBILITY[n] for n in names],
+            width,
+            label="paper",
+            alpha=0.5,
+        )
         ax.set_xticks(x, labels)
         ax.set_ylim(0, 1.05)
         ax.set_ylabel("fraction of steps in view")
-        ax.set_title(f"Hand regard: average {summary['average']:.3f} "
-                     f"({summary['headline_criterion']}, {summary['episodes']} episodes)")
+        ax.set_title(
+            f"Hand regard: average {summary['average']:.3f} "
+            f"({summary['headline_criterion']}, {summary['episodes']} episodes)"
+        )
         ax.legend(loc="upper right", fontsize=8)
         fig.tight_layout()
         out_dir = Path(out_dir)

@@ -8,8 +8,9 @@ import numpy as np
 from devlearn_hand_regard.babbling import BabblingData
 
 
-def hsv_boxes(hsv: np.ndarray, low: float = 2.0, high: float = 98.0,
-              margin: tuple[int, int, int] = (2, 8, 8)) -> list[list[int]]:
+def hsv_boxes(
+    hsv: np.ndarray, low: float = 2.0, high: float = 98.0, margin: tuple[int, int, int] = (2, 8, 8)
+) -> list[list[int]]:
     """Percentile box of (N, 3) OpenCV HSV pixels, widened by ``margin``.
 
     Hue is circular (0..179): when the colours sit around red's wrap, the box is computed on
@@ -31,14 +32,26 @@ def hsv_boxes(hsv: np.ndarray, low: float = 2.0, high: float = 98.0,
     for lo, hi in ((h_lo, h_hi), (h_lo + 180, h_hi + 180), (h_lo - 180, h_hi - 180)):
         lo, hi = max(lo, 0), min(hi, 179)
         if lo <= hi:
-            boxes.append([int(np.floor(lo)), int(np.floor(s_lo)), int(np.floor(v_lo)),
-                          int(np.ceil(hi)), int(np.ceil(s_hi)), int(np.ceil(v_hi))])
+            boxes.append(
+                [
+                    int(np.floor(lo)),
+                    int(np.floor(s_lo)),
+                    int(np.floor(v_lo)),
+                    int(np.ceil(hi)),
+                    int(np.ceil(s_hi)),
+                    int(np.ceil(v_hi)),
+                ]
+            )
     return boxes
 
 
-def drop_background_boxes(boxes: list[list[int]], eyes: np.ndarray, hand_pixels: np.ndarray,
-                          max_coverage: float = 0.25, min_purity: float = 0.6
-                          ) -> tuple[list[list[int]], list[list[int]]]:
+def drop_background_boxes(
+    boxes: list[list[int]],
+    eyes: np.ndarray,
+    hand_pixels: np.ndarray,
+    max_coverage: float = 0.25,
+    min_purity: float = 0.6,
+) -> tuple[list[list[int]], list[list[int]]]:
     """Split boxes into kept and dropped by what they select in sample frames.
 
     A hand never fills most of the view, so a box covering more than ``max_coverage`` of the

@@ -47,8 +47,13 @@ def held_out(infant, steps: int, seed: int) -> tuple[BabblingData, np.ndarray]:
     return data, np.stack(recorder.segmentation)
 
 
-def score(detector: HandDetector, data: BabblingData, segmentation: np.ndarray,
-          clear_pixels: int = 20, posture: bool = True) -> dict:
+def score(
+    detector: HandDetector,
+    data: BabblingData,
+    segmentation: np.ndarray,
+    clear_pixels: int = 20,
+    posture: bool = True,
+) -> dict:
     """Compare the detector's output with the segmentation, frame by frame.
 
     Args:
@@ -97,13 +102,15 @@ def score(detector: HandDetector, data: BabblingData, segmentation: np.ndarray,
     return {
         "steps": len(data),
         "pairs": pairs,
-        "pairs_pooled": _stats(tp, fp, fn, tn) | {
-            "clear_recall": round(clear[0].sum() / max(clear[1].sum(), 1), 3)},
+        "pairs_pooled": _stats(tp, fp, fn, tn)
+        | {"clear_recall": round(clear[0].sum() / max(clear[1].sum(), 1), 3)},
         "any_hand": _stats(*anyh),
         "pixels": {k: round(v / max(labels.sum(), 1), 3) for k, v in zip(LABELS, labels)},
         "hand_pixel_recall": round(hand_px[0] / max(hand_px[1], 1), 3),
-        "pair_mean": {k: round(float(np.mean([p[k] for p in pairs.values()])), 3)
-                      for k in ("precision", "recall", "clear_recall")},
+        "pair_mean": {
+            k: round(float(np.mean([p[k] for p in pairs.values()])), 3)
+            for k in ("precision", "recall", "clear_recall")
+        },
     }
 
 
@@ -152,8 +159,11 @@ def main(argv: list[str] | None = None) -> dict:
             result["detector_bytes"] = path.stat().st_size
         result["calibration"] = params.calibration
         result["hsv_ranges"] = params.hsv_ranges
-        result["area"] = [round(params.min_area), round(params.expected_area),
-                          round(params.max_area)]
+        result["area"] = [
+            round(params.min_area),
+            round(params.expected_area),
+            round(params.max_area),
+        ]
         test, segmentation = held_out(infant, args.test_steps, args.test_seed)
         start = time.perf_counter()
         result["score"] = score(HandDetector(params), test, segmentation)

@@ -86,10 +86,14 @@ def visible(
 def criteria_protocol(cone_degrees: float = CONE_DEGREES, min_pixels: int = MIN_PIXELS) -> dict:
     """The criteria's names and thresholds, as recorded in an eval JSON's protocol."""
     return {
-        "cone": {"max_angle_deg": cone_degrees,
-                 "rule": "hand body centre within the angle of the eye camera's optical axis"},
-        "pixels": {"min_pixels": min_pixels,
-                   "rule": "at least min_pixels of the hand in the eye's segmentation render"},
+        "cone": {
+            "max_angle_deg": cone_degrees,
+            "rule": "hand body centre within the angle of the eye camera's optical axis",
+        },
+        "pixels": {
+            "min_pixels": min_pixels,
+            "rule": "at least min_pixels of the hand in the eye's segmentation render",
+        },
         "any_pixel": {"min_pixels": 1, "rule": "any pixel of the hand in the render"},
     }
 
@@ -106,8 +110,12 @@ def measure_visibility(infant) -> dict[str, np.ndarray]:
     import mujoco  # here, not at import: devlearn.infant sets MUJOCO_GL before mujoco loads
 
     model = infant.model
-    cameras = np.array([mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, f"{s}_eye")
-                        for s in ("left", "right")])
+    cameras = np.array(
+        [
+            mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, f"{s}_eye")
+            for s in ("left", "right")
+        ]
+    )
     bodies = np.array([model.body(f"{s}_hand").id for s in ("left", "right")])
     labels = (infant.hand_labels["left"], infant.hand_labels["right"])
     angles = axis_angles(infant.data, cameras, bodies)

@@ -16,16 +16,16 @@ from devlearn import (
     NetworkSpec,
     Stage,
 )
-from devlearn_self_touch.body_map import (
-    body_map_observation,
-    hand_touched_parts,
-    sparse_body_map,
-)
 from devlearn_self_touch.batched_rewards import (
     BatchedBalance,
     BatchedContactNovelty,
     BatchedDiversityMilestones,
     BatchedTouchNovelty,
+)
+from devlearn_self_touch.body_map import (
+    body_map_observation,
+    hand_touched_parts,
+    sparse_body_map,
 )
 from devlearn_self_touch.config import SelfTouchConfig
 from devlearn_self_touch.evaluation import SelfTouchEvaluator
