@@ -20,8 +20,8 @@ from devlearn.training.process import quiet
 
 ROOT = Path(__file__).resolve().parents[1]
 PUBLISHED = {  # separate actor and critic; hand regard's with the old double image scaling
-    "self_touch": ROOT / "results/self_touch/run/checkpoint_latest.pt",
-    "hand_regard": ROOT / "results/hand_regard/run/checkpoint_latest.pt",
+    "self_touch": ROOT / "results/self_touch/run/policy.pt",
+    "hand_regard": ROOT / "results/hand_regard/run/policy.pt",
 }
 BEHAVIORS = ["self_touch", "hand_regard", "hand_to_mouth"]
 

@@ -67,6 +67,10 @@ def plan_sweep(spec: SweepSpec, registry, global_args: list[str] | None = None) 
         train_args += ["--envs", str(train.envs)] if train.envs is not None else []
         for item in overrides:
             train_args += ["--set", item]
+        if not any(item.partition("=")[0].strip() == "torch_threads" for item in overrides):
+            # A fixed thread count (the run's cores), not the automatic plan: a run then trains
+            # the same numbers under either executor and on any machine.
+            train_args += ["--set", f"torch_threads={train.cores_per_run}"]
         ev = spec.evaluation
         eval_args = ["--episodes", str(ev.episodes), "--seed", str(ev.seed), "--json", *ev.args]
         job = RunJob(

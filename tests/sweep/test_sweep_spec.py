@@ -94,6 +94,7 @@ def test_plan_builds_each_runs_commands(tmp_path):
     assert job.train_args == [
         "--seed", "4", "--workers", "0", "--steps", "64", "--envs", "2",
         "--set", "save_interval=1", "--set", "behavior.target=0.6",
+        "--set", "torch_threads=1",  # fixed: the same numbers under either executor
     ]  # fmt: skip
     assert job.resume_args == ["--workers", "0", "--steps", "64"]
     assert job.eval_args == ["--episodes", "10", "--seed", "0", "--json", "--video", "x.mp4"]
