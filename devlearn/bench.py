@@ -243,6 +243,7 @@ def collect_random(alg, observations, num_steps: int) -> float:
     return 1000.0 * spent / num_steps
 
 
+@_without_user_warnings
 def bench_update(
     behavior, layout: str, num_envs: int, num_steps: int, repeats: int = 2, threads: int = 0
 ) -> dict[str, float]:

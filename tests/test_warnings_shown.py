@@ -6,7 +6,7 @@ import warnings
 
 import pytest
 
-from devlearn.bench import bench_behavior_env
+from devlearn.bench import bench_behavior_env, bench_update
 from devlearn.describe import describe_behavior
 
 hand_regard = pytest.importorskip("devlearn_hand_regard")
@@ -22,6 +22,8 @@ def _warnings(call) -> list[str]:
 def test_info_and_bench_do_not_warn_about_the_uncalibrated_detector():
     assert _warnings(lambda: describe_behavior(hand_regard.HandRegard())) == []
     assert _warnings(lambda: bench_behavior_env(hand_regard.HandRegard(), steps=2)) == []
+    update = lambda: bench_update(hand_regard.HandRegard(), "shared", 2, 4, repeats=1, threads=1)  # noqa: E731
+    assert _warnings(update) == []
 
 
 def test_an_unprepared_detector_still_warns_when_it_is_used():
