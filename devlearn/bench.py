@@ -125,15 +125,23 @@ def bench_behavior_env(behavior, steps: int, reference_touch: bool = False) -> f
         env.infant._contacts.compiled = False
     env.reset()
     rng = np.random.default_rng(0)
-    actions = rng.uniform(-1, 1, (steps + 50, env.action_dim))
-    for a in actions[:50]:
-        env.step(a)
-    start = time.perf_counter()
-    for a in actions[50:]:
-        env.step(a)
-    rate = steps / (time.perf_counter() - start)
+    rate = random_steps_per_s(env.step, rng, env.action_dim, steps, warmup=50)
     env.close()
     return rate
+
+
+def random_steps_per_s(
+    step, rng: np.random.Generator, action_dim: int, steps: int, warmup: int
+) -> float:
+    """Steps per second of ``step(action)`` on uniform random actions in [-1, 1]: ``warmup``
+    untimed steps, then ``steps`` timed ones (actions drawn beforehand, outside the timing)."""
+    actions = rng.uniform(-1, 1, (steps + warmup, action_dim))
+    for a in actions[:warmup]:
+        step(a)
+    start = time.perf_counter()
+    for a in actions[warmup:]:
+        step(a)
+    return steps / (time.perf_counter() - start)
 
 
 def bench_vec_env(behavior, num_envs: int, workers: int, steps: int) -> float:

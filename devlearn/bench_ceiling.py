@@ -27,18 +27,13 @@ def physics_ceiling(scene: str, steps: int, seed: int = 0) -> float:
     Returns:
         Steps per second (the most any environment on this scene can reach in one process).
     """
+    from devlearn.bench import random_steps_per_s
     from devlearn.infant import build_infant
 
     infant = build_infant(scene, senses=("proprioception",))
     rng = np.random.default_rng(seed)
     infant.reset(rng, random_pose=scene == "crib")
-    actions = rng.uniform(-1, 1, (steps + 100, infant.action_dim))
-    for a in actions[:100]:
-        infant.step(a)
-    start = time.perf_counter()
-    for a in actions[100:]:
-        infant.step(a)
-    rate = steps / (time.perf_counter() - start)
+    rate = random_steps_per_s(infant.step, rng, infant.action_dim, steps, warmup=100)
     infant.close()
     return rate
 
