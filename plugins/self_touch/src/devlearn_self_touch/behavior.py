@@ -176,7 +176,8 @@ class SelfTouch(Behavior):
         """PPO settings for this behaviour.
 
         ``total_steps`` is left to the core's short default so that ``devlearn run self_touch``
-        finishes in minutes; the paper's run is ``--steps 8000000`` (4M + 4M, sec. II-A5).
+        finishes in minutes; the paper's run is ``--steps 8000000`` (4M + 4M, sec. II-A5), or
+        ``--preset paper`` (:meth:`presets`).
         At 200 Hz a reach to the body takes a few hundred steps, hence a discount horizon of
         ~1 s (gamma 0.995) and rollouts of 128 steps per environment. The paper gives no other
         PPO constants than the clip 0.2 (the core's default).
