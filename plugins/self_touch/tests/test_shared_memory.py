@@ -113,3 +113,25 @@ def test_shared_memory_survives_resume_with_another_worker_count(tmp_path):
         last = json.loads((copy / "metrics.jsonl").read_text().splitlines()[-1])
         assert last["step"] == 80
         assert (last["reward/touch_novelty"], last["reward/contact_novelty"]) == (5.0, 10.0)
+
+
+def test_same_seed_and_worker_count_same_numbers(tmp_path):
+    """Shared memory merged across 2 workers adds nothing random: two runs are identical."""
+    registry = registry_for(SelfTouch)
+    overrides = ["ppo.num_steps_per_env=20", "ppo.num_mini_batches=2", "torch_threads=1"]
+    drop = {"steps_per_s", "collect_s", "update_s"}  # wall-clock timings
+    runs = []
+    for name in ("a", "b"):
+        cfg = default_config(SelfTouch, overrides, out_dir=str(tmp_path / name), workers=2)
+        cfg.num_envs, cfg.total_steps = 2, 80
+        train(cfg, registry, infant_factory=SwappingInfant, progress=False)
+        lines = (tmp_path / name / "metrics.jsonl").read_text().splitlines()
+        state = load_checkpoint(tmp_path / name / "checkpoint_latest.pt")
+        runs.append(
+            ([{k: v for k, v in json.loads(r).items() if k not in drop} for r in lines], state)
+        )
+    (rows_a, a), (rows_b, b) = runs
+    assert rows_a == rows_b
+    assert rows_a[-1]["reward/touch_novelty"] == 15.0  # mean of 25 (new) and 5 (known)
+    for key in a["actor_state_dict"]:
+        torch.testing.assert_close(a["actor_state_dict"][key], b["actor_state_dict"][key])
