@@ -198,6 +198,17 @@ class Behavior(ABC):
         """
         return {}
 
+    def presets(self) -> dict[str, dict[str, Any]]:
+        """Named sets of run-config overrides, chosen with ``devlearn run NAME --preset P``
+        (e.g. ``{"paper": {"behavior.max_std": 0.0}}``: the paper's values one switch away
+        from a default that differs). Applied over :meth:`train_defaults` and under the
+        command line's options and ``--set``; ``devlearn config NAME`` lists them.
+
+        Returns:
+            Preset name -> mapping of dotted RunConfig keys to values.
+        """
+        return {}
+
     def prepare(self, run_dir: Path) -> None:
         """One-off work before training (e.g. motor babbling); may update ``self.config``.
 

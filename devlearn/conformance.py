@@ -202,6 +202,15 @@ class CheckedBatchedTerm(BatchedIntrinsicReward):
     def load_state_dict(self, env: int, state: dict[str, Any]) -> None:
         self.term.load_state_dict(env, state)
 
+    def run_memory(self) -> dict[str, np.ndarray]:
+        return self.term.run_memory()
+
+    def merge_run_memory(self, copies: list[dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
+        return self.term.merge_run_memory(copies)
+
+    def load_run_memory(self, memory: dict[str, np.ndarray]) -> None:
+        self.term.load_run_memory(memory)
+
 
 def checked_terms(terms: list[Any], phase: list[str]) -> list[Any]:
     """Wrap every term (per-env or batched) so each value it returns is checked."""

@@ -21,10 +21,13 @@ NOT_VARIANT = frozenset(
         "torch_threads",
         "update_threads",
         "save_interval",
+        "preset",
+        "start_from",
         "behavior.detector_file",
     }
 )
-"""Config keys that never make a variant: the seed (pooled) and where or how a run ran."""
+"""Config keys that never make a variant: the seed (pooled) and where or how a run ran (a
+preset's name and a ``--from`` checkpoint are recorded only: the values they set do count)."""
 NOT_METRIC = frozenset(
     {
         "config",

@@ -127,6 +127,20 @@ class BatchedIntrinsicReward(ABC):
 
     Subclasses set ``name`` and implement :meth:`bind`, :meth:`__call__` and, when stateful,
     :meth:`reset`, :meth:`state_dict` and :meth:`load_state_dict`.
+
+    **Run-wide memory.** A term may keep some memory for the whole run instead of per
+    environment (self_touch's "region j was ever touched", so that a discovery is paid once
+    per agent, not once per environment). It holds one copy for all the environments of its
+    worker and reports it through :meth:`run_memory`. The core keeps the copies of all workers
+    (and, under torchrun, all ranks) equal: at every PPO iteration boundary the runner gathers
+    each worker's :meth:`run_memory`, combines them in worker (then rank) order with
+    :meth:`merge_run_memory` and hands the result to every worker's :meth:`load_run_memory`
+    (:meth:`devlearn.env.DevVecEnv.sync_run_memory`). Between two merges a worker knows only
+    its own envs' discoveries, so one discovery can be paid at most once per worker (and rank)
+    per iteration; results therefore depend on the number of workers, not only on the seed.
+    Such a term's ``state_dict(env)`` holds the run memory too (every env the same copy), and
+    ``load_state_dict(env, ...)`` for ``env`` 0 replaces the memory and for later envs merges
+    into it, so loading any split of the saved envs gives the merged memory.
     """
 
     name: str = "reward"
@@ -153,3 +167,30 @@ class BatchedIntrinsicReward(ABC):
 
     def load_state_dict(self, env: int, state: dict[str, Any]) -> None:
         """Restore environment ``env``'s state from what :meth:`state_dict` returned."""
+
+    def run_memory(self) -> dict[str, np.ndarray]:
+        """Return the memory this term keeps for the whole run, name -> array (not a copy).
+
+        Empty (the default) for terms that keep none; then the core never asks again.
+        """
+        return {}
+
+    def merge_run_memory(self, copies: list[dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
+        """Combine copies of :meth:`run_memory` (one per worker or rank, in order) into one.
+
+        The default suits memory that only grows: elementwise OR of bool arrays, elementwise
+        maximum of numeric ones. Override it for anything else; it must not depend on the
+        order of ``copies`` for the result to be the same on every rank.
+
+        Returns:
+            One memory with the keys and shapes of the copies.
+        """
+        merged = {}
+        for key in copies[0]:
+            arrays = [np.asarray(c[key]) for c in copies]
+            combine = np.logical_or if arrays[0].dtype == bool else np.maximum
+            merged[key] = combine.reduce(np.stack(arrays), axis=0)
+        return merged
+
+    def load_run_memory(self, memory: dict[str, np.ndarray]) -> None:
+        """Replace the run-wide memory by ``memory`` (a :meth:`merge_run_memory` result)."""

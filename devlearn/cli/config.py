@@ -6,7 +6,7 @@ import argparse
 import json
 import textwrap
 
-from devlearn.training.config import RunConfig, apply_overrides, default_config
+from devlearn.training.config import RunConfig, apply_overrides, apply_preset, default_config
 from devlearn.training.config_help import describe_keys
 
 
@@ -29,6 +29,11 @@ def add_parser(subparsers) -> list[str]:
         metavar="KEY=VALUE",
         help="show the values after these overrides (checked as `devlearn run` would)",
     )
+    p.add_argument(
+        "--preset",
+        metavar="NAME",
+        help="show the values of one of the behaviour's presets (as `devlearn run --preset`)",
+    )
     return ["config"]
 
 
@@ -38,23 +43,34 @@ def run(args: argparse.Namespace, registry) -> int:
     core = RunConfig(behavior_name=behavior_cls.name, behavior=behavior_cls.config_class())
     cfg = default_config(behavior_cls)
     rows = describe_keys(cfg, core)
-    if args.overrides:
-        before = {r["key"]: r["default"] for r in rows}
-        rows = describe_keys(apply_overrides(cfg, args.overrides), core)
-        for row in rows:
-            if row["default"] != before[row["key"]]:
-                row["set_by"] = "override"
+    changes = [("preset", lambda c: apply_preset(c, behavior_cls, args.preset), args.preset)]
+    changes.append(("override", lambda c: apply_overrides(c, args.overrides), args.overrides))
+    for label, change, wanted in changes:  # mark what --preset, then --set changed
+        if wanted:
+            marks = {r["key"]: (r["default"], r["set_by"]) for r in rows}
+            rows = describe_keys(change(cfg), core)
+            for row in rows:
+                value, mark = marks[row["key"]]
+                row["set_by"] = label if row["default"] != value else mark
     if args.json:
         print(json.dumps(rows, indent=2))
         return 0
     print(f"config keys of `devlearn run {behavior_cls.name}` (override with --set KEY=VALUE)")
+    presets = behavior_cls(cfg.behavior).presets()
+    for name, values in presets.items():
+        shown = ", ".join(f"{k}={json.dumps(v)}" for k, v in values.items())
+        print(f"preset {name} (--preset {name}): {shown}")
     section = None
     for row in rows:
         head = row["key"].split(".", 1)[0] if "." in row["key"] else "run"
         if head != section:
             section = head
             print(f"\n[{section}]")
-        mark = {"behavior": "  (set by the behaviour)", "override": "  (--set)"}
+        mark = {
+            "behavior": "  (set by the behaviour)",
+            "override": "  (--set)",
+            "preset": f"  (preset {args.preset})",
+        }
         print(
             f"  {row['key']}: {row['type']} = {json.dumps(row['default'])}"
             f"{mark.get(row.get('set_by', ''), '')}"

@@ -42,7 +42,20 @@ def add_parser(subparsers) -> list[str]:
         metavar="KEY=VALUE",
         help="override a config field, e.g. ppo.learning_rate=3e-4 (repeatable)",
     )
+    p.add_argument(
+        "--preset",
+        metavar="NAME",
+        help="start from a named set of the behaviour's values (e.g. paper); "
+        "`devlearn config BEHAVIOR` lists them",
+    )
     p.add_argument("--resume", metavar="RUN_DIR", help="continue a run from its latest checkpoint")
+    p.add_argument(
+        "--from",
+        dest="start_from",
+        metavar="CHECKPOINT",
+        help="start a new run (in --out) from another run's checkpoint: its config (changed by "
+        "--set and the options above), weights, optimiser, step count and env memory",
+    )
     p.add_argument(
         "--force",
         action="store_true",
@@ -67,7 +80,16 @@ def run(args: argparse.Namespace, registry) -> int:
         "device": args.device,
         "logger": args.logger,
     }
-    if args.resume:
+    if args.resume and (args.preset or args.start_from):
+        raise UsageError("--resume keeps the run's config; --preset and --from start new runs")
+    if args.start_from:
+        from devlearn.training.train import config_from_checkpoint
+
+        cfg = config_from_checkpoint(args.start_from, registry, args.behavior, args.preset)
+        apply_overrides(cfg, {k: v for k, v in top.items() if v is not None})
+        apply_overrides(cfg, args.overrides)
+        cfg.out_dir = args.out or ""
+    elif args.resume:
         if args.out:
             raise UsageError("--out and --resume exclude each other (a resumed run stays put)")
         if args.force:
@@ -81,7 +103,7 @@ def run(args: argparse.Namespace, registry) -> int:
         apply_overrides(cfg, {k: v for k, v in top.items() if v is not None})
         apply_overrides(cfg, args.overrides)
     else:
-        cfg = default_config(behavior_cls, args.overrides, out_dir=args.out, **top)
+        cfg = default_config(behavior_cls, args.overrides, args.preset, out_dir=args.out, **top)
     check_config(cfg)
     if not args.resume and not cfg.out_dir:
         from devlearn.training.train import default_run_dir
@@ -92,7 +114,9 @@ def run(args: argparse.Namespace, registry) -> int:
         return 0
     print(f"run directory: {cfg.out_dir}", flush=True)
     with _interrupt_on_signals():
-        result = train(cfg, registry, resume=args.resume, force=args.force)
+        result = train(
+            cfg, registry, resume=args.resume, start_from=args.start_from, force=args.force
+        )
     print(run_summary(result, cfg.behavior_name, behavior_cls.headline_metric, cfg.total_steps))
     return 0
 

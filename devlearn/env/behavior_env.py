@@ -178,6 +178,35 @@ def share_batched_terms(envs: list[BehaviorEnv]) -> None:
         env.batch_index = i
 
 
+def run_memories(envs: list[BehaviorEnv]) -> dict[str, dict[str, np.ndarray]]:
+    """The run-wide memory of the batched terms ``envs`` share, term name -> memory (terms
+    keeping none are left out; see :class:`~devlearn.rewards.BatchedIntrinsicReward`)."""
+    return {
+        term.name: memory
+        for term in envs[0].terms
+        if isinstance(term, BatchedIntrinsicReward) and (memory := term.run_memory())
+    }
+
+
+def load_run_memories(envs: list[BehaviorEnv], memories: dict[str, dict[str, np.ndarray]]) -> None:
+    """Give the batched terms ``envs`` share the merged run-wide memories (term name -> memory)."""
+    for term in envs[0].terms:
+        if isinstance(term, BatchedIntrinsicReward) and term.name in memories:
+            term.load_run_memory(memories[term.name])
+
+
+def merge_run_memories(
+    terms: list, copies: list[dict[str, dict[str, np.ndarray]]]
+) -> dict[str, dict[str, np.ndarray]]:
+    """Merge copies of :func:`run_memories` (one per worker or rank, in order) term by term
+    with each term's ``merge_run_memory``; ``terms`` are instances of the same terms."""
+    return {
+        term.name: term.merge_run_memory([c[term.name] for c in copies])
+        for term in terms
+        if isinstance(term, BatchedIntrinsicReward) and term.name in copies[0]
+    }
+
+
 def term_values(envs: list[BehaviorEnv], contexts: list[StepContext]) -> np.ndarray:
     """Every reward term's weighted value for every env: the one place terms are evaluated.
 

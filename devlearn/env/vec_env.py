@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import weakref
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -11,7 +12,12 @@ import torch
 from rsl_rl.env import VecEnv
 from tensordict import TensorDict
 
-from devlearn.env.behavior_env import InfantFactory
+from devlearn.env.behavior_env import (
+    InfantFactory,
+    load_run_memories,
+    merge_run_memories,
+    run_memories,
+)
 from devlearn.env.workers import (
     EnvBuffers,
     EpisodeInfos,
@@ -21,6 +27,7 @@ from devlearn.env.workers import (
     step_envs,
     write_obs,
 )
+from devlearn.rewards import BatchedIntrinsicReward
 
 
 class DevVecEnv(VecEnv):
@@ -64,10 +71,15 @@ class DevVecEnv(VecEnv):
         if workers > 0:
             self._pool = WorkerPool(behavior, seeds, workers, infant_factory)
             spec = self._pool.spec
+            self._merge_terms = list(behavior.reward_terms())  # merge rules of the run memory
         else:
             self._envs = make_envs(behavior, seeds, infant_factory)
             first = [env.reset() for env in self._envs]
             spec = env_spec(self._envs[0], first[0])
+            self._merge_terms = self._envs[0].terms
+        self._has_run_memory = any(
+            isinstance(t, BatchedIntrinsicReward) and t.run_memory() for t in self._merge_terms
+        )
         self._buffers = EnvBuffers(spec, num_envs, shared=self._pool is not None)
         self._finalizer = weakref.finalize(self, _shutdown, self._pool, self._envs, self._buffers)
         if self._pool is not None:
@@ -133,6 +145,31 @@ class DevVecEnv(VecEnv):
                 env.set_stage(options)
         else:
             self._pool.call("set_stage", [options] * len(self._pool.conns))
+
+    def sync_run_memory(self, gather: Callable[[Any], list] | None = None) -> None:
+        """Make every worker's run-wide reward memory the merge of all of them.
+
+        The runner calls this at every PPO iteration boundary (before it snapshots the state
+        for checkpoints): each worker's batched terms report their
+        :meth:`~devlearn.rewards.BatchedIntrinsicReward.run_memory`, the copies are merged in
+        worker order (``merge_run_memory``) and sent back. With ``gather`` (the runner's
+        all-gather over torchrun ranks: this rank's merged memory -> every rank's, in rank
+        order) the ranks' memories are merged too, so every rank holds the same. Nothing is
+        sent when no term keeps a run memory, or with one in-process batch and no ``gather``.
+        """
+        if not self._has_run_memory or (self._pool is None and gather is None):
+            return
+        if self._pool is None:
+            copies = [run_memories(self._envs)]
+        else:
+            copies = self._pool.call("memory")
+        merged = merge_run_memories(self._merge_terms, copies)
+        if gather is not None:
+            merged = merge_run_memories(self._merge_terms, gather(merged))
+        if self._pool is None:
+            load_run_memories(self._envs, merged)
+        else:
+            self._pool.call("load_memory", [merged] * len(self._pool.conns))
 
     def state_dict(self) -> dict[str, Any]:
         """Return every env's state (reward terms, rng, stage), in env order."""

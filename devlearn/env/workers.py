@@ -15,7 +15,14 @@ from typing import Any
 
 import numpy as np
 
-from devlearn.env.behavior_env import BehaviorEnv, InfantFactory, share_batched_terms, step_batch
+from devlearn.env.behavior_env import (
+    BehaviorEnv,
+    InfantFactory,
+    load_run_memories,
+    run_memories,
+    share_batched_terms,
+    step_batch,
+)
 from devlearn.env.guards import GuardError
 
 EpisodeInfos = list[tuple[int, dict[str, float]]]
@@ -174,6 +181,10 @@ def worker_main(conn, behavior, seeds: list[int], offset: int, infant_factory) -
                 reply = [env.set_stage(arg) for env in envs]
             elif cmd == "state":
                 reply = [env.state_dict() for env in envs]
+            elif cmd == "memory":
+                reply = run_memories(envs)
+            elif cmd == "load_memory":
+                reply = load_run_memories(envs, arg)
             elif cmd == "load":
                 for i, (env, state) in enumerate(zip(envs, arg)):
                     env.load_state_dict(state)

@@ -113,8 +113,18 @@ class RunConfig:
     """Options of the learned rewards, name -> {option: value}, e.g. ``--set
     learned.rnd.weight=0.5`` (the fields of the term's ``config_class``; unset ones keep their
     defaults, and config.json records every resolved value)."""
+    preset: str = ""
+    """The behaviour preset this run started from (``devlearn run --preset NAME``; recorded
+    only: config.json holds every resolved value). Empty: none."""
+    start_from: str = ""
+    """The checkpoint this run started from (``devlearn run --from CHECKPOINT``; recorded
+    only). Empty: a fresh start."""
     behavior: Any = None
     """The behaviour's own options (an instance of its ``config_class``)."""
+
+
+RECORDED_ONLY = {"preset": "--preset NAME", "start_from": "--from CHECKPOINT"}
+"""RunConfig fields set by a command-line flag, not by ``--set`` (field -> the flag)."""
 
 
 def _leaf_keys(obj: Any, prefix: str = "") -> list[str]:
@@ -224,6 +234,8 @@ def set_value(cfg: RunConfig, key: str, value: Any) -> None:
                 raise UsageError(f"config key '{key}' goes inside a value that is not a table")
         table[leaf] = value
         return
+    if key in RECORDED_ONLY:
+        raise UsageError(f"'{key}' is set with {RECORDED_ONLY[key]}, not with --set")
     *path, leaf = key.split(".")
     obj: Any = cfg
     for part in path:
@@ -257,21 +269,50 @@ def apply_overrides(cfg: RunConfig, overrides: list[str] | dict[str, Any]) -> Ru
     return cfg
 
 
-def default_config(behavior_cls: type, overrides: list[str] | None = None, **top: Any) -> RunConfig:
-    """Build a run's config: defaults < the behaviour's ``train_defaults()`` < ``top`` < overrides.
+def default_config(
+    behavior_cls: type,
+    overrides: list[str] | None = None,
+    preset: str | None = None,
+    **top: Any,
+) -> RunConfig:
+    """Build a run's config: defaults < the behaviour's ``train_defaults()`` < its preset
+    ``preset`` < ``top`` < overrides.
 
     Args:
         behavior_cls: The behaviour class.
         overrides: ``key=value`` strings (``--set``).
+        preset: A name from the behaviour's ``presets()`` (``--preset``); None or empty: none.
         top: Top-level RunConfig fields (e.g. ``total_steps=...``); None values are skipped.
+    Raises:
+        UsageError: An unknown preset (the valid ones named) or a bad override.
     """
     cfg = RunConfig(behavior_name=behavior_cls.name, behavior=behavior_cls.config_class())
     apply_overrides(cfg, behavior_cls(cfg.behavior).train_defaults())
+    if preset:
+        apply_preset(cfg, behavior_cls, preset)
     apply_overrides(cfg, {k: v for k, v in top.items() if v is not None})
     apply_overrides(cfg, overrides or [])
     if not cfg.network.layout:  # record the behaviour's choice, so config.json says it
         share = behavior_cls(cfg.behavior).network().share
         cfg.network.layout = "shared" if share else "separate"
+    return cfg
+
+
+def apply_preset(cfg: RunConfig, behavior_cls: type, preset: str) -> RunConfig:
+    """Apply the behaviour's preset ``preset`` (its ``presets()``) to ``cfg`` in place and
+    record its name in ``cfg.preset``.
+
+    Raises:
+        UsageError: The behaviour has no such preset (the valid ones are named).
+    """
+    presets = behavior_cls(cfg.behavior).presets()
+    if preset not in presets:
+        raise UsageError(
+            f"unknown preset '{preset}' for {behavior_cls.name}; "
+            f"valid: {', '.join(presets) or 'none (it defines no presets)'}"
+        )
+    apply_overrides(cfg, presets[preset])
+    cfg.preset = preset
     return cfg
 
 
@@ -293,10 +334,20 @@ def _fill(obj: Any, data: dict[str, Any], prefix: str) -> None:
 
 
 def from_dict(data: dict[str, Any], behavior_cls: type) -> RunConfig:
-    """Rebuild a RunConfig saved by :func:`to_dict` for the behaviour class ``behavior_cls``."""
+    """Rebuild a RunConfig saved by :func:`to_dict` for the behaviour class ``behavior_cls``.
+
+    A key the saved config lacks takes its default, except where the old runs were trained
+    otherwise: a missing ``network`` section means :data:`LEGACY_NETWORK`, and a behaviour
+    field named in its config class's ``LEGACY_DEFAULTS`` (field -> value) that the saved
+    ``behavior`` section lacks takes that value (a default changed after those runs).
+    """
     cfg = RunConfig(behavior_name=behavior_cls.name, behavior=behavior_cls.config_class())
     if "network" not in data:
         cfg.network = dataclasses.replace(LEGACY_NETWORK)
+    saved = data.get("behavior")
+    if isinstance(saved, dict) and cfg.behavior is not None:
+        legacy = getattr(type(cfg.behavior), "LEGACY_DEFAULTS", {})
+        _fill(cfg.behavior, {k: v for k, v in legacy.items() if k not in saved}, "behavior.")
     _fill(cfg, data, "")
     return cfg
 

@@ -54,7 +54,11 @@ class DevRunner(OnPolicyRunner):
     bar and ``metrics.jsonl``; checkpoints (model, optimiser, iteration, env steps,
     curriculum, every env's reward-term state, rng states, behaviour name, config) written
     atomically as ``checkpoint_latest.pt`` every ``save_interval // 10`` iterations, plus
-    ``checkpoint_<step>.pt`` every ``save_interval``, at the end and on Ctrl-C or SIGTERM; and
+    ``checkpoint_<step>.pt`` every ``save_interval``, before the first iteration of a new
+    curriculum stage (the stage-switch checkpoint another run may start from with
+    ``devlearn run --from``), at the end and on Ctrl-C or SIGTERM; the run-wide reward memory
+    merged across env workers and ranks at every iteration boundary
+    (:meth:`~devlearn.env.DevVecEnv.sync_run_memory`); and
     CPU distributed training over gloo; learned rewards (``RunConfig.curiosity``), added to the
     rollout's rewards and trained after each rollout, logged under ``reward/<name>/...`` and
     saved in checkpoints (:mod:`devlearn.training.learned_rewards`). ``current_learning_iteration``
@@ -196,6 +200,8 @@ class DevRunner(OnPolicyRunner):
                 it = self.current_learning_iteration
                 self.current_learning_iteration += 1
                 self.env_steps += per_iteration
+                # one agent's lifetime memory: merge the workers' (and ranks') copies
+                env.sync_run_memory(self._all_ranks if self.is_distributed else None)
                 good = self._snapshot()
                 with quiet():
                     self.logger.log(
@@ -219,7 +225,8 @@ class DevRunner(OnPolicyRunner):
                 }
                 self._record(it, len(finished), mean_step, losses, rate, times, bar)
                 interval = self.cfg["save_interval"]
-                if self.current_learning_iteration % interval == 0:
+                switch = self.curriculum.stage_index_at(self.env_steps) != self.curriculum.index
+                if self.current_learning_iteration % interval == 0 or switch:
                     self.save_checkpoints(periodic=True, good=good)
                 elif self.current_learning_iteration % max(1, interval // 10) == 0:
                     self.save_checkpoints(periodic=False, good=good)  # little lost on a kill
@@ -301,6 +308,12 @@ class DevRunner(OnPolicyRunner):
         else:
             bar.update(self.env_steps - bar.n)
 
+    def _all_ranks(self, value: Any) -> list:
+        """Every rank's ``value``, in rank order (a collective: all ranks call it together)."""
+        values = [None] * self.gpu_world_size
+        dist.all_gather_object(values, value)
+        return values
+
     # --- checkpoints ----------------------------------------------------------------------
     def _snapshot(self) -> dict[str, Any]:
         """A copy of the state at an iteration boundary (the :meth:`checkpoint_state` of this
@@ -371,9 +384,10 @@ class DevRunner(OnPolicyRunner):
             save_atomic(state, latest)
         return latest
 
-    def restore(self, state: dict[str, Any]) -> None:
+    def restore(self, state: dict[str, Any], curriculum: bool = True) -> None:
         """Resume from a checkpoint: networks, optimiser, counters, curriculum, learned rewards,
-        envs, rngs."""
+        envs, rngs. ``curriculum=False`` (``devlearn run --from``) leaves this run's own
+        curriculum, whose stage then follows from the step count alone."""
         self.alg.load(state, None, strict=True)  # also takes the adaptive lr from the optimiser
         if self.run_cfg.ppo.schedule == "fixed":  # a fixed schedule means the configured lr
             self.alg.learning_rate = self.run_cfg.ppo.learning_rate
@@ -381,11 +395,17 @@ class DevRunner(OnPolicyRunner):
                 group["lr"] = self.alg.learning_rate
         self.current_learning_iteration = int(state["iteration"])
         self.env_steps = int(state["env_steps"])
-        self.curriculum.load_state_dict(state["curriculum"])
+        if curriculum:
+            self.curriculum.load_state_dict(state["curriculum"])
+        else:
+            self.curriculum.update(self.env_steps)
         self.learned.load_state_dict(state.get("learned", {}))
         ranks = state["env"]["ranks"]
         if self.gpu_global_rank < len(ranks):
             self.env.load_state_dict(ranks[self.gpu_global_rank])
+        # every env's saved state holds the run memory it had: merge across workers (and
+        # ranks), e.g. after a per-env run is continued with shared memory
+        self.env.sync_run_memory(self._all_ranks if self.is_distributed else None)
         if self.is_main:
             forget_metrics_after(self.run_dir / "metrics.jsonl", self.env_steps)
         torch.set_rng_state(state["rng"]["torch"])

@@ -18,9 +18,16 @@ import torch
 
 from devlearn.env import DevVecEnv
 from devlearn.errors import UsageError
-from devlearn.training.checkpoint import check_behavior, remove_temporaries, resume_checkpoint
+from devlearn.training.checkpoint import (
+    RESUME_KEYS,
+    check_behavior,
+    forget_metrics_after,
+    load_checkpoint,
+    remove_temporaries,
+    resume_checkpoint,
+)
 from devlearn.training.checks import check_config, check_memory, check_out_dir, holds_run
-from devlearn.training.config import RunConfig, from_dict, to_dict, to_rsl_rl
+from devlearn.training.config import RunConfig, apply_preset, from_dict, to_dict, to_rsl_rl
 from devlearn.training.learned_rewards import LearnedRewards
 from devlearn.training.loggers import logger_config
 from devlearn.training.runner import DevRunner, init_distributed
@@ -73,6 +80,28 @@ def load_run_config(run_dir: str | Path, registry) -> RunConfig:
     return from_dict(data, registry.behavior(data.get("behavior_name", "")))
 
 
+def config_from_checkpoint(
+    path: str | Path, registry, behavior_name: str, preset: str | None = None
+) -> RunConfig:
+    """The config a run started with ``devlearn run --from CHECKPOINT`` begins with: the
+    checkpoint's own (``preset``, if given, applied over it), to be changed by the command
+    line; ``out_dir`` is cleared and ``start_from`` names the checkpoint.
+
+    Raises:
+        UsageError: The checkpoint cannot resume training, was trained for another
+            behaviour, or the preset is unknown.
+    """
+    state = load_checkpoint(path, RESUME_KEYS)
+    check_behavior(state, path, behavior_name)
+    behavior_cls = registry.behavior(behavior_name)
+    cfg = from_dict(state["config"], behavior_cls)
+    if preset:
+        apply_preset(cfg, behavior_cls, preset)
+    cfg.out_dir = ""
+    cfg.start_from = str(path)
+    return cfg
+
+
 def resolve_workers(workers: int, num_envs: int, cpus: int | None = None) -> int:
     """The number of env worker processes per rank.
 
@@ -114,6 +143,7 @@ def train(
     registry,
     *,
     resume: str | Path | None = None,
+    start_from: str | Path | None = None,
     infant_factory=None,
     progress: bool = True,
     force: bool = False,
@@ -125,6 +155,12 @@ def train(
         registry: Plugin registry (``.behavior(name)``).
         resume: A run directory to continue from its newest complete checkpoint: step counter,
             curriculum stage, reward-term state, networks and optimiser are restored.
+        start_from: A checkpoint (of another run) a new run in ``cfg.out_dir`` starts from:
+            networks, optimiser, step and iteration counters, reward-term state (the lifetime
+            memory) and rng states are carried over, the curriculum is ``cfg``'s own (its
+            stage follows from the step count), and the source run's metrics.jsonl rows up
+            to the checkpoint's step are copied, so curves continue. ``cfg`` is usually
+            :func:`config_from_checkpoint` changed by the command line.
         infant_factory: Infant builder for the envs (tests); default the real infant.
         progress: Show a progress bar.
         force: Start a new run in ``cfg.out_dir`` even if it holds one (its contents are
@@ -150,6 +186,10 @@ def train(
         raise UsageError("train() needs a config or a run directory to resume")
     else:
         run_dir = Path(cfg.out_dir) if cfg.out_dir else default_run_dir(cfg.behavior_name)
+        if start_from is not None:
+            checkpoint = load_checkpoint(start_from, RESUME_KEYS)
+            check_resumable(cfg, checkpoint, start_from)
+            cfg.start_from = str(start_from)
     rank = int(os.environ.get("RANK", "0"))
     if resume is None and rank == 0 and holds_run(run_dir) and not force:
         raise UsageError(
@@ -176,6 +216,7 @@ def train(
             world_size,
             device,
             learned,
+            start_from,
         )
     try:
         # Learn; the runner saves checkpoints periodically, at the end and on Ctrl-C.
@@ -195,11 +236,21 @@ def train(
 
 
 def _build(
-    cfg, registry, run_dir, checkpoint, infant_factory, progress, rank, world_size, device, learned
+    cfg,
+    registry,
+    run_dir,
+    checkpoint,
+    infant_factory,
+    progress,
+    rank,
+    world_size,
+    device,
+    learned,
+    start_from=None,
 ):
     """Start-up after the checks: seed, prepare the behaviour, write config.json, build the
-    envs and the runner (restored from ``checkpoint``, with the ``learned`` rewards); return
-    ``(env, runner)``."""
+    envs and the runner (restored from ``checkpoint``, with the ``learned`` rewards; from
+    another run's when ``start_from`` names it); return ``(env, runner)``."""
 
     # Seed. The runner sets the torch threads of each rollout and update (ThreadPlan); a
     # fixed torch_threads keeps CPU results bit-for-bit repeatable.
@@ -242,7 +293,9 @@ def _build(
             learned,
         )
         if checkpoint is not None:
-            runner.restore(checkpoint)
+            if start_from is not None and rank == 0:
+                _copy_metrics(Path(start_from).parent, run_dir, int(checkpoint["env_steps"]))
+            runner.restore(checkpoint, curriculum=start_from is None)
         if rank > 0:
             # Every rank built its networks from the same seed (rank 0's are broadcast anyway);
             # from here on each rank draws its own action noise, also after a resume, which
@@ -252,6 +305,14 @@ def _build(
         env.close()
         raise
     return env, runner
+
+
+def _copy_metrics(source_dir: Path, run_dir: Path, step: int) -> None:
+    """Start ``run_dir``'s metrics.jsonl with the source run's rows up to ``step``."""
+    source = source_dir / "metrics.jsonl"
+    if source.is_file() and source.resolve() != (run_dir / "metrics.jsonl").resolve():
+        shutil.copyfile(source, run_dir / "metrics.jsonl")
+        forget_metrics_after(run_dir / "metrics.jsonl", step)
 
 
 _SMALL_FILE = 1 << 20  # files up to this size are restored byte for byte after a failed start

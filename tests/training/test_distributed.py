@@ -67,3 +67,20 @@ def test_steps_counted_globally_and_rank0_writes_the_run(two_rank_run):
     assert state["env_steps"] == 128 and len(state["env"]["ranks"]) == 2
     for rank in state["env"]["ranks"]:
         assert [e["terms"]["counter"]["count"] for e in rank["envs"]] == [16] * 4
+
+
+@pytest.mark.slow
+def test_run_wide_reward_memory_is_merged_across_ranks(tmp_path):
+    """Each rank's term memory differs (rank 1 alone would hold 14, rank 0 4); at every
+    iteration boundary the ranks' memories are merged (maximum), so all envs of both ranks
+    hold 14 in the checkpoint."""
+    out = tmp_path / "run"
+    cmd = [sys.executable, "-m", "torch.distributed.run", "--standalone", "--nproc_per_node", "2"]
+    cmd += [str(HERE / "distributed_memory_run.py"), str(out), "64"]
+    env = {**os.environ, "OMP_NUM_THREADS": "1"}
+    done = subprocess.run(cmd, capture_output=True, text=True, timeout=120, env=env)
+    assert done.returncode == 0, done.stderr[-3000:]
+    state = load_checkpoint(out / "checkpoint_latest.pt")
+    widest = [e["terms"]["step_novelty"]["widest"].tolist() for r in state["env"]["ranks"]
+              for e in r["envs"]]
+    assert widest == [[14]] * 8

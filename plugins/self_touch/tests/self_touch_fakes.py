@@ -115,3 +115,31 @@ class ScriptedInfant(FakeInfant):
 
     def close(self) -> None:
         pass
+
+
+class SwappingInfant(ScriptedInfant):
+    """A scripted infant whose discoveries depend on its env and episode (picklable, so it
+    also runs in env worker processes).
+
+    The env's identity is the parity k of its seed (``rng``'s seed: envs are seeded
+    ``seed + index``). In its e-th episode the left hand touches regions 5g .. 5g + 4 on steps
+    1 to 5, one per step, with g = (k + e) % 2: on the first episode env 0 discovers regions
+    0-4 and env 1 regions 5-9, on the second each touches what the other discovered.
+    """
+
+    def __init__(self, scene: str = "crib", senses=()) -> None:
+        super().__init__(scene, senses)
+        self.episodes = 0
+        self.group = 0
+
+    def reset(self, rng, random_pose: bool = False) -> None:
+        super().reset(rng, random_pose)
+        parity = int(rng.bit_generator.seed_seq.entropy) % 2
+        self.group = (parity + self.episodes) % 2
+        self.episodes += 1
+
+    def hand_contacts(self) -> np.ndarray:
+        contacts = np.zeros((2, 68), bool)
+        if 1 <= self.t <= 5:
+            contacts[0, 5 * self.group + self.t - 1] = True
+        return contacts

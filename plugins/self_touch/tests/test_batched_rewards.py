@@ -32,7 +32,16 @@ def recorded_steps(rng, num_envs: int, steps: int, episode: int):
         yield contexts
 
 
-@pytest.mark.parametrize("config", [SelfTouchConfig(), SelfTouchConfig(balance_min_parts=4)])
+PER_ENV = "per_env"  # the per-environment twins keep per-environment lifetime memory
+
+
+@pytest.mark.parametrize(
+    "config",
+    [
+        SelfTouchConfig(lifetime_memory=PER_ENV),
+        SelfTouchConfig(lifetime_memory=PER_ENV, balance_min_parts=4),
+    ],
+)
 def test_batched_terms_equal_per_env_terms_bit_for_bit(config):
     num_envs, episode = 5, 40
     behavior = SelfTouch(config)
@@ -80,9 +89,10 @@ def test_envs_log_the_same_sums_with_either_form():
     def factory(k):
         return lambda scene, senses=(): ScriptedInfant(scene, senses, left=12 - k, right=9 + k)
 
-    batch = [BehaviorEnv(SelfTouch(), k, factory(k)) for k in range(3)]
+    config = SelfTouchConfig(lifetime_memory=PER_ENV)
+    batch = [BehaviorEnv(SelfTouch(config), k, factory(k)) for k in range(3)]
     share_batched_terms(batch)
-    reference = [BehaviorEnv(PerEnvSelfTouch(), k, factory(k)) for k in range(3)]
+    reference = [BehaviorEnv(PerEnvSelfTouch(config), k, factory(k)) for k in range(3)]
     for env in batch + reference:
         env.reset()
     ends = 0
@@ -100,11 +110,12 @@ def test_envs_log_the_same_sums_with_either_form():
         )
 
 
-def test_worker_batches_share_one_instance_per_term():
-    envs = make_envs(SelfTouch(), [0, 1, 2], ScriptedInfant)
+@pytest.mark.parametrize("memory, rows", [(PER_ENV, 3), ("shared", 1)])
+def test_worker_batches_share_one_instance_per_term(memory, rows):
+    envs = make_envs(SelfTouch(SelfTouchConfig(lifetime_memory=memory)), [0, 1, 2], ScriptedInfant)
     assert all(a is b for a, b in zip(envs[0].terms, envs[2].terms))
     assert [env.batch_index for env in envs] == [0, 1, 2]
-    assert envs[0].terms[0].ever.shape == (3, 68)
+    assert envs[0].terms[0].ever.shape == (rows, 68)
     for env in envs:
         env.reset()
     contexts = [env.advance(np.zeros(4)) for env in envs]

@@ -7,6 +7,16 @@ Where a per-environment term sums floats in a Python loop, the batched one sums 
 same order (a loop over the few touched pairs), and f_decay is tabulated with the same
 ``math.exp``. The arrays are tiny, so the terms keep numpy calls few and return early when
 nothing was touched (most steps).
+
+The two "first ever" memories (R_touch's regions, R_geom's hand-region pairs) are the run's by
+default (``lifetime_memory="shared"``): one memory per worker for all its envs, merged across
+workers and ranks at every iteration boundary (see
+:class:`devlearn.BatchedIntrinsicReward`), so a discovery pays first-ever once per agent
+rather than once per environment. When several envs of a worker make the same discovery on
+the same step, the first in batch order (the lowest env index) is paid first-ever and the
+others what an already-known region pays. ``lifetime_memory="per_env"`` keeps one memory per
+environment, as every run before issue #20 did; only that mode equals the per-environment
+twins.
 """
 
 from __future__ import annotations
@@ -18,6 +28,18 @@ import numpy as np
 from devlearn import BatchContext, BatchedIntrinsicReward
 from devlearn_self_touch.body_map import HANDS, NUM_PARTS, NUM_REGIONS
 from devlearn_self_touch.rewards import f_decay
+
+LIFETIME_MEMORIES = ("shared", "per_env")
+"""Valid values of the terms' ``lifetime_memory`` (and of SelfTouchConfig.lifetime_memory)."""
+
+
+def _check_memory(lifetime_memory: str) -> bool:
+    """Return True for ``"shared"``; raise ValueError naming the valid values otherwise."""
+    if lifetime_memory not in LIFETIME_MEMORIES:
+        raise ValueError(
+            f"unknown lifetime_memory '{lifetime_memory}'; valid: {', '.join(LIFETIME_MEMORIES)}"
+        )
+    return lifetime_memory == "shared"
 
 
 class BatchedTouchNovelty(BatchedIntrinsicReward):
@@ -33,16 +55,19 @@ class BatchedTouchNovelty(BatchedIntrinsicReward):
         repeat_scale: float = 0.5,
         midpoint: float = 10.0,
         rate: float = 0.5,
+        lifetime_memory: str = "shared",
     ) -> None:
         super().__init__(weight)
         self.first_ever, self.first_in_episode = float(first_ever), float(first_in_episode)
         self.repeat_scale, self.midpoint, self.rate = float(repeat_scale), midpoint, rate
+        self.shared = _check_memory(lifetime_memory)
         self._repeat = np.zeros(0)  # repeat_scale * f_decay(c) for c = 0, 1, ... (grown as needed)
         self.bind(1)
 
     def bind(self, num_envs: int) -> None:
         super().bind(num_envs)
-        self.ever = np.zeros((num_envs, NUM_REGIONS), dtype=bool)
+        # ever: (1, 68) shared by the batch, or (num_envs, 68); count is always per env
+        self.ever = np.zeros((1 if self.shared else num_envs, NUM_REGIONS), dtype=bool)
         self.count = np.zeros((num_envs, NUM_REGIONS), dtype=np.int64)
 
     def _repeat_pay(self, count: np.ndarray) -> np.ndarray:
@@ -63,15 +88,24 @@ class BatchedTouchNovelty(BatchedIntrinsicReward):
         if len(rows) == 0:
             return np.zeros(len(batch))
         count = self.count[rows, cols]
+        if self.shared:
+            # Of the envs touching region j first this step, the lowest (pairs come in row
+            # order, so np.unique's first occurrence) is paid first-ever.
+            new = np.zeros(len(cols), dtype=bool)
+            _, first = np.unique(cols, return_index=True)
+            new[first] = ~self.ever[0, cols[first]]
+            self.ever[0, cols] = True
+        else:
+            new = ~self.ever[rows, cols]
+            self.ever[rows, cols] = True
         pay = np.where(
-            self.ever[rows, cols],
-            np.where(count == 0, self.first_in_episode, self._repeat_pay(count)),
+            new,
             self.first_ever,
+            np.where(count == 0, self.first_in_episode, self._repeat_pay(count)),
         )
         reward = [0.0] * len(batch)
         for row, value in zip(rows.tolist(), pay.tolist()):  # the per-env loop's order of sums
             reward[row] += value
-        self.ever[rows, cols] = True
         self.count[rows, cols] += 1
         return np.array(reward)
 
@@ -79,10 +113,16 @@ class BatchedTouchNovelty(BatchedIntrinsicReward):
         self.count[env] = 0
 
     def state_dict(self, env: int) -> dict[str, Any]:
-        return {"ever": self.ever[env].copy()}
+        return {"ever": self.ever[0 if self.shared else env].copy()}
 
     def load_state_dict(self, env: int, state: dict[str, Any]) -> None:
-        self.ever[env] = np.asarray(state["ever"], dtype=bool)
+        _load_ever(self.ever, self.shared, env, state["ever"])
+
+    def run_memory(self) -> dict[str, np.ndarray]:
+        return {"ever": self.ever[0]} if self.shared else {}
+
+    def load_run_memory(self, memory: dict[str, np.ndarray]) -> None:
+        self.ever[0] = np.asarray(memory["ever"], dtype=bool)
 
 
 class BatchedContactNovelty(BatchedIntrinsicReward):
@@ -91,24 +131,36 @@ class BatchedContactNovelty(BatchedIntrinsicReward):
     name = "contact_novelty"
 
     def __init__(
-        self, weight: float = 1.0, first_ever: float = 10.0, first_in_episode: float = 2.0
+        self,
+        weight: float = 1.0,
+        first_ever: float = 10.0,
+        first_in_episode: float = 2.0,
+        lifetime_memory: str = "shared",
     ) -> None:
         super().__init__(weight)
         self.first_ever, self.first_in_episode = float(first_ever), float(first_in_episode)
+        self.shared = _check_memory(lifetime_memory)
         self.bind(1)
 
     def bind(self, num_envs: int) -> None:
         super().bind(num_envs)
-        self.ever = np.zeros((num_envs, len(HANDS), NUM_REGIONS), dtype=bool)
+        # ever: (1, 2, 68) shared by the batch, or (num_envs, 2, 68); episode is per env
+        self.ever = np.zeros((1 if self.shared else num_envs, len(HANDS), NUM_REGIONS), bool)
         self.episode = np.zeros((num_envs, len(HANDS), NUM_REGIONS), dtype=bool)
 
     def __call__(self, batch: BatchContext) -> np.ndarray:
         contacts = batch.stack("hand_contacts", bool)  # (E, 2, 68)
         if not contacts.any():
             return np.zeros(len(batch))
-        new_ever = (contacts & ~self.ever).sum(axis=(1, 2))
-        new_episode = (contacts & ~self.episode & self.ever).sum(axis=(1, 2))
-        self.ever |= contacts
+        known = self.ever  # (E, 2, 68), or (1, 2, 68) broadcast over the batch
+        if self.shared and len(contacts) > 1:
+            # a pair first contacted this step by several envs is new only to the first
+            earlier = np.zeros_like(contacts)
+            earlier[1:] = np.logical_or.accumulate(contacts[:-1], axis=0)
+            known = known | earlier
+        new_ever = (contacts & ~known).sum(axis=(1, 2))
+        new_episode = (contacts & ~self.episode & known).sum(axis=(1, 2))
+        self.ever |= contacts.any(axis=0, keepdims=True) if self.shared else contacts
         self.episode |= contacts
         return self.first_ever * new_ever + self.first_in_episode * new_episode
 
@@ -116,10 +168,28 @@ class BatchedContactNovelty(BatchedIntrinsicReward):
         self.episode[env] = False
 
     def state_dict(self, env: int) -> dict[str, Any]:
-        return {"ever": self.ever[env].copy()}
+        return {"ever": self.ever[0 if self.shared else env].copy()}
 
     def load_state_dict(self, env: int, state: dict[str, Any]) -> None:
-        self.ever[env] = np.asarray(state["ever"], dtype=bool)
+        _load_ever(self.ever, self.shared, env, state["ever"])
+
+    def run_memory(self) -> dict[str, np.ndarray]:
+        return {"ever": self.ever[0]} if self.shared else {}
+
+    def load_run_memory(self, memory: dict[str, np.ndarray]) -> None:
+        self.ever[0] = np.asarray(memory["ever"], dtype=bool)
+
+
+def _load_ever(ever: np.ndarray, shared: bool, env: int, saved: Any) -> None:
+    """Restore env ``env``'s saved "ever" memory: its own row, or into the shared row (env 0
+    replaces it, later envs are ORed in, so a batch loads the union of its envs' memories)."""
+    saved = np.asarray(saved, dtype=bool)
+    if not shared:
+        ever[env] = saved
+    elif env == 0:
+        ever[0] = saved
+    else:
+        ever[0] |= saved
 
 
 class BatchedDiversityMilestones(BatchedIntrinsicReward):

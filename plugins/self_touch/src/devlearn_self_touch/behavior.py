@@ -111,9 +111,12 @@ class SelfTouch(Behavior):
         :meth:`per_env_reward_terms`)."""
         c = self.config
         return [
-            BatchedTouchNovelty(*self._touch_args()),
+            BatchedTouchNovelty(*self._touch_args(), lifetime_memory=c.lifetime_memory),
             BatchedContactNovelty(
-                c.weight_contact_novelty, c.contact_first_ever, c.contact_first_in_episode
+                c.weight_contact_novelty,
+                c.contact_first_ever,
+                c.contact_first_in_episode,
+                lifetime_memory=c.lifetime_memory,
             ),
             BatchedDiversityMilestones(
                 c.weight_diversity_milestones, c.milestone_reward, c.milestones
@@ -124,7 +127,9 @@ class SelfTouch(Behavior):
         ]
 
     def per_env_reward_terms(self) -> list[IntrinsicReward]:
-        """The same four terms as per-environment :class:`IntrinsicReward` instances."""
+        """The same four terms as per-environment :class:`IntrinsicReward` instances, each
+        with its own memory (equal to :meth:`reward_terms` with ``lifetime_memory="per_env"``;
+        they cannot share one)."""
         c = self.config
         return [
             TouchNovelty(*self._touch_args()),
@@ -171,9 +176,20 @@ class SelfTouch(Behavior):
         """PPO settings for this behaviour.
 
         ``total_steps`` is left to the core's short default so that ``devlearn run self_touch``
-        finishes in minutes; the paper's run is ``--steps 8000000`` (4M + 4M, sec. II-A5).
+        finishes in minutes; the paper's run is ``--steps 8000000`` (4M + 4M, sec. II-A5), or
+        ``--preset paper`` (:meth:`presets`).
         At 200 Hz a reach to the body takes a few hundred steps, hence a discount horizon of
         ~1 s (gamma 0.995) and rollouts of 128 steps per environment. The paper gives no other
         PPO constants than the clip 0.2 (the core's default).
         """
         return {"ppo.num_steps_per_env": 128, "ppo.gamma": 0.995}
+
+    def presets(self) -> dict[str, dict[str, Any]]:
+        """``paper``: the paper's values where the default recipe differs (sec. II-A):
+        the unbounded softplus spread (``behavior.max_std`` 0; the default bounds it at 1.0)
+        and the full curriculum, 4M fixed-pose + 4M random-pose steps (``total_steps`` 8M;
+        the default is a short demonstration). The lifetime memory is the default's, shared:
+        the paper's "first-ever" and "first global" bonuses are one agent's. Runs published
+        before issue #20 also kept per-environment memory
+        (``--set behavior.lifetime_memory=per_env``)."""
+        return {"paper": {"behavior.max_std": 0.0, "total_steps": 8_000_000}}

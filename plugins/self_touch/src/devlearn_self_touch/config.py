@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any, ClassVar
 
 from devlearn import NetworkSpec
+from devlearn_self_touch.batched_rewards import LIFETIME_MEMORIES
 
 CURRICULA = ("two_stage", "fixed_only", "random_only")
 """Valid values of :attr:`SelfTouchConfig.curriculum` (paper sec. II-A5 and its ablation)."""
@@ -17,8 +19,17 @@ TOUCH_SOURCES = ("hands", "hands_or_threshold", "threshold")
 class SelfTouchConfig:
     """Options of :class:`devlearn_self_touch.SelfTouch`; overridable as ``--set behavior.X=V``.
 
-    Defaults reproduce the paper (Baby Sophia, sec. II-A) unless a field says otherwise.
+    Defaults reproduce the paper (Baby Sophia, sec. II-A) unless a field says otherwise: the
+    policy spread is bounded (``max_std`` 1.0) and the lifetime memory is the run's
+    (``lifetime_memory`` shared), the recipe ``results/self_touch/README.md`` supports. The
+    paper's values are ``devlearn run self_touch --preset paper``
+    (:meth:`devlearn_self_touch.SelfTouch.presets`).
     """
+
+    LEGACY_DEFAULTS: ClassVar[dict[str, Any]] = {"max_std": 0.0, "lifetime_memory": "per_env"}
+    """Values a saved config (config.json, a checkpoint's config) that lacks the field was
+    trained with: runs from before these fields existed, or before their defaults changed
+    (issue #20), load and resume as trained (read by ``devlearn.training.config.from_dict``)."""
 
     # --- what counts as "touched" (sec. II-A2/A3) ----------------------------------------
     touch_source: str = "hands"
@@ -47,8 +58,16 @@ class SelfTouchConfig:
     """Weight of R_balance (paper: 1)."""
 
     # --- touch novelty R_touch (sec. II-A3) ------------------------------------------------
+    lifetime_memory: str = "shared"
+    """Whose lifetime the "first ever" bonuses (``touch_first_ever``, ``contact_first_ever``)
+    count over. ``"shared"`` (default): the run's, as for the paper's one agent; one memory
+    for all environments, merged across env workers (and torchrun ranks) at every PPO
+    iteration boundary, so between two merges a discovery is paid at most once per worker.
+    ``"per_env"``: each environment's own (a discovery can be paid once per environment, 16
+    times with 16 envs); every run before issue #20 used it, and a saved config without this
+    field means it."""
     touch_first_ever: float = 5.0
-    """Reward for a region's first touch in the environment's lifetime."""
+    """Reward for a region's first touch in the lifetime (see ``lifetime_memory``)."""
     touch_first_in_episode: float = 1.0
     """Reward for a region's first touch in the current episode."""
     touch_repeat_scale: float = 0.5
@@ -60,7 +79,7 @@ class SelfTouchConfig:
 
     # --- contact novelty R_geom (sec. II-A3) ------------------------------------------------
     contact_first_ever: float = 10.0
-    """Reward for a (hand, region) pair's first contact in the environment's lifetime."""
+    """Reward for a (hand, region) pair's first contact in the lifetime (``lifetime_memory``)."""
     contact_first_in_episode: float = 2.0
     """Reward for a (hand, region) pair's first contact in the current episode."""
 
@@ -80,10 +99,12 @@ class SelfTouchConfig:
     touch also pays the bonus). Set 1 or more to stop rewarding idleness."""
 
     # --- policy (sec. II-A4) -----------------------------------------------------------------
-    max_std: float = 0.0
-    """Upper bound on the policy's standard deviation; 0: unbounded softplus (the paper). The
-    environment clips actions to [-1, 1], so an unbounded spread can grow until actions are
-    +-1 noise; 1.0 bounds it with a sigmoid (see ``results/self_touch/README.md``)."""
+    max_std: float = 1.0
+    """Upper bound on the policy's standard deviation (default 1.0, bounded with a sigmoid);
+    0: unbounded softplus (the paper, ``--preset paper``). The environment clips actions to
+    [-1, 1], and with the paper's spread it grew to ~1,000 over 8M steps, so training actions
+    became +-1 noise (``results/self_touch/README.md``). A saved config without this field
+    means 0 (runs before issue #20)."""
 
     # --- curriculum (sec. II-A5) ------------------------------------------------------------
     curriculum: str = "two_stage"
@@ -109,6 +130,11 @@ class SelfTouchConfig:
         if self.curriculum not in CURRICULA:
             raise ValueError(
                 f"unknown curriculum '{self.curriculum}'; valid: {', '.join(CURRICULA)}"
+            )
+        if self.lifetime_memory not in LIFETIME_MEMORIES:
+            raise ValueError(
+                f"unknown lifetime_memory '{self.lifetime_memory}'; "
+                f"valid: {', '.join(LIFETIME_MEMORIES)}"
             )
         if self.touch_source not in TOUCH_SOURCES:
             raise ValueError(

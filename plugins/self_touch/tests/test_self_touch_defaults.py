@@ -1,0 +1,78 @@
+"""The default recipe (bounded spread, shared memory), the paper preset, and old runs as trained."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from devlearn_self_touch import SelfTouch
+
+from devlearn.env import BehaviorEnv
+from devlearn.errors import UsageError
+from devlearn.plugins import PluginRegistry
+from devlearn.training.checkpoint import load_checkpoint
+from devlearn.training.config import RunConfig, default_config, from_dict, to_dict
+from devlearn.training.evaluate import load_actor
+from devlearn.training.train import load_run_config
+
+ROOT = Path(__file__).resolve().parents[3]
+RESULTS = ROOT / "results/self_touch"
+
+
+def test_default_is_the_supported_recipe_and_a_short_run():
+    cfg = default_config(SelfTouch)
+    assert (cfg.behavior.max_std, cfg.behavior.lifetime_memory) == (1.0, "shared")
+    assert cfg.total_steps == RunConfig.total_steps  # the README's few-minute run
+    assert cfg.preset == ""
+
+
+def test_paper_preset_gives_the_papers_values():
+    cfg = default_config(SelfTouch, preset="paper")
+    assert (cfg.behavior.max_std, cfg.total_steps, cfg.preset) == (0.0, 8_000_000, "paper")
+    assert cfg.behavior.lifetime_memory == "shared"  # the paper's one agent
+    assert (cfg.behavior.fixed_pose_steps, cfg.behavior.curriculum) == (4_000_000, "two_stage")
+    # the command line still wins over the preset
+    cfg = default_config(SelfTouch, ["behavior.max_std=2"], preset="paper", total_steps=4096)
+    assert (cfg.behavior.max_std, cfg.total_steps) == (2.0, 4096)
+    with pytest.raises(UsageError, match="unknown preset 'papr' for self_touch; valid: paper"):
+        default_config(SelfTouch, preset="papr")
+    with pytest.raises(UsageError, match="'preset' is set with --preset NAME"):
+        default_config(SelfTouch, ["preset=paper"])
+
+
+def test_a_new_config_loads_back_with_its_own_values():
+    """LEGACY_DEFAULTS fill only what a saved config lacks."""
+    cfg = from_dict(to_dict(default_config(SelfTouch)), SelfTouch)
+    assert (cfg.behavior.max_std, cfg.behavior.lifetime_memory) == (1.0, "shared")
+
+
+@pytest.mark.parametrize(
+    "run, max_std",
+    [("run", 0.0), ("max_std/run", 1.0), ("ablation/ablation_fixed_only", 0.0)],
+)
+def test_published_runs_load_as_trained(run, max_std):
+    """Their configs predate lifetime_memory (and, but for max_std/, max_std): they keep the
+    unbounded spread and per-environment memory they were trained with, also on --resume."""
+    data = json.loads((RESULTS / run / "config.json").read_text())
+    assert "lifetime_memory" not in data["behavior"]
+    cfg = load_run_config(RESULTS / run, PluginRegistry())
+    assert (cfg.behavior.max_std, cfg.behavior.lifetime_memory) == (max_std, "per_env")
+
+
+def test_published_policy_file_acts_with_its_unbounded_spread():
+    """results/self_touch/run/policy.pt was trained with the paper's softplus spread (~1,000
+    by the end): rebuilt after the default became 1.0, its policy still has that spread."""
+    registry = PluginRegistry()
+    state = load_checkpoint(RESULTS / "run/policy.pt")
+    cfg = from_dict(state["config"], SelfTouch)
+    assert (cfg.behavior.max_std, cfg.behavior.lifetime_memory) == (0.0, "per_env")
+    behavior = registry.create("self_touch", cfg.behavior)
+    env = BehaviorEnv(behavior, 0, training=False)
+    try:
+        env.set_stage(behavior.eval_stage())
+        obs = env.reset()
+        actor = load_actor(cfg, state, behavior, obs, env.action_dim)
+    finally:
+        env.close()
+    assert actor.distribution.max_std == 0.0

@@ -1,0 +1,137 @@
+"""Lifetime memory as one agent's: a discovery pays its first-ever bonus once per run (#20)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import torch
+from devlearn_self_touch import SelfTouch, SelfTouchConfig
+from devlearn_self_touch.batched_rewards import BatchedContactNovelty, BatchedTouchNovelty
+from self_touch_fakes import SwappingInfant, make_ctx
+
+from devlearn import BatchContext
+from devlearn.env import DevVecEnv
+from devlearn.testing import registry_for
+from devlearn.training import default_config, train
+from devlearn.training.checkpoint import load_checkpoint
+from devlearn.training.train import load_run_config
+
+GROUPS = np.zeros(68, bool)
+GROUPS[:10] = True  # SwappingInfant's env 0 discovers regions 0-4, env 1 regions 5-9
+
+
+def _pay(term, contexts) -> list[float]:
+    term.bind(len(contexts))
+    return np.asarray(term(BatchContext(contexts))).tolist()
+
+
+@pytest.mark.parametrize(
+    "memory, touch, contact",
+    [("shared", [5.0, 1.0], [10.0, 2.0]), ("per_env", [5.0, 5.0], [10.0, 10.0])],
+)
+def test_two_envs_one_discovery_one_first_ever_bonus(memory, touch, contact):
+    """Both envs touch region 3 with the left hand on the same step: shared memory pays the
+    first env first-ever and the second what a known region pays (first in episode)."""
+    step = [make_ctx(touched=[3], hand_contacts=[(0, 3)]) for _ in range(2)]
+    assert _pay(BatchedTouchNovelty(lifetime_memory=memory), step) == touch
+    assert _pay(BatchedContactNovelty(lifetime_memory=memory), step) == contact
+
+
+def test_unknown_lifetime_memory_names_the_valid_ones():
+    with pytest.raises(ValueError, match="lifetime_memory 'global'; valid: shared, per_env"):
+        SelfTouchConfig(lifetime_memory="global")
+    with pytest.raises(ValueError, match="valid: shared, per_env"):
+        BatchedTouchNovelty(lifetime_memory="run")
+
+
+def _episode_sums(vec: DevVecEnv, term: str) -> list[float]:
+    """Step ``vec`` through one episode; return each env's ``reward/<term>`` sum."""
+    infos = []
+    for _ in range(SwappingInfant.episode_steps):
+        infos += vec.step(torch.zeros(vec.num_envs, 4))[3]["episode_infos"]
+    return [info[f"reward/{term}"] for info in infos]
+
+
+def _vec(memory: str, workers: int) -> DevVecEnv:
+    behavior = SelfTouch(SelfTouchConfig(lifetime_memory=memory))
+    return DevVecEnv(behavior, 2, seed=0, workers=workers, infant_factory=SwappingInfant)
+
+
+@pytest.mark.parametrize("memory, second", [("shared", 5.0), ("per_env", 25.0)])
+def test_in_process_envs_share_their_discoveries(memory, second):
+    """Episode 1: each env discovers 5 regions (5 x 5.0); episode 2: each touches the other's
+    regions, known to the run (5 x 1.0), or only to the other env (per_env: 5 x 5.0)."""
+    vec = _vec(memory, workers=0)
+    try:
+        assert _episode_sums(vec, "touch_novelty") == [25.0, 25.0]
+        vec.sync_run_memory()  # nothing to merge in one batch: no change
+        assert _episode_sums(vec, "touch_novelty") == [second, second]
+    finally:
+        vec.close()
+
+
+def test_two_workers_merge_their_memories_at_the_iteration_boundary():
+    """One env per worker: before the merge each worker knows its own discoveries only; after
+    :meth:`DevVecEnv.sync_run_memory` (the runner's iteration boundary) both know both."""
+    vec = _vec("shared", workers=2)
+    try:
+        assert _episode_sums(vec, "contact_novelty") == [50.0, 50.0]  # 5 pairs x 10.0 each
+        envs = vec.state_dict()["envs"]
+        assert [e["terms"]["touch_novelty"]["ever"].sum() for e in envs] == [5, 5]
+        vec.sync_run_memory()
+        for env in vec.state_dict()["envs"]:
+            assert np.array_equal(env["terms"]["touch_novelty"]["ever"], GROUPS)
+        assert _episode_sums(vec, "contact_novelty") == [10.0, 10.0]  # 5 x 2.0: known pairs
+    finally:
+        vec.close()
+
+
+def test_shared_memory_survives_resume_with_another_worker_count(tmp_path):
+    """Train one iteration (= one episode per env) on 2 workers; the checkpoint holds the
+    merged memory in every env; resumed on 1 worker and in process, the second episode pays
+    the other env's discoveries as known (5 x 1.0), not as new (5 x 5.0)."""
+    registry = registry_for(SelfTouch)
+    out = tmp_path / "run"
+    overrides = ["ppo.num_steps_per_env=20", "ppo.num_mini_batches=2", "save_interval=1"]
+    cfg = default_config(SelfTouch, overrides, out_dir=str(out), num_envs=2, workers=2)
+    cfg.total_steps = 40
+    train(cfg, registry, infant_factory=SwappingInfant, progress=False)
+    state = load_checkpoint(out / "checkpoint_latest.pt")
+    for env in state["env"]["ranks"][0]["envs"]:
+        assert np.array_equal(env["terms"]["touch_novelty"]["ever"], GROUPS)
+    for workers in (1, 0):
+        copy = tmp_path / f"resumed_{workers}"
+        copy.mkdir()
+        for path in out.iterdir():
+            if path.is_file():
+                (copy / path.name).write_bytes(path.read_bytes())
+        cfg = load_run_config(copy, registry)
+        cfg.workers, cfg.total_steps = workers, 80
+        train(cfg, registry, resume=copy, infant_factory=SwappingInfant, progress=False)
+        last = json.loads((copy / "metrics.jsonl").read_text().splitlines()[-1])
+        assert last["step"] == 80
+        assert (last["reward/touch_novelty"], last["reward/contact_novelty"]) == (5.0, 10.0)
+
+
+def test_same_seed_and_worker_count_same_numbers(tmp_path):
+    """Shared memory merged across 2 workers adds nothing random: two runs are identical."""
+    registry = registry_for(SelfTouch)
+    overrides = ["ppo.num_steps_per_env=20", "ppo.num_mini_batches=2", "torch_threads=1"]
+    drop = {"steps_per_s", "collect_s", "update_s"}  # wall-clock timings
+    runs = []
+    for name in ("a", "b"):
+        cfg = default_config(SelfTouch, overrides, out_dir=str(tmp_path / name), workers=2)
+        cfg.num_envs, cfg.total_steps = 2, 80
+        train(cfg, registry, infant_factory=SwappingInfant, progress=False)
+        lines = (tmp_path / name / "metrics.jsonl").read_text().splitlines()
+        state = load_checkpoint(tmp_path / name / "checkpoint_latest.pt")
+        runs.append(
+            ([{k: v for k, v in json.loads(r).items() if k not in drop} for r in lines], state)
+        )
+    (rows_a, a), (rows_b, b) = runs
+    assert rows_a == rows_b
+    assert rows_a[-1]["reward/touch_novelty"] == 15.0  # mean of 25 (new) and 5 (known)
+    for key in a["actor_state_dict"]:
+        torch.testing.assert_close(a["actor_state_dict"][key], b["actor_state_dict"][key])

@@ -1,0 +1,72 @@
+"""The core's run-wide memory of batched reward terms: merged across workers and ranks."""
+
+from __future__ import annotations
+
+import numpy as np
+import torch
+from fake_infant import NoveltyBehavior, StepNovelty, fake_infant_factory
+
+from devlearn.env import DevVecEnv
+
+STEPS = 10  # the fake infant's episode
+
+
+def episode(vec: DevVecEnv) -> list[float]:
+    """Step one episode; return each env's ``reward/step_novelty`` sum, in env order."""
+    infos = []
+    for _ in range(STEPS):
+        infos += vec.step(torch.zeros(vec.num_envs, 3))[3]["episode_infos"]
+    return [info["reward/step_novelty"] for info in infos]
+
+
+def test_default_merge_ors_flags_and_keeps_the_largest_count():
+    copies = [
+        {"seen": np.array([True, False, False]), "widest": np.array([2])},
+        {"seen": np.array([False, False, True]), "widest": np.array([5])},
+    ]
+    merged = StepNovelty().merge_run_memory(copies)
+    assert merged["seen"].tolist() == [True, False, True] and merged["widest"].tolist() == [5]
+
+
+def test_one_batch_pays_each_discovery_once():
+    vec = DevVecEnv(NoveltyBehavior(), 2, seed=0, infant_factory=fake_infant_factory)
+    try:
+        assert episode(vec) == [10.0, 0.0]  # the first env in batch order
+        assert episode(vec) == [0.0, 0.0]
+    finally:
+        vec.close()
+
+
+def test_workers_pay_once_each_until_the_merge_then_never_again():
+    vec = DevVecEnv(NoveltyBehavior(), 2, seed=0, workers=2, infant_factory=fake_infant_factory)
+    try:
+        assert episode(vec) == [10.0, 10.0]  # one env per worker: each its own discovery
+        vec.sync_run_memory()
+        states = vec.state_dict()["envs"]
+        assert [s["terms"]["step_novelty"]["widest"].tolist() for s in states] == [[1], [1]]
+        # a third run memory, as another torchrun rank would hold it, merged through gather
+        other = {"step_novelty": {"seen": np.zeros(STEPS, bool), "widest": np.array([7])}}
+        vec.sync_run_memory(gather=lambda mine: [mine, other])
+        for state in vec.state_dict()["envs"]:
+            assert state["terms"]["step_novelty"]["seen"].all()
+            assert state["terms"]["step_novelty"]["widest"].tolist() == [7]
+        assert episode(vec) == [0.0, 0.0]
+    finally:
+        vec.close()
+
+
+def test_memory_loads_merged_into_another_worker_count():
+    pooled = DevVecEnv(NoveltyBehavior(), 2, seed=0, workers=2, infant_factory=fake_infant_factory)
+    try:
+        episode(pooled)  # not merged: each worker's copy has widest 1
+        state = pooled.state_dict()
+    finally:
+        pooled.close()
+    state["envs"][1]["terms"]["step_novelty"]["widest"] = np.array([3])
+    local = DevVecEnv(NoveltyBehavior(), 2, seed=0, infant_factory=fake_infant_factory)
+    try:
+        local.load_state_dict(state)
+        widest = [s["terms"]["step_novelty"]["widest"].tolist() for s in local.state_dict()["envs"]]
+        assert widest == [[3], [3]]  # env 0 replaced, env 1 merged in: one memory
+    finally:
+        local.close()
