@@ -5,6 +5,8 @@ from __future__ import annotations
 import contextlib
 import io
 import os
+import signal
+import threading
 
 import torch
 import torch.distributed as dist
@@ -110,3 +112,30 @@ def quiet():
     """Swallow rsl-rl's console report (the progress bar and metrics.jsonl replace it)."""
     with contextlib.redirect_stdout(io.StringIO()):
         yield
+
+
+@contextlib.contextmanager
+def interrupts_deferred():
+    """Hold Ctrl-C and SIGTERM until the block ends, then deliver them to their handlers.
+
+    The runner closes an iteration inside it (merge the reward memory, take the boundary
+    snapshot, write its metrics row), so an interrupt saves a checkpoint that metrics.jsonl
+    has a row for, never one a row ahead of it. (Blocking the signals would not do: the
+    kernel hands a process's signal to any of its threads that does not block it.) Outside
+    the main thread, where handlers cannot be set, it does nothing.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    held: list[int] = []
+    saved = {s: signal.signal(s, lambda signum, _: held.append(signum)) for s in _DEFERRED}
+    try:
+        yield
+    finally:
+        for signum, handler in saved.items():
+            signal.signal(signum, signal.SIG_DFL if handler is None else handler)
+        for signum in dict.fromkeys(held):
+            signal.raise_signal(signum)
+
+
+_DEFERRED = (signal.SIGINT, signal.SIGTERM)

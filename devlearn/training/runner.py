@@ -38,6 +38,7 @@ from devlearn.training.learned_rewards import LearnedRewards
 from devlearn.training.process import (
     ThreadPlan,
     init_distributed,
+    interrupts_deferred,
     quiet,
     set_threads,
     update_threads,
@@ -198,32 +199,34 @@ class DevRunner(OnPolicyRunner):
                 learn_time = time.time() - start
                 threads.record(learn_time)
                 it = self.current_learning_iteration
-                self.current_learning_iteration += 1
-                self.env_steps += per_iteration
-                # one agent's lifetime memory: merge the workers' (and ranks') copies
-                env.sync_run_memory(self._all_ranks if self.is_distributed else None)
-                good = self._snapshot()
-                with quiet():
-                    self.logger.log(
-                        it=it,
-                        start_it=start_it,
-                        total_it=total_it,
-                        collect_time=collect_time,
-                        learn_time=learn_time,
-                        loss_dict=losses,
-                        learning_rate=alg.learning_rate,
-                        action_std=alg.get_policy().output_std,
-                        rnd_weight=alg.rnd.weight if rnd else None,
-                    )
-                self.episodes.extend(finished)
-                rate = per_iteration / max(collect_time + learn_time, 1e-9)
-                mean_step = step_rewards / self.cfg["num_steps_per_env"]
-                times = {
-                    "collect_s": collect_time,
-                    "update_s": learn_time,
-                    "update_threads": learn_threads,
-                }
-                self._record(it, len(finished), mean_step, losses, rate, times, bar)
+                # the boundary, its snapshot and its metrics row: all or none on an interrupt
+                with interrupts_deferred():
+                    self.current_learning_iteration += 1
+                    self.env_steps += per_iteration
+                    # one agent's lifetime memory: merge the workers' (and ranks') copies
+                    env.sync_run_memory(self._all_ranks if self.is_distributed else None)
+                    good = self._snapshot()
+                    with quiet():
+                        self.logger.log(
+                            it=it,
+                            start_it=start_it,
+                            total_it=total_it,
+                            collect_time=collect_time,
+                            learn_time=learn_time,
+                            loss_dict=losses,
+                            learning_rate=alg.learning_rate,
+                            action_std=alg.get_policy().output_std,
+                            rnd_weight=alg.rnd.weight if rnd else None,
+                        )
+                    self.episodes.extend(finished)
+                    rate = per_iteration / max(collect_time + learn_time, 1e-9)
+                    mean_step = step_rewards / self.cfg["num_steps_per_env"]
+                    times = {
+                        "collect_s": collect_time,
+                        "update_s": learn_time,
+                        "update_threads": learn_threads,
+                    }
+                    self._record(it, len(finished), mean_step, losses, rate, times, bar)
                 interval = self.cfg["save_interval"]
                 switch = self.curriculum.stage_index_at(self.env_steps) != self.curriculum.index
                 if self.current_learning_iteration % interval == 0 or switch:

@@ -52,8 +52,10 @@ def test_published_checkpoints_load_as_data():
 
 def test_new_checkpoints_load_with_weights_only(tmp_path):
     result = train(
-        tiny_run.config(tmp_path / "r", 32), tiny_run.registry(),
-        infant_factory=tiny_run.factory, progress=False,
+        tiny_run.config(tmp_path / "r", 32),
+        tiny_run.registry(),
+        infant_factory=tiny_run.factory,
+        progress=False,
     )
     with torch.serialization.safe_globals(allowed_globals()):
         state = torch.load(result.run_dir / "checkpoint_latest.pt", weights_only=True)
@@ -105,7 +107,10 @@ def test_resume_picks_the_newest_checkpoint_and_removes_temporaries(tmp_path):
     train(cfg, tiny_run.registry(), resume=out, infant_factory=tiny_run.factory, progress=False)
     assert not stale.exists()
     assert [json.loads(r)["step"] for r in (out / "metrics.jsonl").read_text().splitlines()] == [
-        32, 64, 96, 128
+        32,
+        64,
+        96,
+        128,
     ]
 
 
@@ -162,9 +167,7 @@ def bad_config(out: Path, *overrides: str, **top):
     )
 
 
-@pytest.mark.parametrize(
-    ("value", "workers"), [("nan", 0), ("inf", 0), ("1e30", 0), ("-inf", 1)]
-)
+@pytest.mark.parametrize(("value", "workers"), [("nan", 0), ("inf", 0), ("1e30", 0), ("-inf", 1)])
 def test_a_bad_reward_stops_training_named_with_a_good_checkpoint(tmp_path, value, workers):
     out = tmp_path / "r"
     cfg = bad_config(out, f"behavior.bad_value={value}", workers=workers)
@@ -215,8 +218,11 @@ def test_a_killed_worker_leaves_a_resumable_checkpoint(tmp_path):
     out = tmp_path / "r"
     dying = functools.partial(fake_infant_factory, episode_steps=10, die_after=20)
     cfg = tiny_run.config(out, 100_000, workers=1)
-    with pytest.raises(RunStopped, match=r"env worker \d \(pid \d+\) died unexpectedly, killed by "
-                       r"SIGKILL.*last good state \(step 64\)"):
+    with pytest.raises(
+        RunStopped,
+        match=r"env worker \d \(pid \d+\) died unexpectedly, killed by "
+        r"SIGKILL.*last good state \(step 64\)",
+    ):
         train(cfg, tiny_run.registry(), infant_factory=dying, progress=False)
     _, state = resume_checkpoint(out)
     assert state["env_steps"] == 2 * PER_ITERATION
@@ -284,3 +290,30 @@ def test_tensorboard_hides_iterations_a_resume_redoes(tmp_path):
     events.Reload()
     steps = [e.step for e in events.Scalars("Loss/learning_rate")]
     assert steps == [0, 1, 2, 3]
+
+
+def test_an_interrupt_while_an_iteration_closes_saves_what_metrics_record(tmp_path, monkeypatch):
+    """Ctrl-C landing after the boundary snapshot but before its metrics row is written (the
+    race a scheduler's SIGTERM can hit) is held until the row is written, so the checkpoint and
+    metrics.jsonl agree."""
+    import os
+    import signal
+
+    from devlearn.training.runner import DevRunner
+
+    real = DevRunner._record
+    calls = []
+
+    def interrupted_record(self, *args, **kwargs):
+        calls.append(1)
+        if len(calls) == 2:
+            os.kill(os.getpid(), signal.SIGINT)
+        return real(self, *args, **kwargs)
+
+    monkeypatch.setattr(DevRunner, "_record", interrupted_record)
+    out = tmp_path / "r"
+    with pytest.raises(KeyboardInterrupt):
+        _run(out, 32 * 10)
+    saved = load_checkpoint(out / "checkpoint_latest.pt")["env_steps"]
+    rows = [json.loads(line) for line in (out / "metrics.jsonl").read_text().splitlines()]
+    assert saved == rows[-1]["step"] == 64
