@@ -189,27 +189,33 @@ def term_values(envs: list[BehaviorEnv], contexts: list[StepContext]) -> np.ndar
         (num_terms, num_envs) float64, rows in the behaviour's term order.
     """
     terms = envs[0].terms
-    raw = np.empty((len(terms), len(envs)))
+    n = len(envs)
+    raw = np.empty((len(terms), n))
     batch = None
+    own_terms = False  # a per-environment term (each env's own instance and weight)
     for k, term in enumerate(terms):
         if isinstance(term, BatchedIntrinsicReward):
             if batch is None:
                 batch = BatchContext(contexts)
             value = term(batch)
-            if np.shape(value) != (len(envs),):
+            shape = value.shape if isinstance(value, np.ndarray) else np.shape(value)
+            if shape != (n,):
                 raise ValueError(
-                    f"batched reward term '{term.name}' returned shape {np.shape(value)}; "
-                    f"expected ({len(envs)},), one value per environment"
+                    f"batched reward term '{term.name}' returned shape {shape}; "
+                    f"expected ({n},), one value per environment"
                 )
             raw[k] = value
         else:
+            own_terms = True
             for i, (env, ctx) in enumerate(zip(envs, contexts)):
                 raw[k, i] = float(env.terms[k](ctx))
     if not reward_within_bound(raw):  # name the first bad value: term order, then env
         for k, i in np.argwhere(~(np.abs(raw) <= REWARD_BOUND)):  # also NaN
             check_reward(terms[k].name, float(raw[k, i]), envs[i].index, contexts[i].step)
-    # (T, N): a batched term's one weight, or each env's own term's (equal unless changed)
-    weights = np.array([[env.terms[k].weight for env in envs] for k in range(len(terms))])
+    if own_terms:  # (T, N): each env's own term's weight (equal unless changed)
+        weights = np.array([[env.terms[k].weight for env in envs] for k in range(len(terms))])
+    else:
+        weights = np.array([term.weight for term in terms])[:, None]
     return weights * raw
 
 
