@@ -4,7 +4,7 @@
 :meth:`SelfTouch.facts`, and :func:`batch_touch_observations` the observations of
 :meth:`SelfTouch.observe`; ``plugins/self_touch/tests/test_batched_facts.py`` compares them on
 recorded steps. The body map's sums repeat numpy's float operations in numpy's order (see
-:func:`_body_map_row`); the rest is boolean or done by the same numpy calls over the batch.
+:func:`_touch_row`); the rest is boolean or done by the same numpy calls over the batch.
 """
 
 from __future__ import annotations
@@ -19,31 +19,31 @@ from devlearn_self_touch.body_map import HANDS, NUM_PARTS, NUM_REGIONS
 
 
 @numba.njit(cache=True, nogil=True)
-def _body_map_row(sensors, forces, sensor_region, region_sizes, out) -> None:
-    """:func:`~devlearn_self_touch.body_map.sparse_body_map` into ``out`` (68,) float32.
+def _touch_row(
+    sensors, forces, sensor_region, region_sizes, hands, region_parts, g, contacts, parts
+):
+    """One infant's facts into its rows: ``g`` (68,) float32 the body map of
+    :func:`~devlearn_self_touch.body_map.sparse_body_map`, ``contacts`` (2, 68) a copy of
+    ``hands`` and ``parts`` (2, 34) bool :func:`~devlearn_self_touch.body_map.hand_touched_parts`.
 
     sparse_body_map takes |f| with ``np.einsum("ij,ij->i", f, f)``, whose two-lane SIMD loop
     (numpy's baseline build; einsum is not dispatched per CPU) adds the products as
     (f0² + f2²) + f1²; np.bincount then sums the magnitudes per region in sensor order, from 0.
     """
-    sums = np.zeros(out.shape[0])
+    sums = np.zeros(g.shape[0])
     for k in range(sensors.shape[0]):
         f0 = np.float64(forces[k, 0])
         f1 = np.float64(forces[k, 1])
         f2 = np.float64(forces[k, 2])
         sums[sensor_region[sensors[k]]] += np.sqrt((f0 * f0 + f2 * f2) + f1 * f1)
-    for j in range(out.shape[0]):
-        out[j] = np.float32(sums[j] / max(np.float64(region_sizes[j]), 1.0))
-
-
-@numba.njit(cache=True, nogil=True)
-def _hand_parts_row(contacts, region_parts, out) -> None:
-    """:func:`~devlearn_self_touch.body_map.hand_touched_parts` into ``out`` (2, 34) bool."""
-    out[:] = False
-    for h in range(contacts.shape[0]):
-        for j in range(contacts.shape[1]):
-            if contacts[h, j]:
-                out[h, region_parts[j]] = True
+    for j in range(g.shape[0]):
+        g[j] = np.float32(sums[j] / max(np.float64(region_sizes[j]), 1.0))
+    parts[:] = False
+    for h in range(hands.shape[0]):
+        for j in range(hands.shape[1]):
+            contacts[h, j] = hands[h, j]
+            if hands[h, j]:
+                parts[h, region_parts[j]] = True
 
 
 def batch_touch_facts(
@@ -64,11 +64,11 @@ def batch_touch_facts(
     contacts = np.empty((n, len(HANDS), NUM_REGIONS), dtype=bool)
     parts = np.empty((n, len(HANDS), NUM_PARTS), dtype=bool)
     for i, infant in enumerate(infants):
-        skin = infant.skin
-        sensors, forces = infant.touch_sparse()
-        _body_map_row(sensors, forces, skin.sensor_region, skin.region_sizes, g[i])
-        contacts[i] = infant.hand_contacts()
-        _hand_parts_row(contacts[i], np.asarray(infant.regions.parts), parts[i])
+        skin, (sensors, forces) = infant.skin, infant.touch_sparse()
+        hands = np.asarray(infant.hand_contacts(), dtype=bool)
+        region_parts = np.asarray(infant.regions.parts)
+        _touch_row(sensors, forces, skin.sensor_region, skin.region_sizes, hands, region_parts,
+                   g[i], contacts[i], parts[i])  # fmt: skip
     if touch_source == "hands":
         touched = contacts.any(axis=1)
     else:
