@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar
@@ -97,6 +98,10 @@ class Behavior(ABC):
         reset:  infant.reset(rng) -> on_episode_start(infant, rng) -> facts -> observe
         step:   before_step(infant, action) -> process_action -> physics step -> facts
                 -> observe -> reward terms -> evaluator.record
+
+    A behaviour may compute facts and observations of all the environments of a worker at
+    once (:meth:`batch_facts`, :meth:`batch_observe`); the step then reads ``batch_facts`` and
+    ``batch_observe`` once per worker in place of ``facts`` and ``observe`` per environment.
     """
 
     name: ClassVar[str]
@@ -147,6 +152,42 @@ class Behavior(ABC):
     @abstractmethod
     def observe(self, infant: Infant, facts: dict[str, Any]) -> dict[str, np.ndarray]:
         """Return this step's observations, name -> float32 array of a fixed shape."""
+
+    # --- batched observations (optional) ------------------------------------------------
+    def batch_facts(self, infants: Sequence[Infant]) -> list[dict[str, Any]]:
+        """:meth:`facts` of several environments at once, in their order.
+
+        Override it (and :meth:`batch_observe`) when per-step Python cost matters: a worker
+        then calls it once per step, on its first environment's behaviour, with all its
+        infants. An override must return, for every infant, exactly what :meth:`facts` would
+        (:func:`devlearn.testing.check_batched_observations` compares them), so it suits
+        behaviours whose facts keep no per-environment state on ``self``. Without an
+        override every environment calls its own behaviour's :meth:`facts`, as before.
+
+        Args:
+            infants: The environments' infants after this step's physics, (num_envs,).
+        Returns:
+            One facts dict per infant (default: ``[self.facts(i) for i in infants]``).
+        """
+        return [self.facts(infant) for infant in infants]
+
+    def batch_observe(
+        self, infants: Sequence[Infant], facts: Sequence[dict[str, Any]]
+    ) -> dict[str, np.ndarray]:
+        """:meth:`observe` of several environments at once, as arrays over them.
+
+        Called like :meth:`batch_facts` (once per worker step, when overridden) with its
+        result. Row ``i`` of every array must equal ``observe(infants[i], facts[i])``.
+
+        Args:
+            infants: The environments' infants, (num_envs,).
+            facts: Their facts, as :meth:`batch_facts` returned them.
+        Returns:
+            Observation name -> (num_envs, *shape) array (default: :meth:`observe` per
+            environment, stacked).
+        """
+        rows = [self.observe(infant, f) for infant, f in zip(infants, facts)]
+        return {name: np.stack([row[name] for row in rows]) for name in rows[0]}
 
     def obs_groups(self, observation_names: list[str]) -> dict[str, list[str]]:
         """Map rsl-rl's observation sets (``actor``, ``critic``) to observation names."""

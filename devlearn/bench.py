@@ -24,6 +24,7 @@ import numpy as np
 
 from devlearn.bench_ceiling import (
     env_breakdown,
+    observations_old_and_new,
     physics_ceiling,
     reference_env_steps_per_s,
     touch_old_and_new,
@@ -362,6 +363,8 @@ def run_bench(registry, quick: bool = False, progress: Callable[[str], None] = p
         progress(f"{name}: single-process environment steps, now and on the previous code paths")
         steps = n if name == "self_touch" else max(n // 10, 50)
         result[f"{name}_steps_per_s"] = bench_behavior_env(behavior, steps)
+        # a behaviour that batches: both figures again, old and new alternating (best of 2)
+        result.update(observations_old_and_new(behavior, steps, 20 if quick else 200))
         result[f"{name}_reference_steps_per_s"] = reference_env_steps_per_s(behavior, steps)
         ceiling = result[f"physics_{behavior.scene}_steps_per_s"]
         result[f"{name}_fraction_of_ceiling"] = result[f"{name}_steps_per_s"] / ceiling

@@ -15,10 +15,11 @@ import numpy as np
 
 BREAKDOWN_PARTS = ("physics", "touch", "eyes", "facts", "observe", "rewards", "env")
 """Parts of an environment step: physics (``infant.step``); touch (the compiled contact routine:
-sparse touch and hand contacts); eyes (both eye renders); facts (the behaviour's ``facts()``
-beyond those senses); observe (``observe()``, proprioception included); rewards (every reward
-term); env (action clipping, hooks, ``process_action``, per-term sums, the evaluator, and the
-episode resets, spread over the steps)."""
+sparse touch and hand contacts); eyes (both eye renders); facts (the behaviour's ``facts()``, or
+``batch_facts()`` when it batches them, beyond those senses); observe (``observe()`` or
+``batch_observe()``, proprioception included); rewards (every reward term and the reward
+guard); env (action clipping, hooks, ``process_action``, the observation guard, per-term sums,
+the evaluator, and the episode resets, spread over the steps)."""
 
 
 def physics_ceiling(scene: str, steps: int, seed: int = 0) -> float:
@@ -49,12 +50,18 @@ def env_breakdown(behavior, steps: int, seed: int = 0) -> dict[str, float]:
         Part -> ms per step, and ``total``.
     """
     from devlearn.env import BehaviorEnv
+    from devlearn.env.batch_advance import overrides
     from devlearn.env.behavior_env import term_values
+    from devlearn.env.guards import check_observations
     from devlearn.rewards import StepContext
 
     env = BehaviorEnv(behavior, seed=seed)
     env.reset()
     infant, behavior = env.infant, env.behavior
+    batch_facts, batch_observe = (
+        overrides(behavior, "batch_facts"),
+        overrides(behavior, "batch_observe"),
+    )
     senses = set(getattr(infant, "senses", ()))
     rng = np.random.default_rng(seed)
     actions = rng.uniform(-1, 1, (steps + 50, env.action_dim))
@@ -78,19 +85,24 @@ def env_breakdown(behavior, steps: int, seed: int = 0) -> dict[str, float]:
         if "eyes" in senses:
             infant.eyes()
             t4 = clock()
-        facts = behavior.facts(infant)
+        facts = behavior.batch_facts([infant])[0] if batch_facts else behavior.facts(infant)
         t5 = clock()
-        obs = behavior.observe(infant, facts)
+        if batch_observe:
+            obs = {k: v[0] for k, v in behavior.batch_observe([infant], [facts]).items()}
+        else:
+            obs = behavior.observe(infant, facts)
         t6 = clock()
+        check_observations(obs, env.index, env.episode_step + 1)
         last = env.episode_step == env.episode_steps - 1
         ctx = StepContext(infant, obs, facts, env.episode_step, last, env.stage)
-        values = term_values([env], [ctx])
         t7 = clock()
-        env.finish(ctx, values[:, 0])
+        values = term_values([env], [ctx])
         t8 = clock()
+        env.finish(ctx, values[:, 0])
+        t9 = clock()
         for part, dt in zip(
             BREAKDOWN_PARTS,
-            (t2 - t1, t3 - t2, t4 - t3, t5 - t4, t6 - t5, t7 - t6, t8 - t7 + t1 - t0),
+            (t2 - t1, t3 - t2, t4 - t3, t5 - t4, t6 - t5, t8 - t7, t9 - t8 + t7 - t6 + t1 - t0),
         ):
             spent[part] += dt
     env.close()
@@ -109,6 +121,24 @@ def reference_env_steps_per_s(behavior, steps: int) -> float:
     if hasattr(behavior, "per_env_reward_terms"):
         behavior.reward_terms = behavior.per_env_reward_terms
     return bench_behavior_env(behavior, steps, reference_touch=True)
+
+
+def with_per_env_observations(behavior):
+    """A copy of ``behavior`` on the per-environment path: its class's ``batch_facts`` and
+    ``batch_observe`` replaced by :class:`~devlearn.Behavior`'s, so every env calls ``facts``
+    and ``observe`` (the path before batched observations; in-process use only: the copy's
+    class is made here and does not pickle)."""
+    from devlearn.behavior import Behavior
+
+    cls = type(behavior)
+    per_env = type(
+        f"PerEnv{cls.__name__}",
+        (cls,),
+        {"batch_facts": Behavior.batch_facts, "batch_observe": Behavior.batch_observe},
+    )
+    clone = copy.deepcopy(behavior)
+    clone.__class__ = per_env
+    return clone
 
 
 def touch_old_and_new(steps: int, seed: int = 0) -> dict[str, Any]:
@@ -146,3 +176,31 @@ def touch_old_and_new(steps: int, seed: int = 0) -> dict[str, Any]:
             spent[key] += time.perf_counter() - start
     crib.close()
     return {key: 1000.0 * total / steps for key, total in spent.items()}
+
+
+def observations_old_and_new(behavior, steps: int, vec_steps: int) -> dict[str, Any]:
+    """Steps/s of a behaviour that batches its facts and observations against the same
+    behaviour on the per-environment path (:func:`with_per_env_observations`), same run.
+
+    One process, one env (``<name>_steps_per_s[_per_env_observations]``) and 16 envs stepped
+    as one batch (``<name>_vec_steps_per_s_in_process[_per_env_observations]``); each figure
+    is the better of two runs, old and new alternating, so that a burst of other work on the
+    machine does not favour either. Also the per-env path's breakdown
+    (``<name>_breakdown_per_env_observations_ms``). Empty for a behaviour that does not batch.
+    """
+    from devlearn.bench import bench_behavior_env, bench_vec_env
+    from devlearn.env.batch_advance import overrides
+
+    if not (overrides(behavior, "batch_facts") or overrides(behavior, "batch_observe")):
+        return {}
+    name, old = behavior.name, with_per_env_observations(behavior)
+    figures: dict[str, list[float]] = {}
+    for _ in range(2):
+        for suffix, b in (("", behavior), ("_per_env_observations", old)):
+            one = bench_behavior_env(b, steps)
+            many = bench_vec_env(b, num_envs=16, workers=0, steps=vec_steps)
+            figures.setdefault(f"{name}_steps_per_s{suffix}", []).append(one)
+            figures.setdefault(f"{name}_vec_steps_per_s_in_process{suffix}", []).append(many)
+    result: dict[str, Any] = {key: max(values) for key, values in figures.items()}
+    result[f"{name}_breakdown_per_env_observations_ms"] = env_breakdown(old, steps)
+    return result

@@ -104,6 +104,55 @@ def check_observations(
     return out
 
 
+def check_batched_observations(behavior: Any, infants: list[Any], where: str = "") -> None:
+    """Require ``batch_facts`` / ``batch_observe`` to give, for every infant, exactly (bit for
+    bit) what ``facts`` / ``observe`` give for it alone.
+
+    Args:
+        behavior: The behaviour (one instance serves every infant, as in a worker).
+        infants: Infants in the states to compare (after a step or a reset).
+        where: Which phase of the check this is, for messages.
+    """
+    n = len(infants)
+    per_env = [behavior.facts(infant) for infant in infants]
+    batched = behavior.batch_facts(infants)
+    require(
+        isinstance(batched, list) and len(batched) == n,
+        f"batch_facts() must return a list of {n} facts dicts, one per infant {where}",
+    )
+    for i, (got, want) in enumerate(zip(batched, per_env)):
+        require(
+            set(got) == set(want),
+            f"batch_facts()[{i}] has facts {sorted(got)}, facts() {sorted(want)} {where}",
+        )
+        for key, value in want.items():
+            require(
+                _identical(got[key], value),
+                f"batch_facts()[{i}]['{key}'] differs from facts()['{key}'] {where}",
+            )
+    observed = behavior.batch_observe(infants, batched)
+    for i, (infant, facts) in enumerate(zip(infants, per_env)):
+        want = behavior.observe(infant, facts)
+        require(
+            set(observed) == set(want),
+            f"batch_observe() gives {sorted(observed)}, observe() {sorted(want)} {where}",
+        )
+        for key, value in want.items():
+            require(
+                np.shape(observed[key]) == (n, *np.shape(value))
+                and _identical(np.asarray(observed[key])[i], np.asarray(value)),
+                f"batch_observe()['{key}'][{i}] differs from observe()['{key}'] {where}",
+            )
+
+
+def _identical(a: Any, b: Any) -> bool:
+    """Equal values; arrays of the same dtype and shape with the same bytes."""
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        a, b = np.asarray(a), np.asarray(b)
+        return a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes()
+    return bool(a == b)
+
+
 def check_number(value: Any, what: str, where: str = "") -> float:
     """Return ``value`` as a float if it is a finite real number (not a bool); else raise.
 

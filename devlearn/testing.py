@@ -31,6 +31,7 @@ from devlearn.behavior import Behavior, NetworkSpec
 from devlearn.conformance import (
     CheckedEvaluator,
     ConformanceError,
+    check_batched_observations,
     check_number,
     check_observations,
     check_picklable,
@@ -46,6 +47,7 @@ from devlearn.rewards import BatchedIntrinsicReward, IntrinsicReward
 
 __all__ = [
     "ConformanceError",
+    "check_batched_observations",
     "check_behavior",
     "check_behavior_class",
     "check_curriculum",
@@ -149,7 +151,9 @@ def check_behavior(
     uint8) arrays; every reward term must return a finite Python float (the message names the
     term). A training and an evaluation evaluator (``evaluator(training=...)``) record every
     step; their ``end_episode()`` metrics must be finite numbers and their ``summary()``
-    JSON-serialisable, and ``write_artifacts`` must return files that exist.
+    JSON-serialisable, and ``write_artifacts`` must return files that exist. A behaviour that
+    batches its facts or observations (``batch_facts``, ``batch_observe``) must give on every
+    step exactly what ``facts`` and ``observe`` give (:func:`check_batched_observations`).
 
     Args:
         behavior_cls: The Behavior subclass.
@@ -168,6 +172,7 @@ def check_behavior(
     from pathlib import Path
 
     from devlearn.env import BehaviorEnv
+    from devlearn.env.batch_advance import overrides
 
     check_behavior_class(behavior_cls)
     behavior = behavior_cls(config if config is not None else behavior_cls.config_class())
@@ -186,11 +191,15 @@ def check_behavior(
         check_network(behavior.network(), first, behavior.obs_groups(list(shapes)))
         rng = np.random.default_rng(seed)
 
+        batches = overrides(behavior, "batch_facts") or overrides(behavior, "batch_observe")
+
         def step(action: np.ndarray, where: str) -> bool:
             phase[0] = where
             obs, reward, done, _, info = env.step(action)
             check_number(reward, "the summed reward", where)
             check_observations(obs, shapes, where)
+            if batches:
+                check_batched_observations(env.behavior, [env.infant], where)
             return done
 
         for _ in range(steps):

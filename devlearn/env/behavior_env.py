@@ -7,7 +7,13 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from devlearn.env.guards import REWARD_BOUND, check_observations, check_reward
+from devlearn.env.batch_advance import advance_batch
+from devlearn.env.guards import (
+    REWARD_BOUND,
+    check_observations,
+    check_reward,
+    reward_within_bound,
+)
 from devlearn.rewards import BatchContext, BatchedIntrinsicReward, StepContext
 
 if TYPE_CHECKING:
@@ -106,14 +112,7 @@ class BehaviorEnv:
 
     def advance(self, action: np.ndarray) -> StepContext:
         """First half of a step: hooks, physics, facts and observations; no rewards yet."""
-        action = np.clip(np.asarray(action, dtype=np.float64), -1.0, 1.0)
-        self.behavior.before_step(self.infant, action)
-        self.infant.step(self.behavior.process_action(action, self.stage))
-        facts = self.behavior.facts(self.infant)
-        obs = self.behavior.observe(self.infant, facts)
-        check_observations(obs, self.index, self.episode_step + 1)
-        last_step = self.episode_step == self.episode_steps - 1
-        return StepContext(self.infant, obs, facts, self.episode_step, last_step, self.stage)
+        return advance_batch([self], [action])[0][0]
 
     def finish(
         self, ctx: StepContext, weighted: np.ndarray
@@ -219,36 +218,60 @@ def term_values(envs: list[BehaviorEnv], contexts: list[StepContext]) -> np.ndar
         (num_terms, num_envs) float64, rows in the behaviour's term order.
     """
     terms = envs[0].terms
-    values = np.empty((len(terms), len(envs)))
+    n = len(envs)
+    raw = np.empty((len(terms), n))
     batch = None
+    own_terms = False  # a per-environment term (each env's own instance and weight)
     for k, term in enumerate(terms):
         if isinstance(term, BatchedIntrinsicReward):
             if batch is None:
                 batch = BatchContext(contexts)
-            raw = np.asarray(term(batch), dtype=np.float64)
-            if raw.shape != (len(envs),):
+            value = term(batch)
+            shape = value.shape if isinstance(value, np.ndarray) else np.shape(value)
+            if shape != (n,):
                 raise ValueError(
-                    f"batched reward term '{term.name}' returned shape {raw.shape}; "
-                    f"expected ({len(envs)},), one value per environment"
+                    f"batched reward term '{term.name}' returned shape {shape}; "
+                    f"expected ({n},), one value per environment"
                 )
-            for i in np.flatnonzero(~(np.abs(raw) <= REWARD_BOUND))[:1]:  # also NaN
-                check_reward(term.name, float(raw[i]), envs[i].index, contexts[i].step)
-            values[k] = term.weight * raw
+            raw[k] = value
         else:
+            own_terms = True
             for i, (env, ctx) in enumerate(zip(envs, contexts)):
-                own = env.terms[k]
-                raw_value = check_reward(own.name, float(own(ctx)), env.index, ctx.step)
-                values[k, i] = own.weight * raw_value
-    return values
+                raw[k, i] = float(env.terms[k](ctx))
+    if not reward_within_bound(raw):  # name the first bad value: term order, then env
+        for k, i in np.argwhere(~(np.abs(raw) <= REWARD_BOUND)):  # also NaN
+            check_reward(terms[k].name, float(raw[k, i]), envs[i].index, contexts[i].step)
+    if own_terms:  # (T, N): each env's own term's weight (equal unless changed)
+        weights = np.array([[env.terms[k].weight for env in envs] for k in range(len(terms))])
+    else:
+        weights = np.array([term.weight for term in terms])[:, None]
+    return weights * raw
 
 
-def step_batch(envs: list[BehaviorEnv], actions) -> list[tuple]:
-    """Step ``envs`` with ``actions[i]`` each: physics and facts per env, then every reward
-    term (batched ones once for all), then each env's bookkeeping and auto-reset.
+def step_batch(
+    envs: list[BehaviorEnv], actions, obs_out: dict[str, np.ndarray] | None = None
+) -> list[tuple]:
+    """Step ``envs`` with ``actions[i]`` each: physics per env, facts and observations
+    (batched when the behaviour batches them), every reward term (batched ones once for all),
+    then each env's bookkeeping and auto-reset.
 
+    Args:
+        envs: The envs of one batch, sharing their batched terms, in batch order.
+        actions: (num_envs, action_dim), or one (action_dim,) action per env.
+        obs_out: Optional name -> (num_envs, *shape) arrays that receive every env's
+            returned observation (the next episode's first one after an auto-reset).
     Returns:
         One ``(obs, reward, done, time_out, episode_info)`` per env, as :meth:`BehaviorEnv.step`.
     """
-    contexts = [env.advance(action) for env, action in zip(envs, actions)]
+    contexts, batch = advance_batch(envs, actions)
     values = term_values(envs, contexts)
-    return [env.finish(ctx, values[:, i]) for i, (env, ctx) in enumerate(zip(envs, contexts))]
+    if obs_out is not None and batch is not None:
+        for name, array in batch.items():  # the whole batch at once; resets overwrite rows
+            obs_out[name][...] = array
+    results = [env.finish(ctx, values[:, i]) for i, (env, ctx) in enumerate(zip(envs, contexts))]
+    if obs_out is not None:
+        for i, (obs, _, done, _, _) in enumerate(results):
+            if batch is None or done:
+                for name, value in obs.items():
+                    obs_out[name][i] = value
+    return results

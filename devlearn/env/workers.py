@@ -116,10 +116,11 @@ def step_envs(envs: list[BehaviorEnv], offset: int, arrays: dict[str, np.ndarray
     batched reward terms run once for all of them.
     """
     infos = []
-    results = step_batch(envs, arrays["actions"][offset : offset + len(envs)])
-    for i, (obs, reward, done, time_out, info) in enumerate(results):
+    rows = slice(offset, offset + len(envs))
+    obs_out = {key[4:]: a[rows] for key, a in arrays.items() if key.startswith("obs/")}
+    results = step_batch(envs, arrays["actions"][rows], obs_out)
+    for i, (_, reward, done, time_out, info) in enumerate(results):
         j = offset + i
-        write_obs(arrays, j, obs)
         arrays["rewards"][j] = reward
         arrays["dones"][j] = done
         arrays["time_outs"][j] = time_out

@@ -160,9 +160,9 @@ class Infant:
         action = np.asarray(action, dtype=np.float64)
         if action.shape != (self.action_dim,):
             raise ValueError(f"action has shape {action.shape}; expected ({self.action_dim},)")
-        if not np.all(np.isfinite(action)):
+        if not np.isfinite(action).all():
             raise ValueError("action contains NaN or inf")
-        np.clip(action, -1.0, 1.0, out=self.data.ctrl)
+        np.minimum(np.maximum(action, -1.0), 1.0, out=self.data.ctrl)  # np.clip, less overhead
         mujoco.mj_step(self.model, self.data)
         self._cache.clear()
         self.steps += 1

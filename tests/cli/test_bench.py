@@ -60,3 +60,26 @@ def test_table_shows_fractions_and_breakdowns():
     table = format_table(result)
     assert "| self-touch env / crib physics | 23% | 8% | >= 20% |" in table
     assert "self_touch, ms per step (0.060 in all): physics 0.050, touch 0.010" in table
+
+
+def test_batched_and_per_env_observation_paths_are_measured_in_one_run():
+    from devlearn_self_touch import SelfTouch
+
+    from devlearn.bench_ceiling import observations_old_and_new, with_per_env_observations
+    from devlearn.env.batch_advance import overrides
+
+    behavior = SelfTouch()
+    old = with_per_env_observations(behavior)
+    assert overrides(behavior, "batch_observe") and not overrides(old, "batch_observe")
+    assert old.config == behavior.config and old.name == "self_touch"
+    figures = observations_old_and_new(behavior, steps=20, vec_steps=2)
+    rates = {
+        f"self_touch_{key}{suffix}"
+        for key in ("steps_per_s", "vec_steps_per_s_in_process")
+        for suffix in ("", "_per_env_observations")
+    }
+    assert set(figures) == rates | {"self_touch_breakdown_per_env_observations_ms"}
+    assert all(figures[key] > 0 for key in rates)
+    assert observations_old_and_new(old, steps=20, vec_steps=2) == {}  # nothing batched
+    table = format_table(figures)
+    assert "self_touch_per_env_observations, ms per step" in table

@@ -79,3 +79,21 @@ def test_senses_not_enabled_raise_clearly():
             getattr(infant, sense)()
     assert infant.hand_contacts().shape == (2, 68)  # facts need no sense
     infant.close()
+
+
+def test_compiled_proprioception_is_the_numpy_reference_bit_for_bit(crib):
+    """The compiled gather against the numpy vector on recorded random-pose steps, joints
+    near their limits included (where the limit proximity is strictly between 0 and 1)."""
+    rng = np.random.default_rng(5)
+    proprio, partial_limits = crib._proprio, 0
+    for step in range(400):
+        if step % 100 == 0:
+            crib.reset(rng, random_pose=True)
+        crib.step(rng.uniform(-1, 1, crib.action_dim))
+        got, want = proprio(crib.data), proprio.reference(crib.data)
+        assert got.dtype == want.dtype == np.float32
+        assert got.tobytes() == want.tobytes(), step
+        limit = got[90:120]
+        partial_limits += int(np.sum((limit > 0) & (limit < 1)))
+    assert partial_limits > 0
+    crib.reset(np.random.default_rng(0))

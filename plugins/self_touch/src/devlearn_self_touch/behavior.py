@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -16,6 +17,7 @@ from devlearn import (
     NetworkSpec,
     Stage,
 )
+from devlearn_self_touch.batched_facts import batch_touch_facts, batch_touch_observations
 from devlearn_self_touch.batched_rewards import (
     BatchedBalance,
     BatchedContactNovelty,
@@ -88,6 +90,19 @@ class SelfTouch(Behavior):
             "body_map": body_map_observation(facts["body_map"], self.config.body_map_scale),
             "proprioception": np.asarray(infant.proprioception(), dtype=np.float32),
         }
+
+    def batch_facts(self, infants: Sequence[Infant]) -> list[dict[str, Any]]:
+        """:meth:`facts` of a worker's infants at once, bit for bit the same
+        (:func:`~devlearn_self_touch.batched_facts.batch_touch_facts`)."""
+        cfg = self.config
+        return batch_touch_facts(infants, cfg.touch_source, cfg.touch_threshold)
+
+    def batch_observe(
+        self, infants: Sequence[Infant], facts: Sequence[dict[str, Any]]
+    ) -> dict[str, np.ndarray]:
+        """:meth:`observe` of a worker's infants at once: ``body_map`` (num_envs, 68) and
+        ``proprioception`` (num_envs, P), row i bit for bit ``observe(infants[i], facts[i])``."""
+        return batch_touch_observations(infants, facts, self.config.body_map_scale)
 
     def network(self) -> NetworkSpec:
         """The paper's Model I network (sec. II-A2 and II-A4)."""

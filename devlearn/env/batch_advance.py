@@ -1,0 +1,91 @@
+"""The first half of a batched step: physics per env, then facts and observations of all envs.
+
+Facts and observations come from the behaviour's :meth:`~devlearn.Behavior.batch_facts` and
+:meth:`~devlearn.Behavior.batch_observe`, once for the batch, when its class overrides them;
+otherwise from every env's own behaviour, one env at a time, as before.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from devlearn.env.guards import check_observations, observation_within_bound
+from devlearn.rewards import StepContext
+
+if TYPE_CHECKING:
+    from devlearn.behavior import Behavior
+    from devlearn.env.behavior_env import BehaviorEnv
+
+_OVERRIDES: dict[tuple[type, str], bool] = {}
+
+
+def overrides(behavior: Behavior, method: str) -> bool:
+    """True when ``behavior``'s class overrides :class:`~devlearn.Behavior`'s ``method``."""
+    key = (type(behavior), method)
+    if key not in _OVERRIDES:
+        from devlearn.behavior import Behavior  # torch comes with it: not at import time
+
+        _OVERRIDES[key] = getattr(key[0], method) is not getattr(Behavior, method)
+    return _OVERRIDES[key]
+
+
+def clipped_actions(actions: Any) -> np.ndarray | list[np.ndarray]:
+    """Every env's action as float64 clipped to [-1, 1]: rows of one array for a
+    (num_envs, action_dim) array (one clip for the batch), else one array per action."""
+    # np.minimum(np.maximum(...)) is np.clip (NaN stays NaN) without its Python overhead
+    if isinstance(actions, np.ndarray) and actions.ndim == 2:
+        return np.minimum(np.maximum(actions.astype(np.float64), -1.0), 1.0)
+    return [np.minimum(np.maximum(np.asarray(a, dtype=np.float64), -1.0), 1.0) for a in actions]
+
+
+def advance_batch(
+    envs: list[BehaviorEnv], actions: Any
+) -> tuple[list[StepContext], dict[str, np.ndarray] | None]:
+    """Hooks, ``process_action`` and physics per env, then facts and observations.
+
+    Every observation is checked by the guard (:func:`devlearn.env.guards.check_observations`):
+    a bad one raises, naming the env's index and its step.
+
+    Args:
+        envs: The envs of one batch (one behaviour class), in batch order.
+        actions: (num_envs, action_dim) array, or one (action_dim,) action per env.
+    Returns:
+        ``(contexts, batch)``: one :class:`~devlearn.rewards.StepContext` per env (no rewards
+        yet), and the observations as name -> (num_envs, *shape) arrays when the behaviour
+        batched them (each context's observations are row views of these), else None.
+    """
+    for env, action in zip(envs, clipped_actions(actions)):
+        env.behavior.before_step(env.infant, action)
+        env.infant.step(env.behavior.process_action(action, env.stage))
+    lead = envs[0].behavior
+    infants = [env.infant for env in envs]
+    if overrides(lead, "batch_facts"):
+        facts = lead.batch_facts(infants)
+    else:
+        facts = [env.behavior.facts(env.infant) for env in envs]
+    batch = None
+    if overrides(lead, "batch_observe"):
+        batch = lead.batch_observe(infants, facts)
+        observations = [{name: a[i] for name, a in batch.items()} for i in range(len(envs))]
+        fine = all(a.dtype.kind not in "fc" or observation_within_bound(a) for a in batch.values())
+        if not fine:  # find the first env with a bad value, and name it
+            for env, obs in zip(envs, observations):
+                check_observations(obs, env.index, env.episode_step + 1)
+    else:
+        observations = [env.behavior.observe(env.infant, f) for env, f in zip(envs, facts)]
+        for env, obs in zip(envs, observations):
+            check_observations(obs, env.index, env.episode_step + 1)
+    contexts = [
+        StepContext(
+            env.infant,
+            obs,
+            f,
+            env.episode_step,
+            env.episode_step == env.episode_steps - 1,
+            env.stage,
+        )
+        for env, obs, f in zip(envs, observations, facts)
+    ]
+    return contexts, batch

@@ -1,0 +1,83 @@
+"""A recorded self_touch rollout: what a worker's envs returned, kept to catch any change.
+
+``python plugins/self_touch/tests/recorded_rollout.py OUT.npz`` records it with the code on
+the Python path; ``data/rollout_f17ca1c.npz`` was recorded on commit f17ca1c (before batched
+facts and observations, the compiled proprioception and the compiled guards) with::
+
+    git archive f17ca1c | tar -x -C BASE
+    PYTHONPATH=BASE:BASE/plugins/self_touch/src python recorded_rollout.py OUT.npz
+
+Only APIs that commit already had are used, so the same function replays it on today's code.
+"""
+
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+
+NUM_ENVS, STEPS, EPISODE_STEPS, SEED = 2, 120, 40, 3
+
+
+def log1p_probe() -> np.ndarray:
+    """np.log1p on fixed inputs: equal on machines whose numpy computes it the same way
+    (the body map observation is log1p of the map; SIMD builds may differ in the last bit)."""
+    return np.log1p(np.linspace(0.0, 50.0, 1001))
+
+
+def record_rollout() -> dict[str, np.ndarray]:
+    """Step ``NUM_ENVS`` real self_touch envs, sharing their batched terms as in a worker,
+    from random poses, with random actions and a hand placed on the body every 10 steps.
+
+    Returns:
+        ``body_map`` (STEPS, NUM_ENVS, 68) and ``proprioception`` (STEPS, NUM_ENVS, P) float32
+        observations, ``rewards`` (STEPS, NUM_ENVS) float64, ``dones`` bool, ``episode_info``
+        (every finished episode's values, keys sorted, in order) with ``episode_keys``, and
+        ``log1p_probe``.
+    """
+    from devlearn_self_touch import SelfTouch
+
+    from devlearn.conformance import place_hand_on_body
+    from devlearn.env.behavior_env import step_batch
+    from devlearn.env.workers import make_envs
+
+    envs = make_envs(SelfTouch(), list(range(NUM_ENVS)), None)
+    rng = np.random.default_rng(SEED)
+    out: dict[str, list] = {"body_map": [], "proprioception": [], "rewards": [], "dones": []}
+    info_values: list[float] = []
+    keys: list[str] = []
+    try:
+        for env in envs:
+            env.set_stage({"random_pose": True})
+            env.episode_steps = EPISODE_STEPS
+            env.reset()
+        for t in range(STEPS):
+            if t % 10 == 5:
+                for env in envs:
+                    place_hand_on_body(env.infant, rng)
+            actions = rng.uniform(-1, 1, (NUM_ENVS, envs[0].action_dim))
+            results = step_batch(envs, actions)
+            out["body_map"].append([obs["body_map"] for obs, *_ in results])
+            out["proprioception"].append([obs["proprioception"] for obs, *_ in results])
+            out["rewards"].append([reward for _, reward, *_ in results])
+            out["dones"].append([done for _, _, done, *_ in results])
+            for *_, info in results:
+                if info is not None:
+                    keys = sorted(info)
+                    info_values.extend(info[k] for k in keys)
+    finally:
+        for env in envs:
+            env.close()
+    return {
+        "body_map": np.array(out["body_map"], dtype=np.float32),
+        "proprioception": np.array(out["proprioception"], dtype=np.float32),
+        "rewards": np.array(out["rewards"], dtype=np.float64),
+        "dones": np.array(out["dones"], dtype=bool),
+        "episode_info": np.array(info_values, dtype=np.float64),
+        "episode_keys": np.array(keys),
+        "log1p_probe": log1p_probe(),
+    }
+
+
+if __name__ == "__main__":
+    np.savez_compressed(sys.argv[1], **record_rollout())

@@ -1,0 +1,141 @@
+"""Batched and per-environment self_touch facts and observations are identical, bit for bit."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from devlearn_self_touch import SelfTouch, SelfTouchConfig
+from self_touch_fakes import FakeInfant, ScriptedInfant
+
+from devlearn.behavior import Behavior
+from devlearn.conformance import place_hand_on_body
+from devlearn.env.behavior_env import BehaviorEnv, step_batch
+from devlearn.env.workers import make_envs
+from devlearn.infant import build_infant
+from devlearn.testing import ConformanceError, check_batched_observations
+
+SOURCES = ("hands", "threshold", "hands_or_threshold")
+
+
+class PerEnvSelfTouch(SelfTouch):
+    """SelfTouch on the per-environment path: facts(), observe() and terms per env."""
+
+    batch_facts = Behavior.batch_facts
+    batch_observe = Behavior.batch_observe
+
+    def reward_terms(self):
+        return self.per_env_reward_terms()
+
+
+@pytest.fixture(scope="module")
+def cribs():
+    infants = [build_infant("crib", senses=SelfTouch.senses) for _ in range(3)]
+    yield infants
+    for infant in infants:
+        infant.close()
+
+
+def test_recorded_crib_steps_give_the_same_facts_and_observations(cribs):
+    """Three real infants in one batch, random poses and actions, a hand placed on the body
+    now and then: every step, every touch source, the batched path equals the per-env one."""
+    behaviors = [SelfTouch(SelfTouchConfig(touch_source=s)) for s in SOURCES]
+    rng = np.random.default_rng(11)
+    hand_steps = threshold_steps = 0
+    for step in range(240):
+        for infant in cribs:
+            if step % 80 == 0:
+                infant.reset(rng, random_pose=True)
+            if step % 20 == 10:
+                place_hand_on_body(infant, rng)
+            infant.step(rng.uniform(-1, 1, infant.action_dim))
+        for behavior in behaviors:
+            check_batched_observations(behavior, cribs, f"at step {step}")
+        facts = behaviors[1].batch_facts(cribs)
+        hand_steps += any(f["hand_contacts"].any() for f in facts)
+        threshold_steps += any(f["touched"].any() for f in facts)
+    assert hand_steps > 10 and threshold_steps > 100  # both kinds of touch were compared
+
+
+def test_threshold_is_compared_in_float32_as_facts_does():
+    """g_j exactly float32(0.1): facts() compares the float32 map with the Python float in
+    float32 (not touched); a float64 comparison would call it touched."""
+    touch = np.zeros((204, 3), np.float32)
+    touch[0] = (np.float32(0.3), 0, 0)  # region 0 holds 3 sensors: g_0 = 0.3 / 3
+    touch[6:9] = np.float32(1e5)  # a kick into the mattress: large forces
+    infant = FakeInfant(touch)
+    behavior = SelfTouch(SelfTouchConfig(touch_source="threshold", touch_threshold=0.1))
+    facts = behavior.batch_facts([infant])[0]
+    assert facts["body_map"][0] == np.float32(0.1) and float(facts["body_map"][0]) > 0.1
+    assert not facts["touched"][0] and facts["touched"][2]
+    check_batched_observations(behavior, [infant, FakeInfant(), infant])
+
+
+def test_the_check_names_a_batched_fact_that_differs():
+    class Wrong(SelfTouch):
+        def batch_facts(self, infants):
+            facts = super().batch_facts(infants)
+            facts[-1]["touched"] = ~facts[-1]["touched"]
+            return facts
+
+    with pytest.raises(ConformanceError, match=r"batch_facts\(\)\[1\]\['touched'\] differs"):
+        check_batched_observations(Wrong(), [FakeInfant(), FakeInfant()])
+
+
+def test_a_worker_batch_calls_the_batched_methods_once_per_step():
+    calls = []
+
+    class Counting(SelfTouch):
+        def facts(self, infant):
+            raise AssertionError("per-env facts() called on the batched path")
+
+        def batch_facts(self, infants):
+            calls.append(len(infants))
+            return super().batch_facts(infants)
+
+    envs = make_envs(Counting(), [0, 1, 2], ScriptedInfant)
+    for env in envs:
+        env.behavior.facts = SelfTouch.facts.__get__(env.behavior)  # resets use facts()
+        env.reset()
+    for _ in range(5):
+        step_batch(envs, np.zeros((3, ScriptedInfant.action_dim)))
+    assert calls == [3] * 5
+
+
+def test_real_rollout_is_the_same_on_the_batched_and_per_env_paths():
+    """Observations, rewards, dones and episode summaries of a worker's three envs (batched
+    facts, observations and terms) against three envs on the per-environment path."""
+    config = SelfTouchConfig()
+    batch = make_envs(SelfTouch(config), [0, 1, 2], None)
+    reference = [BehaviorEnv(PerEnvSelfTouch(config), seed, index=seed) for seed in range(3)]
+    rng = np.random.default_rng(2)
+    try:
+        for env in batch + reference:
+            env.set_stage({"random_pose": True})
+            env.episode_steps = 60
+        for a, b in zip(batch, reference):
+            assert _same_obs(a.reset(), b.reset())
+        paid = 0.0
+        for step in range(150):
+            if step % 15 == 5:
+                for a, b in zip(batch, reference):
+                    state = rng.bit_generator.state
+                    place_hand_on_body(a.infant, rng)
+                    rng.bit_generator.state = state  # the same placement for both
+                    place_hand_on_body(b.infant, rng)
+            actions = rng.uniform(-1, 1, (3, batch[0].action_dim))
+            got = step_batch(batch, actions)
+            want = [env.step(action) for env, action in zip(reference, actions)]
+            for (o1, r1, d1, t1, i1), (o2, r2, d2, t2, i2) in zip(got, want):
+                assert _same_obs(o1, o2), step
+                assert (r1, d1, t1, i1) == (r2, d2, t2, i2), step
+                paid += r1
+        assert paid > 0  # touches were paid for
+    finally:
+        for env in batch + reference:
+            env.close()
+
+
+def _same_obs(a: dict, b: dict) -> bool:
+    return a.keys() == b.keys() and all(
+        a[k].dtype == b[k].dtype and a[k].tobytes() == b[k].tobytes() for k in a
+    )
