@@ -41,7 +41,10 @@ def record_rollout() -> dict[str, np.ndarray]:
     from devlearn.env.behavior_env import step_batch
     from devlearn.env.workers import make_envs
 
-    envs = make_envs(SelfTouch(), list(range(NUM_ENVS)), None)
+    behavior = SelfTouch()
+    # the memory f17ca1c had (each env its own); an unknown attribute there, so harmless
+    behavior.config.lifetime_memory = "per_env"
+    envs = make_envs(behavior, list(range(NUM_ENVS)), None)
     rng = np.random.default_rng(SEED)
     out: dict[str, list] = {"body_map": [], "proprioception": [], "rewards": [], "dones": []}
     info_values: list[float] = []

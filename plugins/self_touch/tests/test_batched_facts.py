@@ -104,7 +104,7 @@ def test_a_worker_batch_calls_the_batched_methods_once_per_step():
 def test_real_rollout_is_the_same_on_the_batched_and_per_env_paths():
     """Observations, rewards, dones and episode summaries of a worker's three envs (batched
     facts, observations and terms) against three envs on the per-environment path."""
-    config = SelfTouchConfig()
+    config = SelfTouchConfig(lifetime_memory="per_env")  # the reference terms are per env
     batch = make_envs(SelfTouch(config), [0, 1, 2], None)
     reference = [BehaviorEnv(PerEnvSelfTouch(config), seed, index=seed) for seed in range(3)]
     rng = np.random.default_rng(2)
