@@ -26,7 +26,7 @@ def describe_behavior(behavior: Behavior, infant_factory=None) -> dict[str, Any]
     if infant_factory is None:
         from devlearn.infant import build_infant
 
-        infant = build_infant(behavior.scene, senses=behavior.senses)
+        infant = build_infant(behavior.scene, senses=behavior.senses, **behavior.infant_options())
     else:
         infant = infant_factory(behavior.scene, behavior.senses)
     try:

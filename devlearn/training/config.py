@@ -293,10 +293,21 @@ def _fill(obj: Any, data: dict[str, Any], prefix: str) -> None:
 
 
 def from_dict(data: dict[str, Any], behavior_cls: type) -> RunConfig:
-    """Rebuild a RunConfig saved by :func:`to_dict` for the behaviour class ``behavior_cls``."""
+    """Rebuild a RunConfig saved by :func:`to_dict` for the behaviour class ``behavior_cls``.
+
+    A saved behaviour config that lacks a field named in the config class's
+    ``legacy_defaults`` (a ClassVar dict, optional) gets that value instead of the field's
+    default: a field added later keeps old runs as they were trained.
+    """
     cfg = RunConfig(behavior_name=behavior_cls.name, behavior=behavior_cls.config_class())
     if "network" not in data:
         cfg.network = dataclasses.replace(LEGACY_NETWORK)
+    saved = data.get("behavior")
+    if isinstance(saved, dict):
+        legacy = getattr(behavior_cls.config_class, "legacy_defaults", {})
+        for name, value in legacy.items():
+            if name not in saved:
+                setattr(cfg.behavior, name, value)
     _fill(cfg, data, "")
     return cfg
 
