@@ -24,7 +24,9 @@ class HandRegardConfig:
     """How the infant and its toys look: ``skin`` (bare hands the body's colour, as in MIMo;
     toys in the natural palette of baby blocks, red, blue, yellow, wood) or ``mittens``
     (purple mittens; toys recoloured away from their hue). Babbling calibrates the detector
-    on the same appearance (results/hand_regard/README.md, "Detector, both appearances")."""
+    on the same appearance. Default mittens: on skin the colour babbling learns is the whole
+    body's and the detector fires mostly on arms, legs and trunk (results/hand_regard/README.md,
+    "Detector, both appearances")."""
 
     # --- motor babbling and calibration (sec. II-B2) -------------------------------------
     babbling_steps: int = 10_000
