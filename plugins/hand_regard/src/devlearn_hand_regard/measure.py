@@ -158,6 +158,44 @@ def _stats(tp: float, fp: float, fn: float, tn: float) -> dict:
     }
 
 
+def detection_picture(
+    detector: HandDetector,
+    data: BabblingData,
+    segmentation: np.ndarray,
+    path: str | Path,
+    frames: int = 6,
+    scale: int = 2,
+) -> Path:
+    """Draw ``frames`` left-eye test frames that show a hand, spread over the recording.
+
+    Top row: the eye image; bottom row: the same with the detected left hand tinted green,
+    the detected right hand blue and the true hands' pixels (segmentation) outlined red.
+    """
+    import cv2
+
+    shown = np.flatnonzero(np.isin(segmentation[:, 0], (1, 2)).sum(axis=(1, 2)) >= 20)
+    pick = shown[np.linspace(0, len(shown) - 1, min(frames, len(shown))).astype(int)]
+    top, bottom = [], []
+    for t in pick:
+        image = data.eyes[t, 0]
+        _, masks = detector.detect(data.eyes[t], data.proprioception[t])
+        tinted = image.astype(np.float32)
+        for hand, colour in ((0, (0, 220, 0)), (1, (0, 80, 255))):
+            tinted[masks[0, hand]] = 0.4 * tinted[masks[0, hand]] + 0.6 * np.array(colour)
+        big = cv2.resize(tinted.astype(np.uint8), None, fx=scale, fy=scale, interpolation=0)
+        truth = np.isin(segmentation[t, 0], (1, 2)).astype(np.uint8)
+        truth = cv2.resize(truth, None, fx=scale, fy=scale, interpolation=0)
+        contours, _ = cv2.findContours(truth, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+        cv2.drawContours(big, contours, -1, (255, 0, 0), 1)
+        top.append(cv2.resize(image, None, fx=scale, fy=scale, interpolation=0))
+        bottom.append(big)
+    picture = np.concatenate([np.concatenate(top, 1), np.concatenate(bottom, 1)], 0)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    cv2.imwrite(str(path), cv2.cvtColor(picture, cv2.COLOR_RGB2BGR))
+    return path
+
+
 def main(argv: list[str] | None = None) -> dict:
     """Command line: see the module docstring and ``--help``."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -175,6 +213,7 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--detector", help="score this detector JSON instead of calibrating")
     parser.add_argument("--save", help="write the calibrated detector JSON here")
     parser.add_argument("--out", help="write the JSON result here too")
+    parser.add_argument("--picture", help="draw test frames with detections and truth (PNG)")
     args = parser.parse_args(argv)
     from devlearn.infant import build_infant
 
@@ -221,6 +260,8 @@ def main(argv: list[str] | None = None) -> dict:
         result["detect_ms_per_step"] = round(1000 * (time.perf_counter() - start) / len(test), 2)
         means_only = score(HandDetector(params), test, segmentation, posture=False)
         result["score_mean_positions"] = {k: means_only[k] for k in ("pairs", "pair_mean")}
+        if args.picture:
+            detection_picture(HandDetector(params), test, segmentation, args.picture)
     finally:
         infant.close()
     text = json.dumps(result, indent=1)
