@@ -171,6 +171,7 @@ class HandRegard(Behavior):
 
         Returns:
             ``eyes`` (2, H, W, 3) uint8; ``hand_detections`` (2 eyes, 2 hands) bool;
+            ``hand_masks`` (2 eyes, 2 hands, H, W) bool, each detected hand's pixels;
             ``hand_flow`` (2, 2) summed flow magnitude and ``hand_pixels`` (2, 2) pixel counts
             (see :class:`HandFlow`); ``hand_count`` int; ``image_width`` int; ``motion`` float,
             m_t over both hands.
@@ -183,6 +184,7 @@ class HandRegard(Behavior):
         facts = {
             "eyes": eyes,
             "hand_detections": detections,
+            "hand_masks": masks,
             "hand_flow": flow,
             "hand_pixels": pixels,
             "hand_count": int(detections.sum()),
