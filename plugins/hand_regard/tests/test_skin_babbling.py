@@ -14,10 +14,9 @@ from devlearn.infant import build_infant
 
 pytestmark = pytest.mark.slow
 CALIBRATION_STEPS = 2500
-"""Short babbling (the paper: 10,000) keeps this test ~20 s. What the colour learned is
-depends on the length (results/hand_regard/README.md, "Detector, both appearances"): 1,500
-steps found the floor between arm and body, 2,500 the skin plus a shaded skin/wood box, 10,000
-the skin alone; precision was low every time, which is what this test pins down."""
+"""Short babbling (the paper: 10,000) keeps this test ~20 s; at 2,500 steps the colour learned
+is the lit skin's, as at 10,000 (results/hand_regard/README.md, "Detector, both
+appearances"). Pixel precision is low at every length tried, which is what this test pins."""
 TEST_EPISODES, TEST_EPISODE_STEPS = 2, 150
 """Random-start test frames (as ``devlearn eval`` starts), seed 1."""
 
@@ -50,15 +49,17 @@ def test_babbling_finds_arm_correlated_skin_coloured_tracks(skin):
 
 
 def test_skin_detector_finds_the_hands_but_not_only_them(skin):
-    # What fails: the learned colour is also the body's (and a shaded toy's), so the
-    # detector finds the hands (recall) but mostly fires elsewhere (precision). Measured at
-    # these seeds: any hand in an eye precision 0.35, recall 0.73; pair-averaged precision
-    # 0.20, recall 0.80; 11% of the detected pixels are hands. Mittens: precision 1.0.
+    # What fails: the learned colour is also the body's, so the detector finds the hands
+    # (recall) but most of what it marks is arm, leg and trunk (pixel precision). Measured at
+    # these seeds: any hand in an eye recall 0.94 (precision 0.65: hands are in 42% of these
+    # few frames); detected pixels 0.37 hands, 0.63 body; pixel precision per hand 0.18 and
+    # 0.09; pair-averaged precision 0.34. Mittens: 0.999 of the detected pixels are hands.
     result = skin[1]
-    assert result["any_hand"]["recall"] > 0.55 and result["pair_mean"]["recall"] > 0.6
-    assert result["any_hand"]["precision"] < 0.5
-    assert result["pair_mean"]["precision"] < 0.35
-    assert result["pixels"]["left_hand"] + result["pixels"]["right_hand"] < 0.25
+    assert result["any_hand"]["recall"] > 0.8
+    assert result["pixels"]["body"] > 0.5
+    assert result["pixels"]["left_hand"] + result["pixels"]["right_hand"] < 0.5
+    assert all(p["precision"] < 0.3 for p in result["hand_pixels"].values())
+    assert result["pair_mean"]["precision"] < 0.45
 
 
 def test_skin_detector_fires_on_a_skin_coloured_forearm(skin):
