@@ -121,6 +121,13 @@ class Behavior(ABC):
     def __init__(self, config: Any | None = None) -> None:
         self.config = config if config is not None else self.config_class()
 
+    def infant_options(self) -> dict[str, Any]:
+        """Keyword arguments for :func:`devlearn.infant.build_infant` beyond the scene and
+        senses, e.g. ``{"appearance": "skin"}`` (default: none). The environment passes them to
+        its infant factory, so a behaviour chooses how its infant looks without building it.
+        """
+        return {}
+
     # --- episode hooks ------------------------------------------------------------------
     def on_episode_start(self, infant: Infant, rng: np.random.Generator) -> None:
         """Called at the start of every episode, after the infant's reset, before its first

@@ -15,7 +15,8 @@ def describe_behavior(behavior: Behavior, infant_factory=None) -> dict[str, Any]
 
     Args:
         behavior: A behaviour instance (its default config is fine).
-        infant_factory: Optional ``(scene, senses) -> Infant`` replacement for tests.
+        infant_factory: Optional ``(scene, senses, **behavior.infant_options()) -> Infant``
+            replacement for tests.
 
     Returns:
         JSON-ready dict with keys ``behavior``, ``description``, ``scene``, ``senses``,
@@ -26,9 +27,9 @@ def describe_behavior(behavior: Behavior, infant_factory=None) -> dict[str, Any]
     if infant_factory is None:
         from devlearn.infant import build_infant
 
-        infant = build_infant(behavior.scene, senses=behavior.senses)
+        infant = build_infant(behavior.scene, senses=behavior.senses, **behavior.infant_options())
     else:
-        infant = infant_factory(behavior.scene, behavior.senses)
+        infant = infant_factory(behavior.scene, behavior.senses, **behavior.infant_options())
     try:
         rng = np.random.default_rng(0)
         infant.reset(rng, random_pose=False)

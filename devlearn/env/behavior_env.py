@@ -20,14 +20,18 @@ if TYPE_CHECKING:
     from devlearn.behavior import Behavior
 
 InfantFactory = Callable[..., Any]
-"""``factory(scene, senses=...) -> Infant``; defaults to :func:`devlearn.infant.build_infant`."""
+"""``factory(scene, senses=..., **behavior.infant_options()) -> Infant``; defaults to
+:func:`devlearn.infant.build_infant`."""
 
 
-def build_default_infant(scene: str, senses: tuple[str, ...]) -> Any:
-    """Build the real infant (imported lazily so this module imports without it)."""
+def build_default_infant(scene: str, senses: tuple[str, ...], **options: Any) -> Any:
+    """Build the real infant (imported lazily so this module imports without it).
+
+    ``options`` are the behaviour's :meth:`~devlearn.behavior.Behavior.infant_options`.
+    """
     from devlearn.infant import build_infant
 
-    return build_infant(scene, senses=senses)
+    return build_infant(scene, senses=senses, **options)
 
 
 class BehaviorEnv:
@@ -44,7 +48,8 @@ class BehaviorEnv:
     Args:
         behavior: The behaviour (this env's own instance; it may keep per-env state).
         seed: Seed of this env's numpy Generator (initial poses).
-        infant_factory: ``factory(scene, senses=...) -> Infant``; tests pass a fake one.
+        infant_factory: ``factory(scene, senses=..., **behavior.infant_options()) -> Infant``;
+            tests pass a fake one.
         training: Passed to ``behavior.evaluator`` (False for ``devlearn eval``).
         index: This env's index on its rank (named by the reward and observation guards).
     """
@@ -60,7 +65,8 @@ class BehaviorEnv:
         self.behavior = behavior
         self.index = index
         factory = infant_factory or build_default_infant
-        self.infant = factory(behavior.scene, senses=tuple(behavior.senses))
+        options = behavior.infant_options()
+        self.infant = factory(behavior.scene, senses=tuple(behavior.senses), **options)
         self.rng = np.random.default_rng(seed)
         self.terms = list(behavior.reward_terms())
         """Reward terms in the behaviour's order; batched ones may be shared with other envs."""

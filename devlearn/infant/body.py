@@ -79,8 +79,12 @@ def add_infant(
     actuated_groups: set[str],
     held: Mapping[str, float],
     vestibular: bool,
+    hand_rgba: tuple[float, float, float, float] = MITTEN_RGBA,
 ) -> list[str]:
     """Add the infant's bodies, joints, motors and contact exclusions to ``root``.
+
+    The hand and fingers bodies are coloured ``hand_rgba`` (default: purple mittens; pass
+    ``SKIN_RGBA`` for bare hands), every other body part skin, the eyes dark.
 
     Joints whose group is not in ``actuated_groups`` are locked: left out of the model, their
     body rotated by the held angle (``held``, keyed by full joint name "left_knee"; default 0).
@@ -146,7 +150,7 @@ def add_infant(
                     size=geom.size,
                     contype=collide,
                     conaffinity=collide,
-                    rgba=_colour(spec),
+                    rgba=_colour(spec, hand_rgba),
                     **kwargs,
                 )
             if spec.camera:
@@ -174,8 +178,8 @@ def add_infant(
     return actuated
 
 
-def _colour(spec) -> tuple[float, float, float, float]:
-    """RGBA of a body's geoms: eyes dark, mitten hands purple, the rest skin."""
+def _colour(spec, hand_rgba) -> tuple[float, float, float, float]:
+    """RGBA of a body's geoms: eyes dark, hands (and fingers) ``hand_rgba``, the rest skin."""
     if not spec.collides:
         return EYE_RGBA
-    return MITTEN_RGBA if spec.name in MITTEN_BODIES else SKIN_RGBA
+    return hand_rgba if spec.name in MITTEN_BODIES else SKIN_RGBA

@@ -10,10 +10,13 @@ Vec3 = tuple[float, float, float]
 
 SKIN_RGBA = (0.95, 0.78, 0.66, 1.0)
 MITTEN_RGBA = (0.62, 0.38, 0.78, 1.0)
-"""The mitten hands (hand and fingers bodies) wear purple mittens: a colour apart from the skin
-and from the toys, as an infant's mittens would be. Nothing in devlearn tells a behaviour this
-colour: hand_regard learns what its hands look like from motor babbling."""
+"""In the ``mittens`` appearance the hands (hand and fingers bodies) wear purple mittens: a
+colour apart from the skin and from the toys, as an infant's mittens would be. In the ``skin``
+appearance (``build_infant(..., appearance="skin")``) they are bare, ``SKIN_RGBA`` like the rest
+of the body (as in MIMo). Nothing in devlearn tells a behaviour either colour: hand_regard
+learns what its hands look like from motor babbling."""
 MITTEN_BODIES = ("hand", "fingers")
+"""Bodies coloured by the appearance's hand colour."""
 EYE_RGBA = (0.15, 0.10, 0.08, 1.0)
 
 

@@ -12,7 +12,13 @@ from dm_control import mjcf
 from devlearn.infant import contacts, vision
 from devlearn.infant.body_table import BODY_TABLE
 from devlearn.infant.regions import NUM_PARTS, NUM_REGIONS, RegionTable, region_table
-from devlearn.infant.scenes import EPISODE_STEPS, PHYSICS_TIMESTEP, SCENES, build_scene_model
+from devlearn.infant.scenes import (
+    APPEARANCES,
+    EPISODE_STEPS,
+    PHYSICS_TIMESTEP,
+    SCENES,
+    build_scene_model,
+)
 from devlearn.infant.senses import Proprioception, vestibular
 from devlearn.infant.skin import Skin
 
@@ -53,16 +59,29 @@ class Infant:
     control_timestep = PHYSICS_TIMESTEP  # one physics step per control step
     episode_steps = EPISODE_STEPS
 
-    def __init__(self, scene: str, senses: Sequence[str] = SENSES, eye_size: int = 64) -> None:
+    def __init__(
+        self,
+        scene: str,
+        senses: Sequence[str] = SENSES,
+        eye_size: int = 64,
+        appearance: str = "mittens",
+    ) -> None:
         unknown = sorted(set(senses) - set(SENSES))
         if unknown:
             raise ValueError(f"unknown sense(s) {unknown}; valid senses: {', '.join(SENSES)}")
         if scene not in SCENES:
             raise ValueError(f"unknown scene '{scene}'; valid scenes: {', '.join(SCENES)}")
+        if appearance not in APPEARANCES:
+            raise ValueError(
+                f"unknown appearance '{appearance}'; valid appearances: {', '.join(APPEARANCES)}"
+            )
         self.scene = scene
         self.senses = tuple(senses)
         self.eye_size = int(eye_size)
-        root, self.actuator_names = build_scene_model(scene, vestibular="vestibular" in senses)
+        self.appearance = appearance
+        root, self.actuator_names = build_scene_model(
+            scene, vestibular="vestibular" in senses, appearance=appearance
+        )
         self.mjcf_model = root
         self.physics = mjcf.Physics.from_mjcf_model(root)
         self.model: mujoco.MjModel = self.physics.model.ptr
@@ -263,6 +282,7 @@ class Infant:
         """Cheap summary for ``devlearn info``: sizes, timing, actuators."""
         return {
             "scene": self.scene,
+            "appearance": self.appearance,
             "senses": list(self.senses),
             "action_dim": self.action_dim,
             "touch_sensors": self.skin.num_sensors,
@@ -296,7 +316,13 @@ def _free_gl(gl: dict[str, Any]) -> None:
     gl["views"].clear()
 
 
-def build_infant(scene: str, *, senses: Sequence[str] = SENSES, eye_size: int = 64) -> Infant:
+def build_infant(
+    scene: str,
+    *,
+    senses: Sequence[str] = SENSES,
+    eye_size: int = 64,
+    appearance: str = "mittens",
+) -> Infant:
     """Build the infant in a scene.
 
     Args:
@@ -304,8 +330,11 @@ def build_infant(scene: str, *, senses: Sequence[str] = SENSES, eye_size: int = 
             17 actuators, toy blocks in front).
         senses: Any of "touch", "proprioception", "vestibular", "eyes".
         eye_size: Eye image height and width (pixels).
+        appearance: "mittens" (purple mittens, toys coloured away from them) or "skin" (bare
+            hands the body's colour, toys in the natural palette); see
+            :data:`devlearn.infant.scenes.APPEARANCES`. Colours only: physics is the same.
 
     Returns:
         The infant, reset to its rest pose.
     """
-    return Infant(scene, senses=senses, eye_size=eye_size)
+    return Infant(scene, senses=senses, eye_size=eye_size, appearance=appearance)

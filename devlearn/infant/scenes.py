@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 from dm_control import mjcf
 
 from devlearn.infant.body import WORLD_CONTYPE, add_infant
+from devlearn.infant.body_table import MITTEN_RGBA, SKIN_RGBA
 
 SCENE_GROUP = 2  # geom group of everything that is not the infant (hidden in body-map pictures)
 PHYSICS_TIMESTEP = 0.005  # facts sec. 1: 5 ms, one physics step per control step (200 Hz)
@@ -21,6 +22,40 @@ TOY_COLOURS = (
 )
 """Red, green, cyan and yellow toys: hues far (>= 40 of OpenCV's 180) from the purple mittens
 (hue about 138), so colour alone can tell a hand from a toy."""
+
+NATURAL_TOY_COLOURS = (
+    (0.85, 0.12, 0.1, 1),
+    (0.1, 0.3, 0.8, 1),
+    (0.95, 0.8, 0.1, 1),
+    (0.76, 0.6, 0.42, 1),
+)
+"""Red, blue, yellow and natural wood: the usual colours of wooden baby blocks, chosen with no
+regard to the hands. Red (OpenCV hue about 1), wood (about 15) and yellow (about 26) sit
+around the bare skin's hue (about 12); wood is also close to it in saturation (0.45 against
+0.31), so colour alone does not tell a hand from every toy."""
+
+
+@dataclass(frozen=True)
+class Appearance:
+    """How the infant and its toys look (colours only; bodies and physics are the same).
+
+    Attributes:
+        hand_rgba: Colour of the hand and fingers bodies.
+        toy_colours: Colours of the toy blocks (sitting) and of the mobile (crib), in order.
+    """
+
+    hand_rgba: tuple[float, float, float, float]
+    toy_colours: tuple[tuple[float, float, float, float], ...]
+
+
+APPEARANCES = {
+    # Purple mittens, toys recoloured away from their hue: hands found by colour easily.
+    "mittens": Appearance(MITTEN_RGBA, TOY_COLOURS),
+    # Bare hands the colour of the body (as in MIMo), toys in the natural palette: the
+    # paper's problem, hands told apart from arms, legs and toys only by how they move.
+    "skin": Appearance(SKIN_RGBA, NATURAL_TOY_COLOURS),
+}
+"""Appearances by name (``build_infant(..., appearance=NAME)``); ``mittens`` is the default."""
 
 
 @dataclass(frozen=True)
@@ -112,7 +147,7 @@ def _options(root: mjcf.RootElement) -> None:
     root.visual.headlight.diffuse = (0.35, 0.35, 0.35)
 
 
-def _props(root: mjcf.RootElement, scene: str) -> None:
+def _props(root: mjcf.RootElement, scene: str, toy_colours) -> None:
     world = root.worldbody
     world.add(
         "light",
@@ -163,7 +198,7 @@ def _props(root: mjcf.RootElement, scene: str) -> None:
                 conaffinity=0,
             )
         # A mobile of coloured shapes hanging over the infant's face (visual only).
-        for i, (x, y, rgba) in enumerate(zip((0.36, 0.28, 0.22), (0.08, -0.07, 0.03), TOY_COLOURS)):
+        for i, (x, y, rgba) in enumerate(zip((0.36, 0.28, 0.22), (0.08, -0.07, 0.03), toy_colours)):
             world.add(
                 "geom",
                 group=SCENE_GROUP,
@@ -201,7 +236,7 @@ def _props(root: mjcf.RootElement, scene: str) -> None:
                 conaffinity=0,
             )
         blocks = ((0.24, 0.05, 0.4), (0.3, -0.07, -0.3), (0.37, 0.02, 0.1), (0.21, -0.02, 0.8))
-        for i, ((x, y, yaw), rgba) in enumerate(zip(blocks, TOY_COLOURS)):
+        for i, ((x, y, yaw), rgba) in enumerate(zip(blocks, toy_colours)):
             world.add(
                 "geom",
                 group=SCENE_GROUP,
@@ -216,18 +251,30 @@ def _props(root: mjcf.RootElement, scene: str) -> None:
             )
 
 
-def build_scene_model(scene: str, vestibular: bool = True) -> tuple[mjcf.RootElement, list[str]]:
+def build_scene_model(
+    scene: str, vestibular: bool = True, appearance: str = "mittens"
+) -> tuple[mjcf.RootElement, list[str]]:
     """Build the MJCF model of a scene.
+
+    Args:
+        scene: A key of :data:`SCENES`.
+        vestibular: Add the head's accelerometer and gyro.
+        appearance: A key of :data:`APPEARANCES` (hand and toy colours).
 
     Returns:
         (root element, actuated joint names in actuator order).
     """
     if scene not in SCENES:
         raise ValueError(f"unknown scene '{scene}'; valid scenes: {', '.join(SCENES)}")
+    if appearance not in APPEARANCES:
+        raise ValueError(
+            f"unknown appearance '{appearance}'; valid appearances: {', '.join(APPEARANCES)}"
+        )
     spec = SCENES[scene]
+    look = APPEARANCES[appearance]
     root = mjcf.RootElement(model=f"infant_{scene}")
     _options(root)
-    _props(root, scene)
+    _props(root, scene, look.toy_colours)
     pos, xyaxes = spec.overview
     root.worldbody.add("camera", name="overview", pos=pos, xyaxes=xyaxes, fovy=50)
     actuated = add_infant(
@@ -237,5 +284,6 @@ def build_scene_model(scene: str, vestibular: bool = True) -> tuple[mjcf.RootEle
         actuated_groups=set(spec.actuated_groups),
         held=spec.held,
         vestibular=vestibular,
+        hand_rgba=look.hand_rgba,
     )
     return root, actuated

@@ -118,6 +118,17 @@ def test_dict_round_trip_through_json():
         from_dict({**data, "ppo": {**data["ppo"], "bogus": 1}}, TinyBehavior)
 
 
+def test_legacy_defaults_fill_fields_an_old_saved_config_lacks(monkeypatch):
+    # A field added after a run was saved: that run loads with the legacy value, a run saved
+    # with the field keeps its own, and a config without a behaviour section gets defaults.
+    monkeypatch.setattr(TinyConfig, "LEGACY_DEFAULTS", {"target": 0.9}, raising=False)
+    data = to_dict(default_config(TinyBehavior, ["behavior.target=0.25"]))
+    assert from_dict(data, TinyBehavior).behavior.target == 0.25
+    del data["behavior"]["target"]
+    assert from_dict(data, TinyBehavior).behavior.target == 0.9
+    assert from_dict({}, TinyBehavior).behavior.target == TinyConfig().target
+
+
 def test_to_rsl_rl():
     cfg = tiny_run.config("unused")
     behavior = TinyBehavior(cfg.behavior)

@@ -20,9 +20,14 @@ class FakeSittingInfant:
     action_dim = 17
 
     def __init__(
-        self, scene: str = "sitting", senses=("proprioception", "eyes"), episode_steps: int = 20
+        self,
+        scene: str = "sitting",
+        senses=("proprioception", "eyes"),
+        episode_steps: int = 20,
+        appearance: str = "mittens",
     ) -> None:
         self.episode_steps = episode_steps
+        self.appearance = appearance  # the synthetic images are the same either way
         self.actuator_groups = {"head": np.arange(3), "left_arm": LEFT_ARM, "right_arm": RIGHT_ARM}
         self.actuator_names = [f"a{i}" for i in range(17)]
         self.physics = SimpleNamespace(data=SimpleNamespace(time=0.0))

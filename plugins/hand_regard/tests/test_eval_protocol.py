@@ -26,7 +26,7 @@ def starts(seed, episodes, sitting, detector_file):
     """Joint angles and toy positions at the start of each evaluation episode."""
     behavior = HandRegard()
     behavior.config.detector_file = str(detector_file)
-    env = BehaviorEnv(behavior, seed, lambda scene, senses: sitting, training=False)
+    env = BehaviorEnv(behavior, seed, lambda scene, senses, **options: sitting, training=False)
     env.set_stage(behavior.eval_stage())
     toys = [g for g in range(sitting.model.ngeom) if sitting.model.geom(g).name.startswith("toy")]
     out = []

@@ -69,6 +69,38 @@ def test_eval_mode_visibility_and_agreement(tmp_path):
     assert paths[0].read_bytes()[:4] == b"\x89PNG"
 
 
+class Rendered(Truth):
+    """A stand-in infant with a segmentation (left hand label 1, right hand 2)."""
+
+    hand_labels = {"left": 1, "right": 2}
+
+    def __init__(self, segmentation) -> None:
+        self.segmentation = segmentation
+
+    def eyes_segmentation(self):
+        return self.segmentation
+
+
+def test_eval_reports_pixel_precision_and_recall_per_hand():
+    evaluator = HandRegardEvaluator(ground_truth=True, measure=scripted)
+    seg = np.zeros((2, 4, 4), np.int32)
+    seg[0, 0, :4] = 1  # left hand: 4 pixels in the left eye, 2 in the right
+    seg[1, 0, :2] = 1
+    seg[1, 3, :3] = 3  # body
+    masks = np.zeros((2, 2, 4, 4), bool)
+    masks[0, 0, 0, :2] = True  # 2 left-hand pixels found in the left eye ...
+    masks[1, 0, 0, :2] = True  # ... 2 in the right eye
+    masks[1, 0, 3, :3] = True  # and 3 body pixels called the left hand
+    masks[1, 1, 3, :1] = True  # 1 body pixel called the right hand
+    infant = Rendered(seg)
+    infant.verdicts = {k: np.array([[1, 0], [1, 0]], bool) for k in ("cone", "pixels", "any_pixel")}
+    facts = {"hand_detections": masks.any(axis=(2, 3)), "hand_masks": masks}
+    evaluator.record(StepContext(infant, {}, facts, 0, False, {}))
+    pixels = evaluator.summary()["detector_pixels"]
+    assert pixels["left_hand"] == pytest.approx({"precision": 4 / 7, "recall": 4 / 6})
+    assert pixels["right_hand"] == {"precision": 0.0, "recall": None}
+
+
 def test_training_mode_uses_the_detector():
     evaluator = HandRegard().evaluator(training=True)
     step(evaluator, [[0, 0], [0, 0]], [[1, 1], [0, 0]])  # truth ignored in training

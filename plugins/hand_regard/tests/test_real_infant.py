@@ -139,6 +139,7 @@ def test_tiny_training_run_and_eval(tmp_path, real):
         "right_eye_right_hand",
     }
     assert 0.0 <= summary["average"] <= 1.0 and "detector_agreement" in summary
+    assert set(summary["detector_pixels"]) == {"left_hand", "right_hand"}  # pixel agreement
     assert (evaluation / "hand_regard_visibility.png").stat().st_size > 0
     import imageio.v2 as imageio
 

@@ -69,6 +69,8 @@ def babble(
     head_scale: float = 0.3,
     infant=None,
     episode_steps: int | None = None,
+    appearance: str = "mittens",
+    random_pose: bool = False,
 ) -> BabblingData:
     """Move every actuator randomly and record eyes, proprioception, actions and arm speeds.
 
@@ -77,7 +79,8 @@ def babble(
     damped, so fresh noise every 5 ms would only make them tremble; independent switching
     keeps the arms' speeds uncorrelated with the head's; a slower, gentler head (actions
     scaled by ``head_scale``) keeps the scene mostly still in view and the hands near it, while
-    visiting many gaze directions. Every episode starts from the rest pose.
+    visiting many gaze directions. Every episode starts from the rest pose (babbling), or from
+    a random start (``random_pose``: the evaluation's starts, for measuring a detector).
 
     Args:
         steps: Steps to record (paper: 10,000).
@@ -86,6 +89,9 @@ def babble(
         head_hold_steps: Mean steps a head action is held (>= 1).
         head_scale: Largest head action (the arms use the full [-1, 1]).
         infant: A sitting infant with eyes and proprioception (built and closed here if None).
+        appearance: The infant's appearance when built here ("skin" or "mittens").
+        random_pose: Start every episode from a random pose and toy layout
+            (``Infant.reset(rng, random_pose=True)``) instead of the rest pose.
         episode_steps: Steps between resets (default: the infant's episode length).
     Returns:
         The recording.
@@ -99,7 +105,7 @@ def babble(
     if own:
         from devlearn.infant import build_infant
 
-        infant = build_infant("sitting", senses=("proprioception", "eyes"))
+        infant = build_infant("sitting", senses=("proprioception", "eyes"), appearance=appearance)
     try:
         rng = np.random.default_rng(seed)
         length = int(episode_steps or infant.episode_steps)
@@ -112,7 +118,7 @@ def babble(
         action = np.zeros(infant.action_dim)
         for t in range(steps):
             if t % length == 0:
-                infant.reset(rng)
+                infant.reset(rng, random_pose=random_pose)
             redraw = rng.random(infant.action_dim) < switch
             action = np.where(redraw, rng.uniform(-scale, scale), action)
             infant.step(action)

@@ -15,7 +15,7 @@ from devlearn.curriculum import Curriculum, Stage
 from devlearn.errors import UsageError
 from devlearn.rewards import IntrinsicReward
 from devlearn.sensors import MLPEncoder
-from devlearn_hand_regard.config import HandRegardConfig
+from devlearn_hand_regard.config import APPEARANCE_CHOICES, REWARD_CHOICES, HandRegardConfig
 from devlearn_hand_regard.detector import FORMAT_VERSION as DETECTOR_FORMAT
 from devlearn_hand_regard.detector import DetectorParams, HandDetector, HandFlow
 from devlearn_hand_regard.encoders import EyeCNNEncoder
@@ -66,6 +66,15 @@ class HandRegard(Behavior):
         return state
 
     # --- set-up -----------------------------------------------------------------------------
+    def infant_options(self) -> dict[str, Any]:
+        """The infant's appearance (``config.appearance``: skin or mittens).
+
+        Raises:
+            UsageError: Not one of :data:`APPEARANCE_CHOICES`.
+        """
+        _check_choice("appearance", self.config.appearance, APPEARANCE_CHOICES)
+        return {"appearance": self.config.appearance}
+
     def prepare(self, run_dir: Path) -> None:
         """Calibrate the hand detector by motor babbling, or reuse ``run_dir/hand_detector.json``.
 
@@ -79,6 +88,7 @@ class HandRegard(Behavior):
             cfg = self.config
             data = babble(
                 cfg.babbling_steps,
+                appearance=cfg.appearance,
                 seed=cfg.babbling_seed,
                 hold_steps=cfg.babbling_hold_steps,
                 head_hold_steps=cfg.babbling_head_hold_steps,
@@ -161,6 +171,7 @@ class HandRegard(Behavior):
 
         Returns:
             ``eyes`` (2, H, W, 3) uint8; ``hand_detections`` (2 eyes, 2 hands) bool;
+            ``hand_masks`` (2 eyes, 2 hands, H, W) bool, each detected hand's pixels;
             ``hand_flow`` (2, 2) summed flow magnitude and ``hand_pixels`` (2, 2) pixel counts
             (see :class:`HandFlow`); ``hand_count`` int; ``image_width`` int; ``motion`` float,
             m_t over both hands.
@@ -173,6 +184,7 @@ class HandRegard(Behavior):
         facts = {
             "eyes": eyes,
             "hand_detections": detections,
+            "hand_masks": masks,
             "hand_flow": flow,
             "hand_pixels": pixels,
             "hand_count": int(detections.sum()),
@@ -217,19 +229,28 @@ class HandRegard(Behavior):
 
     # --- rewards, actions, curriculum -------------------------------------------------------
     def reward_terms(self) -> list[IntrinsicReward]:
-        """The paper's three terms and ``bilateral_balance``; zero-weight terms are left out."""
+        """The paper's three terms, plus ``bilateral_balance`` when ``config.reward`` is
+        ``bilateral``; zero-weight terms are left out.
+
+        Raises:
+            UsageError: ``config.reward`` is not one of :data:`REWARD_CHOICES`.
+        """
         cfg = self.config
+        _check_choice("reward", cfg.reward, REWARD_CHOICES)
         terms: list[IntrinsicReward] = [
             HandCount(cfg.hand_count_weight),
             HandMotion(cfg.motion_weight),
             LivingPenalty(cfg.living_penalty_weight),
-            BilateralBalance(
-                cfg.bilateral_weight,
-                cfg.bilateral_bonus,
-                cfg.bilateral_penalty,
-                cfg.bilateral_horizon,
-            ),
         ]
+        if cfg.reward == "bilateral":
+            terms.append(
+                BilateralBalance(
+                    cfg.bilateral_weight,
+                    cfg.bilateral_bonus,
+                    cfg.bilateral_penalty,
+                    cfg.bilateral_horizon,
+                )
+            )
         return [t for t in terms if t.weight != 0.0]
 
     def curriculum(self) -> Curriculum:
@@ -284,3 +305,10 @@ class HandRegard(Behavior):
         """
         cfg = self.config
         return {"total_steps": cfg.left_arm_steps + cfg.right_arm_steps + cfg.both_arms_steps}
+
+
+def _check_choice(key: str, value: str, choices: tuple[str, ...]) -> None:
+    if value not in choices:
+        raise UsageError(
+            f"hand_regard: unknown behavior.{key} '{value}'; valid: {', '.join(choices)}"
+        )

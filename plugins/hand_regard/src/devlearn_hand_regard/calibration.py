@@ -15,7 +15,9 @@
    tracks of other things (a toy whose outline the passing arm occludes) also reach 0.6 by
    chance, but they barely move; the hand colour is the colour cluster whose correlated tracks
    carry the most motion (frames x variance of their displacement), along with any cluster
-   carrying at least half as much. The HSV ranges (percentiles of those tracks' pixels,
+   carrying at least half as much, unless its purity (share of its tracked pixels that are in
+   hand tracks) is under half the purest's: a colour the hand shares with the body is not
+   the hand's. The HSV ranges (percentiles of those tracks' pixels,
    background-like boxes dropped), the expected size and each hand's image-position
    statistics come from their blobs.
 """
@@ -181,6 +183,7 @@ def calibrate(
     max_lag: int = 2,
     min_track: int = 30,
     min_cluster_share: float = 0.5,
+    min_purity_share: float = 0.5,
     max_coverage: float = 0.25,
     ridge: float = 4.0,
 ) -> DetectorParams:
@@ -198,6 +201,11 @@ def calibrate(
         min_cluster_share: A colour cluster joins the hand colours when its correlated tracks
             carry at least this share of the strongest cluster's motion (frames x
             :meth:`Track.motion`).
+        min_purity_share: Of those clusters, keep the ones whose purity (the share of all
+            their tracked blob pixels that lie in hand tracks) is at least this share of the
+            purest one's: a hand colour moves with the arm wherever it appears, while a colour
+            the hand shares with the rest of the body (a forearm's shaded skin, also on the
+            legs and trunk) mostly does not.
         max_coverage: A colour box selecting more than this share of all pixels (mean over the
             recording) is background-like (the floor seen between the fingers) and dropped.
         ridge: Regularisation of the posture-to-position model (:func:`position_model`).
@@ -235,7 +243,12 @@ def calibrate(
     motion = np.bincount(
         [t.cluster for t in hands], [len(t.steps) * t.motion(window) for t in hands], clusters
     )
+    tracked = np.bincount([t.cluster for t in tracks], [sum(t.areas) for t in tracks], clusters)
+    in_hands = np.bincount([t.cluster for t in hands], [sum(t.areas) for t in hands], clusters)
+    purity = in_hands / np.maximum(tracked, 1)
     keep = [k for k in range(clusters) if motion[k] >= min_cluster_share * motion.max()]
+    best = max(purity[k] for k in keep)
+    keep = [k for k in keep if purity[k] >= min_purity_share * best]
     hands = [t for t in hands if t.cluster in keep]
     boxes: list[list[int]] = []
     for k in keep:
@@ -269,6 +282,9 @@ def calibrate(
     report.update(
         hand_cluster_motion={
             str(k): round(float(motion[k])) for k in np.argsort(-motion) if motion[k] > 0
+        },
+        hand_cluster_purity={
+            str(k): round(float(purity[k]), 3) for k in np.argsort(-motion) if motion[k] > 0
         },
         hand_clusters=[int(k) for k in keep],
         dropped_background_boxes=dropped,

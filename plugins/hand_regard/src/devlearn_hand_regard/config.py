@@ -3,11 +3,30 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any, ClassVar
+
+APPEARANCE_CHOICES = ("skin", "mittens")
+"""Valid ``appearance`` values (``devlearn.infant.scenes.APPEARANCES``)."""
+REWARD_CHOICES = ("paper", "bilateral")
+"""Valid ``reward`` values."""
 
 
 @dataclass
 class HandRegardConfig:
     """Everything the hand_regard behaviour can be told; paper defaults unless noted."""
+
+    LEGACY_DEFAULTS: ClassVar[dict[str, Any]] = {"appearance": "mittens", "reward": "bilateral"}
+    """Values for keys a saved config lacks: runs saved before these keys existed were trained
+    with mittens and the bilateral term, and load that way."""
+
+    # --- the infant's look (the paper's "without manually defined skin-colors") ---------
+    appearance: str = "mittens"
+    """How the infant and its toys look: ``skin`` (bare hands the body's colour, as in MIMo;
+    toys in the natural palette of baby blocks, red, blue, yellow, wood) or ``mittens``
+    (purple mittens; toys recoloured away from their hue). Babbling calibrates the detector
+    on the same appearance. Default mittens: on skin the colour babbling learns is the whole
+    body's and the detector fires mostly on arms, legs and trunk (results/hand_regard/README.md,
+    "Detector, both appearances")."""
 
     # --- motor babbling and calibration (sec. II-B2) -------------------------------------
     babbling_steps: int = 10_000
@@ -28,7 +47,11 @@ class HandRegardConfig:
     """Calibrated detector (JSON). Set by ``prepare(run_dir)`` to ``run_dir/hand_detector.json``
     (babbling runs first if that file is missing). Empty: uncalibrated, nothing is detected."""
 
-    # --- reward weights (sec. II-B4); 0 switches a term off ------------------------------
+    # --- reward (sec. II-B4); a weight of 0 switches a term off ---------------------------
+    reward: str = "bilateral"
+    """Which reward: ``paper`` (the paper's exact terms: hand count, motion, living penalty;
+    the ``bilateral_*`` keys are ignored) or ``bilateral`` (those three plus our
+    ``bilateral_balance`` term, weighted by ``bilateral_weight``)."""
     hand_count_weight: float = 1.0
     """Weight of ``hand_count`` (-0.1, 0.25, 0.5, 1.0, 2.0 for n_t = 0..4)."""
     motion_weight: float = 1.0
@@ -36,8 +59,8 @@ class HandRegardConfig:
     living_penalty_weight: float = 1.0
     """Weight of ``living_penalty`` (-0.05 per step)."""
     bilateral_weight: float = 1.0
-    """Weight of the extra ``bilateral_balance`` term (not in the paper; its future work). It
-    only pays while both arms are active. 0 reproduces the paper's reward exactly."""
+    """Weight of the extra ``bilateral_balance`` term (not in the paper; its future work), used
+    when ``reward=bilateral``. It only pays while both arms are active."""
     bilateral_bonus: float = 0.25
     """``bilateral_balance``: bonus on steps where each hand is detected by at least one eye."""
     bilateral_penalty: float = 0.5

@@ -74,6 +74,8 @@ class HandRegardEvaluator(Evaluator):
         self.detected = np.zeros((2, 2), dtype=np.int64)
         # Detector vs truth confusion counts per pair: true/false positives/negatives.
         self.confusion = {k: np.zeros((2, 2), dtype=np.int64) for k in ("tp", "fp", "fn", "tn")}
+        # Per hand [left, right]: its mask's pixels on that hand, mask pixels, the hand's pixels.
+        self.pixel_counts = np.zeros((3, 2), dtype=np.int64)
         self._episode_steps = 0
 
     @property
@@ -92,6 +94,8 @@ class HandRegardEvaluator(Evaluator):
             self.confusion["fp"] += detected & ~truth
             self.confusion["fn"] += ~detected & truth
             self.confusion["tn"] += ~detected & ~truth
+            if "hand_masks" in ctx.facts and hasattr(ctx.infant, "eyes_segmentation"):
+                self._count_pixels(ctx.infant, np.asarray(ctx.facts["hand_masks"], dtype=bool))
         else:
             verdicts = {"detector": detected}
         for k in self.counts:
@@ -115,6 +119,26 @@ class HandRegardEvaluator(Evaluator):
         self.steps += self._episode_steps
         self._episode_steps = 0
         return metrics
+
+    def _count_pixels(self, infant: Any, masks: np.ndarray) -> None:
+        """Add one step's pixel counts: masks (2 eyes, 2 hands, H, W) against the segmentation."""
+        seg = np.asarray(infant.eyes_segmentation())  # (2 eyes, H, W), cached by the infant
+        for h, side in enumerate(HANDS):
+            truth = seg == infant.hand_labels[side]
+            self.pixel_counts[:, h] += [(masks[:, h] & truth).sum(), masks[:, h].sum(), truth.sum()]
+
+    def pixel_agreement(self) -> dict[str, dict[str, float | None]]:
+        """Per hand, both eyes pooled: ``precision``, the share of the pixels the detector
+        attributed to that hand that are that hand in the segmentation, and ``recall``, the
+        share of that hand's pixels inside its detected mask (``None`` without any)."""
+        on, mask, truth = self.pixel_counts
+        return {
+            f"{side}_hand": {
+                "precision": float(on[h] / mask[h]) if mask[h] else None,
+                "recall": float(on[h] / truth[h]) if truth[h] else None,
+            }
+            for h, side in enumerate(HANDS)
+        }
 
     def agreement(self) -> dict[str, dict[str, float | None]]:
         """Per pair: accuracy, precision and recall of the detector against the segmentation.
@@ -159,6 +183,7 @@ class HandRegardEvaluator(Evaluator):
         }
         if self.ground_truth:
             result["detector_agreement"] = self.agreement()
+            result["detector_pixels"] = self.pixel_agreement()
         return result
 
     def protocol(self) -> dict[str, Any]:

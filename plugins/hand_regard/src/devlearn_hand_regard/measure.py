@@ -1,16 +1,21 @@
 """Measure a babbling-calibrated detector against the renderer's segmentation.
 
-``python -m devlearn_hand_regard.measure`` babbles (default 10,000 steps, seed 0), calibrates,
-then babbles fresh steps (seed 1) while recording the segmentation, and prints JSON: per
-(eye, hand) pair precision, recall and accuracy of the detections, recall on clearly visible
-hands, and which labels the detected pixels carry (hand, other body, scene/toys, background).
-The segmentation is used here only, never by the detector.
+``python -m devlearn_hand_regard.measure`` babbles (default 10,000 steps, seed 0) on the
+infant of ``--appearance`` (mittens or skin), calibrates, then records test frames (seed 1):
+``--test-episodes`` episodes of ``--test-episode-steps`` steps of the same random babbling
+actions, each from a random start (joints and toys, as ``devlearn eval`` starts; ``--rest-start``
+for the rest pose), with the segmentation. It prints JSON: per (eye, hand) pair the per-frame
+precision, recall and accuracy of the detections (truth: any pixel of that hand), recall on
+clearly visible hands, per hand the pixel precision and recall of its mask, and which labels
+the detected pixels carry (hand, other body, scene/toys, background). The segmentation is
+used here only, never by the detector.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import sys
 import time
 from pathlib import Path
 
@@ -40,10 +45,22 @@ class SegmentationRecorder:
         return self.infant.eyes()
 
 
-def held_out(infant, steps: int, seed: int) -> tuple[BabblingData, np.ndarray]:
-    """Fresh babbling with the segmentation of every frame ((T, 2, H, W) int)."""
+def held_out(
+    infant, steps: int, seed: int, episode_steps: int | None = None, random_pose: bool = False
+) -> tuple[BabblingData, np.ndarray]:
+    """Fresh babbling with the segmentation of every frame ((T, 2, H, W) int).
+
+    Args:
+        infant: The sitting infant.
+        steps: Frames to record.
+        seed: Seed of the actions and starts.
+        episode_steps: Steps between resets (default: the infant's episode length).
+        random_pose: Every episode from a random start (evaluation frames).
+    """
     recorder = SegmentationRecorder(infant)
-    data = babble(steps, seed=seed, infant=recorder)
+    data = babble(
+        steps, seed=seed, infant=recorder, episode_steps=episode_steps, random_pose=random_pose
+    )
     return data, np.stack(recorder.segmentation)
 
 
@@ -74,6 +91,7 @@ def score(
     anyh = np.zeros(4)
     labels = np.zeros(len(LABELS))
     hand_px = np.zeros(2)  # hand pixels detected, hand pixels in view
+    own_px = np.zeros((3, 2))  # per hand: mask pixels on that hand, mask pixels, hand pixels
     for t in range(len(data)):
         proprioception = data.proprioception[t] if posture else None
         detections, masks = detector.detect(data.eyes[t], proprioception)
@@ -85,6 +103,11 @@ def score(
             hand_px += [(detected & is_hand).sum(), is_hand.sum()]
             for hand in range(2):
                 n = int((seg == hand + 1).sum())
+                own_px[:, hand] += [
+                    (masks[eye, hand] & (seg == hand + 1)).sum(),
+                    masks[eye, hand].sum(),
+                    n,
+                ]
                 truth, found = n > 0, bool(detections[eye, hand])
                 conf[_cell(truth, found), eye, hand] += 1
                 if n >= clear_pixels:
@@ -107,6 +130,13 @@ def score(
         "any_hand": _stats(*anyh),
         "pixels": {k: round(v / max(labels.sum(), 1), 3) for k, v in zip(LABELS, labels)},
         "hand_pixel_recall": round(hand_px[0] / max(hand_px[1], 1), 3),
+        "hand_pixels": {
+            f"{side}_hand": {
+                "precision": round(own_px[0, h] / max(own_px[1, h], 1), 3),
+                "recall": round(own_px[0, h] / max(own_px[2, h], 1), 3),
+            }
+            for h, side in enumerate(("left", "right"))
+        },
         "pair_mean": {
             k: round(float(np.mean([p[k] for p in pairs.values()])), 3)
             for k in ("precision", "recall", "clear_recall")
@@ -128,21 +158,75 @@ def _stats(tp: float, fp: float, fn: float, tn: float) -> dict:
     }
 
 
+def detection_picture(
+    detector: HandDetector,
+    data: BabblingData,
+    segmentation: np.ndarray,
+    path: str | Path,
+    frames: int = 6,
+    scale: int = 2,
+) -> Path:
+    """Draw ``frames`` left-eye test frames that show a hand, spread over the recording.
+
+    Top row: the eye image; bottom row: the same with the detected left hand tinted green,
+    the detected right hand blue and the true hands' pixels (segmentation) outlined red.
+    """
+    import cv2
+
+    shown = np.flatnonzero(np.isin(segmentation[:, 0], (1, 2)).sum(axis=(1, 2)) >= 20)
+    pick = shown[np.linspace(0, len(shown) - 1, min(frames, len(shown))).astype(int)]
+    top, bottom = [], []
+    for t in pick:
+        image = data.eyes[t, 0]
+        _, masks = detector.detect(data.eyes[t], data.proprioception[t])
+        tinted = image.astype(np.float32)
+        for hand, colour in ((0, (0, 220, 0)), (1, (0, 80, 255))):
+            tinted[masks[0, hand]] = 0.4 * tinted[masks[0, hand]] + 0.6 * np.array(colour)
+        big = cv2.resize(tinted.astype(np.uint8), None, fx=scale, fy=scale, interpolation=0)
+        truth = np.isin(segmentation[t, 0], (1, 2)).astype(np.uint8)
+        truth = cv2.resize(truth, None, fx=scale, fy=scale, interpolation=0)
+        contours, _ = cv2.findContours(truth, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+        cv2.drawContours(big, contours, -1, (255, 0, 0), 1)
+        top.append(cv2.resize(image, None, fx=scale, fy=scale, interpolation=0))
+        bottom.append(big)
+    picture = np.concatenate([np.concatenate(top, 1), np.concatenate(bottom, 1)], 0)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    cv2.imwrite(str(path), cv2.cvtColor(picture, cv2.COLOR_RGB2BGR))
+    return path
+
+
 def main(argv: list[str] | None = None) -> dict:
     """Command line: see the module docstring and ``--help``."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--babbling-steps", type=int, default=10_000)
     parser.add_argument("--seed", type=int, default=0, help="babbling seed of the calibration")
-    parser.add_argument("--test-steps", type=int, default=2000)
+    parser.add_argument(
+        "--appearance", default="mittens", help="infant appearance: mittens or skin"
+    )
+    parser.add_argument("--test-episodes", type=int, default=4, help="test episodes")
+    parser.add_argument("--test-episode-steps", type=int, default=500, help="steps per episode")
     parser.add_argument("--test-seed", type=int, default=1)
+    parser.add_argument(
+        "--rest-start", action="store_true", help="test episodes from the rest pose, not random"
+    )
     parser.add_argument("--detector", help="score this detector JSON instead of calibrating")
     parser.add_argument("--save", help="write the calibrated detector JSON here")
     parser.add_argument("--out", help="write the JSON result here too")
+    parser.add_argument("--picture", help="draw test frames with detections and truth (PNG)")
     args = parser.parse_args(argv)
     from devlearn.infant import build_infant
 
-    infant = build_infant("sitting", senses=("proprioception", "eyes"))
-    result: dict = {}
+    infant = build_infant("sitting", senses=("proprioception", "eyes"), appearance=args.appearance)
+    result: dict = {
+        "appearance": args.appearance,
+        "argv": list(sys.argv[1:] if argv is None else argv),
+        "test_frames": {
+            "episodes": args.test_episodes,
+            "episode_steps": args.test_episode_steps,
+            "start": "rest" if args.rest_start else "random",
+        },
+    }
     try:
         start = time.perf_counter()
         if args.detector:
@@ -164,12 +248,20 @@ def main(argv: list[str] | None = None) -> dict:
             round(params.expected_area),
             round(params.max_area),
         ]
-        test, segmentation = held_out(infant, args.test_steps, args.test_seed)
+        test, segmentation = held_out(
+            infant,
+            args.test_episodes * args.test_episode_steps,
+            args.test_seed,
+            episode_steps=args.test_episode_steps,
+            random_pose=not args.rest_start,
+        )
         start = time.perf_counter()
         result["score"] = score(HandDetector(params), test, segmentation)
         result["detect_ms_per_step"] = round(1000 * (time.perf_counter() - start) / len(test), 2)
         means_only = score(HandDetector(params), test, segmentation, posture=False)
         result["score_mean_positions"] = {k: means_only[k] for k in ("pairs", "pair_mean")}
+        if args.picture:
+            detection_picture(HandDetector(params), test, segmentation, args.picture)
     finally:
         infant.close()
     text = json.dumps(result, indent=1)

@@ -1,0 +1,91 @@
+"""Config switches: the reward (paper or bilateral) and the infant's appearance (skin or
+mittens), and old runs without these keys loading as they were trained."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from devlearn_hand_regard import HandRegard, HandRegardConfig
+from fake_sitting import FakeSittingInfant
+
+from devlearn.env.behavior_env import BehaviorEnv
+from devlearn.errors import UsageError
+from devlearn.training.config import default_config, from_dict, to_dict
+
+ROOT = Path(__file__).resolve().parents[3]
+PAPER_TERMS = ["hand_count", "motion", "living_penalty"]
+
+
+def _names(config: HandRegardConfig) -> list[str]:
+    return [t.name for t in HandRegard(config).reward_terms()]
+
+
+def test_paper_reward_has_no_bilateral_term():
+    # The paper's reward (sec. II-B4) whatever the bilateral weight says.
+    assert _names(HandRegardConfig(reward="paper")) == PAPER_TERMS
+    assert _names(HandRegardConfig(reward="paper", bilateral_weight=2.0)) == PAPER_TERMS
+
+
+def test_bilateral_reward_adds_the_bilateral_term():
+    assert _names(HandRegardConfig(reward="bilateral")) == PAPER_TERMS + ["bilateral_balance"]
+    terms = HandRegard(HandRegardConfig(reward="bilateral", bilateral_weight=0.5)).reward_terms()
+    assert terms[-1].weight == 0.5
+
+
+def test_reward_switch_on_the_command_line(capsys):
+    from devlearn.cli import main
+
+    assert main(["config", "hand_regard", "--json", "--set", "behavior.reward=paper"]) == 0
+    rows = {r["key"]: r for r in json.loads(capsys.readouterr().out)}
+    assert rows["behavior.reward"]["default"] == "paper"
+    doc = rows["behavior.reward"]["doc"]
+    assert "paper" in doc and "bilateral" in doc
+    assert rows["behavior.appearance"]["doc"]
+    cfg = default_config(HandRegard, ["behavior.reward=paper"])
+    assert _names(cfg.behavior) == PAPER_TERMS
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "valid"),
+    [("reward", "papr", "paper, bilateral"), ("appearance", "gloves", "skin, mittens")],
+)
+def test_unknown_choice_names_the_valid_ones(key, value, valid):
+    behavior = HandRegard(HandRegardConfig(**{key: value}))
+    with pytest.raises(UsageError, match=f"unknown behavior.{key} '{value}'; valid: {valid}"):
+        behavior.reward_terms() if key == "reward" else behavior.infant_options()
+
+
+@pytest.mark.parametrize("appearance", ["skin", "mittens"])
+def test_env_builds_the_infant_in_the_configured_appearance(appearance):
+    built = []
+
+    def factory(scene, senses, **options):
+        built.append(options)
+        return FakeSittingInfant(scene, senses)
+
+    behavior = HandRegard(HandRegardConfig(appearance=appearance))
+    BehaviorEnv(behavior, seed=0, infant_factory=factory)
+    assert built == [{"appearance": appearance}]
+
+
+def test_old_run_config_loads_with_mittens_and_the_bilateral_term():
+    # results/hand_regard/run was trained before these keys existed: mittens, bilateral term.
+    saved = json.loads((ROOT / "results/hand_regard/run/config.json").read_text())
+    assert "appearance" not in saved["behavior"] and "reward" not in saved["behavior"]
+    cfg = from_dict(saved, HandRegard)
+    assert cfg.behavior.appearance == "mittens" and cfg.behavior.reward == "bilateral"
+    assert "bilateral_balance" in _names(cfg.behavior)
+    # The published policy file carries the same config (tests/training/test_layouts.py
+    # loads it and acts with it).
+    from devlearn.training.checkpoint import load_checkpoint
+
+    state = load_checkpoint(ROOT / "results/hand_regard/run/policy.pt")
+    behavior = HandRegard(from_dict(state["config"], HandRegard).behavior)
+    assert behavior.infant_options() == {"appearance": "mittens"}
+    # A config saved now keeps its own values; no saved behaviour section: today's defaults.
+    fresh = default_config(HandRegard, ["behavior.appearance=skin", "behavior.reward=paper"])
+    again = from_dict(to_dict(fresh), HandRegard).behavior
+    assert (again.appearance, again.reward) == ("skin", "paper")
+    assert from_dict({}, HandRegard).behavior.appearance == HandRegardConfig().appearance
