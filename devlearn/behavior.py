@@ -99,9 +99,8 @@ class Behavior(ABC):
         step:   before_step(infant, action) -> process_action -> physics step -> facts
                 -> observe -> reward terms -> evaluator.record
 
-    A behaviour may compute facts and observations of all the environments of a worker at
-    once (:meth:`batch_facts`, :meth:`batch_observe`); the step then reads ``batch_facts`` and
-    ``batch_observe`` once per worker in place of ``facts`` and ``observe`` per environment.
+    A behaviour may compute facts and observations of all of a worker's environments at once
+    (:meth:`batch_facts`, :meth:`batch_observe`, once per worker in place of the per-env pair).
     """
 
     name: ClassVar[str]
@@ -123,9 +122,7 @@ class Behavior(ABC):
 
     def infant_options(self) -> dict[str, Any]:
         """Keyword arguments for :func:`devlearn.infant.build_infant` beyond the scene and
-        senses, e.g. ``{"appearance": "skin"}`` (default: none). The environment passes them to
-        its infant factory, so a behaviour chooses how its infant looks without building it.
-        """
+        senses, e.g. ``{"appearance": "skin"}``: how the infant looks, without building it."""
         return {}
 
     # --- episode hooks ------------------------------------------------------------------
@@ -256,6 +253,17 @@ class Behavior(ABC):
             Preset name -> mapping of dotted RunConfig keys to values.
         """
         return {}
+
+    @classmethod
+    def paper_results(cls, config: dict[str, Any]) -> tuple[str, dict[str, float]] | None:
+        """The paper's figures a run with ``config`` (a saved config dict, as in an eval JSON)
+        is compared with: a column of ``devlearn report`` beside ours and the baselines.
+
+        Returns:
+            ``(column label, {metric: value})`` with metric names as the eval JSON's keys
+            (nested ones dotted, e.g. ``visibility.left_eye_left_hand``), or None.
+        """
+        return None
 
     def prepare(self, run_dir: Path) -> None:
         """One-off work before training (e.g. motor babbling); may update ``self.config``.

@@ -3,12 +3,17 @@
 from __future__ import annotations
 
 import json
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
 from devlearn.errors import UsageError
-from devlearn.stats import CONFIDENCE, mean_ci
+from devlearn.report_markdown import markdown, shown
+from devlearn.stats import mean_ci
+
+PaperResults = Callable[[str, dict[str, Any]], "tuple[str, dict[str, float]] | None"]
+"""(behaviour name, a run's config) -> (column label, the paper's figures) or None: the named
+behaviour's :meth:`devlearn.Behavior.paper_results`."""
 
 BASELINES = ("zero", "random")
 """Baseline policies (``devlearn eval BEHAVIOR --policy ...``) shown beside every variant."""
@@ -187,34 +192,36 @@ def group(evaluations: list[tuple[Path, dict]]) -> tuple[dict[str, list], list[s
     return out, notes
 
 
-def _shown(path: Path) -> str:
-    """``path`` relative to the working directory when inside it (reports get committed)."""
-    try:
-        return str(path.relative_to(Path.cwd().resolve()))
-    except ValueError:
-        return str(path)
+def paper_columns(
+    columns: dict[str, list], variants: list[str], paper_results: PaperResults | None
+) -> dict[str, dict[str, float]]:
+    """The paper's figures for the variants: ``{column label: {metric: value}}``, one column
+    per distinct set of figures."""
+    out: dict[str, dict[str, float]] = {}
+    for c in variants if paper_results else []:
+        data = columns[c][0][1]
+        found = paper_results(data.get("behavior", "?"), data.get("config") or {})
+        if found is not None and found[1] not in out.values():
+            out.setdefault(found[0], {k: float(v) for k, v in found[1].items()})
+    return out
 
 
-def _cell(stat: dict[str, Any]) -> str:
-    if stat["mean"] is None:
-        return "-"
-    if stat["ci_low"] is None:
-        return f"{stat['mean']:.3g}"
-    return f"{stat['mean']:.3g} [{stat['ci_low']:.3g}, {stat['ci_high']:.3g}]"
-
-
-def write_report(paths: Sequence[str | Path], out_dir: str | Path) -> dict[str, Any]:
+def write_report(
+    paths: Sequence[str | Path], out_dir: str | Path, paper_results: PaperResults | None = None
+) -> dict[str, Any]:
     """Write ``out_dir/report.md`` (table) and ``out_dir/report.png`` (bars with error bars).
 
     Args:
         paths: Evaluation folders (with eval.json) or run folders containing them; zero and
             random baseline evaluations among them or in folders beside them are added.
         out_dir: Folder to write into (created).
+        paper_results: Where the paper's figures for each variant come from (in the CLI, the
+            behaviour's :meth:`devlearn.Behavior.paper_results`): columns after the baselines.
     Returns:
         ``{"behavior", "metrics": [...], "columns": {name: {"kind", "seeds", "paths"}},
         "table": {metric: {column: {"n", "mean", "std", "ci_low", "ci_high", "values"}}},
         "notes": [...]}``; intervals are 95% Student-t over seeds (over evaluations for the
-        baselines), None for a single seed.
+        baselines), None for a single seed; kinds are ``variant``, ``baseline``, ``paper``.
     Raises:
         UsageError: An empty or missing folder, mixed behaviours, no checkpoint evaluation.
     """
@@ -239,14 +246,20 @@ def write_report(paths: Sequence[str | Path], out_dir: str | Path) -> dict[str, 
         for c in columns:
             values = [m[metric] for m in per_eval[c] if metric in m]
             table[metric][c] = {**mean_ci(values), "values": values}
+    papers = paper_columns(columns, variants, paper_results)
+    for label, figures in papers.items():
+        for metric in names:
+            values = [figures[metric]] if metric in figures else []
+            table[metric][label] = {**mean_ci(values), "values": values}
     info = {
         c: {
             "kind": "variant" if c in variants else "baseline",
             "seeds": [d.get("training_seed") for _, d in columns[c]],
-            "paths": [_shown(p.parent) for p, _ in columns[c]],
+            "paths": [shown(p.parent) for p, _ in columns[c]],
         }
         for c in columns
     }
+    info.update({label: {"kind": "paper", "seeds": [], "paths": []} for label in papers})
     for c in variants:
         if len(columns[c]) == 1:
             notes.append(
@@ -274,32 +287,8 @@ def write_report(paths: Sequence[str | Path], out_dir: str | Path) -> dict[str, 
     }
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    (out / "report.md").write_text(_markdown(result, evaluations))
+    (out / "report.md").write_text(markdown(result, evaluations))
     from devlearn.report_plot import draw_report
 
     draw_report(result, out / "report.png")
     return result
-
-
-def _markdown(result: dict[str, Any], evaluations: list[tuple[Path, dict]]) -> str:
-    cols = list(result["columns"])
-    protocol = evaluations[0][1]["protocol"]
-    lines = [
-        f"# {result['behavior']}: evaluation report",
-        "",
-        f"Mean and {CONFIDENCE:.0%} t-interval over seeds (baselines: over their "
-        f"evaluations). Protocol: {protocol.get('episodes')} episodes, eval seed "
-        f"{protocol.get('seed')}, settle {protocol.get('settle_steps')} steps, headline "
-        f"`{protocol.get('headline')}`.",
-        "",
-    ]
-    header = ["metric"] + [f"{c} (n={len(result['columns'][c]['seeds'])})" for c in cols]
-    lines += ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    for metric, row in result["table"].items():
-        lines.append("| " + " | ".join([f"`{metric}`"] + [_cell(row[c]) for c in cols]) + " |")
-    lines += ["", "Columns:"]
-    for c, info in result["columns"].items():
-        lines.append(f"- **{c}**: seeds {info['seeds']} from {', '.join(info['paths'])}")
-    if result["notes"]:
-        lines += ["", "Notes:"] + [f"- {n}" for n in result["notes"]]
-    return "\n".join(lines) + "\n"

@@ -27,6 +27,7 @@ def draw_report(result: dict[str, Any], path: Path) -> Path:
     fig = Figure(figsize=(3.2 * max(len(metrics), 1), 3.6), constrained_layout=True)
     axes = np.atleast_1d(fig.subplots(1, max(len(metrics), 1)))
     colours = [f"C{i}" for i in range(len(columns))]
+    kinds = {c: info["kind"] for c, info in result["columns"].items()}
     for ax, metric in zip(axes, metrics):
         row = result["table"][metric]
         means = [row[c]["mean"] if row[c]["mean"] is not None else np.nan for c in columns]
@@ -43,7 +44,8 @@ def draw_report(result: dict[str, Any], path: Path) -> Path:
         for i, c in enumerate(columns):  # the seeds themselves
             values = row[c]["values"]
             ax.plot(np.full(len(values), i), values, "k.", markersize=4)
-        ax.set_xticks(x, [f"{c}\n(n={row[c]['n']})" for c in columns], fontsize=7, rotation=20)
+        ticks = [c if kinds[c] == "paper" else f"{c}\n(n={row[c]['n']})" for c in columns]
+        ax.set_xticks(x, ticks, fontsize=7, rotation=20)
         ax.set_title(metric, fontsize=9)
     fig.suptitle(f"{result['behavior']}: mean and 95% interval over seeds", fontsize=10)
     fig.savefig(path, dpi=110, metadata={"Software": None})

@@ -83,3 +83,68 @@ def test_bad_input(tmp_path, three_seeds, capsys):
     assert len(errors) == 1 and errors[0].startswith("devlearn: error: ")  # one line
     assert main(["report", *map(str, three_seeds), "--out", str(tmp_path / "r")]) == 0
     assert "| `score` |" in capsys.readouterr().out
+
+
+def test_paper_columns_beside_ours(tmp_path):
+    """The paper's figures come per variant config; metrics it gives no figure for show -."""
+    paths = [fake_eval(tmp_path / f"a{s}", 0.5 + s / 10, s, max_std=0.0) for s in (1, 2)]
+    paths += [fake_eval(tmp_path / f"b{s}", 0.9, s, max_std=1.0) for s in (1, 2)]
+
+    def paper(behavior, config):
+        assert behavior == "self_touch"
+        if config["behavior"]["max_std"] == 0.0:
+            return "paper: A", {"score": 0.85, "coverage_total": 32}
+        return "paper: B", {"score": 0.72}
+
+    result = write_report(paths, tmp_path / "report", paper)
+    assert result["columns"]["paper: A"] == {"kind": "paper", "seeds": [], "paths": []}
+    assert result["table"]["score"]["paper: A"]["mean"] == 0.85
+    assert result["table"]["score"]["paper: B"]["mean"] == 0.72
+    assert result["table"]["coverage_total"]["paper: B"]["mean"] is None
+    md = (tmp_path / "report" / "report.md").read_text()
+    header = next(line for line in md.splitlines() if line.startswith("| metric"))
+    assert header.endswith("| paper: A | paper: B |")  # after the baselines, without n=
+    score_row = next(line for line in md.splitlines() if line.startswith("| `score`"))
+    assert score_row.endswith("| 0.85 | 0.72 |")
+    coverage_row = next(line for line in md.splitlines() if line.startswith("| `coverage_total`"))
+    assert coverage_row.endswith("| 32 | - |")
+    assert (tmp_path / "report" / "report.png").read_bytes()[:4] == b"\x89PNG"
+    # Without a source of paper figures (or a behaviour that has none): no paper column.
+    assert not any(c.startswith("paper") for c in write_report(paths, tmp_path / "r2")["columns"])
+    no_figures = write_report(paths, tmp_path / "r3", lambda behavior, config: None)
+    assert not any(c.startswith("paper") for c in no_figures["columns"])
+
+
+def test_cli_report_shows_the_behaviours_paper_figures(three_seeds, tmp_path, capsys):
+    """`devlearn report` asks the installed behaviour (self_touch: Table I for two-stage)."""
+    assert main(["report", *map(str, three_seeds), "--out", str(tmp_path / "r")]) == 0
+    out = capsys.readouterr().out
+    assert "paper: two-stage, 8M (Tables I-II)" in out
+    score_row = next(line for line in out.splitlines() if line.startswith("| `score`"))
+    assert score_row.endswith("| 0.85 |")
+
+
+@pytest.mark.parametrize(
+    ("behavior", "eval_json", "config"),
+    [
+        ("self_touch", "results/self_touch/i20/two_stage_s1/at_8001536/eval.json", {}),
+        ("self_touch", None, {"behavior": {"curriculum": "fixed_only"}}),
+        ("self_touch", None, {"behavior": {"curriculum": "random_only"}}),
+        ("hand_regard", "results/hand_regard/eval/eval.json", {}),
+    ],
+)
+def test_paper_figures_name_real_metrics(behavior, eval_json, config):
+    """Every figure a behaviour gives for the paper is a metric its evaluations report (a
+    misnamed key would leave its column empty)."""
+    from pathlib import Path
+
+    from devlearn.plugins import PluginRegistry
+    from devlearn.report import _metrics
+
+    root = Path(__file__).resolve().parents[1]
+    if eval_json is None:  # the self-touch metrics are the same whatever the curriculum
+        eval_json = "results/self_touch/i20/two_stage_s1/at_8001536/eval.json"
+    label, figures = PluginRegistry(disabled=()).behavior(behavior).paper_results(config)
+    metrics = _metrics(json.loads((root / eval_json).read_text()))
+    assert label.startswith("paper") and figures
+    assert set(figures) <= set(metrics)

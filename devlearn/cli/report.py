@@ -13,7 +13,8 @@ def add_parser(subparsers) -> list[str]:
         description="Read evaluation folders (eval.json) or run folders containing them, group "
         "them by variant (the config keys that differ; seeds pooled) and write report.md (mean "
         "and 95%% t-interval over seeds per metric, zero/random baselines beside them when "
-        "given or found next to the paths) and report.png.",
+        "given or found next to the paths, and the paper's figures where the behaviour "
+        "gives them) and report.png.",
     )
     p.add_argument("paths", nargs="+", metavar="PATH", help="evaluation or run folders")
     p.add_argument("--out", default="report", metavar="DIR", help="output folder (default report)")
@@ -26,7 +27,12 @@ def run(args: argparse.Namespace, registry) -> int:
 
     from devlearn.report import write_report
 
-    write_report(args.paths, args.out)
+    def paper_results(behavior: str, config: dict):
+        if behavior not in registry.behaviors():
+            return None  # its plugin is not installed: no paper column
+        return registry.behavior(behavior).paper_results(config)
+
+    write_report(args.paths, args.out, paper_results)
     print((Path(args.out) / "report.md").read_text(), end="")
     print(f"written to {args.out}: report.md, report.png")
     return 0

@@ -44,6 +44,12 @@ def add_parser(subparsers) -> list[str]:
         metavar="KEY=VALUE",
         help="config override of every run (repeatable)",
     )
+    p.add_argument(
+        "--preset",
+        metavar="NAME",
+        help="every run starts from this preset of the behaviour (e.g. paper; `devlearn "
+        "config BEHAVIOR` lists them); --steps, --envs, --set and the grid apply over it",
+    )
     p.add_argument("--episodes", metavar="N", help="evaluation episodes per run (default 10)")
     p.add_argument("--eval-seed", metavar="S", help="seed of the evaluations (default 0)")
     p.add_argument(
@@ -79,6 +85,7 @@ def run(args: argparse.Namespace, registry) -> int:
         "workers": args.workers,
         "cores": args.cores,
         "overrides": args.overrides,
+        "preset": args.preset,
         "episodes": args.episodes,
         "eval_seed": args.eval_seed,
         "eval_args": None if args.eval_args is None else _split(args.eval_args),

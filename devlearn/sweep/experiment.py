@@ -56,7 +56,7 @@ def plan_sweep(spec: SweepSpec, registry, global_args: list[str] | None = None) 
         overrides = [*train.overrides, *variant.overrides]
         top = {"total_steps": train.steps, "num_envs": train.envs, "workers": train.workers}
         try:
-            cfg = default_config(behavior_cls, overrides, seed=variant.seed, **top)
+            cfg = default_config(behavior_cls, overrides, train.preset, seed=variant.seed, **top)
             check_config(cfg)
             registry.create(spec.behavior, cfg.behavior)
         except UsageError as exc:
@@ -64,6 +64,7 @@ def plan_sweep(spec: SweepSpec, registry, global_args: list[str] | None = None) 
         common = ["--workers", str(train.workers)]
         common += ["--steps", str(train.steps)] if train.steps is not None else []
         train_args = ["--seed", str(variant.seed), *common]
+        train_args += ["--preset", train.preset] if train.preset else []
         train_args += ["--envs", str(train.envs)] if train.envs is not None else []
         for item in overrides:
             train_args += ["--set", item]

@@ -39,6 +39,9 @@ class TrainSpec:
     runs at a time as fit the machine's cores, Ray reserves this many CPUs per task."""
     overrides: list[str] = field(default_factory=list)
     """``key=value`` config overrides of every run (``--set``), before the grid's values."""
+    preset: str = ""
+    """The behaviour preset every run starts from (``--preset``, e.g. ``paper``; empty: none),
+    under ``steps``, ``envs``, the overrides and the grid."""
 
     @property
     def cores_per_run(self) -> int:
@@ -95,6 +98,7 @@ class SweepSpec:
                 "envs": self.train.envs,
                 "workers": self.train.workers,
                 "overrides": list(self.train.overrides),
+                **({"preset": self.train.preset} if self.train.preset else {}),
             },
             "eval": {
                 "episodes": self.evaluation.episodes,

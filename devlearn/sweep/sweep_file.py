@@ -44,7 +44,7 @@ from devlearn.sweep.spec import (
 
 SECTIONS = {
     "": {"behavior", "out", "seeds", "grid", "train", "eval", "executor", "report"},
-    "train": {"steps", "envs", "workers", "cores", "set"},
+    "train": {"steps", "envs", "workers", "cores", "set", "preset"},
     "eval": {"episodes", "seed", "args"},
     "executor": {"kind", "jobs", "address", "launcher"},
 }
@@ -122,7 +122,7 @@ def build_spec(behavior: str, options: dict[str, Any], file: str | Path | None) 
     Args:
         behavior: The BEHAVIOR argument.
         options: ``out``, ``grid`` (list of KEY=V1,V2), ``seeds`` (text), ``steps``, ``envs``,
-            ``workers``, ``cores``, ``overrides`` (list of key=value), ``episodes``,
+            ``workers``, ``cores``, ``overrides`` (list of key=value), ``preset``, ``episodes``,
             ``eval_seed``, ``eval_args``, ``executor``, ``jobs``, ``address``, ``report``.
         file: A TOML sweep file.
     Raises:
@@ -179,6 +179,7 @@ def build_spec(behavior: str, options: dict[str, Any], file: str | Path | None) 
             workers=_integer(pick("workers", train, "workers", 0), "--workers", 0),
             cores=None if cores is None else _integer(cores, "--cores", 1),
             overrides=overrides,
+            preset=str(pick("preset", train, "preset", "") or ""),
         ),
         evaluation=EvalSpec(
             episodes=_integer(pick("episodes", evaluation, "episodes", 10), "--episodes", 1),

@@ -193,3 +193,25 @@ def test_dry_run_lists_the_runs(cli, capsys, tmp_path):
     ]  # fmt: skip
     assert "--set behavior.target=0.6" in printed[1] and "--seed 1" in printed[1]
     assert printed[-1].startswith("4 runs in") and not out.exists()
+
+
+def test_preset_reaches_every_run(capsys, tmp_path):
+    """`--preset paper` plans each run from the behaviour's preset (self_touch: unbounded spread,
+    8M steps), under --steps and --set, and passes it on to `devlearn run`."""
+    from devlearn.plugins import PluginRegistry
+
+    out = tmp_path / "sweep"
+    options = {"out": str(out), "seeds": "1,2", "steps": "1000", "preset": "paper",
+               "overrides": ["behavior.lifetime_memory=per_env"]}  # fmt: skip
+    spec = build_spec("self_touch", options, None)
+    assert spec.what()["train"]["preset"] == "paper"
+    runs = plan_sweep(spec, PluginRegistry(disabled=()), [])
+    args = runs[0].job.train_args
+    assert args[args.index("--preset") + 1] == "paper"
+    assert args[args.index("--steps") + 1] == "1000"  # the option wins over the preset's 8M
+    assert main(["sweep", "self_touch", "--out", str(out), "--preset", "paper", "--dry-run"]) == 0
+    assert "--preset paper" in capsys.readouterr().out
+    assert main(["sweep", "self_touch", "--out", str(out), "--preset", "nope", "--dry-run"]) == 2
+    assert "paper" in capsys.readouterr().err  # the valid presets are named
+    without = build_spec("self_touch", {"out": str(out)}, None)
+    assert "preset" not in without.what()["train"]  # sweeps made before keep their identity

@@ -30,7 +30,7 @@ from devlearn_self_touch.body_map import (
     sparse_body_map,
 )
 from devlearn_self_touch.config import SelfTouchConfig
-from devlearn_self_touch.evaluation import SelfTouchEvaluator
+from devlearn_self_touch.evaluation import PAPER_RESULTS, SelfTouchEvaluator
 from devlearn_self_touch.rewards import Balance, ContactNovelty, DiversityMilestones, TouchNovelty
 
 if TYPE_CHECKING:
@@ -186,6 +186,12 @@ class SelfTouch(Behavior):
     def evaluator(self, training: bool) -> Evaluator:
         """Per-hand coverage of the 34 parts and the score (:class:`SelfTouchEvaluator`)."""
         return SelfTouchEvaluator(training=training)
+
+    @classmethod
+    def paper_results(cls, config: dict[str, Any]) -> tuple[str, dict[str, float]] | None:
+        """The paper's figures for the run's curriculum (:data:`PAPER_RESULTS`; all at 8M
+        steps, whatever the run's budget)."""
+        return PAPER_RESULTS.get((config.get("behavior") or {}).get("curriculum", "two_stage"))
 
     def train_defaults(self) -> dict[str, Any]:
         """PPO settings for this behaviour.

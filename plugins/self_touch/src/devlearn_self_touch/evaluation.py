@@ -18,6 +18,22 @@ reset pose and gravity make contacts on their own (6 of 100 resets touch on step
 BabyBench likewise runs 10 steps before an episode is scored."""
 EPISODE_METRICS = ("coverage_left", "coverage_right", "coverage_total", "score")
 """Per-episode metrics whose mean, spread and 95% interval :meth:`summary` reports."""
+PAPER_RESULTS = {
+    "two_stage": (
+        "paper: two-stage, 8M (Tables I-II)",
+        {
+            "score": 0.85,
+            "coverage_left": 28,
+            "coverage_right": 30,
+            "coverage_total": 32,
+            "balance": 2,
+        },
+    ),
+    "fixed_only": ("paper: fixed-only, 8M (Table II)", {"score": 0.72, "coverage_total": 26}),
+    "random_only": ("paper: random-only, 8M (Table II)", {"score": 0.68, "coverage_total": 24}),
+}
+"""The paper's evaluation figures per curriculum (100 random-pose episodes, its protocol):
+Table I for the two-stage run, Table II ("Eval" score and coverage) for the ablation."""
 
 
 class SelfTouchEvaluator(Evaluator):
