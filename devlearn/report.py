@@ -196,12 +196,12 @@ def paper_columns(
     columns: dict[str, list], variants: list[str], paper_results: PaperResults | None
 ) -> dict[str, dict[str, float]]:
     """The paper's figures for the variants: ``{column label: {metric: value}}``, one column
-    per distinct set of figures."""
+    per label (variants that share the paper's figures share its column)."""
     out: dict[str, dict[str, float]] = {}
     for c in variants if paper_results else []:
         data = columns[c][0][1]
         found = paper_results(data.get("behavior", "?"), data.get("config") or {})
-        if found is not None and found[1] not in out.values():
+        if found is not None:
             out.setdefault(found[0], {k: float(v) for k, v in found[1].items()})
     return out
 

@@ -19,7 +19,7 @@ from devlearn_hand_regard.config import APPEARANCE_CHOICES, REWARD_CHOICES, Hand
 from devlearn_hand_regard.detector import FORMAT_VERSION as DETECTOR_FORMAT
 from devlearn_hand_regard.detector import DetectorParams, HandDetector, HandFlow
 from devlearn_hand_regard.encoders import EyeCNNEncoder
-from devlearn_hand_regard.evaluation import PAPER_VISIBILITY, HandRegardEvaluator
+from devlearn_hand_regard.evaluation import HandRegardEvaluator, paper_figures
 from devlearn_hand_regard.rewards import (
     HANDS,
     BilateralBalance,
@@ -300,8 +300,7 @@ class HandRegard(Behavior):
     @classmethod
     def paper_results(cls, config: dict[str, Any]) -> tuple[str, dict[str, float]] | None:
         """The paper's visibility (Table III, its reward, 1.85M steps), whatever the run's."""
-        figures = {f"visibility.{k}": v for k, v in PAPER_VISIBILITY.items()}
-        return "paper: Table III, 1.85M", {**figures, "average": 0.50625}
+        return paper_figures()
 
     def train_defaults(self) -> dict[str, Any]:
         """The paper's run length: the three stages, 175k + 175k + 1.5M = 1.85M steps.

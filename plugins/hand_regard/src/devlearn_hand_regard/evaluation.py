@@ -28,6 +28,15 @@ PAPER_VISIBILITY = {
     "right_eye_right_hand": 0.044,
 }
 """The paper's result (Table III), for comparison."""
+PAPER_AVERAGE = 0.50625
+"""The mean of :data:`PAPER_VISIBILITY`'s four pairs (Table III)."""
+
+
+def paper_figures() -> tuple[str, dict[str, float]]:
+    """The paper's column in ``devlearn report`` (Table III: its reward, 1.85M steps), under
+    the eval JSON's metric names."""
+    figures = {f"visibility.{k}": v for k, v in PAPER_VISIBILITY.items()}
+    return "paper: Table III, 1.85M", {**figures, "average": PAPER_AVERAGE}
 
 
 def pair_name(eye: int, hand: int) -> str:
@@ -179,7 +188,7 @@ class HandRegardEvaluator(Evaluator):
             **{k: v for k, v in head.items() if k.startswith("episode_")},
             "criteria": criteria,
             "detector_visibility": visibility_dict(self.detected, steps),
-            "paper": {"visibility": PAPER_VISIBILITY, "average": 0.50625},
+            "paper": {"visibility": PAPER_VISIBILITY, "average": PAPER_AVERAGE},
         }
         if self.ground_truth:
             result["detector_agreement"] = self.agreement()
