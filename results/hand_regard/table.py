@@ -1,0 +1,171 @@
+"""Print the Markdown tables of results/hand_regard: visibility per eye-hand pair over seeds.
+
+Run from the repository root::
+
+    python results/hand_regard/table.py                      # the issue-19 runs (runs/*)
+    python results/hand_regard/table.py "paper reward=results/hand_regard/runs/reward=paper,*" \
+        "paper + forward_model=results/curiosity/runs/*"     # any groups: LABEL=GLOB
+
+Every number is read from an ``eval.json`` written by ``devlearn eval`` (10 episodes of 1,000
+steps from seeded random starts, eval seed 0): a group's cell is the mean over its runs
+(seeds) and the 95% t-interval over them (``devlearn.stats.mean_ci``, as ``devlearn report``);
+the baselines' cells are their single evaluations with the interval over episodes (marked
+``ep``). Nothing is computed here but means, intervals and the layout.
+"""
+
+from __future__ import annotations
+
+import glob
+import json
+import sys
+from pathlib import Path
+
+from devlearn.stats import mean_ci
+
+HERE = Path(__file__).resolve().parent
+PAIRS = ("left_eye_left_hand", "right_eye_left_hand", "left_eye_right_hand", "right_eye_right_hand")
+SHORT = ("LL", "RL", "LR", "RR")
+DEFAULT_GROUPS = (
+    "paper reward (no bilateral term)=results/hand_regard/runs/reward=paper,seed=*",
+    "ours: paper + bilateral term=results/hand_regard/runs/reward=bilateral,seed=*",
+)
+BASELINES = ("zero", "random")
+HISTORICAL = HERE / "run" / "eval" / "eval.json"
+"""The first published run (76.8k steps, bilateral reward, one seed), kept as a labelled row."""
+
+
+def evals(pattern: str) -> list[dict]:
+    """The eval JSONs of the run folders (or eval folders) matching ``pattern``, by path."""
+    files = []
+    for folder in sorted(glob.glob(pattern)):
+        path = Path(folder)
+        candidates = [path / "eval.json", path / "eval" / "eval.json"]
+        files += [(path, c) for c in candidates if c.is_file()][:1]
+    return [{**json.loads(f.read_text()), "_folder": folder} for folder, f in files]
+
+
+def training_commits(e: dict) -> str:
+    """The code commits the run trained on (its sweep record's attempts), short, in order."""
+    record = e["_folder"] / "sweep_record.json"
+    if not record.is_file():
+        return "?"
+    commits = []
+    for attempt in json.loads(record.read_text()).get("attempts", []):
+        if attempt.get("phase") in ("train", "resume") and attempt.get("commit"):
+            short = attempt["commit"][:7] + ("+dirty" if attempt.get("dirty") else "")
+            commits += [short] if short not in commits else []
+    return ", ".join(commits) or "?"
+
+
+def cell(values: list[float]) -> str:
+    """``mean [low, high]`` over ``values`` (just the mean when there is one)."""
+    s = mean_ci(values)
+    if s["mean"] is None:
+        return "-"
+    if s["ci_low"] is None:
+        return f"{s['mean']:.3f}"
+    return f"{s['mean']:.3f} [{s['ci_low']:.3f}, {s['ci_high']:.3f}]"
+
+
+def episode_cell(e: dict, criterion: str) -> str:
+    """One evaluation's average with its interval over episodes."""
+    c = e["criteria"][criterion]
+    low, high = c["episode_average_ci_low"], c["episode_average_ci_high"]
+    return f"{c['average']:.3f} [{low:.3f}, {high:.3f}] ep"
+
+
+def visibility_table(groups: list[tuple[str, list[dict]]], criterion: str) -> list[str]:
+    head = " | ".join(SHORT)
+    rows = [
+        f"| `{criterion}` | n | {head} | average [95% CI] |",
+        "|---|---|" + "---|" * (len(PAIRS) + 1),
+    ]
+    for label, runs in groups:
+        pairs = [cell([e["criteria"][criterion]["visibility"][p] for e in runs]) for p in PAIRS]
+        average = cell([e["criteria"][criterion]["average"] for e in runs])
+        rows.append(f"| {label} | {len(runs)} | " + " | ".join(pairs) + f" | **{average}** |")
+    for name in BASELINES:
+        path = HERE / f"baseline_{name}" / "eval.json"
+        if path.is_file():
+            e = json.loads(path.read_text())
+            pairs = [f"{e['criteria'][criterion]['visibility'][p]:.3f}" for p in PAIRS]
+            rows.append(
+                f"| {name} action (baseline) | 1 | "
+                + " | ".join(pairs)
+                + f" | {episode_cell(e, criterion)} |"
+            )
+    if HISTORICAL.is_file():
+        e = json.loads(HISTORICAL.read_text())
+        pairs = [f"{e['criteria'][criterion]['visibility'][p]:.3f}" for p in PAIRS]
+        rows.append(
+            "| historical: first run, 76.8k steps, 1 seed | 1 | "
+            + " | ".join(pairs)
+            + f" | {episode_cell(e, criterion)} |"
+        )
+    if criterion == "cone":
+        paper = json.loads(HISTORICAL.read_text())["paper"] if HISTORICAL.is_file() else None
+        if paper:
+            pairs = [f"{paper['visibility'][p]:.3f}" for p in PAIRS]
+            rows.append(
+                "| paper, Table III (1.85M steps; its own criterion) | - | "
+                + " | ".join(pairs)
+                + f" | {paper['average']:.3f} |"
+            )
+    return rows
+
+
+def per_run_table(groups: list[tuple[str, list[dict]]]) -> list[str]:
+    rows = [
+        "| group | seed | steps | cone LL / RL / LR / RR | cone average [95% CI, episodes] "
+        "| pixels average | trained on | evaluated on |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for label, runs in groups:
+        for e in runs:
+            c = e["criteria"]["cone"]
+            pairs = " / ".join(f"{c['visibility'][p]:.3f}" for p in PAIRS)
+            code = (e["protocol"].get("code") or {}).get("commit") or "?"
+            rows.append(
+                f"| {label} | {e['training_seed']} | {e['checkpoint_env_steps']:,} | {pairs} "
+                f"| {episode_cell(e, 'cone').removesuffix(' ep')} "
+                f"| {e['criteria']['pixels']['average']:.3f} | {training_commits(e)} | {code[:7]} |"
+            )
+    return rows
+
+
+def detector_table(groups: list[tuple[str, list[dict]]]) -> list[str]:
+    rows = [
+        "| detector vs truth (`any_pixel`), precision / recall | n | " + " | ".join(SHORT) + " |",
+        "|---|---|" + "---|" * len(PAIRS),
+    ]
+    for label, runs in groups:
+        cells = []
+        for p in PAIRS:
+            agree = [e["detector_agreement"][p] for e in runs]
+            prec = [a["precision"] for a in agree if a["precision"] is not None]
+            rec = [a["recall"] for a in agree if a["recall"] is not None]
+            mp = f"{mean_ci(prec)['mean']:.2f}" if prec else "-"
+            mr = f"{mean_ci(rec)['mean']:.2f}" if rec else "-"
+            cells.append(f"{mp} / {mr}")
+        rows.append(f"| {label} | {len(runs)} | " + " | ".join(cells) + " |")
+    return rows
+
+
+def main(specs: list[str]) -> None:
+    groups = []
+    for spec in specs or DEFAULT_GROUPS:
+        label, sep, pattern = spec.partition("=")
+        if not sep:
+            sys.exit(f"group {spec!r}: write LABEL=GLOB (e.g. 'paper=results/hand_regard/runs/*')")
+        runs = evals(pattern)
+        if not runs:
+            sys.exit(f"group {label!r}: no eval.json under {pattern!r}")
+        groups.append((label, runs))
+    for criterion in ("cone", "pixels"):
+        print("\n".join(visibility_table(groups, criterion)), end="\n\n")
+    print("\n".join(per_run_table(groups)), end="\n\n")
+    print("\n".join(detector_table(groups)))
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
