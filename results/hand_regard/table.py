@@ -3,6 +3,7 @@
 Run from the repository root::
 
     python results/hand_regard/table.py                      # the issue-19 runs (runs/*)
+    python results/hand_regard/table.py --readme results/hand_regard/README.md   # in place
     python results/hand_regard/table.py "paper reward=results/hand_regard/runs/reward=paper,*" \
         "paper + forward_model=results/curiosity/runs/*"     # any groups: LABEL=GLOB
 
@@ -151,7 +152,12 @@ def detector_table(groups: list[tuple[str, list[dict]]]) -> list[str]:
     return rows
 
 
-def main(specs: list[str]) -> None:
+BEGIN, END = "<!-- table.py begin -->", "<!-- table.py end -->"
+"""Markers of the block ``--readme`` rewrites."""
+
+
+def tables(specs: list[str]) -> str:
+    """The four tables for the groups ``LABEL=GLOB`` (default: :data:`DEFAULT_GROUPS`)."""
     groups = []
     for spec in specs or DEFAULT_GROUPS:
         label, sep, pattern = spec.partition("=")
@@ -161,10 +167,25 @@ def main(specs: list[str]) -> None:
         if not runs:
             sys.exit(f"group {label!r}: no eval.json under {pattern!r}")
         groups.append((label, runs))
-    for criterion in ("cone", "pixels"):
-        print("\n".join(visibility_table(groups, criterion)), end="\n\n")
-    print("\n".join(per_run_table(groups)), end="\n\n")
-    print("\n".join(detector_table(groups)))
+    blocks = [visibility_table(groups, c) for c in ("cone", "pixels")]
+    blocks += [per_run_table(groups), detector_table(groups)]
+    return "\n\n".join("\n".join(rows) for rows in blocks)
+
+
+def main(argv: list[str]) -> None:
+    if argv[:1] != ["--readme"]:
+        print(tables(argv))
+        return
+    if len(argv) < 2:
+        sys.exit("--readme needs the README's path")
+    readme = Path(argv[1])
+    text = readme.read_text()
+    if BEGIN not in text or END not in text:
+        sys.exit(f"{readme} has no {BEGIN} ... {END} block to rewrite")
+    head, rest = text.split(BEGIN, 1)
+    tail = rest.split(END, 1)[1]
+    readme.write_text(f"{head}{BEGIN}\n{tables(argv[2:])}\n{END}{tail}")
+    print(f"rewrote the tables in {readme}")
 
 
 if __name__ == "__main__":
