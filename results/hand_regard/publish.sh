@@ -8,7 +8,7 @@
 # (`devlearn_hand_regard.measure`, ~75 s) into detector_check.json.
 #
 #   bash results/hand_regard/publish.sh SWEEP_DIR DEST_DIR [RUN_NAME ...]
-#   bash results/hand_regard/publish.sh runs/hand_regard_300k results/hand_regard/runs
+#   bash results/hand_regard/publish.sh runs/hand_regard_300k results/hand_regard/i19
 #
 # Without run names it publishes every run of the sweep whose evaluation is written.
 set -euo pipefail

@@ -2,10 +2,10 @@
 
 Run from the repository root::
 
-    python results/hand_regard/table.py                      # the issue-19 runs (runs/*)
+    python results/hand_regard/table.py                      # the issue-19 runs (i19/*)
     python results/hand_regard/table.py --readme results/hand_regard/README.md   # in place
-    python results/hand_regard/table.py "paper reward=results/hand_regard/runs/reward=paper,*" \
-        "paper + forward_model=results/curiosity/runs/*"     # any groups: LABEL=GLOB
+    python results/hand_regard/table.py "paper reward=results/hand_regard/i19/reward=paper,*" \
+        "paper + forward_model=results/curiosity/i18/*"     # any groups: LABEL=GLOB
 
 Every number is read from an ``eval.json`` written by ``devlearn eval`` (10 episodes of 1,000
 steps from seeded random starts, eval seed 0): a group's cell is the mean over its runs
@@ -27,8 +27,8 @@ HERE = Path(__file__).resolve().parent
 PAIRS = ("left_eye_left_hand", "right_eye_left_hand", "left_eye_right_hand", "right_eye_right_hand")
 SHORT = ("LL", "RL", "LR", "RR")
 DEFAULT_GROUPS = (
-    "paper reward (no bilateral term)=results/hand_regard/runs/reward=paper,seed=*",
-    "ours: paper + bilateral term=results/hand_regard/runs/reward=bilateral,seed=*",
+    "paper reward (no bilateral term)=results/hand_regard/i19/reward=paper,seed=*",
+    "ours: paper + bilateral term=results/hand_regard/i19/reward=bilateral,seed=*",
 )
 BASELINES = ("zero", "random")
 HISTORICAL = HERE / "run" / "eval" / "eval.json"
@@ -162,7 +162,7 @@ def tables(specs: list[str]) -> str:
     for spec in specs or DEFAULT_GROUPS:
         label, sep, pattern = spec.partition("=")
         if not sep:
-            sys.exit(f"group {spec!r}: write LABEL=GLOB (e.g. 'paper=results/hand_regard/runs/*')")
+            sys.exit(f"group {spec!r}: write LABEL=GLOB (e.g. 'paper=results/hand_regard/i19/*')")
         runs = evals(pattern)
         if not runs:
             sys.exit(f"group {label!r}: no eval.json under {pattern!r}")
