@@ -33,6 +33,14 @@ def add_parser(subparsers) -> list[str]:
     )
     p.add_argument("--episodes", default="10", metavar="N", help="episodes to run (default 10)")
     p.add_argument("--seed", default="0", metavar="S", help="seed of the initial poses")
+    p.add_argument(
+        "--start",
+        choices=("stage", "rest"),
+        default="stage",
+        help="where episodes start: as the behaviour's evaluation stage says (default; "
+        "usually seeded random poses), or the rest pose every episode (training's start: "
+        "a deterministic policy then repeats one episode)",
+    )
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
     p.add_argument("--video", metavar="PATH", help="write an MP4 of the first episode")
     p.add_argument(
@@ -91,6 +99,7 @@ def run(args: argparse.Namespace, registry) -> int:
             seed=seed,
             out_dir=out_dir,
             policy=args.policy or "checkpoint",
+            start=args.start,
         )
     except EvalWriteError as exc:
         _print(exc.summary, args.json)

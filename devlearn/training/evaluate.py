@@ -29,6 +29,13 @@ POLICY_FILE = "policy.pt"
 POLICIES = ("checkpoint", "zero", "random")
 """What ``evaluate`` can run: a checkpoint's mean action, or a baseline: zero action, or
 actions uniform in [-1, 1] (seeded by the evaluation seed)."""
+STARTS = ("stage", "rest")
+"""Where episodes start: ``stage``, as the behaviour's evaluation stage says (usually seeded
+random poses); ``rest``, the infant's rest pose with the scene as built, every episode (the
+start that training episodes use when the curriculum does not randomise it). A deterministic
+policy from ``rest`` repeats one episode, so one episode is enough: a diagnostic that asks
+whether a policy has the skill where it trained, beside the protocol's answer of whether it
+generalises."""
 
 
 class EvalWriteError(UsageError):
@@ -155,6 +162,7 @@ def evaluate(
     infant_factory=None,
     progress: bool = True,
     policy: str = "checkpoint",
+    start: str = "stage",
 ) -> dict[str, Any]:
     """Run ``episodes`` episodes of a policy and summarise them under the evaluation protocol.
 
@@ -175,6 +183,7 @@ def evaluate(
         infant_factory: Infant builder (tests); default the real infant.
         progress: Show a progress bar (steps, episodes) on stderr.
         policy: One of :data:`POLICIES`.
+        start: One of :data:`STARTS`; ``rest`` overrides the stage's ``random_pose``.
     Returns:
         ``evaluator.summary()`` plus ``behavior``, ``policy``, ``checkpoint``,
         ``checkpoint_env_steps`` (x axis of ``devlearn curve``), ``training_seed``, ``config``
@@ -187,6 +196,8 @@ def evaluate(
     """
     if policy not in POLICIES:
         raise UsageError(f"unknown policy '{policy}'; valid: {', '.join(POLICIES)}")
+    if start not in STARTS:
+        raise UsageError(f"unknown start '{start}'; valid: {', '.join(STARTS)}")
     if (checkpoint is None) != (policy != "checkpoint"):
         raise UsageError("give a checkpoint, or a baseline policy (zero, random), not both")
     out = prepare_out_dir(out_dir) if out_dir is not None else None
@@ -211,6 +222,8 @@ def evaluate(
     writer = None
     try:
         stage = behavior.eval_stage()
+        if start == "rest":
+            stage = {**stage, "random_pose": False}
         env.set_stage(stage)
         obs = env.reset()
         actor = None
@@ -254,6 +267,7 @@ def evaluate(
                 "policy": policy,
                 "action": "mean" if policy == "checkpoint" else policy,
                 "stage": json.loads(json.dumps(stage, default=str)),
+                "start": start,
                 "settle_steps": 0,
                 **env.evaluator.protocol(),
                 "checkpoint_env_steps": steps,

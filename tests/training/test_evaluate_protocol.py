@@ -145,3 +145,36 @@ def test_summary_is_printed_when_writing_fails(registry, run_dir, tmp_path, caps
 def test_evaluate_takes_a_run_folder(registry, run_dir):
     summary = evaluate("tiny", run_dir, 1, registry, infant_factory=recording, progress=False)
     assert summary["checkpoint"] == str(run_dir / "checkpoint_latest.pt")
+
+
+class PoseRecordingInfant(RecordingInfant):
+    """Also keeps whether each reset asked for a random pose."""
+
+    resets: list = []
+
+    def reset(self, rng, random_pose=False):
+        PoseRecordingInfant.resets.append(random_pose)
+        super().reset(rng, random_pose)
+
+
+def test_rest_start_overrides_the_eval_stage(registry, run_dir, tmp_path, capsys):
+    def pose_recording(scene, senses=("proprioception",), **kwargs):
+        return PoseRecordingInfant(scene, senses, episode_steps=10)
+
+    PoseRecordingInfant.resets = []
+    stage = evaluate("tiny", run_dir, 2, registry, infant_factory=pose_recording,
+                     progress=False)
+    assert PoseRecordingInfant.resets and all(PoseRecordingInfant.resets)
+    assert stage["protocol"]["start"] == "stage"
+    PoseRecordingInfant.resets = []
+    rest = evaluate("tiny", run_dir, 2, registry, infant_factory=pose_recording,
+                    progress=False, start="rest")
+    assert PoseRecordingInfant.resets and not any(PoseRecordingInfant.resets)
+    assert rest["protocol"]["stage"] == {"random_pose": False}
+    assert rest["protocol"]["start"] == "rest"
+    with pytest.raises(UsageError, match="valid: stage, rest"):
+        evaluate("tiny", run_dir, 1, registry, start="random")
+    out = tmp_path / "rest"
+    assert main(["eval", "tiny", "--checkpoint", str(run_dir), "--episodes", "1", "--start",
+                 "rest", "--out", str(out)]) == 0
+    assert json.loads((out / "eval.json").read_text())["protocol"]["start"] == "rest"
