@@ -152,12 +152,44 @@ def detector_table(groups: list[tuple[str, list[dict]]]) -> list[str]:
     return rows
 
 
+def rest_table(groups: list[tuple[str, list[dict]]]) -> list[str]:
+    """The diagnostic from the rest pose (``devlearn eval --start rest``, one episode: a
+    deterministic policy repeats it), per run, with the baselines from the same start; empty
+    when no run has an ``eval_rest/eval.json``."""
+    rows = [
+        "| from the rest pose (1 episode) | seed | cone LL / RL / LR / RR | cone average "
+        "| pixels LL / RL / LR / RR | pixels average |",
+        "|---|---|---|---|---|---|",
+    ]
+
+    def row(label: str, seed: str, e: dict) -> str:
+        cells = []
+        for criterion in ("cone", "pixels"):
+            c = e["criteria"][criterion]
+            pairs = " / ".join(f"{c['visibility'][p]:.3f}" for p in PAIRS)
+            cells += [pairs, f"{c['average']:.3f}"]
+        return f"| {label} | {seed} | " + " | ".join(cells) + " |"
+
+    for label, runs in groups:
+        for e in runs:
+            path = Path(e["_folder"]) / "eval_rest" / "eval.json"
+            if path.is_file():
+                rows.append(row(label, str(e["training_seed"]), json.loads(path.read_text())))
+    if len(rows) == 2:
+        return []
+    for name in BASELINES:
+        path = HERE / f"baseline_{name}_rest" / "eval.json"
+        if path.is_file():
+            rows.append(row(f"{name} action (baseline)", "-", json.loads(path.read_text())))
+    return rows
+
+
 BEGIN, END = "<!-- table.py begin -->", "<!-- table.py end -->"
 """Markers of the block ``--readme`` rewrites."""
 
 
 def tables(specs: list[str]) -> str:
-    """The four tables for the groups ``LABEL=GLOB`` (default: :data:`DEFAULT_GROUPS`)."""
+    """The tables (five with rest-pose evaluations) for the groups ``LABEL=GLOB`` (default: :data:`DEFAULT_GROUPS`)."""
     groups = []
     for spec in specs or DEFAULT_GROUPS:
         label, sep, pattern = spec.partition("=")
@@ -168,8 +200,8 @@ def tables(specs: list[str]) -> str:
             sys.exit(f"group {label!r}: no eval.json under {pattern!r}")
         groups.append((label, runs))
     blocks = [visibility_table(groups, c) for c in ("cone", "pixels")]
-    blocks += [per_run_table(groups), detector_table(groups)]
-    return "\n\n".join("\n".join(rows) for rows in blocks)
+    blocks += [per_run_table(groups), detector_table(groups), rest_table(groups)]
+    return "\n\n".join("\n".join(rows) for rows in blocks if rows)
 
 
 def main(argv: list[str]) -> None:
