@@ -189,7 +189,8 @@ BEGIN, END = "<!-- table.py begin -->", "<!-- table.py end -->"
 
 
 def tables(specs: list[str]) -> str:
-    """The tables (five with rest-pose evaluations) for the groups ``LABEL=GLOB`` (default: :data:`DEFAULT_GROUPS`)."""
+    """The tables (five with rest-pose evaluations) for the groups ``LABEL=GLOB``
+    (default: :data:`DEFAULT_GROUPS`)."""
     groups = []
     for spec in specs or DEFAULT_GROUPS:
         label, sep, pattern = spec.partition("=")
