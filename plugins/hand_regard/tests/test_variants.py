@@ -89,3 +89,16 @@ def test_old_run_config_loads_with_mittens_and_the_bilateral_term():
     again = from_dict(to_dict(fresh), HandRegard).behavior
     assert (again.appearance, again.reward) == ("skin", "paper")
     assert from_dict({}, HandRegard).behavior.appearance == HandRegardConfig().appearance
+
+
+def test_policy_spread_bound_reaches_the_network():
+    # Default: the paper's unbounded spread, as every issue-19 run trained.
+    assert HandRegard(HandRegardConfig()).network().max_std == 0.0
+    spec = HandRegard(HandRegardConfig(max_std=1.0)).network()
+    assert spec.max_std == 1.0 and spec.init_std == 0.5
+
+
+@pytest.mark.parametrize("max_std", [-1.0, 0.3, 0.5])
+def test_policy_spread_bound_must_exceed_the_initial_spread(max_std):
+    with pytest.raises(UsageError, match="0 \\(unbounded\\) or above behavior.init_std=0.5"):
+        HandRegard(HandRegardConfig(max_std=max_std)).network()

@@ -202,7 +202,17 @@ class HandRegard(Behavior):
         }
 
     def network(self) -> NetworkSpec:
+        """The paper's Model II network (sec. II-B3).
+
+        Raises:
+            UsageError: ``max_std`` neither 0 (unbounded) nor above ``init_std``.
+        """
         cfg = self.config
+        if cfg.max_std < 0 or 0 < cfg.max_std <= cfg.init_std:
+            raise UsageError(
+                f"hand_regard: behavior.max_std must be 0 (unbounded) or above "
+                f"behavior.init_std={cfg.init_std}, got {cfg.max_std}"
+            )
         eye = EyeCNNEncoder()
         return NetworkSpec(
             encoders={
@@ -213,6 +223,7 @@ class HandRegard(Behavior):
             fusion_dims=(cfg.fusion_dim,),  # 256 + 256 + 64 = 576 -> 256 (sec. II-B3)
             trunk_dims=(),  # the paper's heads sit directly on the fused features
             init_std=cfg.init_std,
+            max_std=cfg.max_std,
             # Joint angles, velocities and torques have mixed scales: running standardisation.
             normalize=("proprioception",),
             share=True,  # one fused representation feeds policy and value heads (Model II)

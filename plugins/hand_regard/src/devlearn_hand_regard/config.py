@@ -84,3 +84,9 @@ class HandRegardConfig:
     """Fused feature size after the 576-d concatenation (paper: 256)."""
     init_std: float = 0.5
     """Initial policy standard deviation."""
+    max_std: float = 0.0
+    """Upper bound on the policy's standard deviation (bounded with a sigmoid, as self-touch's
+    default); 0: the unbounded softplus spread (the paper, and every hand-regard run of issue
+    #19). Actions are clipped to [-1, 1], so a spread past 1 buys entropy bonus without changing
+    much what the arm does: in the issue-19 runs it grew from 0.5 to ~2.7 (paper reward) over
+    300k steps, and the training actions became near-random (results/hand_regard/README.md)."""
