@@ -2,7 +2,8 @@
 # Publish finished runs of a hand-regard sweep into results/: for each run, the policy file
 # (`devlearn slim`: weights, config and detector calibration), its evaluation (written by the
 # sweep's `devlearn eval`), config, metrics, calibrated detector, the sweep's record (the code
-# commit of every training attempt). A run's calibrated detector that equals the measured one
+# commit of every training attempt), and an evaluation from the rest pose (`--start rest`,
+# one episode, into eval_rest/). A run's calibrated detector that equals the measured one
 # (results/hand_regard/detector/<appearance>_detector.json: babbling seed 0, as every run of
 # the sweep) is measured already; any other is measured on the same 2,000 random-start frames
 # (`devlearn_hand_regard.measure`, ~75 s) into detector_check.json.
@@ -32,6 +33,9 @@ for name in "${names[@]}"; do
   cp "$run/eval/"* "$out/eval/"
   cp "$sweep/records/$name.json" "$out/sweep_record.json"
   .venv/bin/devlearn slim "$run" --out "$out/policy.pt"
+  # the diagnostic from the rest pose (training's start; one episode: the policy is deterministic)
+  .venv/bin/devlearn eval hand_regard --checkpoint "$out/policy.pt" --episodes 1 --seed 0 \
+    --start rest --out "$out/eval_rest"
   appearance=$("$py" -c "import json,sys; print(json.load(open(sys.argv[1]))['behavior']['appearance'])" "$run/config.json")
   measured=results/hand_regard/detector/${appearance}_detector.json
   if "$py" -c "import json,sys; sys.exit(json.load(open(sys.argv[1])) != json.load(open(sys.argv[2])))" \
