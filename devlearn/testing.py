@@ -19,7 +19,6 @@ Fixtures ``crib_infant`` and ``sitting_infant`` (module-scoped) are available af
 from __future__ import annotations
 
 import dataclasses
-import io
 import pickle
 import types
 from typing import Any
@@ -41,7 +40,7 @@ from devlearn.conformance import (
 )
 from devlearn.conformance import require as _require
 from devlearn.curriculum import Curriculum
-from devlearn.learned import LearnedReward, LearnedRewardConfig, Transitions
+from devlearn.learned_conformance import check_learned_reward
 from devlearn.plugins import PluginRegistry, PluginSource
 from devlearn.rewards import BatchedIntrinsicReward, IntrinsicReward
 
@@ -241,91 +240,6 @@ def _scripted_contacts(env: Any, rng: np.random.Generator, count: int, step) -> 
         if done >= count:
             return
     raise RuntimeError(f"devlearn.testing could not script a hand contact in {infant.scene}")
-
-
-def _random_transitions(
-    shapes: dict[str, tuple[int, ...]], action_dim: int, size: int, seed: int
-) -> Transitions:
-    """Random transitions: uint8 images for (H, W, C) shapes, normal floats otherwise."""
-    gen = torch.Generator().manual_seed(seed)
-
-    def draw() -> dict[str, torch.Tensor]:
-        return {
-            name: torch.randint(0, 256, (size, *shape), generator=gen, dtype=torch.uint8)
-            if len(shape) == 3
-            else torch.randn(size, *shape, generator=gen)
-            for name, shape in shapes.items()
-        }
-
-    actions = torch.rand(size, action_dim, generator=gen) * 2 - 1
-    return Transitions(draw(), actions, draw())
-
-
-def check_learned_reward(
-    term_cls: type[LearnedReward],
-    observation_shapes: dict[str, tuple[int, ...]] | None = None,
-    action_dim: int = 3,
-    batch_size: int = 32,
-    seed: int = 0,
-) -> LearnedReward:
-    """Check a learned reward: class contract, shapes, training, and a save/restore.
-
-    Builds the term on random transitions (``observation_shapes`` default: a (6,) vector
-    ``proprioception`` and an (8, 8, 3) ``eyes`` image) and checks: a docstring, a
-    lower_snake_case ``name``, a :class:`~devlearn.LearnedRewardConfig` dataclass; rewards
-    (B,) and finite, the same when asked twice; an update changes trainable parameters and
-    reports finite ``raw``, ``loss`` and ``weight``; the state (model, optimiser, scale)
-    survives ``torch.save`` / ``torch.load(weights_only=True)`` into a fresh instance, which
-    then rewards and trains exactly like the original.
-
-    Returns:
-        The trained term.
-    """
-    from devlearn.plugins import _NAME
-
-    shapes = observation_shapes or {"proprioception": (6,), "eyes": (8, 8, 3)}
-    _require(bool(term_cls.__doc__), f"{term_cls.__name__} needs a docstring")
-    name = getattr(term_cls, "name", None)
-    _require(isinstance(name, str) and bool(_NAME.match(name)), "name: lower_snake_case")
-    config_cls = term_cls.config_class
-    _require(
-        dataclasses.is_dataclass(config_cls) and issubclass(config_cls, LearnedRewardConfig),
-        "config_class must be a dataclass subclassing LearnedRewardConfig",
-    )
-    torch.manual_seed(seed)
-    term = term_cls(config_cls(), shapes, action_dim)
-    batch = _random_transitions(shapes, action_dim, batch_size, seed)
-    term.observe(batch)
-    with torch.no_grad():
-        first, second = term.compute_reward(batch), term.compute_reward(batch)
-    _require(
-        tuple(first.shape) == (batch_size,),
-        f"compute_reward gave {tuple(first.shape)}, expected ({batch_size},)",
-    )
-    _require(bool(torch.isfinite(first).all()), "compute_reward gave NaN or inf")
-    _require(torch.equal(first, second), "compute_reward changed on the same batch")
-    before = [p.detach().clone() for p in term.model.parameters() if p.requires_grad]
-    reward, log = term.update(batch, env_steps=0)
-    _require(tuple(reward.shape) == (batch_size,), "update must return a (B,) reward")
-    _require(set(log) >= {"raw", "loss", "weight"}, f"update log lacks raw/loss/weight: {log}")
-    _require(all(np.isfinite(v) for v in log.values()), f"non-finite update log {log}")
-    after = [p.detach() for p in term.model.parameters() if p.requires_grad]
-    _require(any(not torch.equal(a, b) for a, b in zip(before, after)), "update trained nothing")
-    buffer = io.BytesIO()
-    torch.save(term.state_dict(), buffer)
-    buffer.seek(0)
-    fresh = term_cls(config_cls(), shapes, action_dim)
-    fresh.load_state_dict(torch.load(buffer, weights_only=True))
-    later = _random_transitions(shapes, action_dim, batch_size, seed + 1)
-    results = []
-    for copy in (term, fresh):
-        torch.manual_seed(seed + 2)  # the same mini-batch order for both
-        reward, _ = copy.update(later, env_steps=batch_size)
-        results.append((reward, [p.detach().clone() for p in copy.model.parameters()]))
-    _require(torch.equal(results[0][0], results[1][0]), "restored term rewards differently")
-    for a, b in zip(results[0][1], results[1][1]):
-        _require(torch.equal(a, b), "restored term trains differently (optimiser state lost?)")
-    return term
 
 
 def registry_for(

@@ -51,7 +51,7 @@ def test_update_normalises_and_weights_the_reward():
     t = term(weight=0.5, final_weight=None)
     check = check_learned_reward(LinearPredictor, SHAPES)  # also a conformance pass
     assert isinstance(check, LearnedReward)
-    from devlearn.testing import _random_transitions
+    from devlearn.learned_conformance import random_transitions as _random_transitions
 
     batch = _random_transitions(SHAPES, 3, 64, seed=0)
     with torch.no_grad():
