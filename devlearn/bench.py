@@ -6,7 +6,6 @@ actions; nothing here is a test and nothing is asserted.
 
 from __future__ import annotations
 
-import functools
 import json
 import os
 import platform
@@ -15,7 +14,6 @@ import subprocess
 import sys
 import tempfile
 import time
-import warnings
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -29,6 +27,7 @@ from devlearn.bench_ceiling import (
     reference_env_steps_per_s,
     touch_old_and_new,
 )
+from devlearn.bench_learner import bench_update, without_user_warnings
 
 
 def _per_call_ms(
@@ -102,20 +101,7 @@ def bench_infant(steps: int = 2000, frames: int = 100) -> dict[str, float]:
     }
 
 
-def _without_user_warnings(function):
-    """Run ``function`` with UserWarnings silenced: a speed figure of an unprepared behaviour
-    (hand regard's uncalibrated detector) does not depend on what it would perceive."""
-
-    @functools.wraps(function)
-    def wrapper(*args, **kwargs):
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", UserWarning)
-            return function(*args, **kwargs)
-
-    return wrapper
-
-
-@_without_user_warnings
+@without_user_warnings
 def bench_behavior_env(behavior, steps: int, reference_touch: bool = False) -> float:
     """Single-process environment steps per second of one BehaviorEnv (random actions);
     ``reference_touch``: with the numpy touch routine instead of the compiled one."""
@@ -186,119 +172,6 @@ def bench_training(
         rows = [json.loads(line) for line in (out / "metrics.jsonl").read_text().splitlines()]
     rows = rows[1:] or rows
     return float(np.mean([r["steps_per_s"] for r in rows]))
-
-
-def build_learner(behavior, layout: str, num_envs: int, seed: int = 0):
-    """The PPO algorithm a run of ``behavior`` would train, on random observations.
-
-    Observation shapes and dtypes come from one real environment reset; the networks, optimiser
-    and rollout storage are built exactly as ``devlearn run`` builds them, with the run
-    config's defaults and ``network.layout=layout``. Returns ``(alg, observations)``: the
-    algorithm and a function that draws a fresh (num_envs, *shape) observation batch.
-    """
-    from types import SimpleNamespace
-
-    import torch
-    from tensordict import TensorDict
-
-    from devlearn.env import BehaviorEnv
-    from devlearn.training.config import default_config, to_rsl_rl
-    from devlearn.training.ppo import UniqueParamPPO
-    from devlearn.training.process import quiet
-
-    env = BehaviorEnv(behavior, seed=seed)
-    first = env.reset()
-    dt = SimpleNamespace(step_dt=env.step_dt)
-    fake_env = SimpleNamespace(num_envs=num_envs, num_actions=env.action_dim, unwrapped=dt)
-    env.close()
-    cfg = default_config(type(behavior), [f"network.layout={layout}"])
-    train_cfg = to_rsl_rl(cfg, behavior, list(first))
-    train_cfg["multi_gpu"] = None
-    gen = torch.Generator().manual_seed(seed)
-
-    def observations() -> TensorDict:
-        groups = {}
-        for name, value in first.items():
-            shape = (num_envs, *np.shape(value))
-            if np.asarray(value).dtype == np.uint8:
-                groups[name] = torch.randint(0, 256, shape, generator=gen, dtype=torch.uint8)
-            else:
-                groups[name] = torch.randn(shape, generator=gen)
-        return TensorDict(groups, batch_size=[num_envs])
-
-    torch.manual_seed(seed)
-    with quiet():
-        alg = UniqueParamPPO.construct_algorithm(observations(), fake_env, train_cfg, "cpu")
-    alg.train_mode()
-    return alg, observations
-
-
-def collect_random(alg, observations, num_steps: int) -> float:
-    """Fill the rollout storage with ``num_steps`` random steps; return ms of inference/step."""
-    import torch
-
-    spent = 0.0
-    with torch.inference_mode():
-        obs = observations()
-        n = obs.batch_size[0]
-        for _ in range(num_steps):
-            start = time.perf_counter()
-            alg.act(obs)
-            spent += time.perf_counter() - start
-            obs = observations()
-            extras = {"time_outs": torch.zeros(n)}
-            alg.process_env_step(obs, torch.randn(n), torch.zeros(n, dtype=torch.long), extras)
-        alg.compute_returns(obs)
-    return 1000.0 * spent / num_steps
-
-
-@_without_user_warnings
-def bench_update(
-    behavior, layout: str, num_envs: int, num_steps: int, repeats: int = 2, threads: int = 0
-) -> dict[str, float]:
-    """The PPO update's cost per rollout sample, and the rollout inference's per step.
-
-    One update is ``ppo.num_learning_epochs`` passes of ``ppo.num_mini_batches`` mini-batches
-    over a rollout of ``num_envs x num_steps`` samples (here random ones), as in training.
-
-    Args:
-        behavior: The behaviour whose networks are measured.
-        layout: ``shared`` or ``separate`` (``network.layout``).
-        num_envs: Environments of the rollout.
-        num_steps: Steps per environment.
-        repeats: Timed updates after one warm-up; the best is kept (least disturbed).
-        threads: torch threads during the update and inference (0: the training default, all
-            cores this process may use, see :func:`devlearn.training.process.learner_threads`).
-
-    Returns:
-        ``update_us_per_sample`` (seconds of one update / rollout samples, in microseconds),
-        ``inference_ms_per_step`` (actor and critic forward on ``num_envs`` observations),
-        ``parameters`` (unique trainable parameters) and ``threads``.
-    """
-    import torch
-
-    from devlearn.training.ppo import unique_parameters
-    from devlearn.training.process import learner_threads, update_threads
-
-    threads = threads or learner_threads()
-    alg, observations = build_learner(behavior, layout, num_envs)
-    best, inference = float("inf"), float("inf")
-    with update_threads(threads):
-        for k in range(repeats + 1):
-            ms = collect_random(alg, observations, num_steps)
-            start = time.perf_counter()
-            alg.update()
-            took = time.perf_counter() - start
-            if k > 0:  # the first is a warm-up
-                best, inference = min(best, took), min(inference, ms)
-    params = sum(p.numel() for p in unique_parameters(alg.actor, alg.critic))
-    return {
-        "update_us_per_sample": 1e6 * best / (num_envs * num_steps),
-        "inference_ms_per_step": inference,
-        "parameters": float(params),
-        "threads": float(threads),
-        "torch_version": torch.__version__,
-    }
 
 
 OLD_LEARNER = ["network.layout=separate", "torch_threads=1", "update_threads=1"]
