@@ -9,7 +9,7 @@ import io
 import numpy as np
 import torch
 
-from devlearn.conformance import require as _require
+from devlearn.conformance_values import require as _require
 from devlearn.learned import LearnedReward, LearnedRewardConfig, Transitions
 
 

@@ -29,16 +29,14 @@ import torch
 from devlearn.behavior import Behavior, NetworkSpec
 from devlearn.conformance import (
     CheckedEvaluator,
-    ConformanceError,
     check_batched_observations,
-    check_number,
     check_observations,
-    check_picklable,
     check_summaries,
     checked_terms,
     place_hand_on_body,
 )
-from devlearn.conformance import require as _require
+from devlearn.conformance_values import ConformanceError, check_number, check_picklable
+from devlearn.conformance_values import require as _require
 from devlearn.curriculum import Curriculum
 from devlearn.learned_conformance import check_learned_reward
 from devlearn.plugins import PluginRegistry, PluginSource
