@@ -3,12 +3,10 @@
 from __future__ import annotations
 
 import contextlib
-import copy
 import io
 import json
 import math
 import os
-import random
 import sys
 import time
 from collections import deque
@@ -27,13 +25,9 @@ from devlearn.env.guards import GuardError
 from devlearn.env.workers import EnvWorkerError
 from devlearn.errors import RunStopped
 from devlearn.training.checkpoint import (
-    FORMAT,
     LATEST,
-    forget_metrics_after,
-    link_atomic,
-    save_atomic,
 )
-from devlearn.training.config import RunConfig, to_dict
+from devlearn.training.config import RunConfig
 from devlearn.training.learned_rewards import LearnedRewards
 from devlearn.training.process import (
     ThreadPlan,
@@ -43,11 +37,12 @@ from devlearn.training.process import (
     set_threads,
     update_threads,
 )
+from devlearn.training.runner_checkpoints import RunnerCheckpoints
 
 __all__ = ["DevRunner", "init_distributed", "quiet", "update_threads"]
 
 
-class DevRunner(OnPolicyRunner):
+class DevRunner(RunnerCheckpoints, OnPolicyRunner):
     """Trains one behaviour; the loop is rsl-rl's (act, step, returns, update, log).
 
     Additions: the curriculum advances from the global env-step counter
@@ -316,104 +311,6 @@ class DevRunner(OnPolicyRunner):
         values = [None] * self.gpu_world_size
         dist.all_gather_object(values, value)
         return values
-
-    # --- checkpoints ----------------------------------------------------------------------
-    def _snapshot(self) -> dict[str, Any]:
-        """A copy of the state at an iteration boundary (the :meth:`checkpoint_state` of this
-        rank), kept while the next iteration runs so that an interrupt or fault mid-rollout
-        saves that boundary rather than half an iteration."""
-        state = copy.deepcopy(self.alg.save())
-        state.update(
-            iteration=self.current_learning_iteration,
-            env_steps=self.env_steps,
-            curriculum=copy.deepcopy(self.curriculum.state_dict()),
-            env=copy.deepcopy(self.env.state_dict()),
-            learning_rate=self.alg.learning_rate,
-            learned=copy.deepcopy(self.learned.state_dict()),  # live tensors otherwise
-            rng={
-                "torch": torch.get_rng_state(),
-                "numpy": np.random.get_state(),
-                "random": random.getstate(),
-            },
-        )
-        return state
-
-    def checkpoint_state(
-        self, gather: bool = True, good: dict[str, Any] | None = None
-    ) -> dict[str, Any]:
-        """Everything needed to resume (collective when distributed and ``gather``): the live
-        state, or the boundary snapshot ``good`` taken by :meth:`_snapshot`."""
-        state = dict(good) if good is not None else self._snapshot()
-        env_state = state.pop("env")
-        ranks = [env_state]
-        if self.is_distributed and gather:
-            ranks = [None] * self.gpu_world_size
-            dist.all_gather_object(ranks, env_state)
-        state.update(
-            format=FORMAT,
-            behavior=self.run_cfg.behavior_name,
-            config=to_dict(self.run_cfg),
-            env={"ranks": ranks},
-        )
-        return state
-
-    def _fault_checkpoint(self, good: dict[str, Any] | None) -> str:
-        """Write the last good state after a fault; return a sentence saying where (or why not)."""
-        if good is None:
-            return "no checkpoint could be written (the fault came before the first iteration)"
-        try:
-            path = self.save_checkpoints(periodic=False, gather=False, good=good)
-        except Exception as exc:  # e.g. the disk is full too
-            return f"no checkpoint could be written ({exc})"
-        return (
-            f"the last good state (step {good['env_steps']}) is saved in "
-            f"{path or self.run_dir / LATEST}; continue with --resume {self.run_dir}"
-        )
-
-    def save_checkpoints(
-        self, periodic: bool, gather: bool = True, good: dict[str, Any] | None = None
-    ) -> Path | None:
-        """Write ``checkpoint_latest.pt`` (and ``checkpoint_<step>.pt`` when ``periodic``)
-        from the live state or the boundary snapshot ``good``."""
-        state = self.checkpoint_state(gather, good)
-        if not self.is_main:
-            return None
-        latest = self.run_dir / LATEST
-        if periodic:
-            path = self.run_dir / f"checkpoint_{self.env_steps}.pt"
-            save_atomic(state, path)
-            link_atomic(path, latest)
-        else:
-            save_atomic(state, latest)
-        return latest
-
-    def restore(self, state: dict[str, Any], curriculum: bool = True) -> None:
-        """Resume from a checkpoint: networks, optimiser, counters, curriculum, learned rewards,
-        envs, rngs. ``curriculum=False`` (``devlearn run --from``) leaves this run's own
-        curriculum, whose stage then follows from the step count alone."""
-        self.alg.load(state, None, strict=True)  # also takes the adaptive lr from the optimiser
-        if self.run_cfg.ppo.schedule == "fixed":  # a fixed schedule means the configured lr
-            self.alg.learning_rate = self.run_cfg.ppo.learning_rate
-            for group in self.alg.optimizer.param_groups:
-                group["lr"] = self.alg.learning_rate
-        self.current_learning_iteration = int(state["iteration"])
-        self.env_steps = int(state["env_steps"])
-        if curriculum:
-            self.curriculum.load_state_dict(state["curriculum"])
-        else:
-            self.curriculum.update(self.env_steps)
-        self.learned.load_state_dict(state.get("learned", {}))
-        ranks = state["env"]["ranks"]
-        if self.gpu_global_rank < len(ranks):
-            self.env.load_state_dict(ranks[self.gpu_global_rank])
-        # every env's saved state holds the run memory it had: merge across workers (and
-        # ranks), e.g. after a per-env run is continued with shared memory
-        self.env.sync_run_memory(self._all_ranks if self.is_distributed else None)
-        if self.is_main:
-            forget_metrics_after(self.run_dir / "metrics.jsonl", self.env_steps)
-        torch.set_rng_state(state["rng"]["torch"])
-        np.random.set_state(state["rng"]["numpy"])
-        random.setstate(state["rng"]["random"])
 
 
 def _purge_tensorboard_from(writer, step: int) -> None:
