@@ -10,7 +10,8 @@ import torch
 from devlearn.env.guards import GuardError
 from devlearn.errors import UsageError
 from devlearn.learned import LearnedReward, Transitions
-from devlearn.training.config import RunConfig, _hints, convert
+from devlearn.training.config import RunConfig
+from devlearn.training.config_values import convert, field_types
 
 
 class LearnedRewards:
@@ -193,7 +194,7 @@ def _term_config(name: str, term: type[LearnedReward], options: dict[str, Any]) 
     """Build ``term.config_class`` from ``options`` (strings from --set, or saved values)."""
     config = term.config_class()
     fields = [f.name for f in dataclasses.fields(config)]
-    hints = _hints(config)
+    hints = field_types(config)
     for key, value in options.items():
         if key not in fields:
             raise UsageError(
