@@ -2,12 +2,10 @@
 
 from __future__ import annotations
 
-import contextlib
 import errno
 import json
 import os
 import random
-import shutil
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -21,7 +19,6 @@ from devlearn.errors import UsageError
 from devlearn.training.checkpoint import (
     RESUME_KEYS,
     check_behavior,
-    forget_metrics_after,
     load_checkpoint,
     remove_temporaries,
     resume_checkpoint,
@@ -30,6 +27,7 @@ from devlearn.training.checks import check_config, check_memory, check_out_dir, 
 from devlearn.training.config import RunConfig, apply_preset, from_dict, to_dict, to_rsl_rl
 from devlearn.training.learned_rewards import LearnedRewards
 from devlearn.training.loggers import logger_config
+from devlearn.training.run_folder import copy_metrics, start_up
 from devlearn.training.runner import DevRunner, init_distributed
 
 CONFIG_FILE = "config.json"
@@ -204,7 +202,7 @@ def train(
     cfg.workers = resolve_workers(cfg.workers, cfg.num_envs)  # config.json records the number
     learned = LearnedRewards.from_config(cfg, registry)  # names checked before the slow set-up
     check_memory(cfg.num_envs, cfg.workers)
-    with _start_up(run_dir, replace=force and resume is None, owner=rank == 0):
+    with start_up(run_dir, replace=force and resume is None, owner=rank == 0):
         env, runner = _build(
             cfg,
             registry,
@@ -294,7 +292,7 @@ def _build(
         )
         if checkpoint is not None:
             if start_from is not None and rank == 0:
-                _copy_metrics(Path(start_from).parent, run_dir, int(checkpoint["env_steps"]))
+                copy_metrics(Path(start_from).parent, run_dir, int(checkpoint["env_steps"]))
             runner.restore(checkpoint, curriculum=start_from is None)
         if rank > 0:
             # Every rank built its networks from the same seed (rank 0's are broadcast anyway);
@@ -305,58 +303,3 @@ def _build(
         env.close()
         raise
     return env, runner
-
-
-def _copy_metrics(source_dir: Path, run_dir: Path, step: int) -> None:
-    """Start ``run_dir``'s metrics.jsonl with the source run's rows up to ``step``."""
-    source = source_dir / "metrics.jsonl"
-    if source.is_file() and source.resolve() != (run_dir / "metrics.jsonl").resolve():
-        shutil.copyfile(source, run_dir / "metrics.jsonl")
-        forget_metrics_after(run_dir / "metrics.jsonl", step)
-
-
-_SMALL_FILE = 1 << 20  # files up to this size are restored byte for byte after a failed start
-
-
-@contextlib.contextmanager
-def _start_up(run_dir: Path, replace: bool, owner: bool):
-    """Within the block, a failure puts ``run_dir`` back as it was: new entries are deleted
-    (and the folder itself, if it was new), small files rewritten (config.json...) are restored.
-    With ``replace`` the folder's entries are set aside first and deleted once the block
-    succeeds. Only the ``owner`` (rank 0) touches the folder."""
-    if not owner:
-        yield
-        return
-    created = run_dir
-    while not created.parent.exists() and created.parent != created:
-        created = created.parent
-    existed = run_dir.exists()
-    before: dict[str, bytes | None] = {}
-    aside = run_dir / f".devlearn-replaced-{os.getpid()}"
-    if existed:
-        for p in run_dir.iterdir():
-            small = p.is_file() and p.stat().st_size <= _SMALL_FILE
-            before[p.name] = p.read_bytes() if small else None
-        if replace:
-            aside.mkdir()
-            for name in before:
-                os.replace(run_dir / name, aside / name)
-    try:
-        yield
-    except BaseException:
-        if not existed:
-            shutil.rmtree(created, ignore_errors=True)
-            raise
-        for p in run_dir.iterdir():
-            if p != aside and (replace or p.name not in before):
-                shutil.rmtree(p) if p.is_dir() and not p.is_symlink() else p.unlink()
-            elif before.get(p.name) is not None and p.is_file():
-                if p.read_bytes() != before[p.name]:
-                    p.write_bytes(before[p.name])
-        if replace:
-            for name in before:
-                os.replace(aside / name, run_dir / name)
-            aside.rmdir()
-        raise
-    if replace:
-        shutil.rmtree(aside, ignore_errors=True)
