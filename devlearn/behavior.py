@@ -53,6 +53,24 @@ class NetworkSpec:
     normalize: tuple[str, ...] = ()
     share: bool = True
 
+    def __post_init__(self) -> None:
+        check_spread(self.init_std, self.max_std)
+
+
+def check_spread(init_std: float, max_std: float, min_std: float = 1e-3) -> None:
+    """The one check of the policy's spread settings (NetworkSpec and the distribution).
+
+    Raises:
+        ValueError: ``init_std`` not above ``min_std``, or ``max_std`` neither 0 (unbounded)
+            nor above ``init_std``.
+    """
+    if init_std <= min_std:
+        raise ValueError(f"init_std must exceed min_std={min_std}, got {init_std}")
+    if max_std < 0 or 0 < max_std <= init_std:
+        raise ValueError(
+            f"max_std must be 0 (unbounded) or above init_std={init_std}, got {max_std}"
+        )
+
 
 class Evaluator:
     """Collects a behaviour's metrics over steps and episodes.

@@ -206,7 +206,8 @@ def default_config(
         preset: A name from the behaviour's ``presets()`` (``--preset``); None or empty: none.
         top: Top-level RunConfig fields (e.g. ``total_steps=...``); None values are skipped.
     Raises:
-        UsageError: An unknown preset (the valid ones named) or a bad override.
+        UsageError: An unknown preset (the valid ones named), a bad override, or values the
+            behaviour's :class:`~devlearn.behavior.NetworkSpec` rejects.
     """
     cfg = RunConfig(behavior_name=behavior_cls.name, behavior=behavior_cls.config_class())
     apply_overrides(cfg, behavior_cls(cfg.behavior).train_defaults())
@@ -214,9 +215,15 @@ def default_config(
         apply_preset(cfg, behavior_cls, preset)
     apply_overrides(cfg, {k: v for k, v in top.items() if v is not None})
     apply_overrides(cfg, overrides or [])
+    try:  # the spec checks its own values (e.g. the spread): say so before any env starts
+        spec = behavior_cls(cfg.behavior).network()
+    except ValueError as err:
+        raise UsageError(
+            f"{behavior_cls.name}: its network() rejects the config: {err} "
+            "(set through --set behavior.FIELD=VALUE, e.g. behavior.max_std)"
+        ) from err
     if not cfg.network.layout:  # record the behaviour's choice, so config.json says it
-        share = behavior_cls(cfg.behavior).network().share
-        cfg.network.layout = "shared" if share else "separate"
+        cfg.network.layout = "shared" if spec.share else "separate"
     return cfg
 
 

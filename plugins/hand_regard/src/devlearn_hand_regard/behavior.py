@@ -202,17 +202,8 @@ class HandRegard(Behavior):
         }
 
     def network(self) -> NetworkSpec:
-        """The paper's Model II network (sec. II-B3).
-
-        Raises:
-            UsageError: ``max_std`` neither 0 (unbounded) nor above ``init_std``.
-        """
+        """The paper's Model II network (sec. II-B3); NetworkSpec checks the spread settings."""
         cfg = self.config
-        if cfg.max_std < 0 or 0 < cfg.max_std <= cfg.init_std:
-            raise UsageError(
-                f"hand_regard: behavior.max_std must be 0 (unbounded) or above "
-                f"behavior.init_std={cfg.init_std}, got {cfg.max_std}"
-            )
         eye = EyeCNNEncoder()
         return NetworkSpec(
             encoders={
