@@ -207,7 +207,7 @@ def default_config(
         top: Top-level RunConfig fields (e.g. ``total_steps=...``); None values are skipped.
     Raises:
         UsageError: An unknown preset (the valid ones named), a bad override, or values the
-            behaviour's :class:`~devlearn.behavior.NetworkSpec` rejects.
+            behaviour's :class:`~devlearn.network_spec.NetworkSpec` rejects.
     """
     cfg = RunConfig(behavior_name=behavior_cls.name, behavior=behavior_cls.config_class())
     apply_overrides(cfg, behavior_cls(cfg.behavior).train_defaults())
@@ -300,7 +300,7 @@ def to_rsl_rl(cfg: RunConfig, behavior: Any, observation_names: list[str] | None
     """Return rsl-rl 5.5.1's ``train_cfg`` for this run.
 
     Actor and critic are :class:`~devlearn.training.networks.MultiSenseModel`s built from the
-    behaviour's :class:`~devlearn.behavior.NetworkSpec` (passed as an object; rsl-rl deep-copies
+    behaviour's :class:`~devlearn.network_spec.NetworkSpec` (passed as an object; rsl-rl deep-copies
     it). In the ``shared`` layout rsl-rl's ``share_cnn_encoders`` hands the actor's encoders,
     fusion and trunk to the critic, which adds only its value head; in the ``separate`` layout
     each network builds its own. The algorithm is :class:`~devlearn.training.ppo.UniqueParamPPO`.
