@@ -11,13 +11,12 @@ from fake_infant import TinyBehavior, TinyConfig
 from devlearn.errors import UsageError
 from devlearn.training.config import (
     RunConfig,
-    apply_overrides,
     default_config,
     from_dict,
     to_dict,
     to_rsl_rl,
-    valid_keys,
 )
+from devlearn.training.config_values import apply_overrides, valid_keys
 
 
 def test_every_field_is_documented():
