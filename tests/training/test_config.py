@@ -152,7 +152,7 @@ def test_to_rsl_rl():
 
 
 def test_automatic_workers_one_per_core_and_none_for_small_batches():
-    from devlearn.training.train import resolve_workers
+    from devlearn.training.process import resolve_workers
 
     assert resolve_workers(-1, 16, cpus=2) == 2
     assert resolve_workers(-1, 8, cpus=16) == 2  # at most num_envs // 4
