@@ -17,10 +17,11 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 # take cores from the env workers (read when torch loads: effective if devlearn comes first).
 os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
-from devlearn.behavior import Behavior, Evaluator, NetworkSpec
+from devlearn.behavior import Behavior, Evaluator
 from devlearn.curriculum import Curriculum, Stage
 from devlearn.hookspecs import hookimpl
 from devlearn.learned import LearnedReward, LearnedRewardConfig, Transitions
+from devlearn.network_spec import NetworkSpec
 from devlearn.rewards import BatchContext, BatchedIntrinsicReward, IntrinsicReward, StepContext
 from devlearn.sensors import MLPEncoder, SensorEncoder
 

@@ -4,54 +4,17 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from collections.abc import Sequence
-from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
 from devlearn.curriculum import Curriculum, Stage
+from devlearn.network_spec import NetworkSpec  # also imported from here by plugins
 from devlearn.rewards import BatchedIntrinsicReward, IntrinsicReward, StepContext
-from devlearn.sensors import SensorEncoder
 
 if TYPE_CHECKING:
     from devlearn.infant import Infant
-
-
-@dataclass
-class NetworkSpec:
-    """How to assemble the policy and value networks from per-sense encoders.
-
-    Each observation named in ``encoders`` goes through its encoder; the features are
-    concatenated, passed through ``fusion_dims`` (Linear+ReLU each), then ``trunk_dims``
-    (Linear+ReLU each). The policy head is a Gaussian with ``tanh`` mean and state-dependent
-    ``softplus`` standard deviation (paper, sec. II-A4); the value head is one linear layer.
-    With ``share`` (the default, the paper's layout) policy and value use one set of encoders,
-    fusion and trunk and differ only in their heads; without it each network gets its own copy
-    of everything. The run config's ``network.layout`` may override the choice.
-
-    Attributes:
-        encoders: Observation name -> encoder. Every observation in the behaviour's actor and
-            critic groups must have one.
-        fusion_dims: Fusion layers after concatenation (paper Model I: ``(512,)``).
-        trunk_dims: Trunk layers before the heads (paper Model I: ``(256, 256)``).
-        init_std: Initial standard deviation of the policy (softplus bias is set to match).
-        max_std: Upper bound on the policy's standard deviation (a sigmoid replaces the
-            softplus); 0: unbounded, as in the paper.
-        normalize: Observations standardised by a running mean and variance before their
-            encoder (rsl-rl's ``EmpiricalNormalization``, updated during rollouts), e.g.
-            ``("proprioception",)`` whose joint velocities and torques have mixed scales.
-        share: One set of encoders, fusion and trunk feeds both heads (paper: the trunk
-            "feeds both policy and value heads"); False: separate actor and critic networks.
-    """
-
-    encoders: dict[str, SensorEncoder]
-    fusion_dims: tuple[int, ...] = (512,)
-    trunk_dims: tuple[int, ...] = (256, 256)
-    init_std: float = 0.5
-    max_std: float = 0.0
-    normalize: tuple[str, ...] = ()
-    share: bool = True
 
 
 class Evaluator:

@@ -68,7 +68,8 @@ def add_parser(subparsers) -> list[str]:
 def run(args: argparse.Namespace, registry) -> int:
     """Build the config, train, print the run directory and a final summary."""
     from devlearn.cli.summary import finished_message, run_summary
-    from devlearn.training.config import apply_overrides, default_config
+    from devlearn.training.config import default_config
+    from devlearn.training.config_values import apply_overrides
     from devlearn.training.train import load_run_config, train
 
     behavior_cls = registry.behavior(args.behavior)

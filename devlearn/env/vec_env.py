@@ -18,15 +18,8 @@ from devlearn.env.behavior_env import (
     merge_run_memories,
     run_memories,
 )
-from devlearn.env.workers import (
-    EnvBuffers,
-    EpisodeInfos,
-    WorkerPool,
-    env_spec,
-    make_envs,
-    step_envs,
-    write_obs,
-)
+from devlearn.env.buffers import EnvBuffers, env_spec, write_obs
+from devlearn.env.workers import EpisodeInfos, WorkerPool, make_envs, step_envs
 from devlearn.rewards import BatchedIntrinsicReward
 
 

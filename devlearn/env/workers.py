@@ -10,7 +10,6 @@ import os
 import signal
 import sys
 import traceback
-from multiprocessing import shared_memory
 from typing import Any
 
 import numpy as np
@@ -23,6 +22,7 @@ from devlearn.env.behavior_env import (
     share_batched_terms,
     step_batch,
 )
+from devlearn.env.buffers import attach, env_spec, write_obs
 from devlearn.env.guards import GuardError
 
 EpisodeInfos = list[tuple[int, dict[str, float]]]
@@ -36,77 +36,6 @@ class EnvWorkerError(RuntimeError):
     """
 
     died: bool = False
-
-
-def env_spec(env: BehaviorEnv, obs: dict[str, np.ndarray]) -> dict[str, Any]:
-    """Describe an env's batch layout: observation shapes/dtypes, action size, episode length."""
-    return {
-        "obs": {k: (tuple(np.shape(v)), _buffer_dtype(v)) for k, v in obs.items()},
-        "action_dim": env.action_dim,
-        "episode_steps": env.episode_steps,
-        "step_dt": env.step_dt,
-    }
-
-
-def _buffer_dtype(value: np.ndarray) -> str:
-    """uint8 stays uint8 (images); everything else is stored as float32."""
-    return "uint8" if np.asarray(value).dtype == np.uint8 else "float32"
-
-
-class EnvBuffers:
-    """The batch's arrays: ``obs/<name>`` (N, *shape), ``actions`` (N, A) float32,
-    ``rewards`` (N,) float32, ``dones`` and ``time_outs`` (N,) bool.
-
-    With ``shared=True`` every array lives in a ``multiprocessing.shared_memory`` block that
-    worker processes attach to by name, so steps move no array through pipes.
-    """
-
-    def __init__(self, spec: dict[str, Any], num_envs: int, shared: bool) -> None:
-        layout = {f"obs/{k}": ((num_envs, *shape), dt) for k, (shape, dt) in spec["obs"].items()}
-        layout["actions"] = ((num_envs, spec["action_dim"]), "float32")
-        layout["rewards"] = ((num_envs,), "float32")
-        layout["dones"] = ((num_envs,), "bool")
-        layout["time_outs"] = ((num_envs,), "bool")
-        self.layout = layout
-        self.blocks: list[shared_memory.SharedMemory] = []
-        self.arrays: dict[str, np.ndarray] = {}
-        for key, (shape, dtype) in layout.items():
-            if shared:
-                nbytes = max(int(np.prod(shape)) * np.dtype(dtype).itemsize, 1)
-                block = shared_memory.SharedMemory(create=True, size=nbytes)
-                self.blocks.append(block)
-                self.arrays[key] = np.ndarray(shape, dtype=dtype, buffer=block.buf)
-                self.arrays[key].fill(0)
-            else:
-                self.arrays[key] = np.zeros(shape, dtype=dtype)
-
-    def handle(self) -> dict[str, Any]:
-        """Return what a worker needs to attach: block names and the layout (picklable)."""
-        return {"names": [b.name for b in self.blocks], "layout": self.layout}
-
-    def close(self, unlink: bool = True) -> None:
-        """Release (and by default unlink) the shared-memory blocks."""
-        self.arrays = {}
-        for block in self.blocks:
-            block.close()
-            if unlink:
-                block.unlink()
-        self.blocks = []
-
-
-def _attach(handle: dict[str, Any]) -> tuple[dict[str, np.ndarray], list]:
-    blocks = [shared_memory.SharedMemory(name=n) for n in handle["names"]]
-    arrays = {
-        key: np.ndarray(shape, dtype=dtype, buffer=block.buf)
-        for (key, (shape, dtype)), block in zip(handle["layout"].items(), blocks)
-    }
-    return arrays, blocks
-
-
-def write_obs(arrays: dict[str, np.ndarray], index: int, obs: dict[str, np.ndarray]) -> None:
-    """Copy one env's observations into row ``index`` of the batch arrays."""
-    for key, value in obs.items():
-        arrays[f"obs/{key}"][index] = value
 
 
 def step_envs(envs: list[BehaviorEnv], offset: int, arrays: dict[str, np.ndarray]) -> EpisodeInfos:
@@ -172,7 +101,7 @@ def worker_main(conn, behavior, seeds: list[int], offset: int, infant_factory) -
             if cmd == "close":
                 break
             if cmd == "attach":
-                arrays, blocks = _attach(arg)
+                arrays, blocks = attach(arg)
                 for i, obs in enumerate(first):
                     write_obs(arrays, offset + i, obs)
                 reply: Any = None

@@ -9,7 +9,7 @@ import mujoco
 import numpy as np
 from dm_control import mjcf
 
-from devlearn.infant import contacts, vision
+from devlearn.infant import contacts, starts, vision
 from devlearn.infant.body_table import BODY_TABLE
 from devlearn.infant.regions import NUM_PARTS, NUM_REGIONS, RegionTable, region_table
 from devlearn.infant.scenes import (
@@ -24,13 +24,6 @@ from devlearn.infant.skin import Skin
 
 SENSES = ("touch", "proprioception", "vestibular", "eyes")
 ACTUATOR_GROUPS = ("left_arm", "right_arm", "head", "trunk", "legs")
-
-
-MAX_START_PENETRATION = 0.005
-"""Deepest contact penetration (m) accepted for a random initial pose."""
-TOY_AREA = ((0.2, 0.4), (-0.07, 0.07))
-"""Floor area (x, y ranges, m) where a random start places the toy blocks: in front of the
-sitting infant, between its legs (the lower legs' inner edges are at |y| = 0.094)."""
 
 
 class SenseNotEnabledError(RuntimeError):
@@ -124,55 +117,19 @@ class Infant:
         """Start an episode: the scene's rest pose, or a random start.
 
         A random start draws joint angles uniform within their ranges and, in a scene with toy
-        blocks, places them uniformly in :data:`TOY_AREA` with a random yaw (toys first, so
-        the pose's penetration check sees them); otherwise the toys return to their places.
+        blocks, places them uniformly in :data:`~devlearn.infant.starts.TOY_AREA` with a random
+        yaw (toys first, so the pose's penetration check sees them); otherwise the toys return
+        to their places.
         """
         mujoco.mj_resetData(self.model, self.data)
-        self._place_toys(rng if random_pose else None)
+        starts.place_toys(self.model, self._toys, self._toy_pose, rng if random_pose else None)
         if random_pose:
-            self._random_pose(rng)
+            starts.random_pose(self.model, self.data, self._qpos_index, self._ranges, rng)
         else:
             self.data.qpos[self._qpos_index] = self._rest
             mujoco.mj_forward(self.model, self.data)
         self._cache.clear()
         self.steps = 0
-
-    def _place_toys(self, rng: np.random.Generator | None) -> None:
-        """Toy blocks at random in :data:`TOY_AREA` (``rng``), or at the scene's places (None)."""
-        if not len(self._toys):
-            return  # no draws: scenes without toys keep their random streams
-        pos, quat = (a.copy() for a in self._toy_pose)
-        if rng is not None:
-            (x0, x1), (y0, y1) = TOY_AREA
-            n = len(self._toys)
-            pos[:, 0], pos[:, 1] = rng.uniform(x0, x1, n), rng.uniform(y0, y1, n)
-            yaw = rng.uniform(-np.pi, np.pi, n)
-            quat[:] = 0.0
-            quat[:, 0], quat[:, 3] = np.cos(yaw / 2), np.sin(yaw / 2)
-        self.model.geom_pos[self._toys] = pos
-        self.model.geom_quat[self._toys] = quat
-
-    def _random_pose(self, rng: np.random.Generator, tries: int = 20) -> None:
-        """Joint angles uniform within their ranges, avoiding poses that start buried.
-
-        A uniform pose can put a limb deep inside the mattress or the body; the push-out
-        then reaches thousands of newtons per sensor. Up to ``tries`` poses are drawn and the
-        first whose deepest contact penetrates less than ``MAX_START_PENETRATION`` is kept
-        (else the least-penetrating one), so the pose stays random within the ranges.
-        """
-        best_pose, best_depth = None, np.inf
-        for _ in range(tries):
-            pose = rng.uniform(self._ranges[:, 0], self._ranges[:, 1])
-            self.data.qpos[self._qpos_index] = pose
-            mujoco.mj_forward(self.model, self.data)
-            ncon = self.data.ncon
-            depth = float(-self.data.contact.dist[:ncon].min()) if ncon else 0.0
-            if depth < best_depth:
-                best_pose, best_depth = pose, depth
-            if depth < MAX_START_PENETRATION:
-                return
-        self.data.qpos[self._qpos_index] = best_pose
-        mujoco.mj_forward(self.model, self.data)
 
     def step(self, action: np.ndarray) -> None:
         """Apply ``action`` (action_dim,) in [-1, 1] (clipped): torque = max_torque * action."""

@@ -43,7 +43,8 @@ def plan_sweep(spec: SweepSpec, registry, global_args: list[str] | None = None) 
             run is named), or a launcher that is not installed.
     """
     from devlearn.cli.run import check_config
-    from devlearn.training.config import default_config, valid_keys
+    from devlearn.training.config import default_config
+    from devlearn.training.config_values import valid_keys
 
     behavior_cls = registry.behavior(spec.behavior)
     train = spec.train

@@ -5,12 +5,12 @@ from __future__ import annotations
 from devlearn.training.config import (
     PPOConfig,
     RunConfig,
-    apply_overrides,
     default_config,
     from_dict,
     to_dict,
     to_rsl_rl,
 )
+from devlearn.training.config_values import apply_overrides
 from devlearn.training.evaluate import evaluate
 from devlearn.training.train import TrainResult, train
 

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import errno
 import io
-import json
 import os
 import pickle
 import re
@@ -284,20 +283,3 @@ def resume_checkpoint(run_dir: str | Path) -> tuple[Path, dict[str, Any]]:
     if best is None:
         raise UsageError(f"no readable checkpoint in {run_dir}: {errors[0]}")
     return best
-
-
-def forget_metrics_after(path: Path, step: int) -> None:
-    """Drop ``metrics.jsonl`` rows past ``step`` (atomically): a killed run may have logged
-    iterations after its last checkpoint, and the resumed run redoes (and logs) them again."""
-    if not path.exists():
-        return
-    kept = []
-    for line in path.read_text().splitlines():
-        try:
-            if json.loads(line)["step"] <= step:
-                kept.append(line)
-        except (ValueError, KeyError, TypeError):
-            pass  # a line cut short by the kill
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text("".join(line + "\n" for line in kept))
-    os.replace(tmp, path)

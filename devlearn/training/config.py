@@ -1,4 +1,5 @@
-"""Run configuration: nested dataclasses, ``--set a.b=value`` overrides, rsl-rl's train_cfg."""
+"""Run configuration: nested dataclasses, presets, saved configs, rsl-rl's train_cfg (``--set``
+overrides: :mod:`devlearn.training.config_values`)."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from devlearn.errors import UsageError
-from devlearn.training.config_values import convert, field_types
+from devlearn.training.config_values import apply_overrides, convert, field_types
 
 
 @dataclass
@@ -122,75 +123,6 @@ class RunConfig:
     """The behaviour's own options (an instance of its ``config_class``)."""
 
 
-RECORDED_ONLY = {"preset": "--preset NAME", "start_from": "--from CHECKPOINT"}
-"""RunConfig fields set by a command-line flag, not by ``--set`` (field -> the flag)."""
-
-
-def _leaf_keys(obj: Any, prefix: str = "") -> list[str]:
-    keys = []
-    for f in dataclasses.fields(obj):
-        value = getattr(obj, f.name)
-        if dataclasses.is_dataclass(value):
-            keys += _leaf_keys(value, f"{prefix}{f.name}.")
-        else:
-            keys.append(prefix + f.name)
-    return keys
-
-
-def valid_keys(cfg: RunConfig) -> list[str]:
-    """Return every overridable dotted key (``ppo.learning_rate``, ``behavior.stage_steps``...)."""
-    return _leaf_keys(cfg)
-
-
-def set_value(cfg: RunConfig, key: str, value: Any) -> None:
-    """Set dotted ``key`` to ``value`` (converted to the field's type); UsageError if unknown."""
-    head, _, rest = key.partition(".")
-    if rest and isinstance(getattr(cfg, head, None), dict):
-        # A table of free-form options (``learned.rnd.weight``): kept as given here, then
-        # converted and checked against the term's own config class when the run builds it.
-        *path, leaf = rest.split(".")
-        table = getattr(cfg, head)
-        for part in path:
-            table = table.setdefault(part, {})
-            if not isinstance(table, dict):
-                raise UsageError(f"config key '{key}' goes inside a value that is not a table")
-        table[leaf] = value
-        return
-    if key in RECORDED_ONLY:
-        raise UsageError(f"'{key}' is set with {RECORDED_ONLY[key]}, not with --set")
-    *path, leaf = key.split(".")
-    obj: Any = cfg
-    for part in path:
-        obj = getattr(obj, part, None) if dataclasses.is_dataclass(obj) else None
-    names = {f.name for f in dataclasses.fields(obj)} if dataclasses.is_dataclass(obj) else set()
-    if leaf not in names or dataclasses.is_dataclass(getattr(obj, leaf)):
-        from devlearn.training.config_help import unknown_key_message
-
-        raise UsageError(unknown_key_message(key, cfg))
-    setattr(obj, leaf, convert(value, field_types(obj).get(leaf, Any), key))
-
-
-def apply_overrides(cfg: RunConfig, overrides: list[str] | dict[str, Any]) -> RunConfig:
-    """Apply ``["ppo.learning_rate=3e-4", ...]`` (or a dict of dotted keys) to ``cfg`` in place.
-
-    Raises:
-        UsageError: An item without ``=``, an unknown key (the closest valid one is
-            suggested) or a value that does not convert to the field's type.
-    """
-    if isinstance(overrides, dict):
-        items = list(overrides.items())
-    else:
-        items = []
-        for text in overrides:
-            key, sep, value = text.partition("=")
-            if not sep or not key.strip():
-                raise UsageError(f"override '{text}' must look like key=value (e.g. seed=3)")
-            items.append((key.strip(), value.strip()))
-    for key, value in items:
-        set_value(cfg, key, value)
-    return cfg
-
-
 def default_config(
     behavior_cls: type,
     overrides: list[str] | None = None,
@@ -206,7 +138,8 @@ def default_config(
         preset: A name from the behaviour's ``presets()`` (``--preset``); None or empty: none.
         top: Top-level RunConfig fields (e.g. ``total_steps=...``); None values are skipped.
     Raises:
-        UsageError: An unknown preset (the valid ones named) or a bad override.
+        UsageError: An unknown preset (the valid ones named), a bad override, or values the
+            behaviour's :class:`~devlearn.network_spec.NetworkSpec` rejects.
     """
     cfg = RunConfig(behavior_name=behavior_cls.name, behavior=behavior_cls.config_class())
     apply_overrides(cfg, behavior_cls(cfg.behavior).train_defaults())
@@ -214,9 +147,15 @@ def default_config(
         apply_preset(cfg, behavior_cls, preset)
     apply_overrides(cfg, {k: v for k, v in top.items() if v is not None})
     apply_overrides(cfg, overrides or [])
+    try:  # the spec checks its own values (e.g. the spread): say so before any env starts
+        spec = behavior_cls(cfg.behavior).network()
+    except ValueError as err:
+        raise UsageError(
+            f"{behavior_cls.name}: its network() rejects the config: {err} "
+            "(set through --set behavior.FIELD=VALUE, e.g. behavior.max_std)"
+        ) from err
     if not cfg.network.layout:  # record the behaviour's choice, so config.json says it
-        share = behavior_cls(cfg.behavior).network().share
-        cfg.network.layout = "shared" if share else "separate"
+        cfg.network.layout = "shared" if spec.share else "separate"
     return cfg
 
 
@@ -293,7 +232,7 @@ def to_rsl_rl(cfg: RunConfig, behavior: Any, observation_names: list[str] | None
     """Return rsl-rl 5.5.1's ``train_cfg`` for this run.
 
     Actor and critic are :class:`~devlearn.training.networks.MultiSenseModel`s built from the
-    behaviour's :class:`~devlearn.behavior.NetworkSpec` (passed as an object; rsl-rl deep-copies
+    behaviour's :class:`~devlearn.network_spec.NetworkSpec` (passed as an object; rsl-rl deep-copies
     it). In the ``shared`` layout rsl-rl's ``share_cnn_encoders`` hands the actor's encoders,
     fusion and trunk to the critic, which adds only its value head; in the ``separate`` layout
     each network builds its own. The algorithm is :class:`~devlearn.training.ppo.UniqueParamPPO`.

@@ -10,7 +10,8 @@ import textwrap
 import typing
 from typing import Any
 
-from devlearn.training.config import RunConfig, valid_keys
+from devlearn.training.config import RunConfig
+from devlearn.training.config_values import valid_keys
 
 
 def type_name(kind: Any) -> str:

@@ -1,5 +1,6 @@
 """Config values: a command-line string or JSON value converted to a config field's declared
-type, with errors that say what the field expects."""
+type, with errors that say what the field expects, and set by dotted key (``--set a.b=value``)
+on a :class:`~devlearn.training.config.RunConfig`."""
 
 from __future__ import annotations
 
@@ -89,3 +90,72 @@ def field_types(obj: Any) -> dict[str, Any]:
         return typing.get_type_hints(type(obj))
     except Exception:  # unresolvable annotations: fall back to the runtime value's type
         return {f.name: type(getattr(obj, f.name)) for f in dataclasses.fields(obj)}
+
+
+RECORDED_ONLY = {"preset": "--preset NAME", "start_from": "--from CHECKPOINT"}
+"""RunConfig fields set by a command-line flag, not by ``--set`` (field -> the flag)."""
+
+
+def _leaf_keys(obj: Any, prefix: str = "") -> list[str]:
+    keys = []
+    for f in dataclasses.fields(obj):
+        value = getattr(obj, f.name)
+        if dataclasses.is_dataclass(value):
+            keys += _leaf_keys(value, f"{prefix}{f.name}.")
+        else:
+            keys.append(prefix + f.name)
+    return keys
+
+
+def valid_keys(cfg: Any) -> list[str]:
+    """Return every overridable dotted key (``ppo.learning_rate``, ``behavior.stage_steps``...)."""
+    return _leaf_keys(cfg)
+
+
+def set_value(cfg: Any, key: str, value: Any) -> None:
+    """Set dotted ``key`` to ``value`` (converted to the field's type); UsageError if unknown."""
+    head, _, rest = key.partition(".")
+    if rest and isinstance(getattr(cfg, head, None), dict):
+        # A table of free-form options (``learned.rnd.weight``): kept as given here, then
+        # converted and checked against the term's own config class when the run builds it.
+        *path, leaf = rest.split(".")
+        table = getattr(cfg, head)
+        for part in path:
+            table = table.setdefault(part, {})
+            if not isinstance(table, dict):
+                raise UsageError(f"config key '{key}' goes inside a value that is not a table")
+        table[leaf] = value
+        return
+    if key in RECORDED_ONLY:
+        raise UsageError(f"'{key}' is set with {RECORDED_ONLY[key]}, not with --set")
+    *path, leaf = key.split(".")
+    obj: Any = cfg
+    for part in path:
+        obj = getattr(obj, part, None) if dataclasses.is_dataclass(obj) else None
+    names = {f.name for f in dataclasses.fields(obj)} if dataclasses.is_dataclass(obj) else set()
+    if leaf not in names or dataclasses.is_dataclass(getattr(obj, leaf)):
+        from devlearn.training.config_help import unknown_key_message
+
+        raise UsageError(unknown_key_message(key, cfg))
+    setattr(obj, leaf, convert(value, field_types(obj).get(leaf, Any), key))
+
+
+def apply_overrides(cfg: Any, overrides: list[str] | dict[str, Any]) -> Any:
+    """Apply ``["ppo.learning_rate=3e-4", ...]`` (or a dict of dotted keys) to ``cfg`` in place.
+
+    Raises:
+        UsageError: An item without ``=``, an unknown key (the closest valid one is
+            suggested) or a value that does not convert to the field's type.
+    """
+    if isinstance(overrides, dict):
+        items = list(overrides.items())
+    else:
+        items = []
+        for text in overrides:
+            key, sep, value = text.partition("=")
+            if not sep or not key.strip():
+                raise UsageError(f"override '{text}' must look like key=value (e.g. seed=3)")
+            items.append((key.strip(), value.strip()))
+    for key, value in items:
+        set_value(cfg, key, value)
+    return cfg

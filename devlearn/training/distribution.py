@@ -10,6 +10,8 @@ import torch.nn.functional as F
 from rsl_rl.modules.distribution import Distribution
 from torch.distributions import Normal
 
+from devlearn.network_spec import check_spread
+
 
 def inverse_softplus(y: float) -> float:
     """x such that softplus(x) = y (y > 0)."""
@@ -44,10 +46,7 @@ class TanhSoftplusGaussian(Distribution):
         max_std: float = 0.0,
     ) -> None:
         super().__init__(output_dim)
-        if init_std <= min_std:
-            raise ValueError(f"init_std must exceed min_std={min_std}, got {init_std}")
-        if max_std and max_std <= init_std:  # 0 means unbounded
-            raise ValueError(f"max_std must exceed init_std={init_std} (or be 0), got {max_std}")
+        check_spread(init_std, max_std, min_std)
         self.init_std = float(init_std)
         self.min_std = float(min_std)
         self.max_std = float(max_std)

@@ -11,7 +11,7 @@ from rsl_rl.modules import EmpiricalNormalization
 from rsl_rl.utils import resolve_nn_activation
 from tensordict import TensorDict
 
-from devlearn.behavior import NetworkSpec
+from devlearn.network_spec import NetworkSpec
 from devlearn.training.distribution import TanhSoftplusGaussian, inverse_softplus
 
 __all__ = ["MultiSenseModel", "SharedBody", "TanhSoftplusGaussian", "as_float", "inverse_softplus"]

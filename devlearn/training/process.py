@@ -1,15 +1,20 @@
-"""Process-wide settings of a training process: the distributed group, torch threads, console."""
+"""Process-wide settings of a training process: the distributed group, device, torch threads,
+environment workers, seeds, console."""
 
 from __future__ import annotations
 
 import contextlib
 import io
 import os
+import random
 import signal
 import threading
 
+import numpy as np
 import torch
 import torch.distributed as dist
+
+from devlearn.errors import UsageError
 
 
 def init_distributed(device: str) -> None:
@@ -139,3 +144,41 @@ def interrupts_deferred():
 
 
 _DEFERRED = (signal.SIGINT, signal.SIGTERM)
+
+
+def seed_everything(seed: int) -> None:
+    """Seed torch, numpy's global generator and ``random`` (the envs have their own)."""
+    random.seed(seed)
+    np.random.seed(seed)
+    torch.manual_seed(seed)
+
+
+def rank_seed(seed: int, rank: int, env_steps: int) -> int:
+    """A 32-bit seed for rank ``rank``'s sampling, distinct per (seed, rank, resume point)."""
+    return int(np.random.SeedSequence([seed, rank, env_steps]).generate_state(1)[0])
+
+
+def resolve_workers(workers: int, num_envs: int, cpus: int | None = None) -> int:
+    """The number of env worker processes per rank.
+
+    ``workers >= 0`` is taken as is. -1 (automatic) gives one worker per CPU core available to
+    this rank (the cores this process may run on, divided among torchrun's local ranks), but at
+    most ``num_envs // 4``: fewer than 8 envs, or a single core, stay in process, where a
+    worker's start-up and per-step round trip would cost more than it gains.
+    """
+    if workers >= 0:
+        return workers
+    if cpus is None:
+        cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else None
+        local_ranks = int(os.environ.get("LOCAL_WORLD_SIZE", "1"))
+        cpus = max((cores or os.cpu_count() or 1) // local_ranks, 1)
+    return 0 if cpus < 2 or num_envs < 8 else min(cpus, num_envs // 4)
+
+
+def resolve_device(device: str, local_rank: int, world_size: int) -> str:
+    """The rank's torch device: ``cuda:LOCAL_RANK`` under torchrun (UsageError without CUDA)."""
+    if device == "cuda" and world_size > 1:
+        return f"cuda:{local_rank}"
+    if device.startswith("cuda") and not torch.cuda.is_available():
+        raise UsageError(f"device '{device}' requested but CUDA is not available; use --device cpu")
+    return device

@@ -1,14 +1,31 @@
-"""A run folder's start: a failed start leaves the folder as it was; a run started ``--from``
-another run's checkpoint begins its metrics with that run's rows."""
+"""A run folder's start and metrics: a failed start leaves the folder as it was; a run started
+``--from`` another run's checkpoint begins its metrics with that run's rows; a resumed run
+forgets the rows logged after its checkpoint."""
 
 from __future__ import annotations
 
 import contextlib
+import json
 import os
 import shutil
 from pathlib import Path
 
-from devlearn.training.checkpoint import forget_metrics_after
+
+def forget_metrics_after(path: Path, step: int) -> None:
+    """Drop ``metrics.jsonl`` rows past ``step`` (atomically): a killed run may have logged
+    iterations after its last checkpoint, and the resumed run redoes (and logs) them again."""
+    if not path.exists():
+        return
+    kept = []
+    for line in path.read_text().splitlines():
+        try:
+            if json.loads(line)["step"] <= step:
+                kept.append(line)
+        except (ValueError, KeyError, TypeError):
+            pass  # a line cut short by the kill
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text("".join(line + "\n" for line in kept))
+    os.replace(tmp, path)
 
 
 def copy_metrics(source_dir: Path, run_dir: Path, step: int) -> None:

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import contextlib
 import io
-import json
 import math
 import os
 import sys
@@ -13,7 +12,6 @@ from collections import deque
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import torch
 import torch.distributed as dist
 from rsl_rl.runners import OnPolicyRunner
@@ -24,9 +22,7 @@ from devlearn.curriculum import Curriculum
 from devlearn.env.guards import GuardError
 from devlearn.env.workers import EnvWorkerError
 from devlearn.errors import RunStopped
-from devlearn.training.checkpoint import (
-    LATEST,
-)
+from devlearn.training.checkpoint import LATEST
 from devlearn.training.config import RunConfig
 from devlearn.training.learned_rewards import LearnedRewards
 from devlearn.training.process import (
@@ -38,11 +34,12 @@ from devlearn.training.process import (
     update_threads,
 )
 from devlearn.training.runner_checkpoints import RunnerCheckpoints
+from devlearn.training.runner_metrics import RunnerMetrics, purge_tensorboard_from
 
 __all__ = ["DevRunner", "init_distributed", "quiet", "update_threads"]
 
 
-class DevRunner(RunnerCheckpoints, OnPolicyRunner):
+class DevRunner(RunnerCheckpoints, RunnerMetrics, OnPolicyRunner):
     """Trains one behaviour; the loop is rsl-rl's (act, step, returns, update, log).
 
     Additions: the curriculum advances from the global env-step counter
@@ -150,7 +147,7 @@ class DevRunner(RunnerCheckpoints, OnPolicyRunner):
         with quiet():
             self.logger.init_logging_writer()
         if start_it > 0:
-            _purge_tensorboard_from(self.logger.writer, start_it)
+            purge_tensorboard_from(self.logger.writer, start_it)
         self.curriculum.update(self.env_steps)
         env.set_stage(self.curriculum.stage.options)
         bar = tqdm(
@@ -254,72 +251,8 @@ class DevRunner(RunnerCheckpoints, OnPolicyRunner):
             if self.logger.writer is not None:
                 self.logger.writer.close()
 
-    def _record(
-        self,
-        it: int,
-        num_finished: int,
-        mean_step_reward: float,
-        losses: dict,
-        rate: float,
-        times: dict[str, float],
-        bar: tqdm,
-    ) -> None:
-        """Append one line to metrics.jsonl and refresh the progress bar (rank 0).
-
-        ``times`` holds the iteration's ``collect_s`` (rollout) and ``update_s`` (PPO) seconds.
-        """
-        row: dict[str, Any] = {
-            "step": self.env_steps,
-            "iteration": it,
-            "stage": self.curriculum.stage.name,
-            "steps_per_s": rate,
-            **times,
-            "episodes": num_finished,
-            "mean_step_reward": mean_step_reward,
-            "mean_reward": None,
-        }
-        if self.episodes:
-            returns = [
-                sum(v for k, v in ep.items() if k.startswith("reward/")) for ep in self.episodes
-            ]
-            row["mean_reward"] = float(np.mean(returns))
-            for key in dict.fromkeys(k for ep in self.episodes for k in ep):
-                row[key] = float(np.mean([ep[key] for ep in self.episodes if key in ep]))
-        row.update({f"loss/{k}": float(v) for k, v in losses.items()})
-        row.update(self.learned.last)
-        self.last_row = row
-        if not self.is_main:
-            return
-        self.learned.write(self.logger.writer, it)
-        with open(self.run_dir / "metrics.jsonl", "a") as f:
-            f.write(json.dumps(row) + "\n")
-        postfix = {"steps/s": f"{rate:.0f}", "stage": row["stage"]}
-        if row["mean_reward"] is not None:
-            postfix["reward"] = f"{row['mean_reward']:.3g}"
-        headline = row.get(f"metrics/{self.headline_metric}")
-        if headline is not None:
-            postfix[self.headline_metric] = f"{headline:.3g}"
-        bar.set_postfix(postfix, refresh=False)
-        total = getattr(bar, "total", None) or self.env_steps
-        if self.env_steps >= total:  # the last iteration: stop at the total; close() draws it once
-            bar.n = total
-        else:
-            bar.update(self.env_steps - bar.n)
-
     def _all_ranks(self, value: Any) -> list:
         """Every rank's ``value``, in rank order (a collective: all ranks call it together)."""
         values = [None] * self.gpu_world_size
         dist.all_gather_object(values, value)
         return values
-
-
-def _purge_tensorboard_from(writer, step: int) -> None:
-    """Tell TensorBoard to hide earlier event files' points at ``step`` and later (a resumed
-    run redoes the iterations a killed run logged after its last checkpoint): the
-    ``SessionLog.START`` event that ``SummaryWriter(purge_step=...)`` writes."""
-    file_writer = getattr(writer, "file_writer", None)
-    if file_writer is None:
-        return
-    from tensorboard.compat.proto.event_pb2 import Event, SessionLog
-
-    file_writer.add_event(Event(step=step, session_log=SessionLog(status=SessionLog.START)))

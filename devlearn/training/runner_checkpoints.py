@@ -15,11 +15,11 @@ import torch.distributed as dist
 from devlearn.training.checkpoint import (
     FORMAT,
     LATEST,
-    forget_metrics_after,
     link_atomic,
     save_atomic,
 )
 from devlearn.training.config import to_dict
+from devlearn.training.run_folder import forget_metrics_after
 
 
 class RunnerCheckpoints:

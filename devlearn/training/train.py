@@ -5,13 +5,11 @@ from __future__ import annotations
 import errno
 import json
 import os
-import random
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import torch
 
 from devlearn.env import DevVecEnv
@@ -27,6 +25,7 @@ from devlearn.training.checks import check_config, check_memory, check_out_dir, 
 from devlearn.training.config import RunConfig, apply_preset, from_dict, to_dict, to_rsl_rl
 from devlearn.training.learned_rewards import LearnedRewards
 from devlearn.training.loggers import logger_config
+from devlearn.training.process import rank_seed, resolve_device, resolve_workers, seed_everything
 from devlearn.training.run_folder import copy_metrics, start_up
 from devlearn.training.runner import DevRunner, init_distributed
 
@@ -45,18 +44,6 @@ class TrainResult:
     """PPO iterations done in total."""
     last: dict[str, Any] = field(default_factory=dict)
     """The last metrics.jsonl row (mean reward, reward terms, metrics, stage...)."""
-
-
-def seed_everything(seed: int) -> None:
-    """Seed torch, numpy's global generator and ``random`` (the envs have their own)."""
-    random.seed(seed)
-    np.random.seed(seed)
-    torch.manual_seed(seed)
-
-
-def rank_seed(seed: int, rank: int, env_steps: int) -> int:
-    """A 32-bit seed for rank ``rank``'s sampling, distinct per (seed, rank, resume point)."""
-    return int(np.random.SeedSequence([seed, rank, env_steps]).generate_state(1)[0])
 
 
 def default_run_dir(behavior_name: str) -> Path:
@@ -100,23 +87,6 @@ def config_from_checkpoint(
     return cfg
 
 
-def resolve_workers(workers: int, num_envs: int, cpus: int | None = None) -> int:
-    """The number of env worker processes per rank.
-
-    ``workers >= 0`` is taken as is. -1 (automatic) gives one worker per CPU core available to
-    this rank (the cores this process may run on, divided among torchrun's local ranks), but at
-    most ``num_envs // 4``: fewer than 8 envs, or a single core, stay in process, where a
-    worker's start-up and per-step round trip would cost more than it gains.
-    """
-    if workers >= 0:
-        return workers
-    if cpus is None:
-        cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else None
-        local_ranks = int(os.environ.get("LOCAL_WORLD_SIZE", "1"))
-        cpus = max((cores or os.cpu_count() or 1) // local_ranks, 1)
-    return 0 if cpus < 2 or num_envs < 8 else min(cpus, num_envs // 4)
-
-
 def check_resumable(cfg: RunConfig, checkpoint: dict[str, Any], path: str | Path) -> None:
     """Raise UsageError unless ``checkpoint`` (at ``path``) can continue under ``cfg``: same
     behaviour, same number of environments per rank."""
@@ -126,14 +96,6 @@ def check_resumable(cfg: RunConfig, checkpoint: dict[str, Any], path: str | Path
         raise UsageError(
             f"checkpoint has {len(saved)} envs per rank; resume with --envs {len(saved)}"
         )
-
-
-def _resolve_device(device: str, local_rank: int, world_size: int) -> str:
-    if device == "cuda" and world_size > 1:
-        return f"cuda:{local_rank}"
-    if device.startswith("cuda") and not torch.cuda.is_available():
-        raise UsageError(f"device '{device}' requested but CUDA is not available; use --device cpu")
-    return device
 
 
 def train(
@@ -198,7 +160,7 @@ def train(
     check_config(cfg)
     check_out_dir(run_dir)
     world_size = int(os.environ.get("WORLD_SIZE", "1"))
-    device = _resolve_device(cfg.device, int(os.environ.get("LOCAL_RANK", "0")), world_size)
+    device = resolve_device(cfg.device, int(os.environ.get("LOCAL_RANK", "0")), world_size)
     cfg.workers = resolve_workers(cfg.workers, cfg.num_envs)  # config.json records the number
     learned = LearnedRewards.from_config(cfg, registry)  # names checked before the slow set-up
     check_memory(cfg.num_envs, cfg.workers)

@@ -75,6 +75,11 @@ def episode_cell(e: dict, criterion: str) -> str:
     return f"{c['average']:.3f} [{low:.3f}, {high:.3f}] ep"
 
 
+def pair_cells(c: dict) -> list[str]:
+    """One evaluation's visibility per eye-hand pair (a criterion's entry), in PAIRS order."""
+    return [f"{c['visibility'][p]:.3f}" for p in PAIRS]
+
+
 def visibility_table(groups: list[tuple[str, list[dict]]], criterion: str) -> list[str]:
     head = " | ".join(SHORT)
     rows = [
@@ -85,33 +90,22 @@ def visibility_table(groups: list[tuple[str, list[dict]]], criterion: str) -> li
         pairs = [cell([e["criteria"][criterion]["visibility"][p] for e in runs]) for p in PAIRS]
         average = cell([e["criteria"][criterion]["average"] for e in runs])
         rows.append(f"| {label} | {len(runs)} | " + " | ".join(pairs) + f" | **{average}** |")
-    for name in BASELINES:
-        path = HERE / f"baseline_{name}" / "eval.json"
+    singles = [(f"{n} action (baseline)", HERE / f"baseline_{n}" / "eval.json") for n in BASELINES]
+    singles.append(("historical: first run, 76.8k steps, 1 seed", HISTORICAL))
+    for label, path in singles:
         if path.is_file():
             e = json.loads(path.read_text())
-            pairs = [f"{e['criteria'][criterion]['visibility'][p]:.3f}" for p in PAIRS]
+            pairs = pair_cells(e["criteria"][criterion])
             rows.append(
-                f"| {name} action (baseline) | 1 | "
-                + " | ".join(pairs)
-                + f" | {episode_cell(e, criterion)} |"
+                f"| {label} | 1 | " + " | ".join(pairs) + f" | {episode_cell(e, criterion)} |"
             )
-    if HISTORICAL.is_file():
-        e = json.loads(HISTORICAL.read_text())
-        pairs = [f"{e['criteria'][criterion]['visibility'][p]:.3f}" for p in PAIRS]
+    paper = json.loads(HISTORICAL.read_text())["paper"] if HISTORICAL.is_file() else None
+    if criterion == "cone" and paper:
         rows.append(
-            "| historical: first run, 76.8k steps, 1 seed | 1 | "
-            + " | ".join(pairs)
-            + f" | {episode_cell(e, criterion)} |"
+            "| paper, Table III (1.85M steps; its own criterion) | - | "
+            + " | ".join(pair_cells(paper))
+            + f" | {paper['average']:.3f} |"
         )
-    if criterion == "cone":
-        paper = json.loads(HISTORICAL.read_text())["paper"] if HISTORICAL.is_file() else None
-        if paper:
-            pairs = [f"{paper['visibility'][p]:.3f}" for p in PAIRS]
-            rows.append(
-                "| paper, Table III (1.85M steps; its own criterion) | - | "
-                + " | ".join(pairs)
-                + f" | {paper['average']:.3f} |"
-            )
     return rows
 
 
@@ -123,8 +117,7 @@ def per_run_table(groups: list[tuple[str, list[dict]]]) -> list[str]:
     ]
     for label, runs in groups:
         for e in runs:
-            c = e["criteria"]["cone"]
-            pairs = " / ".join(f"{c['visibility'][p]:.3f}" for p in PAIRS)
+            pairs = " / ".join(pair_cells(e["criteria"]["cone"]))
             code = (e["protocol"].get("code") or {}).get("commit") or "?"
             rows.append(
                 f"| {label} | {e['training_seed']} | {e['checkpoint_env_steps']:,} | {pairs} "
@@ -166,8 +159,7 @@ def rest_table(groups: list[tuple[str, list[dict]]]) -> list[str]:
         cells = []
         for criterion in ("cone", "pixels"):
             c = e["criteria"][criterion]
-            pairs = " / ".join(f"{c['visibility'][p]:.3f}" for p in PAIRS)
-            cells += [pairs, f"{c['average']:.3f}"]
+            cells += [" / ".join(pair_cells(c)), f"{c['average']:.3f}"]
         return f"| {label} | {seed} | " + " | ".join(cells) + " |"
 
     for label, runs in groups:

@@ -11,13 +11,12 @@ from fake_infant import TinyBehavior, TinyConfig
 from devlearn.errors import UsageError
 from devlearn.training.config import (
     RunConfig,
-    apply_overrides,
     default_config,
     from_dict,
     to_dict,
     to_rsl_rl,
-    valid_keys,
 )
+from devlearn.training.config_values import apply_overrides, valid_keys
 
 
 def test_every_field_is_documented():
@@ -153,7 +152,7 @@ def test_to_rsl_rl():
 
 
 def test_automatic_workers_one_per_core_and_none_for_small_batches():
-    from devlearn.training.train import resolve_workers
+    from devlearn.training.process import resolve_workers
 
     assert resolve_workers(-1, 16, cpus=2) == 2
     assert resolve_workers(-1, 8, cpus=16) == 2  # at most num_envs // 4

@@ -134,5 +134,15 @@ def test_max_std_bounds_the_spread_and_starts_at_init_std():
     actor = MultiSenseModel(obs, GROUPS, "actor", 4, spec(), distribution_cfg={**DIST, "max_std": 1.0})
     actor(obs, stochastic_output=True)
     torch.testing.assert_close(actor.output_std, torch.full((5, 4), 0.3), atol=0.02, rtol=0)
-    with pytest.raises(ValueError, match="max_std must exceed init_std"):
+    with pytest.raises(ValueError, match="max_std must be 0 \\(unbounded\\) or above init_std=0.5"):
         TanhSoftplusGaussian(2, init_std=0.5, max_std=0.4)
+
+
+@pytest.mark.parametrize("max_std", [-1.0, 0.2, 0.3])
+def test_network_spec_rejects_a_spread_bound_not_above_the_initial_spread(max_std):
+    """One check in the core, so no behaviour need repeat it (or forget it)."""
+    with pytest.raises(ValueError, match="max_std must be 0 \\(unbounded\\) or above init_std=0.3"):
+        NetworkSpec({"proprioception": MLPEncoder((8,))}, init_std=0.3, max_std=max_std)
+    with pytest.raises(ValueError, match="init_std must exceed min_std"):
+        NetworkSpec({"proprioception": MLPEncoder((8,))}, init_std=0.0)
+    assert NetworkSpec({"proprioception": MLPEncoder((8,))}, init_std=0.3, max_std=0.0).max_std == 0.0

@@ -13,7 +13,7 @@ import torch
 from devlearn.errors import UsageError
 from devlearn.training import train
 from devlearn.training.checkpoint import load_checkpoint
-from devlearn.training.config import apply_overrides
+from devlearn.training.config_values import apply_overrides
 from devlearn.training.train import config_from_checkpoint, load_run_config
 
 

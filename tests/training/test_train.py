@@ -190,7 +190,7 @@ def test_kill_mid_write_keeps_previous_checkpoint(tmp_path):
 
 
 def test_resume_forgets_metrics_logged_after_the_checkpoint(tmp_path):
-    from devlearn.training.checkpoint import forget_metrics_after
+    from devlearn.training.run_folder import forget_metrics_after
 
     path = tmp_path / "metrics.jsonl"
     rows = [json.dumps({"step": s}) for s in (100, 200, 300)]

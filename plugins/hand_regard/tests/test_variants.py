@@ -100,5 +100,6 @@ def test_policy_spread_bound_reaches_the_network():
 
 @pytest.mark.parametrize("max_std", [-1.0, 0.3, 0.5])
 def test_policy_spread_bound_must_exceed_the_initial_spread(max_std):
-    with pytest.raises(UsageError, match="0 \\(unbounded\\) or above behavior.init_std=0.5"):
-        HandRegard(HandRegardConfig(max_std=max_std)).network()
+    """The core's NetworkSpec check answers for this behaviour too, at config time."""
+    with pytest.raises(UsageError, match="max_std must be 0 \\(unbounded\\) or above init_std=0.5"):
+        default_config(HandRegard, [f"behavior.max_std={max_std}"])

@@ -76,3 +76,9 @@ def test_published_policy_file_acts_with_its_unbounded_spread():
     finally:
         env.close()
     assert actor.distribution.max_std == 0.0
+
+
+def test_a_spread_bound_below_the_initial_spread_is_a_usage_error():
+    """The core's NetworkSpec check answers at config time, naming the valid values."""
+    with pytest.raises(UsageError, match="max_std must be 0 \\(unbounded\\) or above init_std=0.5"):
+        default_config(SelfTouch, ["behavior.max_std=0.3"])

@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-import json
 import warnings
-from dataclasses import asdict
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -15,8 +13,8 @@ from devlearn.curriculum import Curriculum, Stage
 from devlearn.errors import UsageError
 from devlearn.rewards import IntrinsicReward
 from devlearn.sensors import MLPEncoder
+from devlearn_hand_regard import detector_store
 from devlearn_hand_regard.config import APPEARANCE_CHOICES, REWARD_CHOICES, HandRegardConfig
-from devlearn_hand_regard.detector import FORMAT_VERSION as DETECTOR_FORMAT
 from devlearn_hand_regard.detector import DetectorParams, HandDetector, HandFlow
 from devlearn_hand_regard.encoders import EyeCNNEncoder
 from devlearn_hand_regard.evaluation import HandRegardEvaluator, paper_figures
@@ -80,21 +78,9 @@ class HandRegard(Behavior):
 
         Sets ``config.detector_file`` to the file's absolute path.
         """
-        from devlearn_hand_regard.babbling import babble
-        from devlearn_hand_regard.calibration import calibrate
-
         path = Path(run_dir) / DETECTOR_FILE
         if not path.exists():
-            cfg = self.config
-            data = babble(
-                cfg.babbling_steps,
-                appearance=cfg.appearance,
-                seed=cfg.babbling_seed,
-                hold_steps=cfg.babbling_hold_steps,
-                head_hold_steps=cfg.babbling_head_hold_steps,
-                head_scale=cfg.babbling_head_scale,
-            )
-            calibrate(data, threshold=cfg.correlation_threshold).save(path)
+            detector_store.calibrate_by_babbling(self.config).save(path)
         self.config.detector_file = str(path.resolve())
         self._detector = None
 
@@ -103,10 +89,7 @@ class HandRegard(Behavior):
         if self._detector is None and not self.config.detector_file:
             return {}
         params = self.detector.params
-        if params is None:
-            return {}
-        data = {"format_version": DETECTOR_FORMAT, **asdict(params)}
-        return {"hand_detector": json.loads(json.dumps(data))}  # plain lists, no tuples
+        return {} if params is None else {"hand_detector": detector_store.as_artifact(params)}
 
     def load_policy_artifacts(self, artifacts: dict[str, Any], folder: Path) -> None:
         """Use the detector stored in the checkpoint, else find ``config.detector_file``.
@@ -125,20 +108,8 @@ class HandRegard(Behavior):
         name = self.config.detector_file
         if not name:
             return  # uncalibrated run: nothing is detected (the detector property warns)
-        folder = Path(folder)
-        given = Path(name)
-        candidates = [given] if given.is_absolute() else [folder / given]
-        candidates += [folder / given.name, folder.parent / given.name]
-        for path in candidates:
-            if path.is_file():
-                self.config.detector_file = str(path)
-                self._detector = None
-                return
-        raise UsageError(
-            f"hand_regard: the checkpoint's detector file {name} is missing, and no "
-            f"{given.name} is in {folder} or {folder.parent}; put it beside the checkpoint "
-            "or make a self-contained policy file with `devlearn slim`"
-        )
+        self.config.detector_file = str(detector_store.find_file(name, Path(folder)))
+        self._detector = None
 
     @property
     def detector(self) -> HandDetector:
@@ -202,17 +173,8 @@ class HandRegard(Behavior):
         }
 
     def network(self) -> NetworkSpec:
-        """The paper's Model II network (sec. II-B3).
-
-        Raises:
-            UsageError: ``max_std`` neither 0 (unbounded) nor above ``init_std``.
-        """
+        """The paper's Model II network (sec. II-B3); NetworkSpec checks the spread settings."""
         cfg = self.config
-        if cfg.max_std < 0 or 0 < cfg.max_std <= cfg.init_std:
-            raise UsageError(
-                f"hand_regard: behavior.max_std must be 0 (unbounded) or above "
-                f"behavior.init_std={cfg.init_std}, got {cfg.max_std}"
-            )
         eye = EyeCNNEncoder()
         return NetworkSpec(
             encoders={

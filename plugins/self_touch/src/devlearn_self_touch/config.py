@@ -5,7 +5,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
-from devlearn import NetworkSpec
 from devlearn_self_touch.batched_rewards import LIFETIME_MEMORIES
 
 CURRICULA = ("two_stage", "fixed_only", "random_only")
@@ -121,12 +120,6 @@ class SelfTouchConfig:
 
     def validate(self) -> None:
         """Raise ValueError naming a wrong choice and the valid ones; normalise milestones."""
-        init_std = NetworkSpec.init_std  # the policy's starting spread (this behaviour's)
-        if self.max_std < 0 or 0 < self.max_std <= init_std:
-            raise ValueError(
-                f"max_std must be 0 (unbounded) or above the initial std {init_std}, "
-                f"got {self.max_std}"
-            )
         if self.curriculum not in CURRICULA:
             raise ValueError(
                 f"unknown curriculum '{self.curriculum}'; valid: {', '.join(CURRICULA)}"

@@ -1,0 +1,83 @@
+"""DevRunner's metrics: one metrics.jsonl line and a progress-bar refresh per iteration, and
+TensorBoard told what a resumed run redoes (a mixin of
+:class:`~devlearn.training.runner.DevRunner`)."""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+import numpy as np
+from tqdm import tqdm
+
+
+class RunnerMetrics:
+    """Per-iteration records for :class:`~devlearn.training.runner.DevRunner`.
+
+    Uses the runner's ``env_steps``, ``curriculum``, ``episodes``, ``learned``, ``is_main``,
+    ``logger``, ``run_dir`` and ``headline_metric``; sets ``last_row``.
+    """
+
+    def _record(
+        self,
+        it: int,
+        num_finished: int,
+        mean_step_reward: float,
+        losses: dict,
+        rate: float,
+        times: dict[str, float],
+        bar: tqdm,
+    ) -> None:
+        """Append one line to metrics.jsonl and refresh the progress bar (rank 0).
+
+        ``times`` holds the iteration's ``collect_s`` (rollout) and ``update_s`` (PPO) seconds.
+        """
+        row: dict[str, Any] = {
+            "step": self.env_steps,
+            "iteration": it,
+            "stage": self.curriculum.stage.name,
+            "steps_per_s": rate,
+            **times,
+            "episodes": num_finished,
+            "mean_step_reward": mean_step_reward,
+            "mean_reward": None,
+        }
+        if self.episodes:
+            returns = [
+                sum(v for k, v in ep.items() if k.startswith("reward/")) for ep in self.episodes
+            ]
+            row["mean_reward"] = float(np.mean(returns))
+            for key in dict.fromkeys(k for ep in self.episodes for k in ep):
+                row[key] = float(np.mean([ep[key] for ep in self.episodes if key in ep]))
+        row.update({f"loss/{k}": float(v) for k, v in losses.items()})
+        row.update(self.learned.last)
+        self.last_row = row
+        if not self.is_main:
+            return
+        self.learned.write(self.logger.writer, it)
+        with open(self.run_dir / "metrics.jsonl", "a") as f:
+            f.write(json.dumps(row) + "\n")
+        postfix = {"steps/s": f"{rate:.0f}", "stage": row["stage"]}
+        if row["mean_reward"] is not None:
+            postfix["reward"] = f"{row['mean_reward']:.3g}"
+        headline = row.get(f"metrics/{self.headline_metric}")
+        if headline is not None:
+            postfix[self.headline_metric] = f"{headline:.3g}"
+        bar.set_postfix(postfix, refresh=False)
+        total = getattr(bar, "total", None) or self.env_steps
+        if self.env_steps >= total:  # the last iteration: stop at the total; close() draws it once
+            bar.n = total
+        else:
+            bar.update(self.env_steps - bar.n)
+
+
+def purge_tensorboard_from(writer, step: int) -> None:
+    """Tell TensorBoard to hide earlier event files' points at ``step`` and later (a resumed
+    run redoes the iterations a killed run logged after its last checkpoint): the
+    ``SessionLog.START`` event that ``SummaryWriter(purge_step=...)`` writes."""
+    file_writer = getattr(writer, "file_writer", None)
+    if file_writer is None:
+        return
+    from tensorboard.compat.proto.event_pb2 import Event, SessionLog
+
+    file_writer.add_event(Event(step=step, session_log=SessionLog(status=SessionLog.START)))
