@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 import shutil
 import sys
 from dataclasses import dataclass
@@ -45,13 +46,20 @@ def plan_sweep(spec: SweepSpec, registry, global_args: list[str] | None = None) 
     from devlearn.cli.run import check_config
     from devlearn.training.config import default_config
     from devlearn.training.config_values import valid_keys
+    from devlearn.training.learned_rewards import LearnedRewards
 
     behavior_cls = registry.behavior(spec.behavior)
     train = spec.train
-    keys = valid_keys(default_config(behavior_cls))
+    base = default_config(behavior_cls)
+    keys = valid_keys(base)
     for key in spec.grid:
-        if key not in keys:
-            raise UsageError(f"--grid: unknown config key '{key}'; valid keys: {', '.join(keys)}")
+        head, dot, _ = key.partition(".")
+        table = dot and isinstance(getattr(base, head, None), dict)  # learned.TERM.OPTION
+        if key not in keys and not table:
+            raise UsageError(
+                f"--grid: unknown config key '{key}'; valid keys: {', '.join(keys)} "
+                "(and learned.TERM.OPTION for a learned reward in curiosity)"
+            )
     runs = []
     for variant in variants(spec.grid, spec.seeds):
         overrides = [*train.overrides, *variant.overrides]
@@ -60,6 +68,7 @@ def plan_sweep(spec: SweepSpec, registry, global_args: list[str] | None = None) 
             cfg = default_config(behavior_cls, overrides, train.preset, seed=variant.seed, **top)
             check_config(cfg)
             registry.create(spec.behavior, cfg.behavior)
+            LearnedRewards.from_config(copy.deepcopy(cfg), registry)  # learned.* options too
         except UsageError as exc:
             raise UsageError(f"run {variant.name}: {exc}") from None
         common = ["--workers", str(train.workers)]

@@ -215,3 +215,23 @@ def test_preset_reaches_every_run(capsys, tmp_path):
     assert "paper" in capsys.readouterr().err  # the valid presets are named
     without = build_spec("self_touch", {"out": str(out)}, None)
     assert "preset" not in without.what()["train"]  # sweeps made before keep their identity
+
+
+def test_grid_varies_a_learned_reward_option_and_checks_it_up_front(tmp_path):
+    """`--grid learned.TERM.OPTION=...` is a key like `--set` takes (e.g. a curiosity weight of 0
+    as the control); an unknown option of the term fails at planning, before any run starts."""
+    from devlearn.plugins import PluginRegistry
+
+    registry = PluginRegistry(disabled=())
+    options = {"out": str(tmp_path / "s"), "seeds": "1", "steps": "1000",
+               "grid": ["learned.rnd.weight=0,0.05"], "overrides": ["curiosity=rnd"]}  # fmt: skip
+    runs = plan_sweep(build_spec("self_touch", options, None), registry, [])
+    assert len(runs) == 2
+    sets = [a for r in runs for a in r.job.train_args if a.startswith("learned.")]
+    assert sets == ["learned.rnd.weight=0", "learned.rnd.weight=0.05"]
+    typo = {**options, "grid": ["learned.rnd.wieght=0,0.05"]}
+    with pytest.raises(UsageError, match="wieght"):
+        plan_sweep(build_spec("self_touch", typo, None), registry, [])
+    unknown = {**options, "grid": ["learnd.rnd.weight=0"]}
+    with pytest.raises(UsageError, match="unknown config key 'learnd.rnd.weight'"):
+        plan_sweep(build_spec("self_touch", unknown, None), registry, [])
