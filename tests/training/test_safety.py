@@ -312,8 +312,14 @@ def test_an_interrupt_while_an_iteration_closes_saves_what_metrics_record(tmp_pa
 
     monkeypatch.setattr(DevRunner, "_record", interrupted_record)
     out = tmp_path / "r"
-    with pytest.raises(KeyboardInterrupt):
-        _run(out, 32 * 10)
+    # Ctrl-C as `devlearn run` sets it up, whatever this process inherited (a shell's `cmd &`
+    # starts pytest with SIGINT ignored, and the kill below would then do nothing).
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            _run(out, 32 * 10)
+    finally:
+        signal.signal(signal.SIGINT, previous)
     saved = load_checkpoint(out / "checkpoint_latest.pt")["env_steps"]
     rows = [json.loads(line) for line in (out / "metrics.jsonl").read_text().splitlines()]
     assert saved == rows[-1]["step"] == 64
