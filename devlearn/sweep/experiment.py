@@ -45,7 +45,7 @@ def plan_sweep(spec: SweepSpec, registry, global_args: list[str] | None = None) 
     """
     from devlearn.cli.run import check_config
     from devlearn.training.config import default_config
-    from devlearn.training.config_values import valid_keys
+    from devlearn.training.config_values import in_table, valid_keys
     from devlearn.training.learned_rewards import LearnedRewards
 
     behavior_cls = registry.behavior(spec.behavior)
@@ -53,9 +53,7 @@ def plan_sweep(spec: SweepSpec, registry, global_args: list[str] | None = None) 
     base = default_config(behavior_cls)
     keys = valid_keys(base)
     for key in spec.grid:
-        head, dot, _ = key.partition(".")
-        table = dot and isinstance(getattr(base, head, None), dict)  # learned.TERM.OPTION
-        if key not in keys and not table:
+        if key not in keys and not in_table(base, key):  # learned.TERM.OPTION
             raise UsageError(
                 f"--grid: unknown config key '{key}'; valid keys: {', '.join(keys)} "
                 "(and learned.TERM.OPTION for a learned reward in curiosity)"

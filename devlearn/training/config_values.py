@@ -112,10 +112,17 @@ def valid_keys(cfg: Any) -> list[str]:
     return _leaf_keys(cfg)
 
 
+def in_table(cfg: Any, key: str) -> bool:
+    """Whether dotted ``key`` names an entry of a free-form table field (``learned.rnd.weight``),
+    which :func:`valid_keys` does not list."""
+    head, _, rest = key.partition(".")
+    return bool(rest) and isinstance(getattr(cfg, head, None), dict)
+
+
 def set_value(cfg: Any, key: str, value: Any) -> None:
     """Set dotted ``key`` to ``value`` (converted to the field's type); UsageError if unknown."""
     head, _, rest = key.partition(".")
-    if rest and isinstance(getattr(cfg, head, None), dict):
+    if in_table(cfg, key):
         # A table of free-form options (``learned.rnd.weight``): kept as given here, then
         # converted and checked against the term's own config class when the run builds it.
         *path, leaf = rest.split(".")
