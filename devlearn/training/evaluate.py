@@ -19,7 +19,7 @@ from tqdm import tqdm
 from devlearn.env.behavior_env import BehaviorEnv
 from devlearn.errors import UsageError
 from devlearn.training.checkpoint import LATEST, check_behavior, load_checkpoint
-from devlearn.training.config import RunConfig, from_dict, to_dict, to_rsl_rl
+from devlearn.training.config import RunConfig, default_config, from_dict, to_dict, to_rsl_rl
 from devlearn.training.runner import quiet
 
 VIDEO_FPS = 25
@@ -207,9 +207,10 @@ def evaluate(
         state = load_checkpoint(checkpoint)
         check_behavior(state, checkpoint, behavior_name)
         cfg = from_dict(state["config"], behavior_cls)
-    else:
+    else:  # a baseline acts at the decision rate a new run of the behaviour would use
         state = {}
         cfg = from_dict({}, behavior_cls)
+        cfg.env.action_repeat = default_config(behavior_cls).env.action_repeat
     behavior = registry.create(behavior_name, cfg.behavior)
     if checkpoint is not None:
         behavior.load_policy_artifacts(dict(state.get("artifacts") or {}), checkpoint.parent)
@@ -218,7 +219,8 @@ def evaluate(
     # A batch of one gains nothing from more threads, and several threads on a core that
     # another program uses are many times slower (measured: a 64x64 eye CNN 85 ms vs 11 ms).
     torch.set_num_threads(1)
-    env = BehaviorEnv(behavior, seed, infant_factory, training=False)
+    repeat = cfg.env.action_repeat
+    env = BehaviorEnv(behavior, seed, infant_factory, training=False, action_repeat=repeat)
     writer = None
     try:
         stage = behavior.eval_stage()
@@ -235,7 +237,7 @@ def evaluate(
 
             Path(video).parent.mkdir(parents=True, exist_ok=True)
             writer = imageio.get_writer(str(video), fps=VIDEO_FPS, macro_block_size=1)
-            stride = max(1, round(1.0 / (env.step_dt * VIDEO_FPS)))
+            stride = max(1, round(1.0 / (env.step_dt * repeat * VIDEO_FPS)))
         bar = tqdm(
             total=episodes * env.episode_steps,
             unit="step",
@@ -246,8 +248,8 @@ def evaluate(
         )
         for episode in range(episodes):
             bar.set_postfix(episode=f"{episode + 1}/{episodes}")
-            for t in range(env.episode_steps):
-                bar.update()
+            for t in range(env.episode_steps // repeat):  # decisions; bar and counts: physics
+                bar.update(repeat)
                 if writer is not None and episode == 0 and t % stride == 0:
                     writer.append_data(env.behavior.render_frame(env.infant))
                 obs, _, _, _, _ = env.step(act(obs))
@@ -269,6 +271,7 @@ def evaluate(
                 "stage": json.loads(json.dumps(stage, default=str)),
                 "start": start,
                 "settle_steps": 0,
+                "action_repeat": repeat,
                 **env.evaluator.protocol(),
                 "checkpoint_env_steps": steps,
                 "code": code_version(),
