@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Issue #28's pilots: single-factor arms around the new learner, 300k physics steps each
+# (150k fixed pose + 150k random poses), seeds 1 and 2, 30 random-pose evaluation episodes.
+# Each arm is its own sweep folder under $OUT (default sweeps/learner_pilot); two runs at a
+# time, one core each. Run from the repository root: bash results/learner/pilot.sh [ARM...]
+set -euo pipefail
+OUT=${OUT:-sweeps/learner_pilot}
+STEPS=${STEPS:-300000}
+declare -A ARMS=(
+  [new]=""
+  [separate]="--set network.layout=separate"
+  [paper_head]="--set network.head=paper"
+  [no_norm]="--set ppo.normalize_rewards=false"
+  [k1]="--set env.action_repeat=1 --set ppo.num_steps_per_env=128 --set ppo.gamma=0.995"
+  [onset]="--set behavior.touch_count=onset"
+  [old]="--set network.head=paper --set ppo.normalize_rewards=false --set env.action_repeat=1 --set ppo.num_steps_per_env=128 --set ppo.gamma=0.995"
+)
+ORDER=(${@:-new old paper_head no_norm separate onset k1})
+for arm in "${ORDER[@]}"; do
+  # shellcheck disable=SC2086
+  .venv/bin/devlearn sweep self_touch --out "$OUT/$arm" --seeds 1,2 --steps "$STEPS" \
+    --envs 16 --workers 0 --jobs 2 --episodes 30 \
+    --set torch_threads=1 --set behavior.fixed_pose_steps=$((STEPS / 2)) ${ARMS[$arm]}
+done
