@@ -8,6 +8,7 @@ OUT=${OUT:-sweeps/learner_pilot}
 STEPS=${STEPS:-300000}
 declare -A ARMS=(
   [new]=""
+  [fixed_lr]="--set ppo.schedule=fixed"
   [separate]="--set network.layout=separate"
   [paper_head]="--set network.head=paper"
   [no_norm]="--set ppo.normalize_rewards=false"
@@ -15,7 +16,7 @@ declare -A ARMS=(
   [onset]="--set behavior.touch_count=onset"
   [old]="--set network.head=paper --set ppo.normalize_rewards=false --set env.action_repeat=1 --set ppo.num_steps_per_env=128 --set ppo.gamma=0.995"
 )
-ORDER=(${@:-new old paper_head no_norm separate onset k1})
+ORDER=(${@:-new fixed_lr paper_head no_norm separate onset k1 old})
 for arm in "${ORDER[@]}"; do
   # shellcheck disable=SC2086
   .venv/bin/devlearn sweep self_touch --out "$OUT/$arm" --seeds 1,2 --steps "$STEPS" \
