@@ -87,7 +87,6 @@ HEADS = ("gaussian", "paper")
 LEGACY_FIELDS: dict[str, Any] = {
     "ppo.normalize_rewards": False,
     "network.head": "paper",
-    "env.action_repeat": 1,
 }
 """Core fields a saved config may lack, and the value its run was trained with (the default
 changed when the field was added, issue #28): such a config loads as trained."""
@@ -97,13 +96,15 @@ changed when the field was added, issue #28): such a config loads as trained."""
 class EnvConfig:
     """How the policy meets the environment."""
 
-    action_repeat: int = 5
-    """Physics steps per policy decision: one action is held for this many 5 ms physics steps
-    and their rewards summed (``env.action_repeat=K``). Episode lengths, curriculum stages,
+    action_repeat: int = 1
+    """Physics steps per policy decision: one action is held for this many physics steps and
+    their rewards summed (``env.action_repeat=K``; how facts and rewards are computed within
+    a decision: ``Behavior.facts_every_physics_step``). Episode lengths, curriculum stages,
     ``--steps`` and evaluation counts stay in physics steps. 1: a decision every physics step
-    (the paper's 200 Hz, ``--preset paper``). At 200 Hz independent noise held for 5 ms barely
-    moves an arm, so random exploration goes nowhere (issue #28); 5 is a decision every 25 ms
-    (``results/learner/README.md``). Must divide the episode length."""
+    (the paper's 200 Hz). Behaviours set their own in ``train_defaults`` (self-touch and hand
+    regard: 5, a decision every 25 ms): at 200 Hz independent noise held for 5 ms barely moves
+    an arm, so random exploration goes nowhere (issue #28, ``results/learner/README.md``).
+    Must divide the episode length."""
 
 
 @dataclass

@@ -205,7 +205,7 @@ class SelfTouch(Behavior):
         ~1 s (gamma 0.995) and rollouts of 128 steps per environment. The paper gives no other
         PPO constants than the clip 0.2 (the core's default).
         """
-        return {"ppo.num_steps_per_env": 64, "ppo.gamma": 0.99}
+        return {"env.action_repeat": 5, "ppo.num_steps_per_env": 64, "ppo.gamma": 0.99}
 
     def presets(self) -> dict[str, dict[str, Any]]:
         """``paper``: the paper's values where the default recipe differs (sec. II-A):
