@@ -6,6 +6,9 @@
 set -euo pipefail
 OUT=${OUT:-sweeps/learner_pilot}
 STEPS=${STEPS:-300000}
+# Arms are relative to the code's defaults at the commit they ran on: "new" and "fixed_lr" ran
+# on 657df7c (adaptive learning rate by default), the others on the commit that made the
+# fixed schedule self-touch's default (where "new" would be "--set ppo.schedule=adaptive").
 declare -A ARMS=(
   [new]=""
   [fixed_lr]="--set ppo.schedule=fixed"
@@ -16,7 +19,7 @@ declare -A ARMS=(
   [onset]="--set behavior.touch_count=onset"
   [old]="--set network.head=paper --set ppo.normalize_rewards=false --set env.action_repeat=1 --set ppo.num_steps_per_env=128 --set ppo.gamma=0.995"
 )
-ORDER=(${@:-new fixed_lr paper_head no_norm separate onset k1 old})
+ORDER=(${@:-separate onset paper_head no_norm k1})
 for arm in "${ORDER[@]}"; do
   # shellcheck disable=SC2086
   .venv/bin/devlearn sweep self_touch --out "$OUT/$arm" --seeds 1,2 --steps "$STEPS" \
