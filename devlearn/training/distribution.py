@@ -172,10 +172,11 @@ class BoundedGaussian(Distribution):
         return self._distribution.sample()  # type: ignore[union-attr]
 
     def deterministic_output(self, mlp_output: torch.Tensor) -> torch.Tensor:
-        return mlp_output
+        """The mean as the env applies it: clipped to [-1, 1]."""
+        return mlp_output.clamp(-1.0, 1.0)
 
     def as_deterministic_output_module(self) -> nn.Module:
-        return nn.Identity()
+        return nn.Hardtanh()  # clamp to [-1, 1], exportable
 
     @property
     def mean(self) -> torch.Tensor:
