@@ -210,6 +210,7 @@ class SelfTouch(Behavior):
             "ppo.num_steps_per_env": 64,
             "ppo.gamma": 0.99,
             "ppo.schedule": "fixed",
+            "network.layout": "separate",
         }
 
     def presets(self) -> dict[str, dict[str, Any]]:
@@ -227,6 +228,8 @@ class SelfTouch(Behavior):
                 # the paper's policy head (tanh mean, softplus spread) at BabyBench's 200 Hz,
                 # with the discount and rollouts this behaviour used at that rate
                 "network.head": "paper",
+                "network.layout": "shared",
+                "behavior.touch_count": "step",
                 "env.action_repeat": 1,
                 "ppo.num_steps_per_env": 128,
                 "ppo.gamma": 0.995,
