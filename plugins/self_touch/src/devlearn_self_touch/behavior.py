@@ -201,9 +201,13 @@ class SelfTouch(Behavior):
         ``total_steps`` is left to the core's short default so that ``devlearn run self_touch``
         finishes in minutes; the paper's run is ``--steps 8000000`` (4M + 4M, sec. II-A5), or
         ``--preset paper`` (:meth:`presets`).
-        At 200 Hz a reach to the body takes a few hundred steps, hence a discount horizon of
-        ~1 s (gamma 0.995) and rollouts of 128 steps per environment. The paper gives no other
-        PPO constants than the clip 0.2 (the core's default).
+        Issue #28's learner (``results/learner/README.md``): a decision every 5 physics steps
+        (25 ms; ``env.action_repeat``), so a discount of 0.99 per decision (a horizon of
+        ~2.5 s) and rollouts of 64 decisions per environment; a fixed learning rate (the
+        adaptive schedule sat at its 1e-5 floor in the pilots); separate actor and critic
+        (the pilots' surrogate and evaluation favoured them, as did the audit of the published
+        shared-trunk runs). The paper gives no other PPO constants than the clip 0.2 (the
+        core's default).
         """
         return {
             "env.action_repeat": 5,
