@@ -145,6 +145,7 @@ def test_evaluator_episode_and_summary(tmp_path):
         "coverage_right": 1.0,
         "coverage_total": 2.0,
         "score": 3 / 68,
+        "balance": 1.0,
     }
     ev.record(make_ctx(hand_parts=[(1, 3), (1, 4), (1, 5)]))
     assert ev.end_episode()["coverage_right"] == 3.0

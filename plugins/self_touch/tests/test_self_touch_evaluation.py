@@ -27,6 +27,7 @@ def test_settle_period_does_not_credit_the_reset_contact():
         "coverage_right": 1.0,
         "coverage_total": 1.0,
         "score": 1 / 68,
+        "balance": 1.0,
     }
     unsettled = run_episode(SelfTouchEvaluator(training=False, settle_steps=0), contacts)
     assert unsettled["coverage_left"] == 1.0 and unsettled["coverage_total"] == 2.0
@@ -62,3 +63,34 @@ def test_summary_keeps_the_union_and_adds_per_episode_spread():
     assert summary["episode_coverage_total_std"] == pytest.approx(stats.tstd([2, 1, 0]))
     for key in ("coverage_left", "coverage_right", "coverage_total"):
         assert {f"episode_{key}_{s}" for s in ("mean", "std", "ci_low", "ci_high")} <= set(summary)
+
+
+def test_union_score_and_its_bootstrap_interval_recompute_from_the_eval_json():
+    """eval.json keeps every episode's touched parts per hand; the union score and its
+    bootstrap interval follow from them alone."""
+    import json
+
+    import numpy as np
+    from devlearn_self_touch.evaluation import union_score, union_score_interval
+
+    evaluator = SelfTouchEvaluator(training=False)
+    rng = np.random.default_rng(1)
+    for _ in range(12):  # each episode: a few random (hand, part) touches after the settle
+        touches = [(int(h), int(p)) for h, p in zip(rng.integers(0, 2, 4), rng.integers(0, 34, 4))]
+        run_episode(evaluator, {11 + i: [t] for i, t in enumerate(touches)})
+    saved = json.loads(json.dumps(evaluator.summary()))  # as written to eval.json
+    parts = saved["episode_parts"]
+    assert len(parts) == 12 and set(parts[0]) == {"left", "right"}
+    assert union_score(parts) == saved["score"]
+    interval = union_score_interval(parts)
+    assert (interval["score_boot_low"], interval["score_boot_high"]) == (
+        saved["score_boot_low"],
+        saved["score_boot_high"],
+    )
+    # the union of a resample never exceeds the union of all episodes, and 12 episodes of ~4
+    # touches leave resamples well below it: a mean of per-episode scores would not
+    assert saved["score_boot_low"] < saved["score_boot_high"] <= saved["score"]
+    assert saved["score_boot_low"] > saved["episode_score_mean"]
+    # identical episodes: every resample has the same union
+    same = [{"left": [1, 2], "right": [3]}] * 5
+    assert union_score_interval(same) == {"score_boot_low": 3 / 68, "score_boot_high": 3 / 68}

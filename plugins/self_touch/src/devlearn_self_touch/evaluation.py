@@ -16,7 +16,7 @@ SETTLE_STEPS = 10
 """Steps at the start of an evaluation episode whose contacts are not credited: a random
 reset pose and gravity make contacts on their own (6 of 100 resets touch on step 0), and
 BabyBench likewise runs 10 steps before an episode is scored."""
-EPISODE_METRICS = ("coverage_left", "coverage_right", "coverage_total", "score")
+EPISODE_METRICS = ("coverage_left", "coverage_right", "coverage_total", "score", "balance")
 """Per-episode metrics whose mean, spread and 95% interval :meth:`summary` reports."""
 PAPER_RESULTS = {
     "two_stage": (
@@ -34,6 +34,38 @@ PAPER_RESULTS = {
 }
 """The paper's evaluation figures per curriculum (100 random-pose episodes, its protocol):
 Table I for the two-stage run, Table II ("Eval" score and coverage) for the ablation."""
+
+
+BOOTSTRAP_RESAMPLES = 2000
+"""Resamples of the union score's bootstrap interval."""
+
+
+def union_score(touched: list[dict[str, list[int]]]) -> float:
+    """The union score of episodes' touched parts (eval.json's ``episode_parts``): each hand's
+    distinct parts over all the episodes, (left + right) / 68."""
+    return sum(len(set().union(*(ep[hand] for ep in touched))) for hand in HANDS) / (2 * NUM_PARTS)
+
+
+def union_score_interval(
+    touched: list[dict[str, list[int]]], resamples: int = BOOTSTRAP_RESAMPLES, seed: int = 0
+) -> dict[str, float | None]:
+    """95% percentile-bootstrap interval of the union score: episodes drawn with replacement,
+    ``resamples`` times, from a fixed seed (so it repeats). Empty with fewer than 2 episodes.
+
+    Returns:
+        ``score_boot_low`` and ``score_boot_high`` (None with fewer than 2 episodes).
+    """
+    if len(touched) < 2:
+        return {"score_boot_low": None, "score_boot_high": None}
+    masks = np.zeros((len(touched), len(HANDS), NUM_PARTS), dtype=bool)
+    for e, episode in enumerate(touched):
+        for h, hand in enumerate(HANDS):
+            masks[e, h, episode[hand]] = True
+    rng = np.random.default_rng(seed)
+    draws = rng.integers(0, len(touched), (resamples, len(touched)))
+    scores = masks[draws].any(axis=1).sum(axis=(1, 2)) / (2 * NUM_PARTS)
+    low, high = np.percentile(scores, [2.5, 97.5])
+    return {"score_boot_low": float(low), "score_boot_high": float(high)}
 
 
 class SelfTouchEvaluator(Evaluator):
@@ -66,6 +98,8 @@ class SelfTouchEvaluator(Evaluator):
         self.ever_parts = np.zeros((len(HANDS), NUM_PARTS), dtype=bool)
         self.episode_parts = np.zeros((len(HANDS), NUM_PARTS), dtype=bool)
         self.episodes: list[dict[str, float]] = []
+        self.touched: list[dict[str, list[int]]] = []
+        """Each evaluation episode's touched parts per hand (part indices), in eval.json."""
         self.regions: Any = None  # the infant's region table, taken from the first real step
 
     def record(self, ctx: StepContext) -> None:
@@ -88,14 +122,21 @@ class SelfTouchEvaluator(Evaluator):
             "coverage_right": float(right),
             "coverage_total": float(parts.any(axis=0).sum()),
             "score": (left + right) / (2 * NUM_PARTS),
+            "balance": float(abs(left - right)),
         }
 
     def end_episode(self) -> dict[str, float]:
         metrics = self._coverage(self.episode_parts)
         self.ever_parts |= self.episode_parts
-        self.episode_parts[:] = False
         if not self.training:
             self.episodes.append(metrics)
+            self.touched.append(
+                {
+                    hand: np.flatnonzero(self.episode_parts[h]).tolist()
+                    for h, hand in enumerate(HANDS)
+                }
+            )
+        self.episode_parts[:] = False
         return metrics
 
     def part_names(self) -> list[str]:
@@ -114,9 +155,11 @@ class SelfTouchEvaluator(Evaluator):
             "episodes": len(self.episodes),
             **{k: int(v) if k.startswith("coverage") else v for k, v in union.items()},
             "parts": NUM_PARTS,
-            "balance": int(abs(union["coverage_left"] - union["coverage_right"])),
+            "balance": int(union["balance"]),
+            **union_score_interval(self.touched),
             "settle_steps": self.settle_steps,
             **spread,
+            "episode_parts": self.touched,
             "part_touch_steps": {
                 hand: {names[p]: int(self.part_steps[h, p]) for p in range(NUM_PARTS)}
                 for h, hand in enumerate(HANDS)
