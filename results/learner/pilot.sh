@@ -23,6 +23,6 @@ ORDER=(${@:-separate onset paper_head no_norm k1})
 for arm in "${ORDER[@]}"; do
   # shellcheck disable=SC2086
   .venv/bin/devlearn sweep self_touch --out "$OUT/$arm" --seeds 1,2 --steps "$STEPS" \
-    --envs 16 --workers 0 --jobs 2 --episodes 30 \
+    --envs 16 --workers 0 --jobs "${JOBS:-2}" --episodes 30 \
     --set torch_threads=1 --set behavior.fixed_pose_steps=$((STEPS / 2)) ${ARMS[$arm]}
 done
