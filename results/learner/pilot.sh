@@ -9,8 +9,11 @@ STEPS=${STEPS:-300000}
 # Arms are relative to the code's defaults at the commit they ran on: "new" and "fixed_lr" ran
 # on 657df7c (adaptive learning rate by default), the others on the commit that made the
 # fixed schedule self-touch's default (where "new" would be "--set ppo.schedule=adaptive").
+# "defaults", "paper_head", "no_norm" and "k1" ran on the commit that also made the separate
+# layout and touch_count=onset the defaults (the final recipe), so "defaults" is their base.
 declare -A ARMS=(
   [new]=""
+  [defaults]=""
   [fixed_lr]="--set ppo.schedule=fixed"
   [separate]="--set network.layout=separate"
   [paper_head]="--set network.head=paper"
