@@ -121,3 +121,29 @@ def test_posture_model_tells_crossed_hands_apart(synthetic_params):
     assert detector.detect(eyes, p)[0].tolist() == [[True, False], [True, False]]
     # Without proprioception the mean positions decide: x = 48 is the right hand's side.
     assert detector.detect(eyes)[0].tolist() == [[False, True], [False, True]]
+
+
+def test_a_hand_predicted_outside_the_image_is_never_chosen(synthetic_params, monkeypatch):
+    """The posture puts the right hand outside the image: a blob near where it would be is
+    not called the right hand; the left hand takes it only when predicted inside."""
+    detector = HandDetector(synthetic_params)
+    frame = draw(np.array([[56.0, 40.0], [np.nan, np.nan]]), BLOCK_POSITIONS)
+    eyes = np.stack([frame, frame])
+    cases = {
+        "right outside": ([[20.0, 40.0], [80.0, 40.0]], [True, False]),  # nearer right, but out
+        "left outside": ([[-9.0, 40.0], [40.0, 40.0]], [False, True]),
+        "both outside": ([[20.0, -5.0], [70.0, 40.0]], [False, False]),
+        "both inside": ([[20.0, 40.0], [60.0, 40.0]], [False, True]),  # the nearer one
+    }
+    for name, (expected, seen) in cases.items():
+        monkeypatch.setattr(detector, "expected_positions", lambda eye, p, e=expected: np.array(e))
+        assert detector.detect(eyes, np.zeros(4))[0].tolist() == [seen, seen], name
+    # Two blobs, one hand predicted outside: only one is attributed, to the hand inside.
+    frame = draw(np.array([[20.0, 40.0], [46.0, 42.0]]), BLOCK_POSITIONS)
+    monkeypatch.setattr(
+        detector, "expected_positions", lambda eye, p: np.array([[22, 40], [70, 40]])
+    )
+    detections, masks = detector.detect(np.stack([frame, frame]), np.zeros(4))
+    assert detections.tolist() == [[True, False], [True, False]]
+    ys, xs = np.nonzero(masks[0, 0])
+    assert abs(xs.mean() - 20) < 2

@@ -69,9 +69,11 @@ class HandRegardConfig:
     """Random-action steps recorded before training to discover the hands (paper: 10,000)."""
     babbling_seed: int = 0
     """Seed of the babbling episode's random actions and initial state."""
-    babbling_hold_steps: int = 8
+    babbling_hold_steps: int = 25
     """Mean steps an arm's random babbling action is held (each actuator redraws independently;
-    200 Hz i.i.d. noise barely moves the damped arms, so the hands would hardly move)."""
+    200 Hz i.i.d. noise barely moves the damped arms, so the hands would hardly move). In
+    BabyBench's scene the hands hang out of view: held 25 steps (0.125 s) they swing into
+    view in ~13% of babbling frames, held 8 (the runs before issue #29, in ``sitting``) ~8%."""
     babbling_head_hold_steps: int = 50
     """Mean steps a head action is held while babbling (a slow head keeps the view steady)."""
     babbling_head_scale: float = 0.3

@@ -13,8 +13,9 @@ from devlearn_hand_regard.config import HandRegardConfig
 from devlearn_hand_regard.detector import FORMAT_VERSION, DetectorParams
 
 
-def calibrate_by_babbling(cfg: HandRegardConfig) -> DetectorParams:
-    """Babble (``cfg.babbling_*``) and calibrate the detector (``cfg.correlation_threshold``)."""
+def calibrate_by_babbling(cfg: HandRegardConfig, progress: bool = True) -> DetectorParams:
+    """Babble (``cfg.babbling_*``, in ``cfg.scene`` from ``cfg.start``) and calibrate the
+    detector (``cfg.correlation_threshold``); ``progress`` prints a line every few seconds."""
     from devlearn_hand_regard.babbling import babble
     from devlearn_hand_regard.calibration import calibrate
 
@@ -25,6 +26,9 @@ def calibrate_by_babbling(cfg: HandRegardConfig) -> DetectorParams:
         hold_steps=cfg.babbling_hold_steps,
         head_hold_steps=cfg.babbling_head_hold_steps,
         head_scale=cfg.babbling_head_scale,
+        scene=cfg.scene,
+        start=cfg.start,
+        progress=progress,
     )
     return calibrate(data, threshold=cfg.correlation_threshold)
 

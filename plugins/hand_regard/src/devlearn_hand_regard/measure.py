@@ -2,9 +2,9 @@
 
 ``python -m devlearn_hand_regard.measure`` babbles (default 10,000 steps, seed 0) on the
 infant of ``--appearance`` (mittens or skin), calibrates, then records test frames (seed 1):
-``--test-episodes`` episodes of ``--test-episode-steps`` steps of the same random babbling
-actions, each from a random start (joints and toys, as ``devlearn eval`` starts; ``--rest-start``
-for the rest pose), with the segmentation. It prints JSON: per (eye, hand) pair the per-frame
+``--test-episodes`` episodes of ``--test-episode-steps`` steps of the same held random babbling
+actions, each from ``--start`` (default ``babybench``, the training start of ``--scene``,
+default ``sitting_babybench``; ``random``: random joints and toys), with the segmentation. It prints JSON: per (eye, hand) pair the per-frame
 precision, recall and accuracy of the detections (truth: any pixel of that hand), recall on
 clearly visible hands, per hand the pixel precision and recall of its mask, and which labels
 the detected pixels carry (hand, other body, scene/toys, background). The segmentation is
@@ -46,7 +46,13 @@ class SegmentationRecorder:
 
 
 def held_out(
-    infant, steps: int, seed: int, episode_steps: int | None = None, random_pose: bool = False
+    infant,
+    steps: int,
+    seed: int,
+    episode_steps: int | None = None,
+    random_pose: bool = False,
+    start: str = "babybench",
+    hold_steps: int = 25,
 ) -> tuple[BabblingData, np.ndarray]:
     """Fresh babbling with the segmentation of every frame ((T, 2, H, W) int).
 
@@ -56,10 +62,18 @@ def held_out(
         seed: Seed of the actions and starts.
         episode_steps: Steps between resets (default: the infant's episode length).
         random_pose: Every episode from a random start (evaluation frames).
+        start: Otherwise every episode from this start (``devlearn.infant.starts.STARTS``).
+        hold_steps: Mean steps an arm's babbling action is held.
     """
     recorder = SegmentationRecorder(infant)
     data = babble(
-        steps, seed=seed, infant=recorder, episode_steps=episode_steps, random_pose=random_pose
+        steps,
+        seed=seed,
+        infant=recorder,
+        episode_steps=episode_steps,
+        random_pose=random_pose,
+        start=start,
+        hold_steps=hold_steps,
     )
     return data, np.stack(recorder.segmentation)
 
@@ -208,8 +222,15 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--test-episode-steps", type=int, default=500, help="steps per episode")
     parser.add_argument("--test-seed", type=int, default=1)
     parser.add_argument(
-        "--rest-start", action="store_true", help="test episodes from the rest pose, not random"
+        "--scene", default="sitting_babybench", help="sitting_babybench (default) or sitting"
     )
+    parser.add_argument(
+        "--start",
+        default="babybench",
+        choices=("babybench", "rest", "random"),
+        help="how babbling and test episodes start (default babybench)",
+    )
+    parser.add_argument("--hold-steps", type=int, default=25, help="babbling action hold")
     parser.add_argument("--detector", help="score this detector JSON instead of calibrating")
     parser.add_argument("--save", help="write the calibrated detector JSON here")
     parser.add_argument("--out", help="write the JSON result here too")
@@ -217,14 +238,16 @@ def main(argv: list[str] | None = None) -> dict:
     args = parser.parse_args(argv)
     from devlearn.infant import build_infant
 
-    infant = build_infant("sitting", senses=("proprioception", "eyes"), appearance=args.appearance)
+    infant = build_infant(args.scene, senses=("proprioception", "eyes"), appearance=args.appearance)
     result: dict = {
         "appearance": args.appearance,
+        "scene": args.scene,
+        "hold_steps": args.hold_steps,
         "argv": list(sys.argv[1:] if argv is None else argv),
         "test_frames": {
             "episodes": args.test_episodes,
             "episode_steps": args.test_episode_steps,
-            "start": "rest" if args.rest_start else "random",
+            "start": args.start,
         },
     }
     try:
@@ -232,7 +255,15 @@ def main(argv: list[str] | None = None) -> dict:
         if args.detector:
             params = DetectorParams.load(args.detector)
         else:
-            data = babble(args.babbling_steps, seed=args.seed, infant=infant)
+            start_mode = "rest" if args.start == "random" else args.start
+            data = babble(
+                args.babbling_steps,
+                seed=args.seed,
+                infant=infant,
+                start=start_mode,
+                hold_steps=args.hold_steps,
+                progress=True,
+            )
             result["babbling_s"] = round(time.perf_counter() - start, 1)
             start = time.perf_counter()
             params = calibrate(data)
@@ -253,7 +284,9 @@ def main(argv: list[str] | None = None) -> dict:
             args.test_episodes * args.test_episode_steps,
             args.test_seed,
             episode_steps=args.test_episode_steps,
-            random_pose=not args.rest_start,
+            random_pose=args.start == "random",
+            start="rest" if args.start == "random" else args.start,
+            hold_steps=args.hold_steps,
         )
         start = time.perf_counter()
         result["score"] = score(HandDetector(params), test, segmentation)
