@@ -1,12 +1,13 @@
 """Measure a babbling-calibrated detector against the renderer's segmentation.
 
 ``python -m devlearn_hand_regard.measure`` babbles (default 10,000 steps, seed 0) on the
-infant of ``--appearance`` (mittens or skin), calibrates, then records test frames (seed 1):
-``--test-episodes`` episodes of ``--test-episode-steps`` steps of the same held random babbling
-actions, each from ``--start`` (default ``babybench``, the training start of ``--scene``,
-default ``sitting_babybench``; ``random``: random joints and toys), with the segmentation. It prints JSON: per (eye, hand) pair the per-frame
-precision, recall and accuracy of the detections (truth: any pixel of that hand), recall on
-clearly visible hands, per hand the pixel precision and recall of its mask, and which labels
+infant of ``--appearance`` (mittens or skin) in ``--scene`` (default ``sitting_babybench``),
+calibrates, then records test frames (seed 1): ``--test-episodes`` episodes of
+``--test-episode-steps`` steps of the same held random babbling actions, each from ``--start``
+(default ``babybench``, the training start; ``random``: random joints and toys), with the
+segmentation. It prints JSON: per (eye, hand) pair the per-frame precision, recall and
+accuracy of the detections (truth: any pixel of that hand), recall on clearly visible hands
+(at least 20 pixels), per hand the pixel precision and recall of its mask, and which labels
 the detected pixels carry (hand, other body, scene/toys, background). The segmentation is
 used here only, never by the detector.
 """
