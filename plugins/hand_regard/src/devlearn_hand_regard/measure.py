@@ -100,8 +100,11 @@ def score(
         hands and the share of steps the hand is in view; ``any_hand``: the same with the
         hands' identity ignored (is any hand in this eye?); ``pixels``: share of detected
         pixels per segmentation label; ``hand_pixel_recall``: share of hand pixels detected.
+        Per pair, ``precision_pixels`` and ``recall_pixels`` take as truth at least
+        ``clear_pixels`` of the hand's pixels (``devlearn eval``'s ``pixels`` criterion).
     """
     conf = np.zeros((4, 2, 2))  # tp, fp, fn, tn per (eye, hand)
+    conf_clear = np.zeros((4, 2, 2))  # the same against "clearly visible" (eval's ``pixels``)
     clear = np.zeros((2, 2, 2))  # clearly visible: (found, visible) per (eye, hand)
     anyh = np.zeros(4)
     labels = np.zeros(len(LABELS))
@@ -125,6 +128,7 @@ def score(
                 ]
                 truth, found = n > 0, bool(detections[eye, hand])
                 conf[_cell(truth, found), eye, hand] += 1
+                conf_clear[_cell(n >= clear_pixels, found), eye, hand] += 1
                 if n >= clear_pixels:
                     clear[:, eye, hand] += [found, 1]
             truth, found = bool(is_hand.any()), bool(detections[eye].any())
@@ -132,9 +136,12 @@ def score(
     pairs = {}
     for eye, hand in PAIRS:
         tp, fp, fn, tn = conf[:, eye, hand]
+        against_pixels = _stats(*conf_clear[:, eye, hand])
         pairs[pair_name(eye, hand)] = _stats(tp, fp, fn, tn) | {
             "clear_recall": round(clear[0, eye, hand] / max(clear[1, eye, hand], 1), 3),
             "clear_steps": int(clear[1, eye, hand]),
+            "precision_pixels": against_pixels["precision"],
+            "recall_pixels": against_pixels["recall"],
         }
     tp, fp, fn, tn = conf.sum(axis=(1, 2))
     return {
@@ -154,7 +161,7 @@ def score(
         },
         "pair_mean": {
             k: round(float(np.mean([p[k] for p in pairs.values()])), 3)
-            for k in ("precision", "recall", "clear_recall")
+            for k in ("precision", "recall", "clear_recall", "precision_pixels", "recall_pixels")
         },
     }
 
