@@ -66,7 +66,7 @@ def test_hand_at_20_degrees_is_in_the_image_but_outside_the_cone(scene):
 def test_hand_hidden_behind_a_toy(scene):
     seen, angle, pixels = criteria(scene, (0.5, 0.0, 0.0), toy=(0.25, 0.0, 0.0))
     assert pixels == 0
-    # The cone is geometry only (BabyBench's rule); the pixel criteria see the occlusion.
+    # The cone is geometry only (as BabyBench's counter); the pixel criteria see the occlusion.
     assert seen == {"cone": True, "pixels": False, "any_pixel": False}
 
 

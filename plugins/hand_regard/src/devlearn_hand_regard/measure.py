@@ -138,7 +138,9 @@ def score(
         tp, fp, fn, tn = conf[:, eye, hand]
         against_pixels = _stats(*conf_clear[:, eye, hand])
         pairs[pair_name(eye, hand)] = _stats(tp, fp, fn, tn) | {
-            "clear_recall": round(clear[0, eye, hand] / max(clear[1, eye, hand], 1), 3),
+            "clear_recall": (
+                round(clear[0, eye, hand] / clear[1, eye, hand], 3) if clear[1, eye, hand] else None
+            ),
             "clear_steps": int(clear[1, eye, hand]),
             "precision_pixels": against_pixels["precision"],
             "recall_pixels": against_pixels["recall"],
@@ -160,7 +162,7 @@ def score(
             for h, side in enumerate(("left", "right"))
         },
         "pair_mean": {
-            k: round(float(np.mean([p[k] for p in pairs.values()])), 3)
+            k: _mean([p[k] for p in pairs.values()])
             for k in ("precision", "recall", "clear_recall", "precision_pixels", "recall_pixels")
         },
     }
@@ -172,12 +174,20 @@ def _cell(truth: bool, found: bool) -> int:
 
 
 def _stats(tp: float, fp: float, fn: float, tn: float) -> dict:
+    """Precision (None when nothing was detected), recall (None when nothing was in view),
+    accuracy and the share of steps in view."""
     return {
-        "precision": round(tp / max(tp + fp, 1), 3),
-        "recall": round(tp / max(tp + fn, 1), 3),
+        "precision": round(tp / (tp + fp), 3) if tp + fp else None,
+        "recall": round(tp / (tp + fn), 3) if tp + fn else None,
         "accuracy": round((tp + tn) / max(tp + fp + fn + tn, 1), 3),
         "in_view": round((tp + fn) / max(tp + fp + fn + tn, 1), 3),
     }
+
+
+def _mean(values: list) -> float | None:
+    """Mean of the values that are not None (None if none is)."""
+    values = [v for v in values if v is not None]
+    return round(float(np.mean(values)), 3) if values else None
 
 
 def detection_picture(
