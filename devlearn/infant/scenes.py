@@ -150,8 +150,9 @@ SCENES = {
             "head_tilt": BABYBENCH_HEAD_PITCH,
             "left_shoulder_abduction": 0.25,
             "right_shoulder_abduction": 0.25,
-            "left_shoulder_flexion": -0.2,
-            "right_shoulder_flexion": -0.2,
+            # hands beside the hips, ~85 degrees off the eyes' axes (BabyBench: 80-86)
+            "left_shoulder_flexion": 0.2,
+            "right_shoulder_flexion": 0.2,
         },
         overview=((0.75, -0.55, 0.55), (0.59, 0.81, 0.0, -0.35, 0.25, 0.9)),
         equality={"head_tilt": BABYBENCH_HEAD_PITCH, "head_tilt_side": 0.0},

@@ -37,6 +37,20 @@ def _axis_angles(infant) -> np.ndarray:
     return out
 
 
+def _babybench_angles(infant) -> np.ndarray:
+    """(2 eyes, 2 hands) degrees between each eye *body's* -z axis and the eye-to-hand vector
+    (body origins): BabyBench's hand-regard counter, 90 degrees below the optical axis."""
+    data, out = infant.data, np.empty((2, 2))
+    for e, eye in enumerate(("left", "right")):
+        body = infant.model.body(f"{eye}_eye").id
+        axis = -data.xmat[body].reshape(3, 3)[:, 2]
+        for h, hand in enumerate(("left", "right")):
+            to_hand = data.xpos[infant.model.body(f"{hand}_hand").id] - data.xpos[body]
+            cos = axis @ to_hand / np.linalg.norm(to_hand)
+            out[e, h] = np.degrees(np.arccos(np.clip(cos, -1, 1)))
+    return out
+
+
 def test_seventeen_motors_head_pitch_and_side_tilt_held(babybench):
     assert babybench.action_dim == 17  # the held joints keep their motors, as in BabyBench
     assert babybench.model.neq == 2
@@ -57,7 +71,8 @@ def test_start_hands_far_off_both_optical_axes(babybench):
     for start in ("rest", "babybench"):
         for seed in range(3):
             babybench.reset(np.random.default_rng(seed), start=start)
-            assert _axis_angles(babybench).min() >= 80.0, start
+            angles = _axis_angles(babybench)
+            assert angles.min() >= 80.0 and angles.max() < 90.0, start  # BabyBench: 80-86
             assert not np.isin(babybench.eyes_segmentation(), (1, 2)).any()
 
 
@@ -68,9 +83,13 @@ def test_baselines_see_no_hand_over_an_episode(babybench, policy):
     bring a single hand pixel into either eye over a 1000-step episode (BabyBench: both 0)."""
     rng = np.random.default_rng(5)
     babybench.reset(rng, start="babybench")
+    counted = 0
     for _ in range(babybench.episode_steps):
         babybench.step(np.zeros(17) if policy == "zero" else rng.uniform(-1, 1, 17))
         assert not np.isin(babybench.eyes_segmentation(), (1, 2)).any()
+        counted += int((_babybench_angles(babybench) < 15.0).sum())
+    if policy == "zero":  # BabyBench's own counter credits doing nothing with 0, as there
+        assert counted == 0
 
 
 def test_rest_is_the_settled_state_and_babybench_kicks_it(babybench):
