@@ -45,6 +45,15 @@ def add_parser(subparsers) -> list[str]:
         "state alone, every episode: a deterministic policy then repeats one episode); "
         "random (random joint angles: generalisation)",
     )
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        dest="overrides",
+        help="a baseline's config value, e.g. behavior.detector_file=runs/hr/hand_detector.json "
+        "(hand regard's baselines then score with a calibrated detector); repeatable",
+    )
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
     p.add_argument("--video", metavar="PATH", help="write an MP4 of the first episode")
     p.add_argument(
@@ -104,6 +113,7 @@ def run(args: argparse.Namespace, registry) -> int:
             out_dir=out_dir,
             policy=args.policy or "checkpoint",
             start=args.start,
+            overrides=args.overrides,
         )
     except EvalWriteError as exc:
         _print(exc.summary, args.json)

@@ -19,7 +19,7 @@ from tqdm import tqdm
 from devlearn.env.behavior_env import BehaviorEnv
 from devlearn.errors import UsageError
 from devlearn.training.checkpoint import LATEST, check_behavior, load_checkpoint
-from devlearn.training.config import RunConfig, from_dict, to_dict, to_rsl_rl
+from devlearn.training.config import RunConfig, apply_overrides, from_dict, to_dict, to_rsl_rl
 from devlearn.training.runner import quiet
 
 VIDEO_FPS = 25
@@ -192,6 +192,7 @@ def evaluate(
     progress: bool = True,
     policy: str = "checkpoint",
     start: str = "stage",
+    overrides: list[str] | None = None,
 ) -> dict[str, Any]:
     """Run ``episodes`` episodes of a policy and summarise them under the evaluation protocol.
 
@@ -214,6 +215,10 @@ def evaluate(
         policy: One of :data:`POLICIES`.
         start: One of :data:`STARTS`; other than ``stage`` it overrides the stage's
             ``random_pose`` and the infant's start.
+        overrides: ``key=value`` settings of a baseline's config (``--set``), e.g. a
+            calibrated detector for hand regard's baselines
+            (``behavior.detector_file=runs/hr/hand_detector.json``); not with a checkpoint,
+            whose config is its own.
     Returns:
         ``evaluator.summary()`` plus ``behavior``, ``policy``, ``checkpoint``,
         ``checkpoint_env_steps`` (x axis of ``devlearn curve``), ``training_seed``, ``config``
@@ -233,6 +238,8 @@ def evaluate(
         raise UsageError(
             "give a checkpoint, or a baseline policy (zero, random, held_random), not both"
         )
+    if overrides and checkpoint is not None:
+        raise UsageError("--set applies to baselines only: a checkpoint evaluates with its config")
     out = prepare_out_dir(out_dir) if out_dir is not None else None
     behavior_cls = registry.behavior(behavior_name)
     if checkpoint is not None:
@@ -243,6 +250,7 @@ def evaluate(
     else:
         state = {}
         cfg = from_dict({}, behavior_cls)
+        apply_overrides(cfg, list(overrides or []))
     behavior = registry.create(behavior_name, cfg.behavior)
     if checkpoint is not None:
         behavior.load_policy_artifacts(dict(state.get("artifacts") or {}), checkpoint.parent)

@@ -220,3 +220,15 @@ def test_held_random_baseline_holds_its_actions(registry):
     assert 0.8 < unchanged < 0.95
     iid, _ = actions_of(registry, None, "random")
     assert (np.diff(iid, axis=0) == 0).mean() == 0.0
+
+
+def test_baseline_config_overrides(registry, tmp_path):
+    summary = evaluate("tiny", None, 1, registry, policy="zero", progress=False,
+                       overrides=["seed=7"])
+    assert summary["config"]["seed"] == 7
+    with pytest.raises(UsageError, match="baselines only"):
+        evaluate("tiny", tmp_path, 1, registry, overrides=["seed=7"])
+    out = tmp_path / "zero"
+    assert main(["eval", "tiny", "--policy", "zero", "--episodes", "1", "--set", "seed=5",
+                 "--out", str(out)]) == 0
+    assert json.loads((out / "eval.json").read_text())["config"]["seed"] == 5
