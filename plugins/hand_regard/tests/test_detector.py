@@ -147,3 +147,31 @@ def test_a_hand_predicted_outside_the_image_is_never_chosen(synthetic_params, mo
     assert detections.tolist() == [[True, False], [True, False]]
     ys, xs = np.nonzero(masks[0, 0])
     assert abs(xs.mean() - 20) < 2
+
+
+def test_posture_model_is_kept_only_when_it_predicts_unseen_tracks():
+    """Validated on every other track: a posture-driven hand keeps its model; hands whose
+    image positions do not follow the posture (noise) fall back to the mean positions."""
+    from devlearn_hand_regard.calibration import Track, position_model
+
+    rng = np.random.default_rng(1)
+    steps, n_joints = 600, 4
+    angles = rng.uniform(-1, 1, (steps, n_joints))
+    proprioception = np.c_[angles, np.zeros((steps, 5 * n_joints))]
+
+    def tracks(where):
+        out = []
+        for side in range(2):
+            for k in range(6):  # six tracks per arm, 50 steps each
+                track = Track(k % 2, 0, side=side)
+                track.steps = list(range(side * 300 + 50 * k, side * 300 + 50 * (k + 1)))
+                track.centroids = [tuple(where(side, s)) for s in track.steps]
+                out.append(track)
+        return out
+
+    linear = tracks(lambda side, s: [32 + 20 * angles[s, side], 40 + 5 * angles[s, 2 + side]])
+    model = position_model(linear, proprioception, ridge=0.1, max_error=16.0)
+    assert model and model["validation_error_px"] < 2.0
+    noise = tracks(lambda side, s: rng.uniform(0, 64, 2))
+    assert position_model(noise, proprioception, ridge=0.1, max_error=16.0) == {}
+    assert position_model(noise, proprioception, ridge=0.1)  # unvalidated: kept, as before
