@@ -175,3 +175,7 @@ def test_posture_model_is_kept_only_when_it_predicts_unseen_tracks():
     noise = tracks(lambda side, s: rng.uniform(0, 64, 2))
     assert position_model(noise, proprioception, ridge=0.1, max_error=16.0) == {}
     assert position_model(noise, proprioception, ridge=0.1)  # unvalidated: kept, as before
+    episode = np.arange(steps) // 100  # folds by babbling episode, as calibrate() asks
+    kept = position_model(linear, proprioception, ridge=0.1, max_error=16.0, episode=episode)
+    assert kept and kept["validation_error_px"] < 2.0
+    assert position_model(noise, proprioception, 0.1, max_error=16.0, episode=episode) == {}

@@ -47,6 +47,7 @@ def position_model(
     ridge: float = 4.0,
     min_frames: int = 20,
     max_error: float | None = None,
+    episode: np.ndarray | None = None,
 ) -> dict:
     """Learn where each hand appears in view from the body's posture (for left/right).
 
@@ -62,18 +63,21 @@ def position_model(
             weighs like this many frames pulling the weights to 0, so short babbling, with
             few hand frames, relies more on the mean position).
         min_frames: Fewest frames of either hand for a model.
-        max_error: When given, the model is validated first: fitted on every other hand
-            track of each arm and tested on the rest (then the other way round), and kept only
+        max_error: When given, the model is validated first: fitted on the hand tracks of
+            every other babbling episode (``episode``; without it, every other track of each
+            arm) and tested on the rest (then the other way round), and kept only
             if its median error on unseen tracks is at most this many pixels. A posture model
             that predicts worse than this would send blobs to the wrong hand, or (predicting a
             hand outside the image) to none.
+        episode: (T,) babbling episode of each step (``BabblingData.episode``): folds by
+            episode, so that tracks of one episode's postures are not on both sides.
     Returns:
         ``joint_mean``, ``joint_scale`` and ``weights`` (2 hands, 2 + J, 2), see
         :class:`DetectorParams`, and ``validation_error_px`` when validated; empty when a hand
         has too few frames, P < 6, or the validation error exceeds ``max_error``.
     """
     if max_error is not None:
-        error = _validation_error(hands, proprioception, ridge, min_frames)
+        error = _validation_error(hands, proprioception, ridge, min_frames, episode)
         if error is None or error > max_error:
             return {}
         model = position_model(hands, proprioception, ridge, min_frames)
@@ -104,17 +108,25 @@ def position_model(
 
 
 def _validation_error(
-    hands: list[Track], proprioception: np.ndarray, ridge: float, min_frames: int
+    hands: list[Track],
+    proprioception: np.ndarray,
+    ridge: float,
+    min_frames: int,
+    episode: np.ndarray | None = None,
 ) -> float | None:
     """Median pixel error of :func:`position_model` on hand tracks it was not fitted on
-    (two folds: every other track of each arm); None when a fold has too few frames."""
+    (two folds: every other babbling episode, or every other track of each arm); None when a
+    fold has too few frames."""
     errors = []
     for fold in range(2):
         train, test = [], []
         for side in range(2):
             tracks = [t for t in hands if t.side == side]
-            train += [t for i, t in enumerate(tracks) if i % 2 != fold]
-            test += [t for i, t in enumerate(tracks) if i % 2 == fold]
+            keys = [
+                int(episode[t.steps[0]]) if episode is not None else i for i, t in enumerate(tracks)
+            ]
+            train += [t for k, t in zip(keys, tracks) if k % 2 != fold]
+            test += [t for k, t in zip(keys, tracks) if k % 2 == fold]
         model = position_model(train, proprioception, ridge, min_frames)
         if not model or not test:
             return None
@@ -266,6 +278,10 @@ def calibrate(
         image_size=(height, width),
         calibration=report,
         position_model=position_model(
-            hands, data.proprioception, ridge, max_error=max_position_error * width
+            hands,
+            data.proprioception,
+            ridge,
+            max_error=max_position_error * width,
+            episode=data.episode,
         ),
     )
