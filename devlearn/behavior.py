@@ -80,6 +80,13 @@ class Behavior(ABC):
     as ``--set behavior.FIELD=VALUE``."""
     headline_metric: ClassVar[str] = ""
     """Key of :meth:`Evaluator.end_episode` shown on the progress bar."""
+    facts_every_physics_step: ClassVar[bool] = True
+    """With a decision rate (``env.action_repeat=K``, one action held for K physics steps):
+    True (cheap facts, e.g. touch): facts, reward terms and the evaluator run at every physics
+    step and the decision's reward is their sum, exactly an env stepped K times with the same
+    action. False (facts that need renders, e.g. eye images and a detector): physics runs K
+    times, then facts, observations, reward terms and the evaluator run once, on the state the
+    decision reached, and the reward terms are paid K times (held over the decision)."""
 
     def __init__(self, config: Any | None = None) -> None:
         self.config = config if config is not None else self.config_class()

@@ -174,6 +174,29 @@ def bench_training(
     return float(np.mean([r["steps_per_s"] for r in rows]))
 
 
+def decision_rate(
+    registry,
+    behavior: str,
+    steps: int,
+    extra: list[str],
+    progress: Callable[[str], None],
+) -> dict[str, Any]:
+    """The behaviour's default decision rate (``<behavior>_train_action_repeat``: physics steps
+    per policy decision) and, beside ``<behavior>_train_steps_per_s`` measured at it, the same
+    training with a decision every physics step (``<behavior>_train_steps_per_s_k1``). Both
+    count physics steps per second."""
+    from devlearn.training.config import default_config
+
+    repeat = default_config(registry.behavior(behavior)).env.action_repeat
+    result: dict[str, Any] = {f"{behavior}_train_action_repeat": repeat}
+    if repeat > 1:
+        progress(f"{behavior}: end-to-end training, a decision every physics step (K=1)")
+        result[f"{behavior}_train_steps_per_s_k1"] = bench_training(
+            behavior, steps, [*extra, "--set", "env.action_repeat=1"], progress
+        )
+    return result
+
+
 OLD_LEARNER = ["network.layout=separate", "torch_threads=1", "update_threads=1"]
 """``--set`` options that train as before the shared layout and automatic threads."""
 
@@ -261,16 +284,18 @@ def run_bench(registry, quick: bool = False, progress: Callable[[str], None] = p
         result["self_touch_train_steps_per_s"] = bench_training(
             "self_touch", 8192 if quick else 32768, [], progress
         )
+        result.update(decision_rate(registry, "self_touch", 8192 if quick else 32768, [], progress))
     if "hand_regard" in behaviors:
         progress("hand_regard: end-to-end training (short babbling, any correlation accepted)")
         # prepare() babbles before training (10,000 rendered steps by default); a short babble
         # finds weaker correlations, so the threshold is dropped: speed does not depend on it.
         short = ["behavior.babbling_steps=300", "behavior.correlation_threshold=0"]
+        extra = ["--envs", "8", *(arg for kv in short for arg in ("--set", kv))]
         result["hand_regard_train_steps_per_s"] = bench_training(
-            "hand_regard",
-            1024 if quick else 4096,
-            ["--envs", "8", *(arg for kv in short for arg in ("--set", kv))],
-            progress,
+            "hand_regard", 1024 if quick else 4096, extra, progress
+        )
+        result.update(
+            decision_rate(registry, "hand_regard", 1024 if quick else 4096, extra, progress)
         )
     result.update(bench_learner(behaviors, quick, progress))
     usage_self = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss

@@ -18,7 +18,7 @@ ACTION = "action"
 
 
 class DeterministicPolicy(nn.Module):
-    """The policy at test time: ``tanh`` of the Gaussian's mean (paper: a_t = mu_t).
+    """The policy at test time: the Gaussian's mean as the env applies it (paper: a_t = mu_t).
 
     ``forward(*observations)`` takes one tensor per observation, in :attr:`names` order, each
     (N, *shape) in the dtype the behaviour observes (uint8 images, float32 otherwise), and

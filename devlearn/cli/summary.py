@@ -63,6 +63,7 @@ def run_summary(result: Any, behavior_name: str, metric: str, total_steps: int) 
     ]
     if result.last.get("stage"):
         lines.append(f"  stage       {result.last['stage']}")
+    lines += [f"  {warning}" for warning in getattr(result, "warnings", [])]
     more = max(2 * total_steps, total_steps + 1)
     lines += [
         "next:",

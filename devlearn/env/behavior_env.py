@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from devlearn.env.batch_advance import advance_batch
+from devlearn.env.batch_advance import advance_batch, clipped_actions
 from devlearn.env.guards import (
     REWARD_BOUND,
     check_observations,
@@ -52,6 +52,8 @@ class BehaviorEnv:
             tests pass a fake one.
         training: Passed to ``behavior.evaluator`` (False for ``devlearn eval``).
         index: This env's index on its rank (named by the reward and observation guards).
+        action_repeat: Physics steps per decision (:func:`step_batch`); must divide the
+            episode length, so every episode ends on a decision's last physics step.
     """
 
     def __init__(
@@ -61,6 +63,7 @@ class BehaviorEnv:
         infant_factory: InfantFactory | None = None,
         training: bool = True,
         index: int = 0,
+        action_repeat: int = 1,
     ) -> None:
         self.behavior = behavior
         self.index = index
@@ -82,6 +85,12 @@ class BehaviorEnv:
         self.step_dt = float(self.infant.control_timestep)
         self.episode_step = 0
         self._sums = {term.name: 0.0 for term in self.terms}
+        self.action_repeat = int(action_repeat)
+        if self.action_repeat < 1 or self.episode_steps % self.action_repeat:
+            raise ValueError(
+                f"env.action_repeat={action_repeat} must be at least 1 and divide the episode "
+                f"length of {self.episode_steps} physics steps"
+            )
 
     def reset(self) -> dict[str, np.ndarray]:
         """Start a new episode; return its first observations (name -> array)."""
@@ -101,7 +110,7 @@ class BehaviorEnv:
     def step(
         self, action: np.ndarray
     ) -> tuple[dict[str, np.ndarray], float, bool, bool, dict[str, float] | None]:
-        """Advance one control step.
+        """Advance one decision: ``action_repeat`` physics steps (:func:`step_batch`).
 
         Args:
             action: (action_dim,) policy action; clipped to [-1, 1].
@@ -121,11 +130,13 @@ class BehaviorEnv:
         return advance_batch([self], [action])[0][0]
 
     def finish(
-        self, ctx: StepContext, weighted: np.ndarray
+        self, ctx: StepContext, weighted: np.ndarray, steps: int = 1
     ) -> tuple[dict[str, np.ndarray], float, bool, bool, dict[str, float] | None]:
-        """Second half of a step: sum the weighted term values (T,), record, maybe reset."""
+        """Second half of a step: sum the weighted term values (T,), each paid ``steps`` times
+        (a decision whose facts ran once), record, maybe reset."""
         reward = 0.0
         for term, value in zip(self.terms, weighted.tolist()):
+            value *= steps
             self._sums[term.name] += value
             reward += value
         self.evaluator.record(ctx)
@@ -257,9 +268,44 @@ def term_values(envs: list[BehaviorEnv], contexts: list[StepContext]) -> np.ndar
 def step_batch(
     envs: list[BehaviorEnv], actions, obs_out: dict[str, np.ndarray] | None = None
 ) -> list[tuple]:
-    """Step ``envs`` with ``actions[i]`` each: physics per env, facts and observations
-    (batched when the behaviour batches them), every reward term (batched ones once for all),
-    then each env's bookkeeping and auto-reset.
+    """One decision of ``envs``: ``action_repeat`` physics steps with ``actions[i]`` held.
+
+    With ``Behavior.facts_every_physics_step`` (the default) this is :func:`step_physics`
+    ``action_repeat`` times, the rewards summed; otherwise physics runs ``action_repeat - 1``
+    times bare, then one :func:`step_physics` computes facts, observations, rewards (paid
+    ``action_repeat`` times) and the evaluator's record. Envs step in lockstep (their episodes
+    have one length that the repeat divides), so an episode can end only on a decision's last
+    physics step. With ``action_repeat`` 1 both are exactly :func:`step_physics`.
+
+    Returns:
+        One ``(obs, reward, done, time_out, episode_info)`` per env, as :meth:`BehaviorEnv.step`.
+    """
+    repeat = envs[0].action_repeat
+    if repeat == 1:
+        return step_physics(envs, actions, obs_out)
+    if not envs[0].behavior.facts_every_physics_step:
+        for _ in range(repeat - 1):
+            for env, action in zip(envs, clipped_actions(actions)):
+                env.behavior.before_step(env.infant, action)
+                env.infant.step(env.behavior.process_action(action, env.stage))
+                env.episode_step += 1
+        return step_physics(envs, actions, obs_out, paid=repeat)
+    totals = np.zeros(len(envs))
+    for _ in range(repeat):
+        results = step_physics(envs, actions, obs_out)
+        totals += [reward for _, reward, _, _, _ in results]
+    return [(obs, float(total), *rest) for (obs, _, *rest), total in zip(results, totals)]
+
+
+def step_physics(
+    envs: list[BehaviorEnv],
+    actions,
+    obs_out: dict[str, np.ndarray] | None = None,
+    paid: int = 1,
+) -> list[tuple]:
+    """Step ``envs`` one physics step with ``actions[i]`` each: physics per env, facts and
+    observations (batched when the behaviour batches them), every reward term (batched ones
+    once for all, each value paid ``paid`` times), then each env's bookkeeping and auto-reset.
 
     Args:
         envs: The envs of one batch, sharing their batched terms, in batch order.
@@ -274,7 +320,9 @@ def step_batch(
     if obs_out is not None and batch is not None:
         for name, array in batch.items():  # the whole batch at once; resets overwrite rows
             obs_out[name][...] = array
-    results = [env.finish(ctx, values[:, i]) for i, (env, ctx) in enumerate(zip(envs, contexts))]
+    results = [
+        env.finish(ctx, values[:, i], paid) for i, (env, ctx) in enumerate(zip(envs, contexts))
+    ]
     if obs_out is not None:
         for i, (obs, _, done, _, _) in enumerate(results):
             if batch is None or done:

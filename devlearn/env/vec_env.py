@@ -42,6 +42,8 @@ class DevVecEnv(VecEnv):
         infant_factory: ``factory(scene, senses=...) -> Infant`` (default: the real infant);
             must be picklable when ``workers >= 1``.
         rank: Distributed rank for seeding (default: ``$RANK`` or 0).
+        action_repeat: Physics steps per ``step`` call, one action held over them (see
+            :func:`~devlearn.env.behavior_env.step_batch`); rewards are their sum.
     """
 
     def __init__(
@@ -53,6 +55,7 @@ class DevVecEnv(VecEnv):
         device: str = "cpu",
         infant_factory: InfantFactory | None = None,
         rank: int | None = None,
+        action_repeat: int = 1,
     ) -> None:
         if num_envs < 1:
             raise ValueError(f"num_envs must be at least 1, got {num_envs}")
@@ -62,11 +65,11 @@ class DevVecEnv(VecEnv):
         self._pool: WorkerPool | None = None
         self._envs: list = []
         if workers > 0:
-            self._pool = WorkerPool(behavior, seeds, workers, infant_factory)
+            self._pool = WorkerPool(behavior, seeds, workers, infant_factory, action_repeat)
             spec = self._pool.spec
             self._merge_terms = list(behavior.reward_terms())  # merge rules of the run memory
         else:
-            self._envs = make_envs(behavior, seeds, infant_factory)
+            self._envs = make_envs(behavior, seeds, infant_factory, action_repeat=action_repeat)
             first = [env.reset() for env in self._envs]
             spec = env_spec(self._envs[0], first[0])
             self._merge_terms = self._envs[0].terms

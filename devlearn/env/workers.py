@@ -59,12 +59,23 @@ def step_envs(envs: list[BehaviorEnv], offset: int, arrays: dict[str, np.ndarray
 
 
 def make_envs(
-    behavior, seeds: list[int], infant_factory: InfantFactory | None, offset: int = 0
+    behavior,
+    seeds: list[int],
+    infant_factory: InfantFactory | None,
+    offset: int = 0,
+    action_repeat: int = 1,
 ) -> list:
     """Build one BehaviorEnv per seed (indices ``offset...``), each with its own copy of the
-    behaviour; the envs share their batched reward terms (one instance over all of them)."""
+    behaviour and the decision rate ``action_repeat``; the envs share their batched reward
+    terms (one instance over all of them)."""
     envs = [
-        BehaviorEnv(copy.deepcopy(behavior), s, infant_factory, index=offset + i)
+        BehaviorEnv(
+            copy.deepcopy(behavior),
+            s,
+            infant_factory,
+            index=offset + i,
+            action_repeat=action_repeat,
+        )
         for i, s in enumerate(seeds)
     ]
     share_batched_terms(envs)
@@ -80,7 +91,9 @@ def _die_with_parent() -> None:
             pass  # the closed pipe (EOFError below) still ends the worker
 
 
-def worker_main(conn, behavior, seeds: list[int], offset: int, infant_factory) -> None:
+def worker_main(
+    conn, behavior, seeds: list[int], offset: int, infant_factory, action_repeat: int = 1
+) -> None:
     """Entry point of one worker process: serve commands from the parent until told to close.
 
     Replies ``("ok", payload)`` or, on any exception, ``("error", traceback text)`` and exits.
@@ -93,7 +106,7 @@ def worker_main(conn, behavior, seeds: list[int], offset: int, infant_factory) -
     blocks: list = []
     arrays: dict[str, np.ndarray] = {}
     try:
-        envs = make_envs(behavior, seeds, infant_factory, offset)
+        envs = make_envs(behavior, seeds, infant_factory, offset, action_repeat)
         first = [env.reset() for env in envs]
         conn.send(("ok", env_spec(envs[0], first[0])))
         while True:
@@ -177,12 +190,19 @@ class WorkerPool:
         seeds: One seed per env, in global order.
         workers: Number of processes (at most one per env).
         infant_factory: Picklable infant factory (None: the real infant).
+        action_repeat: Physics steps per step command (the decision rate).
         context: multiprocessing start method; ``spawn`` (default) imports everything afresh, so
             no parent state (threads, torch, open files) leaks into workers.
     """
 
     def __init__(
-        self, behavior, seeds: list[int], workers: int, infant_factory=None, context: str = "spawn"
+        self,
+        behavior,
+        seeds: list[int],
+        workers: int,
+        infant_factory=None,
+        action_repeat: int = 1,
+        context: str = "spawn",
     ) -> None:
         ctx = mp.get_context(context)
         self._pending: set[int] = set()
@@ -195,7 +215,14 @@ class WorkerPool:
                 chunk_seeds = [seeds[i] for i in chunk]
                 proc = ctx.Process(
                     target=worker_main,
-                    args=(child_conn, behavior, chunk_seeds, int(chunk[0]), infant_factory),
+                    args=(
+                        child_conn,
+                        behavior,
+                        chunk_seeds,
+                        int(chunk[0]),
+                        infant_factory,
+                        action_repeat,
+                    ),
                     daemon=True,
                     name=f"devlearn-env-worker-{len(self.procs)}",
                 )

@@ -40,6 +40,15 @@ class PPOConfig:
     """Target KL for the adaptive schedule (None disables adaptation)."""
     schedule: str = "adaptive"
     """Learning-rate schedule: ``adaptive`` (KL-driven) or ``fixed``."""
+    normalize_rewards: bool = True
+    """Divide every reward by a running standard deviation of the discounted return (as
+    gymnasium's ``NormalizeReward`` and SB3's ``VecNormalize``), then clip it to
+    +-``reward_clip``, before PPO sees it (:mod:`devlearn.training.reward_norm`). Raw per-term
+    rewards are still what metrics.jsonl logs. Unnormalised returns (value loss 5 to 440)
+    swamped the policy gradient of every shared-trunk run (issue #28,
+    ``results/learner/README.md``). A saved config without this field means False."""
+    reward_clip: float = 10.0
+    """Bound on a normalised reward (with ``normalize_rewards``)."""
 
 
 @dataclass
@@ -56,10 +65,46 @@ class NetworkConfig:
     fix did (the eye CNN divided its already-scaled input again). A saved config without a
     ``network`` section means True, so those checkpoints see the input they were trained on;
     new runs use [0, 1] images."""
+    head: str = "gaussian"
+    """The policy's action distribution. ``gaussian``: a mean that is a plain linear output and
+    one state-independent spread per action, bounded to [``min_std``, the behaviour's
+    ``max_std`` (1.0 where it sets none)] by a sigmoid; actions are clipped by the env, and a
+    mean past a bound stops being pushed once no sample falls inside (it cannot saturate).
+    ``paper``: the paper's ``tanh`` mean with a state-dependent softplus spread (sec. II-A4),
+    whose pre-activation grows without limit when the best action lies at a bound, since the
+    env clips the samples, not the mean (issue #28). A saved config without this field means
+    ``paper``."""
+    min_std: float = 0.05
+    """Lower bound of the ``gaussian`` head's spread (exploration never vanishes)."""
 
 
-LEGACY_NETWORK = NetworkConfig(layout="separate", legacy_uint8_scale=True)
+LEGACY_NETWORK = NetworkConfig(layout="separate", legacy_uint8_scale=True, head="paper")
 """What a saved config without a ``network`` section was trained with."""
+
+HEADS = ("gaussian", "paper")
+"""Valid values of :attr:`NetworkConfig.head`."""
+
+LEGACY_FIELDS: dict[str, Any] = {
+    "ppo.normalize_rewards": False,
+    "network.head": "paper",
+}
+"""Core fields a saved config may lack, and the value its run was trained with (the default
+changed when the field was added, issue #28): such a config loads as trained."""
+
+
+@dataclass
+class EnvConfig:
+    """How the policy meets the environment."""
+
+    action_repeat: int = 1
+    """Physics steps per policy decision: one action is held for this many physics steps and
+    their rewards summed (``env.action_repeat=K``; how facts and rewards are computed within
+    a decision: ``Behavior.facts_every_physics_step``). Episode lengths, curriculum stages,
+    ``--steps`` and evaluation counts stay in physics steps. 1: a decision every physics step
+    (the paper's 200 Hz). Behaviours set their own in ``train_defaults`` (self-touch and hand
+    regard: 5, a decision every 25 ms): at 200 Hz independent noise held for 5 ms barely moves
+    an arm, so random exploration goes nowhere (issue #28, ``results/learner/README.md``).
+    Must divide the episode length."""
 
 
 @dataclass
@@ -104,7 +149,9 @@ class RunConfig:
     ppo: PPOConfig = field(default_factory=PPOConfig)
     """PPO hyper-parameters."""
     network: NetworkConfig = field(default_factory=NetworkConfig)
-    """Network layout and input scale."""
+    """Network layout, policy head and input scale."""
+    env: EnvConfig = field(default_factory=EnvConfig)
+    """The decision rate."""
     curiosity: list[str] = field(default_factory=list)
     """Learned intrinsic rewards added to the behaviour's reward, by registered name
     (``--set curiosity=rnd,forward_model``; ``devlearn plugins --json`` lists them). Each is a
@@ -156,7 +203,34 @@ def default_config(
         ) from err
     if not cfg.network.layout:  # record the behaviour's choice, so config.json says it
         cfg.network.layout = "shared" if spec.share else "separate"
+    check_learner(cfg, spec)
     return cfg
+
+
+def check_learner(cfg: RunConfig, spec: Any) -> None:
+    """Check the head, spread bounds and decision rate of a run config.
+
+    Raises:
+        UsageError: naming the ``--set`` key and what is valid.
+    """
+    net = cfg.network
+    if net.head not in HEADS:
+        raise UsageError(f"unknown network.head '{net.head}'; valid: {', '.join(HEADS)}")
+    if net.head == "gaussian" and not 0 < net.min_std < min(spec.init_std, head_max_std(spec)):
+        raise UsageError(
+            f"network.min_std must be above 0 and below the initial spread {spec.init_std} "
+            f"and the bound {head_max_std(spec)}; got {net.min_std}"
+        )
+    if cfg.env.action_repeat < 1:
+        raise UsageError(f"env.action_repeat must be at least 1, got {cfg.env.action_repeat}")
+    if cfg.ppo.normalize_rewards and not cfg.ppo.reward_clip > 0:
+        raise UsageError(f"ppo.reward_clip must be above 0, got {cfg.ppo.reward_clip}")
+
+
+def head_max_std(spec: Any) -> float:
+    """Upper bound of the ``gaussian`` head's spread: the behaviour's ``max_std``, or 1.0 (the
+    widest useful spread for actions clipped to [-1, 1]) where it sets none."""
+    return float(spec.max_std) if spec.max_std else 1.0
 
 
 def apply_preset(cfg: RunConfig, behavior_cls: type, preset: str) -> RunConfig:
@@ -205,6 +279,10 @@ def from_dict(data: dict[str, Any], behavior_cls: type) -> RunConfig:
     cfg = RunConfig(behavior_name=behavior_cls.name, behavior=behavior_cls.config_class())
     if "network" not in data:
         cfg.network = dataclasses.replace(LEGACY_NETWORK)
+    for key, value in LEGACY_FIELDS.items():
+        section, name = key.split(".")
+        if name not in (data.get(section) or {}):
+            setattr(getattr(cfg, section), name, value)
     saved = data.get("behavior")
     if isinstance(saved, dict) and cfg.behavior is not None:
         legacy = getattr(type(cfg.behavior), "LEGACY_DEFAULTS", {})
@@ -246,6 +324,8 @@ def to_rsl_rl(cfg: RunConfig, behavior: Any, observation_names: list[str] | None
     names = list(observation_names or spec.encoders)
     ppo = dataclasses.asdict(cfg.ppo)
     num_steps = ppo.pop("num_steps_per_env")
+    for ours in ("normalize_rewards", "reward_clip"):  # devlearn's, not rsl-rl's PPO's
+        ppo.pop(ours)
     shared = shared_layout(cfg, spec)
     model = {
         "class_name": "devlearn.training.networks:MultiSenseModel",
@@ -253,20 +333,26 @@ def to_rsl_rl(cfg: RunConfig, behavior: Any, observation_names: list[str] | None
         "shared": shared,
         "legacy_uint8_scale": cfg.network.legacy_uint8_scale,
     }
+    if cfg.network.head == "paper":
+        distribution = {
+            "class_name": "devlearn.training.networks:TanhSoftplusGaussian",
+            "init_std": spec.init_std,
+            "max_std": spec.max_std,
+        }
+    else:
+        distribution = {
+            "class_name": "devlearn.training.distribution:BoundedGaussian",
+            "init_std": spec.init_std,
+            "min_std": cfg.network.min_std,
+            "max_std": head_max_std(spec),
+        }
     return {
         "algorithm": {
             "class_name": "devlearn.training.ppo:UniqueParamPPO",
             "share_cnn_encoders": shared,
             **ppo,
         },
-        "actor": {
-            **model,
-            "distribution_cfg": {
-                "class_name": "devlearn.training.networks:TanhSoftplusGaussian",
-                "init_std": spec.init_std,
-                "max_std": spec.max_std,
-            },
-        },
+        "actor": {**model, "distribution_cfg": distribution},
         "critic": dict(model),
         "obs_groups": behavior.obs_groups(names),
         "num_steps_per_env": num_steps,

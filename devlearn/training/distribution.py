@@ -118,3 +118,91 @@ class _TanhFirstSlice(nn.Module):
 
     def forward(self, mlp_output: torch.Tensor) -> torch.Tensor:
         return torch.tanh(mlp_output[..., 0, :])
+
+
+class BoundedGaussian(Distribution):
+    """Diagonal Gaussian with a linear mean and a state-independent, bounded spread.
+
+    ``mean = W_mu h + b_mu`` (no squashing) and, per action dimension,
+    ``log std = log min_std + (log max_std - log min_std) * sigmoid(p)`` with ``p`` a learned
+    parameter: the spread can neither collapse below ``min_std`` nor run away past ``max_std``
+    under an entropy bonus, and near a bound its gradient fades smoothly instead of being cut
+    by a clamp (which pins a parameter at the bound for good). The env clips sampled actions
+    to [-1, 1]. Where the best action lies at a bound, samples past it all earn the same clipped
+    reward, so the mean stops being pushed once almost no sample falls inside the range: it
+    settles a few spreads past the bound (the paper's ``tanh`` mean instead always has half
+    its samples inside and its pre-activation grows without limit; issue #28).
+
+    Args:
+        output_dim: Action size.
+        init_std: Spread at initialisation.
+        min_std: Lower bound of the spread.
+        max_std: Upper bound of the spread.
+    """
+
+    def __init__(
+        self, output_dim: int, init_std: float = 0.5, min_std: float = 0.05, max_std: float = 1.0
+    ) -> None:
+        super().__init__(output_dim)
+        if not 0 < min_std < init_std < max_std:
+            raise ValueError(
+                f"the spread needs 0 < min_std < init_std < max_std; got min_std={min_std}, "
+                f"init_std={init_std}, max_std={max_std}"
+            )
+        self.min_std, self.init_std, self.max_std = float(min_std), float(init_std), float(max_std)
+        self._log_min, self._log_span = math.log(min_std), math.log(max_std / min_std)
+        frac = (math.log(init_std) - self._log_min) / self._log_span
+        self.std_param = nn.Parameter(torch.full((output_dim,), math.log(frac / (1.0 - frac))))
+        self._distribution: Normal | None = None
+        Normal.set_default_validate_args(False)
+
+    @property
+    def input_dim(self) -> int:
+        """The MLP outputs the mean only."""
+        return self.output_dim
+
+    def current_std(self) -> torch.Tensor:
+        """(output_dim,) spread."""
+        return torch.exp(self._log_min + self._log_span * torch.sigmoid(self.std_param))
+
+    def update(self, mlp_output: torch.Tensor) -> None:
+        self._distribution = Normal(mlp_output, self.current_std().expand_as(mlp_output))
+
+    def sample(self) -> torch.Tensor:
+        return self._distribution.sample()  # type: ignore[union-attr]
+
+    def deterministic_output(self, mlp_output: torch.Tensor) -> torch.Tensor:
+        """The mean as the env applies it: clipped to [-1, 1]."""
+        return mlp_output.clamp(-1.0, 1.0)
+
+    def as_deterministic_output_module(self) -> nn.Module:
+        return nn.Hardtanh()  # clamp to [-1, 1], exportable
+
+    @property
+    def mean(self) -> torch.Tensor:
+        return self._distribution.mean  # type: ignore[union-attr]
+
+    @property
+    def std(self) -> torch.Tensor:
+        return self._distribution.stddev  # type: ignore[union-attr]
+
+    @property
+    def entropy(self) -> torch.Tensor:
+        return self._distribution.entropy().sum(dim=-1)  # type: ignore[union-attr]
+
+    @property
+    def params(self) -> tuple[torch.Tensor, ...]:
+        return (self.mean, self.std)
+
+    def log_prob(self, outputs: torch.Tensor) -> torch.Tensor:
+        return self._distribution.log_prob(outputs).sum(dim=-1)  # type: ignore[union-attr]
+
+    def kl_divergence(self, old_params, new_params) -> torch.Tensor:
+        return torch.distributions.kl_divergence(Normal(*old_params), Normal(*new_params)).sum(-1)
+
+    def init_mlp_weights(self, mlp: nn.Module) -> None:
+        """Start near mean 0: small weights and zero bias on the mean's layer."""
+        head = mlp[-1]
+        with torch.no_grad():
+            head.weight.mul_(0.01)
+            head.bias.zero_()

@@ -19,7 +19,14 @@ from tqdm import tqdm
 from devlearn.env.behavior_env import BehaviorEnv
 from devlearn.errors import UsageError
 from devlearn.training.checkpoint import LATEST, check_behavior, load_checkpoint
-from devlearn.training.config import RunConfig, apply_overrides, from_dict, to_dict, to_rsl_rl
+from devlearn.training.config import (
+    RunConfig,
+    apply_overrides,
+    default_config,
+    from_dict,
+    to_dict,
+    to_rsl_rl,
+)
 from devlearn.training.runner import quiet
 
 VIDEO_FPS = 25
@@ -29,8 +36,9 @@ POLICY_FILE = "policy.pt"
 POLICIES = ("checkpoint", "zero", "random", "held_random")
 """What ``evaluate`` can run: a checkpoint's mean action, or a baseline: zero action, actions
 uniform in [-1, 1] drawn afresh every step (i.i.d.), or ``held_random``: uniform actions each
-held for :data:`HOLD_STEPS` steps on average (each actuator redraws with probability
-1 / HOLD_STEPS per step, as motor babbling does), which moves the damped limbs much further
+held for :data:`HOLD_STEPS` physics steps on average (each actuator redraws with probability
+1 / HOLD_STEPS per physics step, as motor babbling does; with a decision rate K, K / HOLD_STEPS
+per decision), which moves the damped limbs much further
 than i.i.d. noise. All seeded by the evaluation seed."""
 HOLD_STEPS = 8
 """Mean steps a ``held_random`` baseline action is held (40 ms at 200 Hz)."""
@@ -142,7 +150,7 @@ def load_actor(
 
 
 def _policy(
-    policy: str, actor, action_dim: int, seed: int
+    policy: str, actor, action_dim: int, seed: int, repeat: int = 1
 ) -> Callable[[dict[str, np.ndarray]], np.ndarray]:
     """``act(obs) -> (action_dim,)``: the actor's mean action, zeros, or seeded uniform noise."""
     if policy == "zero":
@@ -155,7 +163,7 @@ def _policy(
         held = rng.uniform(-1.0, 1.0, action_dim)
 
         def hold(obs: dict[str, np.ndarray]) -> np.ndarray:
-            redraw = rng.random(action_dim) < 1.0 / HOLD_STEPS
+            redraw = rng.random(action_dim) < min(1.0, repeat / HOLD_STEPS)
             held[redraw] = rng.uniform(-1.0, 1.0, int(redraw.sum()))
             return held.copy()
 
@@ -247,9 +255,10 @@ def evaluate(
         state = load_checkpoint(checkpoint)
         check_behavior(state, checkpoint, behavior_name)
         cfg = from_dict(state["config"], behavior_cls)
-    else:
+    else:  # a baseline acts at the decision rate a new run of the behaviour would use
         state = {}
         cfg = from_dict({}, behavior_cls)
+        cfg.env.action_repeat = default_config(behavior_cls).env.action_repeat
         apply_overrides(cfg, list(overrides or []))
     behavior = registry.create(behavior_name, cfg.behavior)
     if checkpoint is not None:
@@ -259,7 +268,8 @@ def evaluate(
     # A batch of one gains nothing from more threads, and several threads on a core that
     # another program uses are many times slower (measured: a 64x64 eye CNN 85 ms vs 11 ms).
     torch.set_num_threads(1)
-    env = BehaviorEnv(behavior, seed, infant_factory, training=False)
+    repeat = cfg.env.action_repeat
+    env = BehaviorEnv(behavior, seed, infant_factory, training=False, action_repeat=repeat)
     writer = None
     try:
         stage = behavior.eval_stage()
@@ -273,13 +283,13 @@ def evaluate(
         actor = None
         if checkpoint is not None:
             actor = load_actor(cfg, state, behavior, obs, env.action_dim)
-        act = _policy(policy, actor, env.action_dim, seed)
+        act = _policy(policy, actor, env.action_dim, seed, repeat)
         if video is not None:
             import imageio.v2 as imageio
 
             Path(video).parent.mkdir(parents=True, exist_ok=True)
             writer = imageio.get_writer(str(video), fps=VIDEO_FPS, macro_block_size=1)
-            stride = max(1, round(1.0 / (env.step_dt * VIDEO_FPS)))
+            stride = max(1, round(1.0 / (env.step_dt * repeat * VIDEO_FPS)))
         bar = tqdm(
             total=episodes * env.episode_steps,
             unit="step",
@@ -290,8 +300,8 @@ def evaluate(
         )
         for episode in range(episodes):
             bar.set_postfix(episode=f"{episode + 1}/{episodes}")
-            for t in range(env.episode_steps):
-                bar.update()
+            for t in range(env.episode_steps // repeat):  # decisions; bar and counts: physics
+                bar.update(repeat)
                 if writer is not None and episode == 0 and t % stride == 0:
                     writer.append_data(env.behavior.render_frame(env.infant))
                 obs, _, _, _, _ = env.step(act(obs))
@@ -315,6 +325,7 @@ def evaluate(
                 "start": started,
                 "start_option": start,
                 "settle_steps": 0,
+                "action_repeat": repeat,
                 **env.evaluator.protocol(),
                 "checkpoint_env_steps": steps,
                 "code": code_version(),

@@ -24,6 +24,7 @@ from devlearn.env.workers import EnvWorkerError
 from devlearn.errors import RunStopped
 from devlearn.training.checkpoint import LATEST
 from devlearn.training.config import RunConfig
+from devlearn.training.health import HealthWatch, rollout_health
 from devlearn.training.learned_rewards import LearnedRewards
 from devlearn.training.process import (
     ThreadPlan,
@@ -33,6 +34,7 @@ from devlearn.training.process import (
     set_threads,
     update_threads,
 )
+from devlearn.training.reward_norm import RewardNormalizer
 from devlearn.training.runner_checkpoints import RunnerCheckpoints
 from devlearn.training.runner_metrics import RunnerMetrics, purge_tensorboard_from
 
@@ -106,6 +108,14 @@ class DevRunner(RunnerCheckpoints, RunnerMetrics, OnPolicyRunner):
         self.learned = (learned or LearnedRewards()).build(
             env.observation_shapes, env.num_actions, self.device
         )
+        self.action_repeat = int(cfg.env.action_repeat)
+        self.reward_norm = None
+        if cfg.ppo.normalize_rewards:
+            self.reward_norm = RewardNormalizer(
+                env.num_envs, cfg.ppo.gamma, cfg.ppo.reward_clip
+            ).to(self.device)
+        dist_cfg = train_cfg["actor"]["distribution_cfg"]
+        self.health = HealthWatch((dist_cfg.get("min_std", 1e-3), dist_cfg.get("max_std", 0.0)))
         if self.is_main:
             (self.run_dir / "networks.txt").write_text(report.getvalue())
 
@@ -134,7 +144,10 @@ class DevRunner(RunnerCheckpoints, RunnerMetrics, OnPolicyRunner):
         env, alg = self.env, self.alg
         rnd = bool(self.cfg["algorithm"].get("rnd_cfg"))
         threads = ThreadPlan(self.run_cfg.torch_threads, self.run_cfg.update_threads)
-        per_iteration = self.cfg["num_steps_per_env"] * env.num_envs * self.gpu_world_size
+        # physics steps: each decision holds its action for action_repeat of them
+        per_iteration = (
+            self.cfg["num_steps_per_env"] * env.num_envs * self.gpu_world_size * self.action_repeat
+        )
         total_it = self.current_learning_iteration + max(
             math.ceil((total_steps - self.env_steps) / per_iteration), 0
         )
@@ -177,7 +190,10 @@ class DevRunner(RunnerCheckpoints, RunnerMetrics, OnPolicyRunner):
                             check_nan(obs, rewards, dones)
                         obs, rewards = obs.to(self.device), rewards.to(self.device)
                         dones = dones.to(self.device)
-                        alg.process_env_step(obs, rewards, dones, extras)
+                        learned_from = rewards
+                        if self.reward_norm is not None:  # PPO sees the scaled rewards
+                            learned_from = self.reward_norm(rewards, dones)
+                        alg.process_env_step(obs, learned_from, dones, extras)
                         intrinsic = alg.intrinsic_rewards if rnd else None
                         self.logger.process_env_step(rewards, dones, extras, intrinsic)
                         finished += extras["episode_infos"]
@@ -185,6 +201,7 @@ class DevRunner(RunnerCheckpoints, RunnerMetrics, OnPolicyRunner):
                     collect_time = time.time() - start
                     self.learned.apply(alg.storage, obs, self.env_steps)  # adds to the rewards
                     alg.compute_returns(obs)
+                    health = rollout_health(alg.storage)
                 start = time.time()
                 set_threads(learn_threads)  # the workers sleep during the update
                 losses = alg.update()
@@ -218,7 +235,13 @@ class DevRunner(RunnerCheckpoints, RunnerMetrics, OnPolicyRunner):
                         "update_s": learn_time,
                         "update_threads": learn_threads,
                     }
-                    self._record(it, len(finished), mean_step, losses, rate, times, bar)
+                    health["learning_rate"] = alg.learning_rate
+                    if self.reward_norm is not None:
+                        health["health/reward_scale"] = self.reward_norm.std
+                    self._record(it, len(finished), mean_step, losses, rate, times, bar, health)
+                    for warning in self.health.check(self.last_row):
+                        if self.is_main:
+                            tqdm.write(f"devlearn: {warning}", file=sys.stderr)
                 interval = self.cfg["save_interval"]
                 switch = self.curriculum.stage_index_at(self.env_steps) != self.curriculum.index
                 if self.current_learning_iteration % interval == 0 or switch:

@@ -44,6 +44,9 @@ class RunnerCheckpoints:
             env=copy.deepcopy(self.env.state_dict()),
             learning_rate=self.alg.learning_rate,
             learned=copy.deepcopy(self.learned.state_dict()),  # live tensors otherwise
+            reward_norm=(
+                copy.deepcopy(self.reward_norm.state_dict()) if self.reward_norm is not None else {}
+            ),
             rng={
                 "torch": torch.get_rng_state(),
                 "numpy": np.random.get_state(),
@@ -117,6 +120,8 @@ class RunnerCheckpoints:
         else:
             self.curriculum.update(self.env_steps)
         self.learned.load_state_dict(state.get("learned", {}))
+        if self.reward_norm is not None and state.get("reward_norm"):
+            self.reward_norm.load_state_dict(state["reward_norm"])
         ranks = state["env"]["ranks"]
         if self.gpu_global_rank < len(ranks):
             self.env.load_state_dict(ranks[self.gpu_global_rank])

@@ -27,10 +27,13 @@ class RunnerMetrics:
         rate: float,
         times: dict[str, float],
         bar: tqdm,
+        health: dict[str, float] | None = None,
     ) -> None:
         """Append one line to metrics.jsonl and refresh the progress bar (rank 0).
 
-        ``times`` holds the iteration's ``collect_s`` (rollout) and ``update_s`` (PPO) seconds.
+        ``times`` holds the iteration's ``collect_s`` (rollout) and ``update_s`` (PPO) seconds;
+        ``health`` the learner's figures (:mod:`devlearn.training.health`), also shown on the
+        progress bar.
         """
         row: dict[str, Any] = {
             "step": self.env_steps,
@@ -50,14 +53,22 @@ class RunnerMetrics:
             for key in dict.fromkeys(k for ep in self.episodes for k in ep):
                 row[key] = float(np.mean([ep[key] for ep in self.episodes if key in ep]))
         row.update({f"loss/{k}": float(v) for k, v in losses.items()})
+        row.update(health or {})
         row.update(self.learned.last)
         self.last_row = row
         if not self.is_main:
             return
         self.learned.write(self.logger.writer, it)
+        if self.logger.writer is not None:
+            for key, value in (health or {}).items():
+                self.logger.writer.add_scalar(key if "/" in key else f"health/{key}", value, it)
         with open(self.run_dir / "metrics.jsonl", "a") as f:
             f.write(json.dumps(row) + "\n")
         postfix = {"steps/s": f"{rate:.0f}", "stage": row["stage"]}
+        if health:
+            postfix["std"] = f"{health['health/std_mean']:.2f}"
+            postfix["sat"] = f"{health['health/saturated']:.0%}"
+            postfix["ev"] = f"{health['health/explained_variance']:.2f}"
         if row["mean_reward"] is not None:
             postfix["reward"] = f"{row['mean_reward']:.3g}"
         headline = row.get(f"metrics/{self.headline_metric}")

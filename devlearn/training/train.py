@@ -44,6 +44,8 @@ class TrainResult:
     """PPO iterations done in total."""
     last: dict[str, Any] = field(default_factory=dict)
     """The last metrics.jsonl row (mean reward, reward terms, metrics, stage...)."""
+    warnings: list[str] = field(default_factory=list)
+    """The learner-health warnings the run gave (:mod:`devlearn.training.health`)."""
 
 
 def default_run_dir(behavior_name: str) -> Path:
@@ -191,7 +193,11 @@ def train(
     finally:
         env.close()
     return TrainResult(
-        run_dir, runner.env_steps, runner.current_learning_iteration, runner.last_row
+        run_dir,
+        runner.env_steps,
+        runner.current_learning_iteration,
+        runner.last_row,
+        list(runner.health.warnings),
     )
 
 
@@ -236,7 +242,16 @@ def _build(
         (run_dir / CONFIG_FILE).write_text(json.dumps(to_dict(cfg), indent=2) + "\n")
 
     # Environments (seeded seed + rank * num_envs + index) and the runner.
-    env = DevVecEnv(behavior, cfg.num_envs, cfg.seed, cfg.workers, "cpu", infant_factory, rank)
+    env = DevVecEnv(
+        behavior,
+        cfg.num_envs,
+        cfg.seed,
+        cfg.workers,
+        "cpu",
+        infant_factory,
+        rank,
+        action_repeat=cfg.env.action_repeat,
+    )
     try:
         env.cfg = cfg
         train_cfg = to_rsl_rl(cfg, behavior, list(env.observation_shapes))

@@ -5,6 +5,7 @@ from __future__ import annotations
 import functools
 
 import numpy as np
+import pytest
 from fake_infant import TinyBehavior, TinyConfig, fake_infant_factory
 
 from devlearn.env import BehaviorEnv
@@ -106,3 +107,55 @@ def test_batched_term_of_the_wrong_shape_is_named():
     contexts = [env.advance(np.zeros(3)) for env in envs if env.reset() is not None]
     with pytest.raises(ValueError, match="'wrong' returned shape \\(3,\\); expected \\(2,\\)"):
         term_values(envs, contexts)
+
+
+# --- the decision rate (env.action_repeat, issue #28) -----------------------------------
+
+
+def test_a_decision_is_the_same_action_held_for_k_physics_steps_with_rewards_summed():
+    held = BehaviorEnv(TinyBehavior(TinyConfig(target=0.45)), 0, factory, action_repeat=5)
+    plain = make_env(target=0.45)
+    held.reset(), plain.reset()
+    rng = np.random.default_rng(0)
+    for _ in range(3):  # three episodes of 5 physics steps: one decision each
+        action = rng.uniform(-1, 1, 3)
+        want_reward = 0.0
+        for _ in range(5):
+            want_obs, reward, want_done, _, want_info = plain.step(action)
+            want_reward += reward
+        obs, reward, done, time_out, info = held.step(action)
+        np.testing.assert_array_equal(obs["proprioception"], want_obs["proprioception"])
+        assert reward == want_reward and (done, time_out) == (want_done, True) and done
+        assert info == want_info  # per-term sums and the evaluator saw every physics step
+    assert held.infant.steps_taken == plain.infant.steps_taken == 15
+
+
+def test_a_decision_rate_must_divide_the_episode():
+    with pytest.raises(ValueError, match="divide the episode length of 5"):
+        BehaviorEnv(TinyBehavior(TinyConfig()), 0, factory, action_repeat=3)
+
+
+class RenderedTiny(TinyBehavior):
+    """Facts once per decision (as behaviours whose facts need renders); counts them."""
+
+    facts_every_physics_step = False
+    facts_calls = 0
+
+    def facts(self, infant):
+        type(self).facts_calls += 1
+        return {}
+
+
+def test_facts_once_per_decision_pay_the_reward_for_every_physics_step():
+    ten = functools.partial(fake_infant_factory, episode_steps=10)
+    env = BehaviorEnv(RenderedTiny(TinyConfig(target=0.45)), 0, ten, action_repeat=5)
+    env.reset()
+    RenderedTiny.facts_calls = 0
+    _, reward, done, _, _ = env.step(np.ones(3))
+    # physics ran 5 times; facts, rewards and the evaluator once, on the state reached
+    assert env.infant.steps_taken == 5 and RenderedTiny.facts_calls == 1 and not done
+    np.testing.assert_allclose(reward, 5 * -0.05, atol=1e-6)  # -|0.5 - 0.45|, held 5 steps
+    _, reward, done, time_out, info = env.step(np.zeros(3))
+    assert done and time_out and env.infant.steps_taken == 10  # the episode: 10 physics steps
+    assert info["reward/reach"] == pytest.approx(2 * 5 * -0.05)
+    assert info["metrics/close"] == 1.0  # two records, one per decision

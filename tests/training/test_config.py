@@ -139,6 +139,14 @@ def test_to_rsl_rl():
     assert train_cfg["obs_groups"] == {"actor": ["proprioception"], "critic": ["proprioception"]}
     assert train_cfg["actor"]["class_name"] == "devlearn.training.networks:MultiSenseModel"
     dist = train_cfg["actor"]["distribution_cfg"]
+    assert dist == {  # the default head: bounded, state-independent spread
+        "class_name": "devlearn.training.distribution:BoundedGaussian",
+        "init_std": 0.5,
+        "min_std": 0.05,
+        "max_std": 1.0,
+    }
+    paper = to_rsl_rl(tiny_run.config("unused", 256, "network.head=paper"), behavior)
+    dist = paper["actor"]["distribution_cfg"]
     assert dist["class_name"] == "devlearn.training.networks:TanhSoftplusGaussian"
     assert "distribution_cfg" not in train_cfg["critic"]
     # every algorithm key is a PPO keyword argument (rsl-rl raises TypeError otherwise)

@@ -94,7 +94,12 @@ def test_shared_memory_survives_resume_with_another_worker_count(tmp_path):
     the other env's discoveries as known (5 x 1.0), not as new (5 x 5.0)."""
     registry = registry_for(SelfTouch)
     out = tmp_path / "run"
-    overrides = ["ppo.num_steps_per_env=20", "ppo.num_mini_batches=2", "save_interval=1"]
+    overrides = [
+        "env.action_repeat=1",
+        "ppo.num_steps_per_env=20",
+        "ppo.num_mini_batches=2",
+        "save_interval=1",
+    ]
     cfg = default_config(SelfTouch, overrides, out_dir=str(out), num_envs=2, workers=2)
     cfg.total_steps = 40
     train(cfg, registry, infant_factory=SwappingInfant, progress=False)
@@ -118,7 +123,12 @@ def test_shared_memory_survives_resume_with_another_worker_count(tmp_path):
 def test_same_seed_and_worker_count_same_numbers(tmp_path):
     """Shared memory merged across 2 workers adds nothing random: two runs are identical."""
     registry = registry_for(SelfTouch)
-    overrides = ["ppo.num_steps_per_env=20", "ppo.num_mini_batches=2", "torch_threads=1"]
+    overrides = [
+        "env.action_repeat=1",
+        "ppo.num_steps_per_env=20",
+        "ppo.num_mini_batches=2",
+        "torch_threads=1",
+    ]
     drop = {"steps_per_s", "collect_s", "update_s"}  # wall-clock timings
     runs = []
     for name in ("a", "b"):

@@ -27,7 +27,7 @@ import numpy as np
 
 from devlearn import BatchContext, BatchedIntrinsicReward
 from devlearn_self_touch.body_map import HANDS, NUM_PARTS, NUM_REGIONS
-from devlearn_self_touch.rewards import f_decay
+from devlearn_self_touch.rewards import _check_touch_count, f_decay
 
 LIFETIME_MEMORIES = ("shared", "per_env")
 """Valid values of the terms' ``lifetime_memory`` (and of SelfTouchConfig.lifetime_memory)."""
@@ -56,11 +56,13 @@ class BatchedTouchNovelty(BatchedIntrinsicReward):
         midpoint: float = 10.0,
         rate: float = 0.5,
         lifetime_memory: str = "shared",
+        touch_count: str = "step",
     ) -> None:
         super().__init__(weight)
         self.first_ever, self.first_in_episode = float(first_ever), float(first_in_episode)
         self.repeat_scale, self.midpoint, self.rate = float(repeat_scale), midpoint, rate
         self.shared = _check_memory(lifetime_memory)
+        self.onset = _check_touch_count(touch_count)
         self._repeat = np.zeros(0)  # repeat_scale * f_decay(c) for c = 0, 1, ... (grown as needed)
         self.bind(1)
 
@@ -69,6 +71,7 @@ class BatchedTouchNovelty(BatchedIntrinsicReward):
         # ever: (1, 68) shared by the batch, or (num_envs, 68); count is always per env
         self.ever = np.zeros((1 if self.shared else num_envs, NUM_REGIONS), dtype=bool)
         self.count = np.zeros((num_envs, NUM_REGIONS), dtype=np.int64)
+        self.before = np.zeros((num_envs, NUM_REGIONS), dtype=bool)  # touched last step
 
     def _repeat_pay(self, count: np.ndarray) -> np.ndarray:
         """repeat_scale * f_decay(count), elementwise, with the per-env term's float math."""
@@ -84,7 +87,10 @@ class BatchedTouchNovelty(BatchedIntrinsicReward):
         return self._repeat.take(count)
 
     def __call__(self, batch: BatchContext) -> np.ndarray:
-        rows, cols = batch.stack("touched", bool).nonzero()  # row-major: regions ascending
+        touched = batch.stack("touched", bool)
+        if self.onset:  # only a touch's first step counts
+            touched, self.before = touched & ~self.before, touched.copy()
+        rows, cols = touched.nonzero()  # row-major: regions ascending
         if len(rows) == 0:
             return np.zeros(len(batch))
         count = self.count[rows, cols]
@@ -111,6 +117,7 @@ class BatchedTouchNovelty(BatchedIntrinsicReward):
 
     def reset(self, env: int) -> None:
         self.count[env] = 0
+        self.before[env] = False
 
     def state_dict(self, env: int) -> dict[str, Any]:
         return {"ever": self.ever[0 if self.shared else env].copy()}

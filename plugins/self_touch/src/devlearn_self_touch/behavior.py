@@ -126,7 +126,9 @@ class SelfTouch(Behavior):
         :meth:`per_env_reward_terms`)."""
         c = self.config
         return [
-            BatchedTouchNovelty(*self._touch_args(), lifetime_memory=c.lifetime_memory),
+            BatchedTouchNovelty(
+                *self._touch_args(), lifetime_memory=c.lifetime_memory, touch_count=c.touch_count
+            ),
             BatchedContactNovelty(
                 c.weight_contact_novelty,
                 c.contact_first_ever,
@@ -147,7 +149,7 @@ class SelfTouch(Behavior):
         they cannot share one)."""
         c = self.config
         return [
-            TouchNovelty(*self._touch_args()),
+            TouchNovelty(*self._touch_args(), touch_count=c.touch_count),
             ContactNovelty(
                 c.weight_contact_novelty, c.contact_first_ever, c.contact_first_in_episode
             ),
@@ -203,7 +205,12 @@ class SelfTouch(Behavior):
         ~1 s (gamma 0.995) and rollouts of 128 steps per environment. The paper gives no other
         PPO constants than the clip 0.2 (the core's default).
         """
-        return {"ppo.num_steps_per_env": 128, "ppo.gamma": 0.995}
+        return {
+            "env.action_repeat": 5,
+            "ppo.num_steps_per_env": 64,
+            "ppo.gamma": 0.99,
+            "ppo.schedule": "fixed",
+        }
 
     def presets(self) -> dict[str, dict[str, Any]]:
         """``paper``: the paper's values where the default recipe differs (sec. II-A):
@@ -213,4 +220,15 @@ class SelfTouch(Behavior):
         the paper's "first-ever" and "first global" bonuses are one agent's. Runs published
         before issue #20 also kept per-environment memory
         (``--set behavior.lifetime_memory=per_env``)."""
-        return {"paper": {"behavior.max_std": 0.0, "total_steps": 8_000_000}}
+        return {
+            "paper": {
+                "behavior.max_std": 0.0,
+                "total_steps": 8_000_000,
+                # the paper's policy head (tanh mean, softplus spread) at BabyBench's 200 Hz,
+                # with the discount and rollouts this behaviour used at that rate
+                "network.head": "paper",
+                "env.action_repeat": 1,
+                "ppo.num_steps_per_env": 128,
+                "ppo.gamma": 0.995,
+            }
+        }

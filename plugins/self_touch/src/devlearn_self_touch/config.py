@@ -6,6 +6,7 @@ from dataclasses import dataclass
 from typing import Any, ClassVar
 
 from devlearn_self_touch.batched_rewards import LIFETIME_MEMORIES
+from devlearn_self_touch.rewards import TOUCH_COUNTS
 
 CURRICULA = ("two_stage", "fixed_only", "random_only")
 """Valid values of :attr:`SelfTouchConfig.curriculum` (paper sec. II-A5 and its ablation)."""
@@ -75,6 +76,11 @@ class SelfTouchConfig:
     """f_decay(c) = 2 / (1 + exp(decay_rate * (c - decay_midpoint))) - 1 crosses 0 here."""
     decay_rate: float = 0.5
     """Steepness of f_decay."""
+    touch_count: str = "step"
+    """What c_j counts and when repeats pay. ``step`` (the paper's literal rule): every step a
+    region is touched, so a region held for a whole episode costs about -489 (the cliff behind
+    the large negative returns of issue #28). ``onset``: touch events only (a touch's first
+    step counts and pays; holding it costs nothing more)."""
 
     # --- contact novelty R_geom (sec. II-A3) ------------------------------------------------
     contact_first_ever: float = 10.0
@@ -132,5 +138,9 @@ class SelfTouchConfig:
         if self.touch_source not in TOUCH_SOURCES:
             raise ValueError(
                 f"unknown touch_source '{self.touch_source}'; valid: {', '.join(TOUCH_SOURCES)}"
+            )
+        if self.touch_count not in TOUCH_COUNTS:
+            raise ValueError(
+                f"unknown touch_count '{self.touch_count}'; valid: {', '.join(TOUCH_COUNTS)}"
             )
         self.milestones = tuple(sorted(int(m) for m in self.milestones))

@@ -44,6 +44,17 @@ def f_decay(c: float, midpoint: float = 10.0, rate: float = 0.5) -> float:
     return 2.0 / (1.0 + math.exp(x)) - 1.0
 
 
+TOUCH_COUNTS = ("step", "onset")
+"""Valid values of the touch-novelty term's ``touch_count``."""
+
+
+def _check_touch_count(touch_count: str) -> bool:
+    """True for ``onset``; raises ValueError naming the valid values otherwise."""
+    if touch_count not in TOUCH_COUNTS:
+        raise ValueError(f"unknown touch_count '{touch_count}'; valid: {', '.join(TOUCH_COUNTS)}")
+    return touch_count == "onset"
+
+
 class TouchNovelty(IntrinsicReward):
     """R_touch: novelty of each touched region, with the anti-boredom decay (sec. II-A3).
 
@@ -63,6 +74,9 @@ class TouchNovelty(IntrinsicReward):
         first_in_episode: Paper: 1.0.
         repeat_scale: Paper: 0.5.
         midpoint, rate: Parameters of :func:`f_decay` (paper: 10, 0.5).
+        touch_count: ``step`` (the paper's literal rule: every step a region is touched
+            counts, so one region held for a whole episode costs about -489) or ``onset``
+            (only a touch's first step counts and pays: holding costs nothing more).
     """
 
     name = "touch_novelty"
@@ -75,15 +89,20 @@ class TouchNovelty(IntrinsicReward):
         repeat_scale: float = 0.5,
         midpoint: float = 10.0,
         rate: float = 0.5,
+        touch_count: str = "step",
     ) -> None:
         super().__init__(weight)
         self.first_ever, self.first_in_episode = float(first_ever), float(first_in_episode)
         self.repeat_scale, self.midpoint, self.rate = float(repeat_scale), midpoint, rate
+        self.onset = _check_touch_count(touch_count)
         self.ever = np.zeros(NUM_REGIONS, dtype=bool)
         self.count = np.zeros(NUM_REGIONS, dtype=np.int64)
+        self.before = np.zeros(NUM_REGIONS, dtype=bool)
 
     def __call__(self, ctx: StepContext) -> float:
         touched = np.asarray(ctx.facts["touched"], dtype=bool)
+        if self.onset:
+            touched, self.before = touched & ~self.before, touched.copy()
         reward = 0.0
         for j in np.flatnonzero(touched):
             if not self.ever[j]:
@@ -99,6 +118,7 @@ class TouchNovelty(IntrinsicReward):
 
     def reset(self) -> None:
         self.count[:] = 0
+        self.before[:] = False
 
     def state_dict(self) -> dict[str, Any]:
         return {"ever": self.ever.copy()}
