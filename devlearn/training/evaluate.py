@@ -277,6 +277,10 @@ def evaluate(
             stage = {**stage, "random_pose": start == "random"}
             if start != "random":
                 _set_infant_start(env.infant, start)
+        elif not stage.get("random_pose") and hasattr(behavior, "eval_start"):
+            # a behaviour may evaluate from another start than it trains from (hand regard's
+            # eval_start); the infant was built with the training start
+            _set_infant_start(env.infant, behavior.eval_start())
         env.set_stage(stage)
         started = "random" if stage.get("random_pose") else getattr(env.infant, "start", "rest")
         obs = env.reset()

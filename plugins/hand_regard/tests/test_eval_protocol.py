@@ -183,3 +183,30 @@ def test_published_policy_evaluates_from_babybench_start(tmp_path):
     assert summary["start"] == "babybench" and summary["protocol"]["start_option"] == "babybench"
     saved = json.loads((tmp_path / "eval" / "eval.json").read_text())
     assert saved["start"] == "babybench" and saved["headline_criterion"] == "detector"
+
+
+def test_eval_start_differs_from_the_training_start(tmp_path):
+    """Trained from rest, evaluated (``--start stage``) from its ``eval_start``, babybench."""
+    from devlearn.plugins import PluginRegistry
+    from devlearn.training.evaluate import evaluate
+
+    built = []
+
+    def short(scene, **kwargs):
+        built.append(kwargs.get("start"))
+        infant = build_infant(scene, **kwargs)
+        infant.episode_steps = 5
+        return infant
+
+    summary = evaluate(
+        "hand_regard",
+        None,
+        1,
+        PluginRegistry(),
+        infant_factory=short,
+        progress=False,
+        policy="zero",
+        overrides=["behavior.start=rest"],
+    )
+    assert built == ["rest"] and summary["start"] == "babybench"
+    assert summary["protocol"]["start_option"] == "stage"
