@@ -71,7 +71,8 @@ class Behavior(ABC):
     description: ClassVar[str] = ""
     """One line shown by ``devlearn plugins`` and ``devlearn info``."""
     scene: ClassVar[str]
-    """Infant scene to build: ``"crib"`` or ``"sitting"`` (:func:`devlearn.infant.build_infant`)."""
+    """Infant scene to build: ``"crib"``, ``"sitting"`` or ``"sitting_babybench"``
+    (:func:`devlearn.infant.build_infant`); an instance may set its own from its config."""
     senses: ClassVar[tuple[str, ...]] = ("touch", "proprioception", "vestibular")
     """Infant senses read: ``touch``, ``proprioception``, ``vestibular``, ``eyes``."""
     config_class: ClassVar[type]

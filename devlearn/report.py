@@ -15,7 +15,7 @@ PaperResults = Callable[[str, dict[str, Any]], "tuple[str, dict[str, float]] | N
 """(behaviour name, a run's config) -> (column label, the paper's figures) or None: the named
 behaviour's :meth:`devlearn.Behavior.paper_results`."""
 
-BASELINES = ("zero", "random")
+BASELINES = ("zero", "random", "held_random")
 """Baseline policies (``devlearn eval BEHAVIOR --policy ...``) shown beside every variant."""
 NOT_VARIANT = frozenset(
     {

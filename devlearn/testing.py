@@ -61,7 +61,10 @@ def check_behavior_class(behavior_cls: type[Behavior]) -> None:
     """Check the class-level contract: name, scene, senses, config dataclass, docstrings."""
     name = getattr(behavior_cls, "name", None)
     _require(isinstance(name, str) and name.isidentifier(), "Behavior.name must be an identifier")
-    _require(behavior_cls.scene in ("crib", "sitting"), "Behavior.scene must be crib or sitting")
+    _require(
+        behavior_cls.scene in ("crib", "sitting", "sitting_babybench"),
+        "Behavior.scene must be crib, sitting or sitting_babybench",
+    )
     valid = {"touch", "proprioception", "vestibular", "eyes"}
     _require(set(behavior_cls.senses) <= valid, f"Behavior.senses must be within {sorted(valid)}")
     _require(dataclasses.is_dataclass(behavior_cls.config_class), "config_class: a dataclass")

@@ -1,4 +1,4 @@
-"""``devlearn eval BEHAVIOR --checkpoint PATH | --policy zero|random``: evaluate and report."""
+"""``devlearn eval BEHAVIOR --checkpoint PATH | --policy zero|random|held_random``: evaluate."""
 
 from __future__ import annotations
 
@@ -16,7 +16,8 @@ def add_parser(subparsers) -> list[str]:
         "eval",
         help="evaluate a trained checkpoint or a baseline policy",
         description="Run episodes in the behaviour's evaluation stage (a checkpoint's mean "
-        "action, or a zero / uniform-random baseline under the same protocol); writes "
+        "action, or a zero / uniform-random / held-random baseline under the same protocol); "
+        "writes "
         "eval.json (with the protocol) and the behaviour's pictures to --out.",
     )
     p.add_argument("behavior", help="behaviour name (see `devlearn plugins`)")
@@ -28,18 +29,30 @@ def add_parser(subparsers) -> list[str]:
     )
     source.add_argument(
         "--policy",
-        choices=("zero", "random"),
-        help="baseline instead of a checkpoint: zero action, or uniform random in [-1, 1]",
+        choices=("zero", "random", "held_random"),
+        help="baseline instead of a checkpoint: zero action, uniform random in [-1, 1] every "
+        "step, or held_random (uniform random actions held ~8 steps, as babbling)",
     )
     p.add_argument("--episodes", default="10", metavar="N", help="episodes to run (default 10)")
     p.add_argument("--seed", default="0", metavar="S", help="seed of the initial poses")
     p.add_argument(
         "--start",
-        choices=("stage", "rest"),
+        choices=("stage", "babybench", "rest", "random"),
         default="stage",
         help="where episodes start: as the behaviour's evaluation stage says (default; "
-        "usually seeded random poses), or the rest pose every episode (training's start: "
-        "a deterministic policy then repeats one episode)",
+        "self_touch: seeded random poses; hand_regard: babybench); babybench (the scene's "
+        "settled state + 10 seeded random-action steps, as BabyBench's reset); rest (that "
+        "state alone, every episode: a deterministic policy then repeats one episode); "
+        "random (random joint angles: generalisation)",
+    )
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        dest="overrides",
+        help="a baseline's config value, e.g. behavior.detector_file=runs/hr/hand_detector.json "
+        "(hand regard's baselines then score with a calibrated detector); repeatable",
     )
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
     p.add_argument("--video", metavar="PATH", help="write an MP4 of the first episode")
@@ -100,6 +113,7 @@ def run(args: argparse.Namespace, registry) -> int:
             out_dir=out_dir,
             policy=args.policy or "checkpoint",
             start=args.start,
+            overrides=args.overrides,
         )
     except EvalWriteError as exc:
         _print(exc.summary, args.json)

@@ -58,6 +58,7 @@ class Infant:
         senses: Sequence[str] = SENSES,
         eye_size: int = 64,
         appearance: str = "mittens",
+        start: str = "rest",
     ) -> None:
         unknown = sorted(set(senses) - set(SENSES))
         if unknown:
@@ -68,7 +69,11 @@ class Infant:
             raise ValueError(
                 f"unknown appearance '{appearance}'; valid appearances: {', '.join(APPEARANCES)}"
             )
+        if start not in starts.STARTS:
+            raise ValueError(f"unknown start '{start}'; valid starts: {', '.join(starts.STARTS)}")
         self.scene = scene
+        self.start = start
+        """How episodes start when ``reset`` is not told (:data:`~.starts.STARTS`); settable."""
         self.senses = tuple(senses)
         self.eye_size = int(eye_size)
         self.appearance = appearance
@@ -97,8 +102,12 @@ class Infant:
         joints = [self.model.joint(j) for j in self.actuator_names]
         self._qpos_index = np.array([j.qposadr[0] for j in joints])
         self._ranges = np.array([j.range for j in joints])
-        rest = SCENES[scene].rest
-        self._rest = np.array([rest.get(j, 0.0) for j in self.actuator_names])
+        spec = SCENES[scene]
+        self._rest = np.array([spec.rest.get(j, 0.0) for j in self.actuator_names])
+        # Joints held by equality constraints keep their angle in random poses too.
+        for i, name in enumerate(self.actuator_names):
+            if name in spec.equality:
+                self._ranges[i] = spec.equality[name]
         self._toys = np.array(
             [g for g in range(self.model.ngeom) if self.model.geom(g).name.startswith("toy_")],
             dtype=np.int64,
@@ -110,26 +119,59 @@ class Infant:
         self._gl: dict[str, Any] = {"eyes": None, "views": {}}  # renderers, made on first use
         self._cache: dict[str, Any] = {}
         self.steps = 0
-        self.reset(np.random.default_rng(0))
+        self._initial: tuple[np.ndarray, np.ndarray] | None = None
+        if spec.settle_steps:
+            # BabyBench: the state after settling from the scene's pose is every episode's.
+            self._reset_to_rest()
+            for _ in range(spec.settle_steps):
+                mujoco.mj_step(self.model, self.data)
+            self._initial = (self.data.qpos.copy(), self.data.qvel.copy())
+        self.reset(np.random.default_rng(0), start="rest")
 
     # -- simulation -------------------------------------------------------------------------
-    def reset(self, rng: np.random.Generator, random_pose: bool = False) -> None:
-        """Start an episode: the scene's rest pose, or a random start.
+    def reset(
+        self, rng: np.random.Generator, random_pose: bool = False, start: str | None = None
+    ) -> None:
+        """Start an episode (:data:`~devlearn.infant.starts.STARTS`).
 
-        A random start draws joint angles uniform within their ranges and, in a scene with toy
-        blocks, places them uniformly in :data:`~devlearn.infant.starts.TOY_AREA` with a random
-        yaw (toys first, so the pose's penetration check sees them); otherwise the toys return
-        to their places.
+        ``rest``: the scene's initial state (its rest pose, settled for scenes with
+        ``settle_steps``). ``babybench``: that state, then 10 physics steps of uniform-random
+        actions drawn from ``rng``. ``random``: joint angles uniform within their ranges (joints
+        held by equality constraints keep their angle) and, in a scene with toy blocks, the
+        toys placed uniformly in :data:`~devlearn.infant.starts.TOY_AREA` with a random yaw
+        (toys first, so the pose's penetration check sees them); otherwise the toys return to
+        their places.
+
+        Args:
+            rng: Draws random poses and kicks.
+            random_pose: Start ``random`` (what the core's ``random_pose`` stage option asks).
+            start: One of the starts; default: ``random`` if ``random_pose``, else
+                :attr:`start`.
         """
-        mujoco.mj_resetData(self.model, self.data)
-        starts.place_toys(self.model, self._toys, self._toy_pose, rng if random_pose else None)
-        if random_pose:
+        start = "random" if random_pose else (start or self.start)
+        if start not in starts.STARTS:
+            raise ValueError(f"unknown start '{start}'; valid starts: {', '.join(starts.STARTS)}")
+        starts.place_toys(
+            self.model, self._toys, self._toy_pose, rng if start == "random" else None
+        )
+        if start == "random":
+            mujoco.mj_resetData(self.model, self.data)
             starts.random_pose(self.model, self.data, self._qpos_index, self._ranges, rng)
         else:
-            self.data.qpos[self._qpos_index] = self._rest
-            mujoco.mj_forward(self.model, self.data)
+            self._reset_to_rest()
+            if start == "babybench":
+                starts.kick(self.model, self.data, rng, starts.KICK_STEPS)
         self._cache.clear()
         self.steps = 0
+
+    def _reset_to_rest(self) -> None:
+        """The scene's initial state: its settled state if it has one, else the rest pose."""
+        mujoco.mj_resetData(self.model, self.data)
+        if self._initial is None:
+            self.data.qpos[self._qpos_index] = self._rest
+        else:
+            self.data.qpos[:], self.data.qvel[:] = self._initial
+        mujoco.mj_forward(self.model, self.data)
 
     def step(self, action: np.ndarray) -> None:
         """Apply ``action`` (action_dim,) in [-1, 1] (clipped): torque = max_torque * action."""
@@ -239,6 +281,7 @@ class Infant:
         """Cheap summary for ``devlearn info``: sizes, timing, actuators."""
         return {
             "scene": self.scene,
+            "start": self.start,
             "appearance": self.appearance,
             "senses": list(self.senses),
             "action_dim": self.action_dim,
@@ -279,19 +322,24 @@ def build_infant(
     senses: Sequence[str] = SENSES,
     eye_size: int = 64,
     appearance: str = "mittens",
+    start: str = "rest",
 ) -> Infant:
     """Build the infant in a scene.
 
     Args:
-        scene: "crib" (lying, pelvis fixed, 30 actuators) or "sitting" (trunk and legs held,
-            17 actuators, toy blocks in front).
+        scene: "crib" (lying, pelvis fixed, 30 actuators), "sitting_babybench" (BabyBench's
+            hand-regard scene: trunk and legs held, head pitch and side tilt held by
+            constraints, arms hanging; 17 actuators, toy blocks in front) or "sitting" (the
+            same body with the head free and the hands raised at rest).
         senses: Any of "touch", "proprioception", "vestibular", "eyes".
         eye_size: Eye image height and width (pixels).
         appearance: "mittens" (purple mittens, toys coloured away from them) or "skin" (bare
             hands the body's colour, toys in the natural palette); see
             :data:`devlearn.infant.scenes.APPEARANCES`. Colours only: physics is the same.
+        start: How episodes start unless ``reset`` is told (:data:`~.starts.STARTS`):
+            ``rest``, ``babybench`` or ``random``.
 
     Returns:
         The infant, reset to its rest pose.
     """
-    return Infant(scene, senses=senses, eye_size=eye_size, appearance=appearance)
+    return Infant(scene, senses=senses, eye_size=eye_size, appearance=appearance, start=start)

@@ -108,32 +108,51 @@ def body_map_picture(path: str | Path, width: int = 420, height: int = 900) -> P
     return _write_png(path, picture)
 
 
-def eyes_picture(path: str | Path, scale: int = 4) -> Path:
-    """Write what the two eyes see, sitting with the hands raised: left | right, 64 x 64 each.
+def eyes_picture(
+    path: str | Path, scale: int = 4, scene: str = "sitting_babybench", overview: bool = True
+) -> Path:
+    """Write what the two eyes see at the scene's rest (its initial state), left | right,
+    64 x 64 each, and beside them the third-person view of the same moment.
+
+    In ``sitting_babybench`` (hand regard's default, BabyBench's scene) the head is pitched
+    0.4 rad down and the arms hang at the sides: the eyes see the floor, the toy blocks at the
+    bottom edge and the far wall, and no hand. ``sitting`` shows that scene with the hands
+    raised before the eyes (:data:`EYES_POSE`), the picture of runs before issue #29.
 
     Args:
         path: Output PNG.
-        scale: Each pixel is drawn as scale x scale pixels.
+        scale: Each eye pixel is drawn as scale x scale pixels.
+        scene: ``sitting_babybench`` or ``sitting``.
+        overview: Add the third-person view on the right.
 
     Returns:
         The path written.
     """
-    infant = build_infant("sitting", senses=("eyes",))
+    infant = build_infant(scene, senses=("eyes",))
     try:
-        infant.reset(np.random.default_rng(0))
-        for joint, angle in EYES_POSE.items():
-            for name in (joint, f"left_{joint}", f"right_{joint}"):
-                if name in infant.actuator_names:
-                    infant.data.qpos[infant.model.joint(name).qposadr[0]] = angle
-        mujoco.mj_forward(infant.model, infant.data)
+        infant.reset(np.random.default_rng(0), start="rest")
+        if scene == "sitting":
+            for joint, angle in EYES_POSE.items():
+                for name in (joint, f"left_{joint}", f"right_{joint}"):
+                    if name in infant.actuator_names:
+                        infant.data.qpos[infant.model.joint(name).qposadr[0]] = angle
+            mujoco.mj_forward(infant.model, infant.data)
         frames = []
         for image, title in zip(infant.eyes(), ("left eye", "right eye")):
             big = cv2.resize(image, None, fx=scale, fy=scale, interpolation=cv2.INTER_NEAREST)
             big = np.ascontiguousarray(big[..., ::-1])
             cv2.putText(big, title, (8, 22), cv2.FONT_HERSHEY_SIMPLEX, 0.6, (20,) * 3, 2)
             frames.append(big)
-        gap = np.full((frames[0].shape[0], 6, 3), 255, dtype=np.uint8)
-        picture = np.concatenate([frames[0], gap, frames[1]], axis=1)
+        height = frames[0].shape[0]
+        if overview:
+            view = np.ascontiguousarray(infant.render_view(height * 4 // 3, height)[..., ::-1])
+            cv2.putText(view, "third person", (8, 22), cv2.FONT_HERSHEY_SIMPLEX, 0.6, (20,) * 3, 2)
+            frames.append(view)
+        gap = np.full((height, 6, 3), 255, dtype=np.uint8)
+        parts = [frames[0]]
+        for frame in frames[1:]:
+            parts += [gap, frame]
+        picture = np.concatenate(parts, axis=1)
     finally:
         infant.close()
     return _write_png(path, picture)

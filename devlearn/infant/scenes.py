@@ -1,4 +1,5 @@
-"""The two scenes: lying in a crib (self-touch) and sitting before toy blocks (hand regard)."""
+"""The scenes: lying in a crib (self-touch), and sitting before toy blocks (hand regard) in two
+versions, BabyBench's (head pitch held, arms hanging: the hand-regard default) and our first one."""
 
 from __future__ import annotations
 
@@ -69,6 +70,10 @@ class SceneSpec:
         root_pos, root_quat: Pose of the fixed hip in the world.
         rest: Initial angles of actuated joints when not posed randomly (full names).
         overview: Third-person camera (pos, xyaxes) for ``render_view``.
+        equality: Actuated joints held at an angle (radians) by equality constraints: their
+            motors stay (the action size is unchanged) but cannot move them, as in BabyBench.
+        settle_steps: Zero-action physics steps taken from ``rest`` when the infant is built;
+            the settled state is the scene's initial state (BabyBench: 100). 0: ``rest`` as is.
     """
 
     name: str
@@ -78,6 +83,8 @@ class SceneSpec:
     root_quat: tuple[float, float, float, float]
     rest: dict[str, float] = field(default_factory=dict)
     overview: tuple[tuple[float, ...], tuple[float, ...]] = ((0, 0, 1), (1, 0, 0, 0, 1, 0))
+    equality: dict[str, float] = field(default_factory=dict)
+    settle_steps: int = 0
 
 
 _HALF = math.sqrt(0.5)
@@ -93,6 +100,12 @@ _SITTING_LEGS = {
     for s in ("left", "right")
     for j, a in (("hip_flexion", math.radians(90)), ("hip_abduction", 0.4), ("fingers", 0.3))
 }
+
+BABYBENCH_HEAD_PITCH = 0.4
+"""Head pitch (rad, forward-down) that BabyBench's hand-regard scene holds by a constraint
+(facts sec. 3b); its side tilt is held at 0, only the swivel moves."""
+SETTLE_STEPS = 100
+"""BabyBench: 100 zero-action physics steps from the scene's pose make the initial state."""
 
 SCENES = {
     # On its back, head towards +x: body x (front) -> world z, body z (up) -> world x, so the
@@ -122,7 +135,35 @@ SCENES = {
         },
         overview=((0.75, -0.55, 0.55), (0.59, 0.81, 0.0, -0.35, 0.25, 0.9)),
     ),
+    # BabyBench's hand-regard scene (facts sec. 3b), the hand_regard default: sitting as above,
+    # but the head's pitch held at 0.4 rad and its side tilt at 0 by equality constraints (their
+    # motors kept: 17 actions), only the swivel free, eyes locked, and the arms hanging at the
+    # sides, hands beside the hips, out of both eyes' view; the state after 100 zero-action
+    # steps is the initial state. Bringing a hand into view must be learned.
+    "sitting_babybench": SceneSpec(
+        "sitting_babybench",
+        frozenset({"head", "arm", "wrist"}),
+        _SITTING_LEGS,
+        root_pos=(0.0, 0.0, 0.07),
+        root_quat=(1.0, 0.0, 0.0, 0.0),
+        rest={
+            "head_tilt": BABYBENCH_HEAD_PITCH,
+            "left_shoulder_abduction": 0.25,
+            "right_shoulder_abduction": 0.25,
+            # hands beside the hips, ~85 degrees off the eyes' axes (BabyBench: 80-86)
+            "left_shoulder_flexion": 0.2,
+            "right_shoulder_flexion": 0.2,
+        },
+        overview=((0.75, -0.55, 0.55), (0.59, 0.81, 0.0, -0.35, 0.25, 0.9)),
+        equality={"head_tilt": BABYBENCH_HEAD_PITCH, "head_tilt_side": 0.0},
+        settle_steps=SETTLE_STEPS,
+    ),
 }
+"""Scenes by name. ``sitting`` is the hand-regard scene of runs before issue #29 (head free,
+hands raised before the eyes at rest); ``sitting_babybench`` is BabyBench's, the default."""
+
+SITTING_SCENES = ("sitting", "sitting_babybench")
+"""The scenes with the sitting body (17 actuators, toy blocks)."""
 
 
 def _options(root: mjcf.RootElement) -> None:
@@ -210,7 +251,7 @@ def _props(root: mjcf.RootElement, scene: str, toy_colours) -> None:
                 contype=0,
                 conaffinity=0,
             )
-    else:
+    else:  # both sitting scenes
         world.add(
             "geom",
             group=SCENE_GROUP,
@@ -286,4 +327,7 @@ def build_scene_model(
         vestibular=vestibular,
         hand_rgba=look.hand_rgba,
     )
+    for joint, angle in spec.equality.items():
+        # joint1 = polycoef[0]: the angle held; the motor on it pushes against the constraint.
+        root.equality.add("joint", name=f"hold_{joint}", joint1=joint, polycoef=(angle, 0, 0, 0, 0))
     return root, actuated

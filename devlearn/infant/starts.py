@@ -1,9 +1,18 @@
-"""Random starts: joint angles within their ranges (not buried) and toy blocks on the floor."""
+"""Episode starts: the scene's rest state, BabyBench's (rest + random kicks), random poses."""
 
 from __future__ import annotations
 
 import mujoco
 import numpy as np
+
+STARTS = ("babybench", "rest", "random")
+"""How an episode starts (``Infant.reset``): ``babybench``, the scene's initial state (settled,
+for scenes with ``settle_steps``) then :data:`KICK_STEPS` physics steps of uniform-random
+actions, as every BabyBench episode starts (facts sec. 3b); ``rest``, the initial state alone
+(the same every episode); ``random``, joint angles uniform within their ranges and toys
+placed at random."""
+KICK_STEPS = 10
+"""Uniform-random-action physics steps of a ``babybench`` start (BabyBench's reset)."""
 
 MAX_START_PENETRATION = 0.005
 """Deepest contact penetration (m) accepted for a random initial pose."""
@@ -76,3 +85,18 @@ def random_pose(
             return
     data.qpos[qpos_index] = best_pose
     mujoco.mj_forward(model, data)
+
+
+def kick(model: mujoco.MjModel, data: mujoco.MjData, rng: np.random.Generator, steps: int) -> None:
+    """``steps`` physics steps, each with fresh actions uniform in [-1, 1] (``data.ctrl``), then
+    the controls back to zero: BabyBench's reset after restoring its initial state.
+
+    Args:
+        model, data: The scene's physics (stepped in place).
+        rng: Draws the actions, (steps, nu) values.
+        steps: Physics steps.
+    """
+    for _ in range(steps):
+        data.ctrl[:] = rng.uniform(-1.0, 1.0, model.nu)
+        mujoco.mj_step(model, data)
+    data.ctrl[:] = 0.0

@@ -19,23 +19,38 @@ from tqdm import tqdm
 from devlearn.env.behavior_env import BehaviorEnv
 from devlearn.errors import UsageError
 from devlearn.training.checkpoint import LATEST, check_behavior, load_checkpoint
-from devlearn.training.config import RunConfig, default_config, from_dict, to_dict, to_rsl_rl
+from devlearn.training.config import (
+    RunConfig,
+    apply_overrides,
+    default_config,
+    from_dict,
+    to_dict,
+    to_rsl_rl,
+)
 from devlearn.training.runner import quiet
 
 VIDEO_FPS = 25
 """Frame rate of evaluation videos (every k-th control step is rendered to match it)."""
 POLICY_FILE = "policy.pt"
 """Name of a slimmed policy file (``devlearn slim``) in a published run folder."""
-POLICIES = ("checkpoint", "zero", "random")
-"""What ``evaluate`` can run: a checkpoint's mean action, or a baseline: zero action, or
-actions uniform in [-1, 1] (seeded by the evaluation seed)."""
-STARTS = ("stage", "rest")
-"""Where episodes start: ``stage``, as the behaviour's evaluation stage says (usually seeded
-random poses); ``rest``, the infant's rest pose with the scene as built, every episode (the
-start that training episodes use when the curriculum does not randomise it). A deterministic
-policy from ``rest`` repeats one episode, so one episode is enough: a diagnostic that asks
-whether a policy has the skill where it trained, beside the protocol's answer of whether it
-generalises."""
+POLICIES = ("checkpoint", "zero", "random", "held_random")
+"""What ``evaluate`` can run: a checkpoint's mean action, or a baseline: zero action, actions
+uniform in [-1, 1] drawn afresh every step (i.i.d.), or ``held_random``: uniform actions each
+held for :data:`HOLD_STEPS` physics steps on average (each actuator redraws with probability
+1 / HOLD_STEPS per physics step, as motor babbling does; with a decision rate K, K / HOLD_STEPS
+per decision), which moves the damped limbs much further
+than i.i.d. noise. All seeded by the evaluation seed."""
+HOLD_STEPS = 8
+"""Mean steps a ``held_random`` baseline action is held (40 ms at 200 Hz)."""
+STARTS = ("stage", "babybench", "rest", "random")
+"""Where episodes start: ``stage``, as the behaviour's evaluation stage says (self-touch:
+seeded random poses; hand regard: its ``eval_start``, BabyBench's start); ``babybench``, the
+scene's initial state (settled, in scenes that settle) then 10 physics steps of seeded
+uniform-random actions, as every BabyBench episode starts; ``rest``, that initial state
+alone, every episode (a deterministic policy then repeats one episode, so one episode is
+enough: a diagnostic that asks whether a policy has the skill where it trained); ``random``,
+joint angles uniform in their ranges (and toys placed at random), a generalisation test.
+``devlearn.infant.starts.STARTS`` are the infant's."""
 
 
 class EvalWriteError(UsageError):
@@ -135,7 +150,7 @@ def load_actor(
 
 
 def _policy(
-    policy: str, actor, action_dim: int, seed: int
+    policy: str, actor, action_dim: int, seed: int, repeat: int = 1
 ) -> Callable[[dict[str, np.ndarray]], np.ndarray]:
     """``act(obs) -> (action_dim,)``: the actor's mean action, zeros, or seeded uniform noise."""
     if policy == "zero":
@@ -143,12 +158,34 @@ def _policy(
     if policy == "random":
         rng = np.random.default_rng([seed, 1])  # a stream apart from the env's (seed)
         return lambda obs: rng.uniform(-1.0, 1.0, action_dim)
+    if policy == "held_random":
+        rng = np.random.default_rng([seed, 2])
+        held = rng.uniform(-1.0, 1.0, action_dim)
+
+        def hold(obs: dict[str, np.ndarray]) -> np.ndarray:
+            redraw = rng.random(action_dim) < min(1.0, repeat / HOLD_STEPS)
+            held[redraw] = rng.uniform(-1.0, 1.0, int(redraw.sum()))
+            return held.copy()
+
+        return hold
 
     def act(obs: dict[str, np.ndarray]) -> np.ndarray:
         with torch.inference_mode():
             return actor(_batch(obs))[0].numpy()
 
     return act
+
+
+def _set_infant_start(infant: Any, start: str) -> None:
+    """Make the env's infant start its episodes with ``start`` (babybench or rest).
+
+    Raises:
+        UsageError: The infant has no starts (a stand-in) and ``start`` is not its rest.
+    """
+    if hasattr(infant, "start"):
+        infant.start = start
+    elif start != "rest":
+        raise UsageError(f"--start {start}: this infant has no such start (it has only rest)")
 
 
 def evaluate(
@@ -163,6 +200,7 @@ def evaluate(
     progress: bool = True,
     policy: str = "checkpoint",
     start: str = "stage",
+    overrides: list[str] | None = None,
 ) -> dict[str, Any]:
     """Run ``episodes`` episodes of a policy and summarise them under the evaluation protocol.
 
@@ -183,12 +221,18 @@ def evaluate(
         infant_factory: Infant builder (tests); default the real infant.
         progress: Show a progress bar (steps, episodes) on stderr.
         policy: One of :data:`POLICIES`.
-        start: One of :data:`STARTS`; ``rest`` overrides the stage's ``random_pose``.
+        start: One of :data:`STARTS`; other than ``stage`` it overrides the stage's
+            ``random_pose`` and the infant's start.
+        overrides: ``key=value`` settings of a baseline's config (``--set``), e.g. a
+            calibrated detector for hand regard's baselines
+            (``behavior.detector_file=runs/hr/hand_detector.json``); not with a checkpoint,
+            whose config is its own.
     Returns:
         ``evaluator.summary()`` plus ``behavior``, ``policy``, ``checkpoint``,
         ``checkpoint_env_steps`` (x axis of ``devlearn curve``), ``training_seed``, ``config``
-        (the checkpoint's, for ``devlearn report``'s grouping) and ``protocol`` (episodes,
-        seed, settle steps, criteria, training steps, code commit). When files were written,
+        (the checkpoint's, for ``devlearn report``'s grouping), ``start`` (the start episodes
+        took: babybench, rest or random) and ``protocol`` (episodes, seed, start, settle
+        steps, criteria, training steps, code commit). When files were written,
         ``written`` lists them (not part of eval.json).
     Raises:
         UsageError: Missing, corrupt or foreign checkpoint; bad policy; unwritable out_dir.
@@ -199,7 +243,11 @@ def evaluate(
     if start not in STARTS:
         raise UsageError(f"unknown start '{start}'; valid: {', '.join(STARTS)}")
     if (checkpoint is None) != (policy != "checkpoint"):
-        raise UsageError("give a checkpoint, or a baseline policy (zero, random), not both")
+        raise UsageError(
+            "give a checkpoint, or a baseline policy (zero, random, held_random), not both"
+        )
+    if overrides and checkpoint is not None:
+        raise UsageError("--set applies to baselines only: a checkpoint evaluates with its config")
     out = prepare_out_dir(out_dir) if out_dir is not None else None
     behavior_cls = registry.behavior(behavior_name)
     if checkpoint is not None:
@@ -211,6 +259,7 @@ def evaluate(
         state = {}
         cfg = from_dict({}, behavior_cls)
         cfg.env.action_repeat = default_config(behavior_cls).env.action_repeat
+        apply_overrides(cfg, list(overrides or []))
     behavior = registry.create(behavior_name, cfg.behavior)
     if checkpoint is not None:
         behavior.load_policy_artifacts(dict(state.get("artifacts") or {}), checkpoint.parent)
@@ -224,14 +273,21 @@ def evaluate(
     writer = None
     try:
         stage = behavior.eval_stage()
-        if start == "rest":
-            stage = {**stage, "random_pose": False}
+        if start != "stage":
+            stage = {**stage, "random_pose": start == "random"}
+            if start != "random":
+                _set_infant_start(env.infant, start)
+        elif not stage.get("random_pose") and hasattr(behavior, "eval_start"):
+            # a behaviour may evaluate from another start than it trains from (hand regard's
+            # eval_start); the infant was built with the training start
+            _set_infant_start(env.infant, behavior.eval_start())
         env.set_stage(stage)
+        started = "random" if stage.get("random_pose") else getattr(env.infant, "start", "rest")
         obs = env.reset()
         actor = None
         if checkpoint is not None:
             actor = load_actor(cfg, state, behavior, obs, env.action_dim)
-        act = _policy(policy, actor, env.action_dim, seed)
+        act = _policy(policy, actor, env.action_dim, seed, repeat)
         if video is not None:
             import imageio.v2 as imageio
 
@@ -263,13 +319,15 @@ def evaluate(
             checkpoint_env_steps=steps,
             training_seed=int(cfg.seed) if checkpoint is not None else None,
             config=state["config"] if checkpoint is not None else to_dict(cfg),
+            start=started,
             protocol={
                 "episodes": episodes,
                 "seed": seed,
                 "policy": policy,
                 "action": "mean" if policy == "checkpoint" else policy,
                 "stage": json.loads(json.dumps(stage, default=str)),
-                "start": start,
+                "start": started,
+                "start_option": start,
                 "settle_steps": 0,
                 "action_repeat": repeat,
                 **env.evaluator.protocol(),

@@ -17,7 +17,7 @@ def _parse(argv):
     return parser.parse_args(argv)
 
 
-@pytest.mark.parametrize("what, shape", [("eyes", (256, 518, 3)), ("body-map", (900, 1100, 3))])
+@pytest.mark.parametrize("what, shape", [("eyes", (256, 865, 3)), ("body-map", (900, 1100, 3))])
 def test_picture_writes_png(tmp_path, capsys, what, shape):
     out = tmp_path / f"{what}.png"
     args = _parse(["picture", what, "--out", str(out)])

@@ -165,16 +165,70 @@ def test_rest_start_overrides_the_eval_stage(registry, run_dir, tmp_path, capsys
     stage = evaluate("tiny", run_dir, 2, registry, infant_factory=pose_recording,
                      progress=False)
     assert PoseRecordingInfant.resets and all(PoseRecordingInfant.resets)
-    assert stage["protocol"]["start"] == "stage"
+    assert stage["protocol"]["start"] == "random" and stage["start"] == "random"
+    assert stage["protocol"]["start_option"] == "stage"
     PoseRecordingInfant.resets = []
     rest = evaluate("tiny", run_dir, 2, registry, infant_factory=pose_recording,
                     progress=False, start="rest")
     assert PoseRecordingInfant.resets and not any(PoseRecordingInfant.resets)
     assert rest["protocol"]["stage"] == {"random_pose": False}
     assert rest["protocol"]["start"] == "rest"
-    with pytest.raises(UsageError, match="valid: stage, rest"):
-        evaluate("tiny", run_dir, 1, registry, start="random")
+    with pytest.raises(UsageError, match="valid: stage, babybench, rest, random"):
+        evaluate("tiny", run_dir, 1, registry, start="sideways")
+    with pytest.raises(UsageError, match="no such start"):  # a stand-in without starts
+        evaluate("tiny", run_dir, 1, registry, infant_factory=pose_recording, start="babybench",
+                 progress=False)
     out = tmp_path / "rest"
     assert main(["eval", "tiny", "--checkpoint", str(run_dir), "--episodes", "1", "--start",
                  "rest", "--out", str(out)]) == 0
     assert json.loads((out / "eval.json").read_text())["protocol"]["start"] == "rest"
+
+
+class StartingInfant(PoseRecordingInfant):
+    """A stand-in with the real infant's ``start`` attribute."""
+
+    start = "rest"
+    starts: list = []
+
+    def reset(self, rng, random_pose=False):
+        StartingInfant.starts.append("random" if random_pose else self.start)
+        super().reset(rng, random_pose)
+
+
+@pytest.mark.parametrize("start", ["babybench", "rest", "random"])
+def test_start_options_reach_the_infant_and_the_json(registry, run_dir, tmp_path, start):
+    def factory(scene, senses=("proprioception",), **kwargs):
+        return StartingInfant(scene, senses, episode_steps=10)
+
+    StartingInfant.starts = []
+    out = tmp_path / start
+    summary = evaluate("tiny", run_dir, 2, registry, infant_factory=factory, progress=False,
+                       start=start, out_dir=out)
+    assert set(StartingInfant.starts) == {start}
+    saved = json.loads((out / "eval.json").read_text())
+    assert saved["start"] == start and saved["protocol"]["start"] == start
+    assert summary["protocol"]["stage"]["random_pose"] == (start == "random")
+
+
+def test_held_random_baseline_holds_its_actions(registry):
+    held, summary = actions_of(registry, None, "held_random")
+    again, _ = actions_of(registry, None, "held_random")
+    np.testing.assert_array_equal(held, again)  # seeded
+    assert summary["policy"] == "held_random"
+    assert np.abs(held).max() <= 1.0 and np.ptp(held) > 1.0
+    unchanged = (np.diff(held, axis=0) == 0).mean()  # each actuator redraws with p = 1/8
+    assert 0.8 < unchanged < 0.95
+    iid, _ = actions_of(registry, None, "random")
+    assert (np.diff(iid, axis=0) == 0).mean() == 0.0
+
+
+def test_baseline_config_overrides(registry, tmp_path):
+    summary = evaluate("tiny", None, 1, registry, policy="zero", progress=False,
+                       overrides=["seed=7"])
+    assert summary["config"]["seed"] == 7
+    with pytest.raises(UsageError, match="baselines only"):
+        evaluate("tiny", tmp_path, 1, registry, overrides=["seed=7"])
+    out = tmp_path / "zero"
+    assert main(["eval", "tiny", "--policy", "zero", "--episodes", "1", "--set", "seed=5",
+                 "--out", str(out)]) == 0
+    assert json.loads((out / "eval.json").read_text())["config"]["seed"] == 5

@@ -25,7 +25,9 @@ class FakeSittingInfant:
         senses=("proprioception", "eyes"),
         episode_steps: int = 20,
         appearance: str = "mittens",
+        start: str = "rest",
     ) -> None:
+        self.start = start
         self.episode_steps = episode_steps
         self.appearance = appearance  # the synthetic images are the same either way
         self.actuator_groups = {"head": np.arange(3), "left_arm": LEFT_ARM, "right_arm": RIGHT_ARM}
@@ -34,7 +36,7 @@ class FakeSittingInfant:
         self.last_action = np.zeros(17)
         self.hands = np.array([[20.0, 40.0], [44.0, 40.0]])
 
-    def reset(self, rng, random_pose: bool = False) -> None:
+    def reset(self, rng, random_pose: bool = False, start: str | None = None) -> None:
         self.physics.data.time = 0.0
         self.hands = np.array([[20.0, 40.0], [44.0, 40.0]])
 

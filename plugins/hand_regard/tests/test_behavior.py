@@ -84,7 +84,8 @@ def test_facts_detect_hands_and_motion(behavior):
 def test_env_steps_with_rewards_and_metrics(behavior):
     env = BehaviorEnv(behavior, seed=0, infant_factory=FakeSittingInfant)
     obs = env.reset()
-    assert obs["left_eye"].shape == (64, 64, 3) and obs["left_eye"].dtype == np.uint8
+    assert set(obs) == {"proprioception", "hands_seen"}  # the default policy: no images
+    assert obs["hands_seen"].shape == (16,) and obs["hands_seen"].dtype == np.float32
     env.set_stage(stage_options(behavior, "left_arm"))
     info = None
     for _ in range(env.episode_steps):
@@ -99,6 +100,7 @@ def test_env_steps_with_rewards_and_metrics(behavior):
 
 
 def test_network_fuses_576_features(behavior):
+    behavior.config.policy = "cnn"
     spec = behavior.network()
     shapes = {"left_eye": (64, 64, 3), "right_eye": (64, 64, 3), "proprioception": (21,)}
     dims = {k: spec.encoders[k].out_dim(s) for k, s in shapes.items()}
@@ -132,3 +134,65 @@ def test_behavior_pickles_without_runtime_state(behavior):
     clone = pickle.loads(pickle.dumps(behavior))
     assert clone._detector is None and clone._flow.previous is None
     assert clone.config == behavior.config
+
+
+def test_cnn_policy_sees_the_eyes(behavior):
+    behavior.config.policy = "cnn"
+    env = BehaviorEnv(behavior, seed=0, infant_factory=FakeSittingInfant)
+    obs = env.reset()
+    assert set(obs) == {"left_eye", "right_eye", "proprioception"}
+    assert obs["left_eye"].shape == (64, 64, 3) and obs["left_eye"].dtype == np.uint8
+
+
+def test_proprio_policy_sees_the_detector_output(behavior):
+    """Proprioception plus per (eye, hand): detected, centre x and y in [-1, 1], area share;
+    the reward still comes from the images through the detector."""
+    from devlearn_hand_regard.behavior import hand_features
+
+    infant = FakeSittingInfant()  # left hand disc at x 20, right at x 44, both at y 40
+    infant.reset(None)
+    behavior.on_episode_start(infant, None)
+    facts = behavior.facts(infant)
+    obs = behavior.observe(infant, facts)
+    features = obs["hands_seen"].reshape(2, 2, 4)
+    assert np.all(features[..., 0] == 1.0)
+    np.testing.assert_allclose(features[:, 0, 1], 2 * 20.5 / 64 - 1, atol=0.05)
+    np.testing.assert_allclose(features[:, 1, 1], 2 * 44.5 / 64 - 1, atol=0.05)
+    np.testing.assert_allclose(features[..., 2], 2 * 40.5 / 64 - 1, atol=0.05)
+    assert np.all((features[..., 3] > 0.01) & (features[..., 3] < 0.05))  # ~81 px of 4096
+    np.testing.assert_array_equal(obs["proprioception"], infant.proprioception())
+    none = hand_features(np.zeros((2, 2), bool), np.zeros((2, 2, 64, 64), bool))
+    assert none.shape == (16,) and not none.any()
+    spec = behavior.network()
+    assert set(spec.encoders) == {"proprioception", "hands_seen"} and spec.share
+    net = spec.encoders["hands_seen"].build((16,))
+    assert net(torch.zeros(3, 16)).shape == (3, 32)
+
+
+def test_scene_start_and_policy_defaults_and_legacy():
+    from devlearn.training.config import from_dict
+
+    behavior = HandRegard()
+    assert behavior.scene == "sitting_babybench" and HandRegard.scene == "sitting_babybench"
+    assert behavior.infant_options() == {"appearance": "mittens", "start": "babybench"}
+    assert behavior.eval_stage() == {"active_arms": ["left", "right"], "random_pose": False}
+    assert behavior.config.policy == "proprio" and HandRegard.facts_every_physics_step is False
+    # A config saved before issue #29 lacks these keys: the old scene, start, eval and network.
+    old = from_dict({"behavior": {"detector_file": "x.json"}}, HandRegard)
+    legacy = HandRegard(old.behavior)
+    assert legacy.scene == "sitting" and legacy.config.policy == "cnn"
+    assert legacy.infant_options()["start"] == "rest"
+    assert legacy.eval_stage()["random_pose"] is True
+    with pytest.raises(Exception, match="valid: sitting_babybench, sitting"):
+        HandRegard(HandRegardConfig(scene="crib")).infant_options()
+
+
+def test_demonstration_by_default_and_the_paper_preset():
+    from devlearn.training.config import default_config
+
+    demo = default_config(HandRegard)
+    assert demo.total_steps == 30_000 and demo.behavior.policy == "proprio"
+    assert (demo.behavior.left_arm_steps, demo.behavior.right_arm_steps) == (3_000, 3_000)
+    paper = default_config(HandRegard, preset="paper")
+    assert paper.total_steps == 1_850_000 and paper.behavior.policy == "cnn"
+    assert (paper.behavior.left_arm_steps, paper.behavior.both_arms_steps) == (175_000, 1_500_000)

@@ -121,3 +121,61 @@ def test_posture_model_tells_crossed_hands_apart(synthetic_params):
     assert detector.detect(eyes, p)[0].tolist() == [[True, False], [True, False]]
     # Without proprioception the mean positions decide: x = 48 is the right hand's side.
     assert detector.detect(eyes)[0].tolist() == [[False, True], [False, True]]
+
+
+def test_a_hand_predicted_outside_the_image_is_never_chosen(synthetic_params, monkeypatch):
+    """The posture puts the right hand outside the image: a blob near where it would be is
+    not called the right hand; the left hand takes it only when predicted inside."""
+    detector = HandDetector(synthetic_params)
+    frame = draw(np.array([[56.0, 40.0], [np.nan, np.nan]]), BLOCK_POSITIONS)
+    eyes = np.stack([frame, frame])
+    cases = {
+        "right outside": ([[20.0, 40.0], [80.0, 40.0]], [True, False]),  # nearer right, but out
+        "left outside": ([[-9.0, 40.0], [40.0, 40.0]], [False, True]),
+        "both outside": ([[20.0, -5.0], [70.0, 40.0]], [False, False]),
+        "both inside": ([[20.0, 40.0], [60.0, 40.0]], [False, True]),  # the nearer one
+    }
+    for name, (expected, seen) in cases.items():
+        monkeypatch.setattr(detector, "expected_positions", lambda eye, p, e=expected: np.array(e))
+        assert detector.detect(eyes, np.zeros(4))[0].tolist() == [seen, seen], name
+    # Two blobs, one hand predicted outside: only one is attributed, to the hand inside.
+    frame = draw(np.array([[20.0, 40.0], [46.0, 42.0]]), BLOCK_POSITIONS)
+    monkeypatch.setattr(
+        detector, "expected_positions", lambda eye, p: np.array([[22, 40], [70, 40]])
+    )
+    detections, masks = detector.detect(np.stack([frame, frame]), np.zeros(4))
+    assert detections.tolist() == [[True, False], [True, False]]
+    ys, xs = np.nonzero(masks[0, 0])
+    assert abs(xs.mean() - 20) < 2
+
+
+def test_posture_model_is_kept_only_when_it_predicts_unseen_tracks():
+    """Validated on every other track: a posture-driven hand keeps its model; hands whose
+    image positions do not follow the posture (noise) fall back to the mean positions."""
+    from devlearn_hand_regard.calibration import Track, position_model
+
+    rng = np.random.default_rng(1)
+    steps, n_joints = 600, 4
+    angles = rng.uniform(-1, 1, (steps, n_joints))
+    proprioception = np.c_[angles, np.zeros((steps, 5 * n_joints))]
+
+    def tracks(where):
+        out = []
+        for side in range(2):
+            for k in range(6):  # six tracks per arm, 50 steps each
+                track = Track(k % 2, 0, side=side)
+                track.steps = list(range(side * 300 + 50 * k, side * 300 + 50 * (k + 1)))
+                track.centroids = [tuple(where(side, s)) for s in track.steps]
+                out.append(track)
+        return out
+
+    linear = tracks(lambda side, s: [32 + 20 * angles[s, side], 40 + 5 * angles[s, 2 + side]])
+    model = position_model(linear, proprioception, ridge=0.1, max_error=16.0)
+    assert model and model["validation_error_px"] < 2.0
+    noise = tracks(lambda side, s: rng.uniform(0, 64, 2))
+    assert position_model(noise, proprioception, ridge=0.1, max_error=16.0) == {}
+    assert position_model(noise, proprioception, ridge=0.1)  # unvalidated: kept, as before
+    episode = np.arange(steps) // 100  # folds by babbling episode, as calibrate() asks
+    kept = position_model(linear, proprioception, ridge=0.1, max_error=16.0, episode=episode)
+    assert kept and kept["validation_error_px"] < 2.0
+    assert position_model(noise, proprioception, 0.1, max_error=16.0, episode=episode) == {}

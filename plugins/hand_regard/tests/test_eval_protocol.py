@@ -1,4 +1,5 @@
-"""Hand-regard evaluation episodes: seeded random starts that differ; self-contained runs."""
+"""Hand-regard evaluation episodes: BabyBench's seeded starts (the default) and random starts
+(the generalisation row, and runs before issue #29) that differ; self-contained runs."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from devlearn_hand_regard import HandRegard
+from devlearn_hand_regard import HandRegard, HandRegardConfig
 
 from devlearn.env.behavior_env import BehaviorEnv
 from devlearn.errors import UsageError
@@ -22,9 +23,9 @@ def sitting():
     infant.close()
 
 
-def starts(seed, episodes, sitting, detector_file):
+def starts(seed, episodes, sitting, detector_file, eval_start="random"):
     """Joint angles and toy positions at the start of each evaluation episode."""
-    behavior = HandRegard()
+    behavior = HandRegard(HandRegardConfig(eval_start=eval_start))
     behavior.config.detector_file = str(detector_file)
     env = BehaviorEnv(behavior, seed, lambda scene, senses, **options: sitting, training=False)
     env.set_stage(behavior.eval_stage())
@@ -50,7 +51,27 @@ def test_evaluation_episodes_differ_and_repeat_with_the_seed(sitting, detector_f
     head, arms = sitting.actuator_groups["head"], sitting.actuator_groups["left_arm"]
     assert np.ptp([q[head] for q, _ in first], axis=0).min() > 0  # every head joint varies
     assert np.ptp([q[arms] for q, _ in first], axis=0).min() > 0
-    assert HandRegard().eval_stage() == {"active_arms": ["left", "right"], "random_pose": True}
+    random = HandRegard(HandRegardConfig(eval_start="random")).eval_stage()
+    assert random == {"active_arms": ["left", "right"], "random_pose": True}
+
+
+@pytest.fixture(scope="module")
+def babybench():
+    infant = build_infant("sitting_babybench", senses=("proprioception", "eyes"), start="babybench")
+    yield infant
+    infant.close()
+
+
+def test_babybench_evaluation_episodes_differ_by_their_kicks(babybench, detector_file):
+    """The default protocol: every episode from the settled state plus 10 seeded random-action
+    steps, so the deterministic policy's episodes differ a little and repeat with the seed."""
+    first = starts(3, 3, babybench, detector_file, eval_start="babybench")
+    again = starts(3, 3, babybench, detector_file, eval_start="babybench")
+    for (q, toys), (q2, toys2) in zip(first, again):
+        np.testing.assert_array_equal(q, q2)
+        np.testing.assert_array_equal(toys, toys2)  # the toys stay in their places
+    for a, b in ((0, 1), (1, 2)):
+        assert 1e-4 < np.abs(first[a][0] - first[b][0]).max() < 0.3  # kicked, not random
 
 
 def test_training_start_keeps_the_toys_in_place(sitting):
@@ -126,6 +147,66 @@ def test_relocated_run_folder_evaluates(tmp_path):
         out_dir=tmp_path / "eval",
         progress=False,
     )
-    assert summary["steps"] == 30 and summary["headline_criterion"] == "cone"
-    assert set(summary["criteria"]) == {"cone", "pixels", "any_pixel"}
+    assert summary["steps"] == 30 and summary["headline_criterion"] == "detector"
+    assert set(summary["criteria"]) == {"detector", "pixels", "babybench", "cone", "any_pixel"}
     assert summary["protocol"]["criteria"]["cone"]["max_angle_deg"] == 15.0
+    # Its saved config predates issue #29: the old scene, evaluated from random starts.
+    assert summary["start"] == "random" and summary["protocol"]["stage"]["random_pose"]
+    assert summary["config"]["behavior"].get("scene") is None
+
+
+def test_published_policy_evaluates_from_babybench_start(tmp_path):
+    """`devlearn eval hand_regard --start babybench` on a published policy file (old scene)."""
+    from devlearn.plugins import PluginRegistry
+    from devlearn.training.evaluate import evaluate
+
+    published = Path(__file__).resolve().parents[3] / "results" / "hand_regard" / "run"
+    scenes = []
+
+    def short(scene, **kwargs):
+        scenes.append((scene, kwargs.get("start")))
+        infant = build_infant(scene, **kwargs)
+        infant.episode_steps = 20
+        return infant
+
+    summary = evaluate(
+        "hand_regard",
+        published / "policy.pt",
+        1,
+        PluginRegistry(),
+        infant_factory=short,
+        out_dir=tmp_path / "eval",
+        progress=False,
+        start="babybench",
+    )
+    assert scenes == [("sitting", "rest")]  # the scene it trained in
+    assert summary["start"] == "babybench" and summary["protocol"]["start_option"] == "babybench"
+    saved = json.loads((tmp_path / "eval" / "eval.json").read_text())
+    assert saved["start"] == "babybench" and saved["headline_criterion"] == "detector"
+
+
+def test_eval_start_differs_from_the_training_start(tmp_path):
+    """Trained from rest, evaluated (``--start stage``) from its ``eval_start``, babybench."""
+    from devlearn.plugins import PluginRegistry
+    from devlearn.training.evaluate import evaluate
+
+    built = []
+
+    def short(scene, **kwargs):
+        built.append(kwargs.get("start"))
+        infant = build_infant(scene, **kwargs)
+        infant.episode_steps = 5
+        return infant
+
+    summary = evaluate(
+        "hand_regard",
+        None,
+        1,
+        PluginRegistry(),
+        infant_factory=short,
+        progress=False,
+        policy="zero",
+        overrides=["behavior.start=rest"],
+    )
+    assert built == ["rest"] and summary["start"] == "babybench"
+    assert summary["protocol"]["start_option"] == "stage"

@@ -57,4 +57,4 @@ def test_conformance_with_the_real_infant():
     # Without prepare() the detector is uncalibrated (sees nothing): conformance is about
     # shapes and contracts; test_calibration covers the calibrated detector on real renders.
     shapes = check_behavior(HandRegard, steps=10)
-    assert shapes["left_eye"] == (64, 64, 3) and shapes["right_eye"] == (64, 64, 3)
+    assert shapes["hands_seen"] == (16,) and shapes["proprioception"] == (102,)

@@ -62,12 +62,12 @@ def test_env_builds_the_infant_in_the_configured_appearance(appearance):
     built = []
 
     def factory(scene, senses, **options):
-        built.append(options)
+        built.append((scene, options))
         return FakeSittingInfant(scene, senses)
 
     behavior = HandRegard(HandRegardConfig(appearance=appearance))
     BehaviorEnv(behavior, seed=0, infant_factory=factory)
-    assert built == [{"appearance": appearance}]
+    assert built == [("sitting_babybench", {"appearance": appearance, "start": "babybench"})]
 
 
 def test_old_run_config_loads_with_mittens_and_the_bilateral_term():
@@ -83,7 +83,8 @@ def test_old_run_config_loads_with_mittens_and_the_bilateral_term():
 
     state = load_checkpoint(ROOT / "results/hand_regard/run/policy.pt")
     behavior = HandRegard(from_dict(state["config"], HandRegard).behavior)
-    assert behavior.infant_options() == {"appearance": "mittens"}
+    assert behavior.infant_options() == {"appearance": "mittens", "start": "rest"}
+    assert behavior.scene == "sitting" and behavior.config.policy == "cnn"
     # A config saved now keeps its own values; no saved behaviour section: today's defaults.
     fresh = default_config(HandRegard, ["behavior.appearance=skin", "behavior.reward=paper"])
     again = from_dict(to_dict(fresh), HandRegard).behavior

@@ -53,7 +53,7 @@ def criteria(scene, hand, toy=(0.0, 5.0, 0.0)):
 def test_hand_on_the_axis_is_seen_by_every_criterion(scene):
     seen, angle, pixels = criteria(scene, (0.5, 0.0, 0.0))
     assert angle == pytest.approx(0.0, abs=1e-6) and pixels >= 20
-    assert seen == {"cone": True, "pixels": True, "any_pixel": True}
+    assert seen == {"pixels": True, "cone": True, "any_pixel": True}
 
 
 def test_hand_at_20_degrees_is_in_the_image_but_outside_the_cone(scene):
@@ -66,7 +66,7 @@ def test_hand_at_20_degrees_is_in_the_image_but_outside_the_cone(scene):
 def test_hand_hidden_behind_a_toy(scene):
     seen, angle, pixels = criteria(scene, (0.5, 0.0, 0.0), toy=(0.25, 0.0, 0.0))
     assert pixels == 0
-    # The cone is geometry only (BabyBench's rule); the pixel criteria see the occlusion.
+    # The cone is geometry only (as BabyBench's counter); the pixel criteria see the occlusion.
     assert seen == {"cone": True, "pixels": False, "any_pixel": False}
 
 
@@ -75,3 +75,44 @@ def test_few_pixels_count_for_any_pixel_only():
     assert verdicts["any_pixel"].tolist() == [[True, False]]
     assert verdicts["pixels"].tolist() == [[False, False]]
     assert verdicts["cone"].tolist() == [[False, True]]
+
+
+# BabyBench's counter: the eye *body's* -z axis. An eye body at the origin whose camera looks
+# along +x (camera xyaxes in the body as in our infant and MIMo): the body's -z points down.
+EYE_BODY = """
+<mujoco>
+  <worldbody>
+    <body name="eye" pos="0 0 0">
+      <camera name="cam" pos="0 0 0" xyaxes="0 -1 0 0 0 1" fovy="60"/>
+    </body>
+    <body name="hand" mocap="true" pos="0.5 0 0"><geom type="sphere" size="0.04"/></body>
+  </worldbody>
+</mujoco>
+"""
+
+
+@pytest.mark.parametrize(
+    ("hand", "cone", "babybench"),
+    [
+        ((0.5, 0.0, 0.0), True, False),  # on the optical axis: in view, BabyBench misses it
+        ((0.0, 0.0, -0.5), False, True),  # straight below the eye, out of view: BabyBench counts
+        ((0.05, 0.0, -0.5), False, True),  # 5.7 degrees off the body's -z
+        ((0.2, 0.0, -0.5), False, False),  # 21.8 degrees off
+    ],
+)
+def test_babybench_counts_the_eye_body_minus_z_axis(hand, cone, babybench):
+    from devlearn_hand_regard.visibility import babybench_angles
+
+    model = mujoco.MjModel.from_xml_string(EYE_BODY)
+    data = mujoco.MjData(model)
+    data.mocap_pos[0] = hand
+    mujoco.mj_forward(model, data)
+    eye, hand_id = np.array([model.body("eye").id]), np.array([model.body("hand").id])
+    verdicts = visible(
+        axis_angles(data, np.array([model.camera("cam").id]), hand_id),
+        np.zeros((1, 1)),
+        babybench=babybench_angles(data, eye, hand_id),
+    )
+    assert bool(verdicts["cone"][0, 0]) == cone
+    assert bool(verdicts["babybench"][0, 0]) == babybench
+    assert list(verdicts) == ["pixels", "babybench", "cone", "any_pixel"]

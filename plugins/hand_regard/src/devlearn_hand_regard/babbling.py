@@ -6,9 +6,14 @@ vision, and actions trajectories". The recording feeds :func:`calibration.calibr
 
 from __future__ import annotations
 
+import sys
+import time
 from dataclasses import dataclass
 
 import numpy as np
+
+PROGRESS_SECONDS = 5.0
+"""Babbling prints a progress line at most this often (it takes minutes on a CPU)."""
 
 SIDES = ("left", "right")
 
@@ -71,6 +76,9 @@ def babble(
     episode_steps: int | None = None,
     appearance: str = "mittens",
     random_pose: bool = False,
+    scene: str = "sitting_babybench",
+    start: str = "babybench",
+    progress: bool = False,
 ) -> BabblingData:
     """Move every actuator randomly and record eyes, proprioception, actions and arm speeds.
 
@@ -79,8 +87,9 @@ def babble(
     damped, so fresh noise every 5 ms would only make them tremble; independent switching
     keeps the arms' speeds uncorrelated with the head's; a slower, gentler head (actions
     scaled by ``head_scale``) keeps the scene mostly still in view and the hands near it, while
-    visiting many gaze directions. Every episode starts from the rest pose (babbling), or from
-    a random start (``random_pose``: the evaluation's starts, for measuring a detector).
+    visiting many gaze directions. Held actions swing the hands up from their hanging pose
+    into view, which i.i.d. noise never does. Every episode starts as ``start`` says (the
+    training start), or from a random start (``random_pose``: for measuring a detector).
 
     Args:
         steps: Steps to record (paper: 10,000).
@@ -91,8 +100,11 @@ def babble(
         infant: A sitting infant with eyes and proprioception (built and closed here if None).
         appearance: The infant's appearance when built here ("skin" or "mittens").
         random_pose: Start every episode from a random pose and toy layout
-            (``Infant.reset(rng, random_pose=True)``) instead of the rest pose.
+            (``Infant.reset(rng, random_pose=True)``) instead of ``start``.
         episode_steps: Steps between resets (default: the infant's episode length).
+        scene: The scene when the infant is built here.
+        start: How episodes start (``devlearn.infant.starts.STARTS``) unless ``random_pose``.
+        progress: Print a line to stderr every :data:`PROGRESS_SECONDS` (steps done, rate).
     Returns:
         The recording.
     """
@@ -105,8 +117,9 @@ def babble(
     if own:
         from devlearn.infant import build_infant
 
-        infant = build_infant("sitting", senses=("proprioception", "eyes"), appearance=appearance)
+        infant = build_infant(scene, senses=("proprioception", "eyes"), appearance=appearance)
     try:
+        began = shown = time.monotonic()
         rng = np.random.default_rng(seed)
         length = int(episode_steps or infant.episode_steps)
         switch = np.full(infant.action_dim, 1.0 / hold_steps)
@@ -118,7 +131,19 @@ def babble(
         action = np.zeros(infant.action_dim)
         for t in range(steps):
             if t % length == 0:
-                infant.reset(rng, random_pose=random_pose)
+                if random_pose:
+                    infant.reset(rng, random_pose=True)
+                else:
+                    infant.reset(rng, start=start)
+            if progress and time.monotonic() - shown >= PROGRESS_SECONDS:
+                shown = time.monotonic()
+                rate = t / max(shown - began, 1e-9)
+                print(
+                    f"babbling: {t:,} / {steps:,} steps ({rate:.0f} steps/s, "
+                    f"{(steps - t) / max(rate, 1e-9):.0f} s left)",
+                    file=sys.stderr,
+                    flush=True,
+                )
             redraw = rng.random(infant.action_dim) < switch
             action = np.where(redraw, rng.uniform(-scale, scale), action)
             infant.step(action)

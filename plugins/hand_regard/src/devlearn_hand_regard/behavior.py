@@ -14,7 +14,14 @@ from devlearn.errors import UsageError
 from devlearn.rewards import IntrinsicReward
 from devlearn.sensors import MLPEncoder
 from devlearn_hand_regard import detector_store
-from devlearn_hand_regard.config import APPEARANCE_CHOICES, REWARD_CHOICES, HandRegardConfig
+from devlearn_hand_regard.config import (
+    APPEARANCE_CHOICES,
+    POLICY_CHOICES,
+    REWARD_CHOICES,
+    SCENE_CHOICES,
+    START_CHOICES,
+    HandRegardConfig,
+)
 from devlearn_hand_regard.detector import DetectorParams, HandDetector, HandFlow
 from devlearn_hand_regard.encoders import EyeCNNEncoder
 from devlearn_hand_regard.evaluation import HandRegardEvaluator, paper_figures
@@ -32,6 +39,39 @@ if TYPE_CHECKING:
 
 DETECTOR_FILE = "hand_detector.json"
 """Name of the calibrated detector in a run directory."""
+DEMO_STEPS = (3_000, 3_000, 24_000)
+"""``devlearn run hand_regard`` without ``--steps``: a demonstration of a few minutes on a CPU,
+the paper's three stages in short (left arm, right arm, both); ``--preset paper`` is the
+paper's 175k + 175k + 1.5M."""
+
+
+def hand_features(detections: np.ndarray, masks: np.ndarray) -> np.ndarray:
+    """The detector's output as the ``proprio`` policy sees it.
+
+    Args:
+        detections: (2 eyes, 2 hands) bool.
+        masks: (2 eyes, 2 hands, H, W) bool, each detected hand's pixels.
+    Returns:
+        (16,) float32: per (eye, hand), in that order: detected (0 or 1), the mask's centre
+        x and y in [-1, 1] (image centre 0; 0 when not detected) and its area as a fraction of
+        the image.
+    """
+    eyes, hands, height, width = masks.shape
+    out = np.zeros((eyes, hands, 4), dtype=np.float32)
+    for e in range(eyes):
+        for h in range(hands):
+            if not detections[e, h]:
+                continue
+            ys, xs = np.nonzero(masks[e, h])
+            if not len(xs):
+                continue
+            out[e, h] = (
+                1.0,
+                2.0 * (xs.mean() + 0.5) / width - 1.0,
+                2.0 * (ys.mean() + 0.5) / height - 1.0,
+                len(xs) / float(height * width),
+            )
+    return out.ravel()
 
 
 class HandRegard(Behavior):
@@ -40,19 +80,28 @@ class HandRegard(Behavior):
     Before training, motor babbling discovers what the hands look like (:meth:`prepare`). Each
     step the calibrated detector counts the hands in both 64x64 eye images and optical flow
     measures their motion; rewards follow the paper (sec. II-B4) plus an optional bilateral
-    term. Observations: ``left_eye`` and ``right_eye`` (64, 64, 3) uint8, ``proprioception``
-    (P,) float32. Curriculum: left arm only, right arm only, then both (sec. II-B5).
+    term. The scene is BabyBench's (``config.scene``; the instance's :attr:`scene`), every
+    episode from BabyBench's start (``config.start``). Observations (``config.policy``):
+    ``proprio``: ``proprioception`` (P,) float32 and ``hands_seen`` (16,) float32, the
+    detector's output (:func:`hand_features`); ``cnn`` (the paper's): ``left_eye`` and
+    ``right_eye`` (64, 64, 3) uint8 and ``proprioception``. Curriculum: left arm only, right
+    arm only, then both (sec. II-B5).
     """
 
     name = "hand_regard"
     description = "Look at your own hands: babbling-calibrated hand detector, visual rewards"
-    scene = "sitting"
+    scene = "sitting_babybench"
+    """The default scene; an instance uses ``config.scene`` (old runs: ``sitting``)."""
     senses = ("proprioception", "eyes")
     config_class = HandRegardConfig
     headline_metric = "average"
+    facts_every_physics_step = False
+    """Renders and the detector run once per decision, not on every physics step (read by the
+    core's decision rate, ``env.action_repeat``)."""
 
     def __init__(self, config: HandRegardConfig | None = None) -> None:
         super().__init__(config)
+        self.scene = self.config.scene  # the env builds the infant in this scene
         self._detector: HandDetector | None = None
         self._flow = HandFlow()
         self._arm_actuators: dict[str, np.ndarray] | None = None
@@ -65,13 +114,20 @@ class HandRegard(Behavior):
 
     # --- set-up -----------------------------------------------------------------------------
     def infant_options(self) -> dict[str, Any]:
-        """The infant's appearance (``config.appearance``: skin or mittens).
+        """The infant's appearance (``config.appearance``: skin or mittens) and how its
+        episodes start (``config.start``).
 
         Raises:
-            UsageError: Not one of :data:`APPEARANCE_CHOICES`.
+            UsageError: A scene, start, appearance or policy not among the valid ones.
         """
-        _check_choice("appearance", self.config.appearance, APPEARANCE_CHOICES)
-        return {"appearance": self.config.appearance}
+        cfg = self.config
+        _check_choice("appearance", cfg.appearance, APPEARANCE_CHOICES)
+        _check_choice("scene", cfg.scene, SCENE_CHOICES)
+        _check_choice("start", cfg.start, START_CHOICES)
+        _check_choice("eval_start", cfg.eval_start, START_CHOICES)
+        _check_choice("policy", cfg.policy, POLICY_CHOICES)
+        self.scene = cfg.scene  # the config may have changed since __init__
+        return {"appearance": cfg.appearance, "start": cfg.start}
 
     def prepare(self, run_dir: Path) -> None:
         """Calibrate the hand detector by motor babbling, or reuse ``run_dir/hand_detector.json``.
@@ -145,7 +201,7 @@ class HandRegard(Behavior):
             ``hand_masks`` (2 eyes, 2 hands, H, W) bool, each detected hand's pixels;
             ``hand_flow`` (2, 2) summed flow magnitude and ``hand_pixels`` (2, 2) pixel counts
             (see :class:`HandFlow`); ``hand_count`` int; ``image_width`` int; ``motion`` float,
-            m_t over both hands.
+            m_t over both hands; ``proprioception`` (P,) float32.
         """
         eyes = infant.eyes()
         # The posture tells which blob is which hand (the position model babbling learned).
@@ -160,21 +216,46 @@ class HandRegard(Behavior):
             "hand_pixels": pixels,
             "hand_count": int(detections.sum()),
             "image_width": int(eyes.shape[2]),
+            "proprioception": proprioception,
         }
         facts["motion"] = hand_motion(facts, [0, 1])
         return facts
 
     def observe(self, infant: Infant, facts: dict[str, Any]) -> dict[str, np.ndarray]:
+        """``config.policy`` ``proprio``: ``proprioception`` and ``hands_seen`` (16,);
+        ``cnn``: ``left_eye``, ``right_eye`` (H, W, 3) uint8 and ``proprioception``."""
+        proprioception = facts.get("proprioception")
+        if proprioception is None:
+            proprioception = np.asarray(infant.proprioception(), dtype=np.float32)
+        if self.config.policy == "proprio":
+            features = hand_features(facts["hand_detections"], facts["hand_masks"])
+            return {"proprioception": proprioception, "hands_seen": features}
         eyes = facts["eyes"]
-        return {
-            "left_eye": eyes[0],
-            "right_eye": eyes[1],
-            "proprioception": np.asarray(infant.proprioception(), dtype=np.float32),
-        }
+        return {"left_eye": eyes[0], "right_eye": eyes[1], "proprioception": proprioception}
 
     def network(self) -> NetworkSpec:
-        """The paper's Model II network (sec. II-B3); NetworkSpec checks the spread settings."""
+        """``config.policy``: ``cnn``, the paper's Model II network (sec. II-B3); ``proprio``,
+        the same proprioception MLP beside a small MLP on the detector's output.
+
+        The paper's eye CNN ends in global average pooling: its 256 features say what is in
+        view, not where in the image, so a policy that must centre a hand learns that from
+        proprioception alone. NetworkSpec checks the spread settings.
+        """
         cfg = self.config
+        _check_choice("policy", cfg.policy, POLICY_CHOICES)
+        if cfg.policy == "proprio":
+            return NetworkSpec(
+                encoders={
+                    "proprioception": MLPEncoder(tuple(cfg.proprioception_dims)),
+                    "hands_seen": MLPEncoder((32,)),
+                },
+                fusion_dims=(cfg.fusion_dim,),
+                trunk_dims=(),
+                init_std=cfg.init_std,
+                max_std=cfg.max_std,
+                normalize=("proprioception",),
+                share=True,
+            )
         eye = EyeCNNEncoder()
         return NetworkSpec(
             encoders={
@@ -261,10 +342,16 @@ class HandRegard(Behavior):
         return action
 
     def eval_stage(self) -> dict[str, Any]:
-        """Both arms, and every episode a seeded random start: head and arm joints uniform in
-        their ranges, toys placed at random (``Infant.reset``; seeded by the eval seed), so
-        that the deterministic policy's episodes differ."""
-        return {"active_arms": list(HANDS), "random_pose": True}
+        """Both arms, every episode from ``config.eval_start``: ``babybench`` (the default,
+        the paper-comparable protocol: the settled state and 10 seeded random-action steps,
+        so the deterministic policy's episodes differ) or ``random`` (``random_pose``: head
+        and arm joints uniform in their ranges, toys placed at random; runs before issue #29
+        were evaluated this way)."""
+        return {"active_arms": list(HANDS), "random_pose": self.config.eval_start == "random"}
+
+    def eval_start(self) -> str:
+        """The start of ``devlearn eval``'s episodes when ``--start`` is ``stage``."""
+        return self.config.eval_start
 
     # --- metrics and run defaults -----------------------------------------------------------
     def evaluator(self, training: bool) -> Evaluator:
@@ -276,13 +363,35 @@ class HandRegard(Behavior):
         return paper_figures()
 
     def train_defaults(self) -> dict[str, Any]:
-        """The paper's run length: the three stages, 175k + 175k + 1.5M = 1.85M steps.
+        """A demonstration of a few minutes on a CPU: :data:`DEMO_STEPS`, the three stages
+        in short (3k + 3k + 24k = 30k steps), with the ``proprio`` policy.
 
-        That is many hours of rendering on a CPU; shorten it with ``--steps``. The paper gives
-        no PPO constants for Model II beyond the network, so the core's PPO defaults stand.
+        The paper's run (175k + 175k + 1.5M = 1.85M steps, the eye CNN) is ``--preset paper``:
+        many hours of rendering on a CPU. The paper gives no PPO constants for Model II beyond
+        the network, so the core's PPO defaults stand.
         """
-        cfg = self.config
-        return {"total_steps": cfg.left_arm_steps + cfg.right_arm_steps + cfg.both_arms_steps}
+        left, right, both = DEMO_STEPS
+        return {
+            "behavior.left_arm_steps": left,
+            "behavior.right_arm_steps": right,
+            "behavior.both_arms_steps": both,
+            "total_steps": left + right + both,
+        }
+
+    def presets(self) -> dict[str, dict[str, Any]]:
+        """``paper``: the paper's network (``behavior.policy=cnn``, the eye CNNs) and run
+        length, 175k + 175k + 1.5M = 1.85M steps (sec. II-B5)."""
+        paper = HandRegardConfig()
+        steps = paper.left_arm_steps, paper.right_arm_steps, paper.both_arms_steps
+        return {
+            "paper": {
+                "behavior.policy": "cnn",
+                "behavior.left_arm_steps": steps[0],
+                "behavior.right_arm_steps": steps[1],
+                "behavior.both_arms_steps": steps[2],
+                "total_steps": sum(steps),
+            }
+        }
 
 
 def _check_choice(key: str, value: str, choices: tuple[str, ...]) -> None:

@@ -42,7 +42,12 @@ __all__ = ["CalibrationError", "Track", "calibrate", "position_model", "track_bl
 
 
 def position_model(
-    hands: list[Track], proprioception: np.ndarray, ridge: float = 4.0, min_frames: int = 20
+    hands: list[Track],
+    proprioception: np.ndarray,
+    ridge: float = 4.0,
+    min_frames: int = 20,
+    max_error: float | None = None,
+    episode: np.ndarray | None = None,
 ) -> dict:
     """Learn where each hand appears in view from the body's posture (for left/right).
 
@@ -58,10 +63,25 @@ def position_model(
             weighs like this many frames pulling the weights to 0, so short babbling, with
             few hand frames, relies more on the mean position).
         min_frames: Fewest frames of either hand for a model.
+        max_error: When given, the model is validated first: fitted on the hand tracks of
+            every other babbling episode (``episode``; without it, every other track of each
+            arm) and tested on the rest (then the other way round), and kept only
+            if its median error on unseen tracks is at most this many pixels. A posture model
+            that predicts worse than this would send blobs to the wrong hand, or (predicting a
+            hand outside the image) to none.
+        episode: (T,) babbling episode of each step (``BabblingData.episode``): folds by
+            episode, so that tracks of one episode's postures are not on both sides.
     Returns:
         ``joint_mean``, ``joint_scale`` and ``weights`` (2 hands, 2 + J, 2), see
-        :class:`DetectorParams`; empty when a hand has too few frames or P < 6.
+        :class:`DetectorParams`, and ``validation_error_px`` when validated; empty when a hand
+        has too few frames, P < 6, or the validation error exceeds ``max_error``.
     """
+    if max_error is not None:
+        error = _validation_error(hands, proprioception, ridge, min_frames, episode)
+        if error is None or error > max_error:
+            return {}
+        model = position_model(hands, proprioception, ridge, min_frames)
+        return {**model, "validation_error_px": round(error, 2)} if model else {}
     n_joints = proprioception.shape[1] // 6
     if n_joints == 0:
         return {}
@@ -87,6 +107,39 @@ def position_model(
     }
 
 
+def _validation_error(
+    hands: list[Track],
+    proprioception: np.ndarray,
+    ridge: float,
+    min_frames: int,
+    episode: np.ndarray | None = None,
+) -> float | None:
+    """Median pixel error of :func:`position_model` on hand tracks it was not fitted on
+    (two folds: every other babbling episode, or every other track of each arm); None when a
+    fold has too few frames."""
+    errors = []
+    for fold in range(2):
+        train, test = [], []
+        for side in range(2):
+            tracks = [t for t in hands if t.side == side]
+            keys = [
+                int(episode[t.steps[0]]) if episode is not None else i for i, t in enumerate(tracks)
+            ]
+            train += [t for k, t in zip(keys, tracks) if k % 2 != fold]
+            test += [t for k, t in zip(keys, tracks) if k % 2 == fold]
+        model = position_model(train, proprioception, ridge, min_frames)
+        if not model or not test:
+            return None
+        mean, scale = np.asarray(model["joint_mean"]), np.asarray(model["joint_scale"])
+        for t in test:
+            angles = np.asarray(proprioception[t.steps, : len(mean)], dtype=float)
+            x = np.c_[np.ones(len(t.steps)), np.full(len(t.steps), t.eye - 0.5)]
+            x = np.c_[x, (angles - mean) / scale]
+            predicted = x @ np.asarray(model["weights"][t.side])
+            errors.append(np.linalg.norm(predicted - np.asarray(t.centroids), axis=1))
+    return float(np.median(np.concatenate(errors))) if errors else None
+
+
 class CalibrationError(RuntimeError):
     """Babbling found no hand (too short a recording, or hands never in view)."""
 
@@ -103,6 +156,7 @@ def calibrate(
     min_purity_share: float = 0.5,
     max_coverage: float = 0.25,
     ridge: float = 4.0,
+    max_position_error: float = 0.25,
 ) -> DetectorParams:
     """Discover the hands in a babbling recording and calibrate the detector.
 
@@ -126,6 +180,9 @@ def calibrate(
         max_coverage: A colour box selecting more than this share of all pixels (mean over the
             recording) is background-like (the floor seen between the fingers) and dropped.
         ridge: Regularisation of the posture-to-position model (:func:`position_model`).
+        max_position_error: The posture model is kept only if its median error on hand
+            tracks it was not fitted on is at most this share of the image width; otherwise
+            the hands' mean positions attribute the blobs.
     Returns:
         The detector parameters, with a ``calibration`` report.
     Raises:
@@ -220,5 +277,11 @@ def calibrate(
         hand_means=means.tolist(),
         image_size=(height, width),
         calibration=report,
-        position_model=position_model(hands, data.proprioception, ridge),
+        position_model=position_model(
+            hands,
+            data.proprioception,
+            ridge,
+            max_error=max_position_error * width,
+            episode=data.episode,
+        ),
     )

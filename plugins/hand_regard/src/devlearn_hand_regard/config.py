@@ -9,15 +9,51 @@ APPEARANCE_CHOICES = ("skin", "mittens")
 """Valid ``appearance`` values (``devlearn.infant.scenes.APPEARANCES``)."""
 REWARD_CHOICES = ("paper", "bilateral")
 """Valid ``reward`` values."""
+SCENE_CHOICES = ("sitting_babybench", "sitting")
+"""Valid ``scene`` values (``devlearn.infant.scenes.SCENES``, the sitting ones)."""
+START_CHOICES = ("babybench", "rest", "random")
+"""Valid ``start`` and ``eval_start`` values (``devlearn.infant.starts.STARTS``)."""
+POLICY_CHOICES = ("proprio", "cnn")
+"""Valid ``policy`` values."""
 
 
 @dataclass
 class HandRegardConfig:
     """Everything the hand_regard behaviour can be told; paper defaults unless noted."""
 
-    LEGACY_DEFAULTS: ClassVar[dict[str, Any]] = {"appearance": "mittens", "reward": "bilateral"}
+    LEGACY_DEFAULTS: ClassVar[dict[str, Any]] = {
+        "appearance": "mittens",
+        "reward": "bilateral",
+        "scene": "sitting",
+        "start": "rest",
+        "eval_start": "random",
+        "policy": "cnn",
+    }
     """Values for keys a saved config lacks: runs saved before these keys existed were trained
-    with mittens and the bilateral term, and load that way."""
+    with mittens and the bilateral term, in the ``sitting`` scene from its rest pose, with the
+    eye CNN, and evaluated from random starts; they load and evaluate that way."""
+
+    # --- the scene and how episodes start (issue #29: BabyBench's) -------------------------
+    scene: str = "sitting_babybench"
+    """The infant's scene: ``sitting_babybench`` (BabyBench's hand-regard scene: head pitch
+    held at 0.4 rad and side tilt at 0, only the swivel free, eyes locked, arms hanging at
+    the sides, so no hand is in view at the start) or ``sitting`` (the scene of runs before
+    issue #29: head free and the hands raised before the eyes at rest)."""
+    start: str = "babybench"
+    """How training episodes start: ``babybench`` (the scene's settled state, then 10
+    physics steps of uniform-random actions, as BabyBench's), ``rest`` (the settled state
+    alone) or ``random`` (joint angles uniform in their ranges, toys placed at random)."""
+    eval_start: str = "babybench"
+    """How ``devlearn eval`` episodes start by default (``--start stage``): ``babybench``, the
+    paper-comparable protocol (BabyBench evaluates from its own reset); ``random`` is the
+    generalisation row (``devlearn eval --start random``)."""
+    policy: str = "proprio"
+    """The policy's observations: ``proprio`` (proprioception plus the detector's output, the
+    hands' detections, image positions and sizes in both eyes: a small MLP that trains on a
+    CPU; the reward still comes from the images, through the detector) or ``cnn`` (the
+    paper's network, sec. II-B3: a CNN per eye plus the proprioception MLP; ``--preset
+    paper``). The CNN ends in global average pooling, which keeps what is seen but not where
+    in the image it is."""
 
     # --- the infant's look (the paper's "without manually defined skin-colors") ---------
     appearance: str = "mittens"
@@ -33,9 +69,11 @@ class HandRegardConfig:
     """Random-action steps recorded before training to discover the hands (paper: 10,000)."""
     babbling_seed: int = 0
     """Seed of the babbling episode's random actions and initial state."""
-    babbling_hold_steps: int = 8
+    babbling_hold_steps: int = 25
     """Mean steps an arm's random babbling action is held (each actuator redraws independently;
-    200 Hz i.i.d. noise barely moves the damped arms, so the hands would hardly move)."""
+    200 Hz i.i.d. noise barely moves the damped arms, so the hands would hardly move). In
+    BabyBench's scene the hands hang out of view: held 25 steps (0.125 s) they swing into
+    view in ~13% of babbling frames, held 8 (the runs before issue #29, in ``sitting``) ~8%."""
     babbling_head_hold_steps: int = 50
     """Mean steps a head action is held while babbling (a slow head keeps the view steady)."""
     babbling_head_scale: float = 0.3

@@ -178,18 +178,31 @@ class HandDetector:
 
         Rule: each hand has an expected image position (:meth:`expected_positions`: predicted
         from the posture when ``proprioception`` is given, else its mean babbling position).
-        Two blobs get the pairing with the smaller summed distance to those positions; one
-        blob goes to the nearer one. Positions are scaled from the calibration image size.
+        A hand whose expected position lies outside the image is never chosen: the posture
+        says it is out of view, so a blob there is something else (or the other hand). Two
+        blobs get the pairing with the smaller summed distance to those positions; one blob
+        goes to the nearer hand. Positions are scaled from the calibration image size.
 
         Returns:
             [left-hand blob or None, right-hand blob or None].
         """
         if not blobs:
             return [None, None]
+        height = blobs[0].mask.shape[0]
         means = self.expected_positions(eye, proprioception)
         means = means * width / float(self.params.image_size[1])
+        inside = (
+            (means[:, 0] >= 0) & (means[:, 0] < width) & (means[:, 1] >= 0) & (means[:, 1] < height)
+        )
+        if not inside.any():
+            return [None, None]
         pos = np.array([b.centroid for b in blobs])
         dist = np.linalg.norm(pos[:, None, :] - means[None, :, :], axis=-1)  # (blobs, 2 hands)
+        if not inside.all():
+            hand = int(np.flatnonzero(inside)[0])  # the only hand that can be in view
+            out: list[Blob | None] = [None, None]
+            out[hand] = blobs[int(np.argmin(dist[:, hand]))]
+            return out
         if len(blobs) == 1:
             return [blobs[0], None] if dist[0, 0] <= dist[0, 1] else [None, blobs[0]]
         straight = dist[0, 0] + dist[1, 1]

@@ -15,7 +15,7 @@ import numpy as np
 from devlearn.behavior import Evaluator
 from devlearn.rewards import StepContext
 from devlearn.stats import episode_stats
-from devlearn_hand_regard.visibility import CRITERIA, HEADLINE, criteria_protocol
+from devlearn_hand_regard.visibility import CRITERIA, DETECTOR_TRUTH, HEADLINE, criteria_protocol
 
 EYES = ("left", "right")
 HANDS = ("left", "right")
@@ -52,9 +52,13 @@ def visibility_dict(counts: np.ndarray, steps: int) -> dict[str, float]:
 class HandRegardEvaluator(Evaluator):
     """Counts, per (eye, hand) pair, the steps in which the hand is in view.
 
-    In evaluation (``ground_truth``) a hand is in view under three criteria side by side
-    (:mod:`devlearn_hand_regard.visibility`): ``cone`` (the headline: ``visibility`` and
-    ``average``), ``pixels`` and ``any_pixel``; the detector is scored against ``any_pixel``.
+    In evaluation (``ground_truth``) a hand is in view under five criteria side by side:
+    ``detector``, the calibrated detector's own detections (the paper's measure and the
+    headline: ``visibility`` and ``average``), and from the scene
+    (:mod:`devlearn_hand_regard.visibility`) ``pixels`` (ground truth: at least 20 of the
+    hand's pixels in the eye's segmentation), ``babybench`` (BabyBench's official counter,
+    computed in our geometry), ``cone`` (the true optical axis within 15 degrees) and
+    ``any_pixel``. The detector's precision and recall are measured against ``pixels``.
     Each episode's average visibility is kept, so :meth:`summary` reports its mean, standard
     deviation and 95% t-interval per criterion.
 
@@ -76,7 +80,7 @@ class HandRegardEvaluator(Evaluator):
         self.measure = measure
         self.episodes = 0
         self.steps = 0
-        names = CRITERIA if ground_truth else ("detector",)
+        names = ("detector", *CRITERIA) if ground_truth else ("detector",)
         self.counts = {k: np.zeros((2, 2), dtype=np.int64) for k in names}  # all episodes
         self._episode = {k: np.zeros((2, 2), dtype=np.int64) for k in names}
         self.episode_averages: dict[str, list[float]] = {k: [] for k in names}
@@ -98,7 +102,8 @@ class HandRegardEvaluator(Evaluator):
         self._episode_steps += 1
         if self.ground_truth:
             verdicts = {k: np.asarray(v, dtype=bool) for k, v in self.measure(ctx.infant).items()}
-            truth = verdicts["any_pixel"]
+            verdicts["detector"] = detected
+            truth = verdicts[DETECTOR_TRUTH]
             self.confusion["tp"] += detected & truth
             self.confusion["fp"] += detected & ~truth
             self.confusion["fn"] += ~detected & truth
@@ -108,8 +113,9 @@ class HandRegardEvaluator(Evaluator):
         else:
             verdicts = {"detector": detected}
         for k in self.counts:
-            self.counts[k] += verdicts[k]
-            self._episode[k] += verdicts[k]
+            if k in verdicts:  # a scripted measure may leave a criterion out
+                self.counts[k] += verdicts[k]
+                self._episode[k] += verdicts[k]
 
     def end_episode(self) -> dict[str, float]:
         if self._episode_steps == 0:
@@ -150,7 +156,8 @@ class HandRegardEvaluator(Evaluator):
         }
 
     def agreement(self) -> dict[str, dict[str, float | None]]:
-        """Per pair: accuracy, precision and recall of the detector against the segmentation.
+        """Per pair and their mean (``average``): accuracy, precision and recall of the
+        detector against ``pixels`` (at least 20 of the hand's pixels in the segmentation).
 
         Precision is ``None`` when the detector never fired for that pair, recall ``None`` when
         the hand was never in view.
@@ -165,6 +172,11 @@ class HandRegardEvaluator(Evaluator):
                 "precision": tp / (tp + fp) if tp + fp else None,
                 "recall": tp / (tp + fn) if tp + fn else None,
             }
+        pairs = list(out.values())
+        out["average"] = {}
+        for k in ("accuracy", "precision", "recall"):
+            values = [p[k] for p in pairs if p[k] is not None]
+            out["average"][k] = float(np.mean(values)) if values else None
         return out
 
     def summary(self) -> dict[str, Any]:
@@ -203,7 +215,7 @@ class HandRegardEvaluator(Evaluator):
             "settle_steps": 0,
             "criteria": criteria_protocol(),
             "headline": HEADLINE,
-            "detector_truth": "any_pixel",
+            "detector_truth": DETECTOR_TRUTH,
         }
 
     def write_artifacts(self, out_dir: Path) -> list[Path]:

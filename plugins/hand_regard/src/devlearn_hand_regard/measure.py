@@ -1,12 +1,13 @@
 """Measure a babbling-calibrated detector against the renderer's segmentation.
 
 ``python -m devlearn_hand_regard.measure`` babbles (default 10,000 steps, seed 0) on the
-infant of ``--appearance`` (mittens or skin), calibrates, then records test frames (seed 1):
-``--test-episodes`` episodes of ``--test-episode-steps`` steps of the same random babbling
-actions, each from a random start (joints and toys, as ``devlearn eval`` starts; ``--rest-start``
-for the rest pose), with the segmentation. It prints JSON: per (eye, hand) pair the per-frame
-precision, recall and accuracy of the detections (truth: any pixel of that hand), recall on
-clearly visible hands, per hand the pixel precision and recall of its mask, and which labels
+infant of ``--appearance`` (mittens or skin) in ``--scene`` (default ``sitting_babybench``),
+calibrates, then records test frames (seed 1): ``--test-episodes`` episodes of
+``--test-episode-steps`` steps of the same held random babbling actions, each from ``--start``
+(default ``babybench``, the training start; ``random``: random joints and toys), with the
+segmentation. It prints JSON: per (eye, hand) pair the per-frame precision, recall and
+accuracy of the detections (truth: any pixel of that hand), recall on clearly visible hands
+(at least 20 pixels), per hand the pixel precision and recall of its mask, and which labels
 the detected pixels carry (hand, other body, scene/toys, background). The segmentation is
 used here only, never by the detector.
 """
@@ -46,7 +47,13 @@ class SegmentationRecorder:
 
 
 def held_out(
-    infant, steps: int, seed: int, episode_steps: int | None = None, random_pose: bool = False
+    infant,
+    steps: int,
+    seed: int,
+    episode_steps: int | None = None,
+    random_pose: bool = False,
+    start: str = "babybench",
+    hold_steps: int = 25,
 ) -> tuple[BabblingData, np.ndarray]:
     """Fresh babbling with the segmentation of every frame ((T, 2, H, W) int).
 
@@ -56,10 +63,18 @@ def held_out(
         seed: Seed of the actions and starts.
         episode_steps: Steps between resets (default: the infant's episode length).
         random_pose: Every episode from a random start (evaluation frames).
+        start: Otherwise every episode from this start (``devlearn.infant.starts.STARTS``).
+        hold_steps: Mean steps an arm's babbling action is held.
     """
     recorder = SegmentationRecorder(infant)
     data = babble(
-        steps, seed=seed, infant=recorder, episode_steps=episode_steps, random_pose=random_pose
+        steps,
+        seed=seed,
+        infant=recorder,
+        episode_steps=episode_steps,
+        random_pose=random_pose,
+        start=start,
+        hold_steps=hold_steps,
     )
     return data, np.stack(recorder.segmentation)
 
@@ -85,8 +100,11 @@ def score(
         hands and the share of steps the hand is in view; ``any_hand``: the same with the
         hands' identity ignored (is any hand in this eye?); ``pixels``: share of detected
         pixels per segmentation label; ``hand_pixel_recall``: share of hand pixels detected.
+        Per pair, ``precision_pixels`` and ``recall_pixels`` take as truth at least
+        ``clear_pixels`` of the hand's pixels (``devlearn eval``'s ``pixels`` criterion).
     """
     conf = np.zeros((4, 2, 2))  # tp, fp, fn, tn per (eye, hand)
+    conf_clear = np.zeros((4, 2, 2))  # the same against "clearly visible" (eval's ``pixels``)
     clear = np.zeros((2, 2, 2))  # clearly visible: (found, visible) per (eye, hand)
     anyh = np.zeros(4)
     labels = np.zeros(len(LABELS))
@@ -110,6 +128,7 @@ def score(
                 ]
                 truth, found = n > 0, bool(detections[eye, hand])
                 conf[_cell(truth, found), eye, hand] += 1
+                conf_clear[_cell(n >= clear_pixels, found), eye, hand] += 1
                 if n >= clear_pixels:
                     clear[:, eye, hand] += [found, 1]
             truth, found = bool(is_hand.any()), bool(detections[eye].any())
@@ -117,9 +136,14 @@ def score(
     pairs = {}
     for eye, hand in PAIRS:
         tp, fp, fn, tn = conf[:, eye, hand]
+        against_pixels = _stats(*conf_clear[:, eye, hand])
         pairs[pair_name(eye, hand)] = _stats(tp, fp, fn, tn) | {
-            "clear_recall": round(clear[0, eye, hand] / max(clear[1, eye, hand], 1), 3),
+            "clear_recall": (
+                round(clear[0, eye, hand] / clear[1, eye, hand], 3) if clear[1, eye, hand] else None
+            ),
             "clear_steps": int(clear[1, eye, hand]),
+            "precision_pixels": against_pixels["precision"],
+            "recall_pixels": against_pixels["recall"],
         }
     tp, fp, fn, tn = conf.sum(axis=(1, 2))
     return {
@@ -138,8 +162,8 @@ def score(
             for h, side in enumerate(("left", "right"))
         },
         "pair_mean": {
-            k: round(float(np.mean([p[k] for p in pairs.values()])), 3)
-            for k in ("precision", "recall", "clear_recall")
+            k: _mean([p[k] for p in pairs.values()])
+            for k in ("precision", "recall", "clear_recall", "precision_pixels", "recall_pixels")
         },
     }
 
@@ -150,12 +174,20 @@ def _cell(truth: bool, found: bool) -> int:
 
 
 def _stats(tp: float, fp: float, fn: float, tn: float) -> dict:
+    """Precision (None when nothing was detected), recall (None when nothing was in view),
+    accuracy and the share of steps in view."""
     return {
-        "precision": round(tp / max(tp + fp, 1), 3),
-        "recall": round(tp / max(tp + fn, 1), 3),
+        "precision": round(tp / (tp + fp), 3) if tp + fp else None,
+        "recall": round(tp / (tp + fn), 3) if tp + fn else None,
         "accuracy": round((tp + tn) / max(tp + fp + fn + tn, 1), 3),
         "in_view": round((tp + fn) / max(tp + fp + fn + tn, 1), 3),
     }
+
+
+def _mean(values: list) -> float | None:
+    """Mean of the values that are not None (None if none is)."""
+    values = [v for v in values if v is not None]
+    return round(float(np.mean(values)), 3) if values else None
 
 
 def detection_picture(
@@ -208,8 +240,15 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--test-episode-steps", type=int, default=500, help="steps per episode")
     parser.add_argument("--test-seed", type=int, default=1)
     parser.add_argument(
-        "--rest-start", action="store_true", help="test episodes from the rest pose, not random"
+        "--scene", default="sitting_babybench", help="sitting_babybench (default) or sitting"
     )
+    parser.add_argument(
+        "--start",
+        default="babybench",
+        choices=("babybench", "rest", "random"),
+        help="how babbling and test episodes start (default babybench)",
+    )
+    parser.add_argument("--hold-steps", type=int, default=25, help="babbling action hold")
     parser.add_argument("--detector", help="score this detector JSON instead of calibrating")
     parser.add_argument("--save", help="write the calibrated detector JSON here")
     parser.add_argument("--out", help="write the JSON result here too")
@@ -217,14 +256,16 @@ def main(argv: list[str] | None = None) -> dict:
     args = parser.parse_args(argv)
     from devlearn.infant import build_infant
 
-    infant = build_infant("sitting", senses=("proprioception", "eyes"), appearance=args.appearance)
+    infant = build_infant(args.scene, senses=("proprioception", "eyes"), appearance=args.appearance)
     result: dict = {
         "appearance": args.appearance,
+        "scene": args.scene,
+        "hold_steps": args.hold_steps,
         "argv": list(sys.argv[1:] if argv is None else argv),
         "test_frames": {
             "episodes": args.test_episodes,
             "episode_steps": args.test_episode_steps,
-            "start": "rest" if args.rest_start else "random",
+            "start": args.start,
         },
     }
     try:
@@ -232,7 +273,15 @@ def main(argv: list[str] | None = None) -> dict:
         if args.detector:
             params = DetectorParams.load(args.detector)
         else:
-            data = babble(args.babbling_steps, seed=args.seed, infant=infant)
+            start_mode = "rest" if args.start == "random" else args.start
+            data = babble(
+                args.babbling_steps,
+                seed=args.seed,
+                infant=infant,
+                start=start_mode,
+                hold_steps=args.hold_steps,
+                progress=True,
+            )
             result["babbling_s"] = round(time.perf_counter() - start, 1)
             start = time.perf_counter()
             params = calibrate(data)
@@ -253,7 +302,9 @@ def main(argv: list[str] | None = None) -> dict:
             args.test_episodes * args.test_episode_steps,
             args.test_seed,
             episode_steps=args.test_episode_steps,
-            random_pose=not args.rest_start,
+            random_pose=args.start == "random",
+            start="rest" if args.start == "random" else args.start,
+            hold_steps=args.hold_steps,
         )
         start = time.perf_counter()
         result["score"] = score(HandDetector(params), test, segmentation)
