@@ -368,7 +368,13 @@ class HandRegard(Behavior):
 
         The paper's run (175k + 175k + 1.5M = 1.85M steps, the eye CNN) is ``--preset paper``:
         many hours of rendering on a CPU. The paper gives no PPO constants for Model II beyond
-        the network, so the core's PPO defaults stand.
+        the network.
+
+        The learner (issue #28, ``results/learner/README.md``): a decision every 5 physics
+        steps (renders and the detector once per decision), so a discount of 0.99 per decision;
+        no entropy bonus (with it the spread ran away from 0.5 to 2.7-5.7 in the published
+        runs, and the issue's pilot learned hand regard without one); a fixed learning rate and
+        separate actor and critic, as self-touch's pilots chose (not yet measured here).
         """
         left, right, both = DEMO_STEPS
         return {
@@ -376,6 +382,11 @@ class HandRegard(Behavior):
             "behavior.right_arm_steps": right,
             "behavior.both_arms_steps": both,
             "total_steps": left + right + both,
+            "env.action_repeat": 5,
+            "ppo.gamma": 0.99,
+            "ppo.entropy_coef": 0.0,
+            "ppo.schedule": "fixed",
+            "network.layout": "separate",
         }
 
     def presets(self) -> dict[str, dict[str, Any]]:
@@ -390,6 +401,12 @@ class HandRegard(Behavior):
                 "behavior.right_arm_steps": steps[1],
                 "behavior.both_arms_steps": steps[2],
                 "total_steps": sum(steps),
+                # the paper's policy head and shared trunk at BabyBench's 200 Hz
+                "network.head": "paper",
+                "network.layout": "shared",
+                "env.action_repeat": 1,
+                "ppo.entropy_coef": 0.005,
+                "ppo.schedule": "adaptive",
             }
         }
 
