@@ -51,13 +51,19 @@ def add_parser(subparsers) -> list[str]:
     return ["eval"]
 
 
-def _count(text: str, option: str, minimum: int) -> int:
+EPISODES_MAX = 1_000_000
+"""Largest ``--episodes``."""
+
+
+def _count(text: str, option: str, minimum: int, maximum: int) -> int:
     try:
         value = int(text)
     except ValueError:
         raise UsageError(f"{option} must be an integer, got '{text}'") from None
     if value < minimum:
         raise UsageError(f"{option} must be at least {minimum}, got {value}")
+    if value > maximum:
+        raise UsageError(f"{option} must be at most {maximum}, got {value}")
     return value
 
 
@@ -80,8 +86,10 @@ def run(args: argparse.Namespace, registry) -> int:
     from devlearn.training.evaluate import EvalWriteError, evaluate, resolve_checkpoint
 
     registry.behavior(args.behavior)  # unknown behaviour: one clear line
-    episodes = _count(args.episodes, "--episodes", 1)
-    seed = _count(args.seed, "--seed", 0)
+    from devlearn.training.checks import SEED_MAX
+
+    episodes = _count(args.episodes, "--episodes", 1, EPISODES_MAX)
+    seed = _count(args.seed, "--seed", 0, SEED_MAX)
     checkpoint = resolve_checkpoint(args.checkpoint) if args.checkpoint else None
     if args.out:
         out_dir = Path(args.out)
