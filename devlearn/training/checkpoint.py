@@ -225,10 +225,67 @@ def _check_shapes(state: dict[str, Any], path: Path, required: tuple[str, ...]) 
             and isinstance(ranks[0].get("envs"), list)
         ):
             raise UsageError(f"checkpoint {path} is damaged: 'env' lacks the envs' state")
+    for key in ("iteration", "env_steps"):
+        if key in required and state[key] < 0:
+            raise UsageError(f"checkpoint {path} is damaged: '{key}' is {state[key]}, below 0")
     if "rng" in required:
         missing = [k for k in ("torch", "numpy", "random") if k not in state["rng"]]
         if missing:
             raise UsageError(f"checkpoint {path} is damaged: 'rng' lacks {', '.join(missing)}")
+        _check_rng(state["rng"], path)
+
+
+def _check_rng(rng: dict[str, Any], path: Path) -> None:
+    """Raise UsageError unless each saved generator state loads into a fresh generator of its
+    kind (so a resume cannot fail half-way through its restore)."""
+    import random
+
+    loaders = {
+        "torch": lambda v: torch.Generator().set_state(v),
+        "numpy": lambda v: np.random.RandomState().set_state(v),
+        "random": lambda v: random.Random().setstate(v),
+    }
+    for name, load in loaders.items():
+        try:
+            load(rng[name])
+        except Exception as exc:
+            reason = " ".join(str(exc).split())[:120] or type(exc).__name__
+            raise UsageError(
+                f"checkpoint {path} is damaged: 'rng' holds an unusable {name} state ({reason})"
+            ) from None
+
+
+def state_dict_mismatch(expected: dict[str, Any], saved: Any) -> str | None:
+    """What keeps ``saved`` (a checkpoint's network weights) from loading into a network whose
+    ``state_dict()`` is ``expected``: the first missing, unexpected or mis-shaped entry (None
+    when it fits)."""
+    if not isinstance(saved, dict):
+        return f"it holds a {type(saved).__name__}, not weights by name"
+    missing = [k for k in expected if k not in saved]
+    if missing:
+        return f"it lacks '{missing[0]}' ({len(missing)} missing in all)"
+    extra = [k for k in saved if k not in expected]
+    if extra:
+        return f"it holds '{extra[0]}', which the network has not ({len(extra)} unknown in all)"
+    for key, value in expected.items():
+        got = saved[key]
+        if not isinstance(got, torch.Tensor):
+            return f"'{key}' is a {type(got).__name__}, not a tensor"
+        if tuple(got.shape) != tuple(value.shape):
+            return f"'{key}' has shape {tuple(got.shape)}, the network expects {tuple(value.shape)}"
+    return None
+
+
+def check_fits(expected: dict[str, Any], saved: Any, source: str, what: str) -> None:
+    """Raise UsageError when ``what`` of a checkpoint (e.g. ``actor_state_dict``), named by
+    ``source`` (``checkpoint PATH``), cannot load into a network whose ``state_dict()`` is
+    ``expected`` (the one its behaviour builds under its config)."""
+    reason = state_dict_mismatch(expected, saved)
+    if reason:
+        raise UsageError(
+            f"{source} does not fit the network its behaviour builds under its config: "
+            f"{what}: {reason}"
+        )
 
 
 def check_behavior(state: dict[str, Any], path: str | Path, behavior_name: str) -> None:

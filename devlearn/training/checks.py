@@ -34,7 +34,7 @@ def _positive(cfg, name: str, low: float = 0.0, high: float = math.inf, closed: 
 STEPS_MAX = 10**12
 """Largest ``--steps`` (a million times the paper's 8M-step runs; beyond it counters and the
 progress bar overflow)."""
-ENVS_MAX = 65_536
+ENVS_MAX = 1_000_000
 """Largest ``--envs`` per rank."""
 WORKERS_MAX = 4_096
 """Largest ``--workers`` per rank."""

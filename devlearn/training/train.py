@@ -17,6 +17,7 @@ from devlearn.errors import UsageError
 from devlearn.training.checkpoint import (
     RESUME_KEYS,
     check_behavior,
+    check_fits,
     load_checkpoint,
     remove_temporaries,
     resume_checkpoint,
@@ -136,7 +137,7 @@ def train(
             last good state is written first).
     """
     # Config (and, when resuming, the checkpoint it continues from).
-    checkpoint = None
+    checkpoint, ckpt_path = None, None
     if resume is not None:
         run_dir = Path(resume)
         ckpt_path, checkpoint = resume_checkpoint(run_dir)
@@ -147,7 +148,7 @@ def train(
     else:
         run_dir = Path(cfg.out_dir) if cfg.out_dir else default_run_dir(cfg.behavior_name)
         if start_from is not None:
-            checkpoint = load_checkpoint(start_from, RESUME_KEYS)
+            checkpoint, ckpt_path = load_checkpoint(start_from, RESUME_KEYS), start_from
             check_resumable(cfg, checkpoint, start_from)
             cfg.start_from = str(start_from)
     rank = int(os.environ.get("RANK", "0"))
@@ -177,6 +178,7 @@ def train(
             device,
             learned,
             start_from,
+            ckpt_path,
         )
     try:
         # Learn; the runner saves checkpoints periodically, at the end and on Ctrl-C.
@@ -207,6 +209,7 @@ def _build(
     device,
     learned,
     start_from=None,
+    ckpt_path=None,
 ):
     """Start-up after the checks: seed, prepare the behaviour, write config.json, build the
     envs and the runner (restored from ``checkpoint``, with the ``learned`` rewards; from
@@ -255,7 +258,7 @@ def _build(
         if checkpoint is not None:
             if start_from is not None and rank == 0:
                 copy_metrics(Path(start_from).parent, run_dir, int(checkpoint["env_steps"]))
-            runner.restore(checkpoint, curriculum=start_from is None)
+            _restore(runner, checkpoint, start_from is None, f"checkpoint {ckpt_path}")
         if rank > 0:
             # Every rank built its networks from the same seed (rank 0's are broadcast anyway);
             # from here on each rank draws its own action noise, also after a resume, which
@@ -265,3 +268,18 @@ def _build(
         env.close()
         raise
     return env, runner
+
+
+def _restore(runner, checkpoint: dict[str, Any], curriculum: bool, source: str) -> None:
+    """``runner.restore`` after checking that the checkpoint's weights fit the networks this
+    config builds; a value that still does not load is one line naming the checkpoint."""
+    fresh = runner.alg.save()
+    for key in ("actor_state_dict", "critic_state_dict"):
+        if key in fresh:
+            check_fits(fresh[key], checkpoint[key], source, key)
+    try:
+        runner.restore(checkpoint, curriculum=curriculum)
+    except (RuntimeError, ValueError, TypeError, KeyError, IndexError) as exc:
+        reason = " ".join(str(exc).split())
+        reason = reason if len(reason) <= 200 else reason[:197] + "..."
+        raise UsageError(f"{source} cannot be restored: {type(exc).__name__}: {reason}") from None
