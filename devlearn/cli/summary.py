@@ -73,16 +73,18 @@ def run_summary(result: Any, behavior_name: str, metric: str, total_steps: int) 
     return "\n".join(lines)
 
 
-def finished_message(run_dir: str | Path, cfg) -> str | None:
+def finished_message(run_dir: str | Path, cfg, found: tuple | None = None) -> str | None:
     """If the run's newest checkpoint already reached ``cfg.total_steps``, say so; else None.
 
-    Reads only the newest checkpoint, so nothing in the run is touched; a checkpoint that
-    ``cfg`` could not continue (other behaviour or env count) is refused first, finished or not.
+    Reads only the newest checkpoint (or takes ``found``, the ``(path, state)`` of
+    :func:`~devlearn.training.checkpoint.resume_checkpoint`), so nothing in the run is touched;
+    a checkpoint that ``cfg`` could not continue (other behaviour or env count) is refused
+    first, finished or not.
     """
     from devlearn.training.checkpoint import resume_checkpoint
     from devlearn.training.train import check_resumable
 
-    path, state = resume_checkpoint(run_dir)
+    path, state = found if found is not None else resume_checkpoint(run_dir)
     check_resumable(cfg, state, path)
     done = int(state.get("env_steps", 0))
     total_steps = cfg.total_steps

@@ -6,6 +6,7 @@ import errno
 import json
 import os
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -15,10 +16,12 @@ import torch
 from devlearn.env import DevVecEnv
 from devlearn.errors import UsageError
 from devlearn.training.checkpoint import (
+    LATEST,
     RESUME_KEYS,
     check_behavior,
     check_fits,
     load_checkpoint,
+    periodic_checkpoints,
     remove_temporaries,
     resume_checkpoint,
 )
@@ -108,6 +111,7 @@ def train(
     infant_factory=None,
     progress: bool = True,
     force: bool = False,
+    started: Callable[[Path], None] | None = None,
 ) -> TrainResult:
     """Train ``cfg.behavior_name`` with PPO; return where and how far it got.
 
@@ -126,6 +130,8 @@ def train(
         progress: Show a progress bar.
         force: Start a new run in ``cfg.out_dir`` even if it holds one (its contents are
             deleted once the new run has started); without it such a folder is refused.
+        started: Called with the run folder once every check has passed, before anything is
+            written (``devlearn run`` prints it there, so a refusal prints only its error).
 
     Everything that can be checked (config values, the checkpoint's env count, memory, the
     folder) is checked before anything is written; a start that fails anyway (e.g. the envs
@@ -153,6 +159,11 @@ def train(
             cfg.start_from = str(start_from)
     rank = int(os.environ.get("RANK", "0"))
     if resume is None and rank == 0 and holds_run(run_dir) and not force:
+        if not (run_dir / LATEST).exists() and not periodic_checkpoints(run_dir):
+            raise UsageError(
+                f"--out {run_dir} holds a run that stopped before its first checkpoint "
+                "(nothing to resume); replace it with --force (deletes what the folder holds)"
+            )
         raise UsageError(
             f"--out {run_dir} already holds a run; continue it with --resume {run_dir}, "
             "or replace it with --force (deletes what the folder holds)"
@@ -165,6 +176,8 @@ def train(
     cfg.workers = resolve_workers(cfg.workers, cfg.num_envs)  # config.json records the number
     learned = LearnedRewards.from_config(cfg, registry)  # names checked before the slow set-up
     check_memory(cfg.num_envs, cfg.workers)
+    if started is not None and rank == 0:
+        started(run_dir)
     with start_up(run_dir, replace=force and resume is None, owner=rank == 0):
         env, runner = _build(
             cfg,

@@ -326,3 +326,65 @@ def test_a_full_disk_is_reported_as_such(cli, run_dir, capsys, monkeypatch):
     assert err.startswith("devlearn: error: ") and "Traceback" not in printed
     assert "disk full: cannot write" in err and "the previous checkpoint is kept" in err
     assert (run_dir / "checkpoint_latest.pt").read_bytes() == before
+
+
+# --- resuming: what it keeps and what it says -----------------------------------------------
+
+
+def test_resume_refuses_another_seed_and_keeps_config_json(cli, run_dir, capsys):
+    config = (run_dir / "config.json").read_bytes()
+    for argv in (["--seed", "7"], ["--set", "seed=7"]):
+        err = error(cli, capsys, "run", "tiny", "--resume", str(run_dir), "--steps", "64", *argv)
+        assert f"run {run_dir} was trained with seed 1, which a resumed run keeps" in err
+        assert "--seed 7 --out NEW_DIR" in err
+        assert (run_dir / "config.json").read_bytes() == config
+    assert cli(["run", "tiny", "--resume", str(run_dir), "--steps", "48", "--seed", "1"]) == 0
+
+
+def test_resume_says_when_it_falls_back_to_an_older_checkpoint(cli, run_dir, capsys):
+    assert sorted(p.name for p in run_dir.glob("checkpoint_*.pt"))[-1] == "checkpoint_latest.pt"
+    (run_dir / "checkpoint_latest.pt").unlink()
+    (run_dir / "checkpoint_latest.pt").write_bytes(b"garbage")
+    capsys.readouterr()
+    assert cli(["run", "tiny", "--resume", str(run_dir), "--steps", "48"]) == 0
+    err = capsys.readouterr().err
+    assert "devlearn: warning: checkpoint " in err and "checkpoint_latest.pt is corrupt" in err
+    assert "resuming from checkpoint_32.pt (step 32), the newest that loads" in err
+
+
+def test_a_run_killed_before_its_first_checkpoint_says_how_to_restart(cli, run_dir, capsys):
+    for path in run_dir.glob("checkpoint_*.pt"):
+        path.unlink()
+    temporary = run_dir / ".checkpoint_latest.pt.tmp-12345"
+    temporary.write_bytes(b"")  # what a kill during the first save leaves
+    err = error(cli, capsys, "run", "tiny", "--resume", str(run_dir))
+    assert "the run stopped before its first checkpoint, so there is nothing to resume" in err
+    assert f"start it again with --out {run_dir} --force" in err
+    assert "removed 1 unfinished checkpoint file" in err and not temporary.exists()
+    err = error(cli, capsys, "run", "tiny", "--out", str(run_dir), *SMALL)
+    assert "holds a run that stopped before its first checkpoint (nothing to resume)" in err
+    assert "--resume" not in err
+    assert cli(["run", "tiny", "--steps", "16", "--out", str(run_dir), "--force", *SMALL]) == 0
+
+
+def test_a_refusal_prints_only_its_error(cli, run_dir, capsys):
+    capsys.readouterr()
+    assert cli(["run", "tiny", "--steps", "16", "--out", str(run_dir), *SMALL]) == 2
+    printed = capsys.readouterr()
+    assert printed.out == "" and "already holds a run" in printed.err
+
+
+@pytest.mark.parametrize("protocol", [0, 2, 4, 5, "legacy"])
+def test_a_plain_pickle_with_a_payload_is_refused_by_name(cli, tmp_path, capsys, protocol):
+    marker = tmp_path / "marker"
+    crafted = tmp_path / "crafted.pt"
+    state = {"format": "devlearn-checkpoint-1", "behavior": "tiny", "x": Payload(marker)}
+    if protocol == "legacy":
+        torch.save(state, crafted, _use_new_zipfile_serialization=False)
+    else:
+        import pickle
+
+        crafted.write_bytes(pickle.dumps(state, protocol=protocol))
+    err = error(cli, capsys, "eval", "tiny", "--checkpoint", str(crafted), "--episodes", "1")
+    assert f"checkpoint {crafted} refused: it needs builtins.exec" in err
+    assert not marker.exists()

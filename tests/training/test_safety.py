@@ -246,8 +246,10 @@ def test_a_killed_worker_leaves_a_resumable_checkpoint(tmp_path):
         RunStopped,
         match=r"env worker \d \(pid \d+\) died unexpectedly, killed by "
         r"SIGKILL.*last good state \(step 64\)",
-    ):
+    ) as caught:
         train(cfg, tiny_run.registry(), infant_factory=dying, progress=False)
+    # two iterations completed (rows 0 and 1 of metrics.jsonl), the third was under way
+    assert "during iteration 3 of 3125;" in str(caught.value)
     _, state = resume_checkpoint(out)
     assert state["env_steps"] == 2 * PER_ITERATION
     cfg = tiny_run.config(out, 3 * PER_ITERATION)
