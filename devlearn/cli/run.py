@@ -68,7 +68,7 @@ def add_parser(subparsers) -> list[str]:
 
 def run(args: argparse.Namespace, registry) -> int:
     """Build the config, train, print the run directory and a final summary."""
-    from devlearn.cli.summary import finished_message, run_summary
+    from devlearn.cli.summary import finished_message, paper_budget, run_summary
     from devlearn.training.config import default_config
     from devlearn.training.config_values import apply_overrides
     from devlearn.training.train import load_run_config, train
@@ -142,7 +142,9 @@ def run(args: argparse.Namespace, registry) -> int:
             force=args.force,
             started=started,
         )
-    print(run_summary(result, cfg.behavior_name, behavior_cls.headline_metric, cfg.total_steps))
+    budget = paper_budget(behavior_cls(cfg.behavior).presets())
+    metric = behavior_cls.headline_metric
+    print(run_summary(result, cfg.behavior_name, metric, cfg.total_steps, cfg.num_envs, budget))
     return 0
 
 
