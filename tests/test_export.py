@@ -162,3 +162,28 @@ def test_bad_input_is_one_line_and_exit_2(registry, tmp_path, capsys):
     )
     assert code == 0 and Path(out).stat().st_size > 0
     assert "wrote" in capsys.readouterr().out
+
+
+def test_a_successful_export_prints_one_line_and_no_exporter_noise(registry, tmp_path, capfd):
+    import warnings
+
+    checkpoint = str(fresh_checkpoint("hand_to_mouth", registry, tmp_path / "c.pt"))
+    capfd.readouterr()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        code = main(
+            [
+                "export",
+                "hand_to_mouth",
+                "--checkpoint",
+                checkpoint,
+                "--format",
+                "onnx",
+                "--out",
+                str(tmp_path / "p.onnx"),
+            ]
+        )
+    out, err = capfd.readouterr()
+    assert code == 0 and len(out.splitlines()) == 1 and out.startswith("wrote ")
+    assert [line for line in err.splitlines() if not line.startswith("devlearn: ")] == []
+    assert [str(w.message) for w in caught] == []

@@ -7,6 +7,7 @@ import json
 import sys
 from pathlib import Path
 
+from devlearn.cli.folders import removed_on_failure
 from devlearn.errors import UsageError
 
 
@@ -98,17 +99,18 @@ def run(args: argparse.Namespace, registry) -> int:
     else:
         out_dir = Path(f"eval_{args.behavior}_{args.policy}")
     try:
-        summary = evaluate(
-            args.behavior,
-            checkpoint,
-            episodes,
-            registry,
-            video=args.video,
-            seed=seed,
-            out_dir=out_dir,
-            policy=args.policy or "checkpoint",
-            start=args.start,
-        )
+        with removed_on_failure(out_dir):
+            summary = evaluate(
+                args.behavior,
+                checkpoint,
+                episodes,
+                registry,
+                video=args.video,
+                seed=seed,
+                out_dir=out_dir,
+                policy=args.policy or "checkpoint",
+                start=args.start,
+            )
     except EvalWriteError as exc:
         _print(exc.summary, args.json)
         raise

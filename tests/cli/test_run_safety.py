@@ -388,3 +388,16 @@ def test_a_plain_pickle_with_a_payload_is_refused_by_name(cli, tmp_path, capsys,
     err = error(cli, capsys, "eval", "tiny", "--checkpoint", str(crafted), "--episodes", "1")
     assert f"checkpoint {crafted} refused: it needs builtins.exec" in err
     assert not marker.exists()
+
+
+def test_failed_commands_leave_no_new_folders(cli, tmp_path, capsys):
+    missing = tmp_path / "runs" / "nope" / "checkpoint_latest.pt"
+    err = error(cli, capsys, "eval", "tiny", "--checkpoint", str(missing), "--episodes", "1")
+    assert "does not exist" in err and not (tmp_path / "runs").exists()
+    out = tmp_path / "reports" / "r"
+    error(cli, capsys, "report", str(tmp_path / "no_eval_here"), "--out", str(out))
+    assert not (tmp_path / "reports").exists()
+    kept = tmp_path / "kept"
+    kept.mkdir()
+    error(cli, capsys, "eval", "tiny", "--checkpoint", str(missing), "--out", str(kept))
+    assert kept.is_dir()  # what existed before stays
