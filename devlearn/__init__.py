@@ -17,13 +17,42 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 # take cores from the env workers (read when torch loads: effective if devlearn comes first).
 os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
-from devlearn.behavior import Behavior, Evaluator
-from devlearn.curriculum import Curriculum, Stage
-from devlearn.hookspecs import hookimpl
-from devlearn.learned import LearnedReward, LearnedRewardConfig, Transitions
-from devlearn.network_spec import NetworkSpec
-from devlearn.rewards import BatchContext, BatchedIntrinsicReward, IntrinsicReward, StepContext
-from devlearn.sensors import MLPEncoder, SensorEncoder
+# The public names load on first use (PEP 562), so that ``import devlearn`` and the commands
+# that neither train nor evaluate (``devlearn --help``, ``plugins``, ``config``) do not pay for
+# torch; a plugin that imports only Behavior, IntrinsicReward, Curriculum... stays light too.
+_PUBLIC = {
+    "BatchContext": "devlearn.rewards",
+    "BatchedIntrinsicReward": "devlearn.rewards",
+    "Behavior": "devlearn.behavior",
+    "Curriculum": "devlearn.curriculum",
+    "Evaluator": "devlearn.behavior",
+    "IntrinsicReward": "devlearn.rewards",
+    "LearnedReward": "devlearn.learned",
+    "LearnedRewardConfig": "devlearn.learned",
+    "MLPEncoder": "devlearn.sensors",
+    "NetworkSpec": "devlearn.network_spec",
+    "SensorEncoder": "devlearn.sensors",
+    "Stage": "devlearn.curriculum",
+    "StepContext": "devlearn.rewards",
+    "Transitions": "devlearn.learned",
+    "hookimpl": "devlearn.hookspecs",
+}
+
+
+def __getattr__(name: str):
+    module = _PUBLIC.get(name)
+    if module is None:
+        raise AttributeError(f"module 'devlearn' has no attribute '{name}'")
+    import importlib
+
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value  # later look-ups skip this function
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_PUBLIC))
+
 
 __version__ = "0.1.0"
 

@@ -10,11 +10,21 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 
 from devlearn.curriculum import Curriculum, Stage
-from devlearn.network_spec import NetworkSpec  # also imported from here by plugins
 from devlearn.rewards import BatchedIntrinsicReward, IntrinsicReward, StepContext
 
 if TYPE_CHECKING:
     from devlearn.infant import Infant
+    from devlearn.network_spec import NetworkSpec
+
+
+def __getattr__(name: str):
+    # ``from devlearn.behavior import NetworkSpec`` (plugins do) loads it, and torch with its
+    # encoders, only when asked for: a behaviour's class can be read without torch.
+    if name == "NetworkSpec":
+        from devlearn.network_spec import NetworkSpec
+
+        return NetworkSpec
+    raise AttributeError(f"module 'devlearn.behavior' has no attribute '{name}'")
 
 
 class Evaluator:

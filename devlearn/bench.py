@@ -241,11 +241,41 @@ def bench_learner(behaviors: dict, quick: bool, progress: Callable[[str], None])
     return result
 
 
+STARTUP_COMMANDS = {
+    "help": ["--help"],
+    "plugins": ["plugins"],
+    "config": ["config", "self_touch"],
+    "info": ["info", "self_touch"],
+}
+"""The commands whose start-up ``devlearn bench`` times (``startup_<name>_s``): none trains."""
+
+
+def cli_startup_s(args: list[str], repeats: int = 3) -> float:
+    """Best wall-clock seconds of ``python -m devlearn.cli ARGS`` in a fresh process over
+    ``repeats`` runs: the interpreter, the imports, the plugins and the command itself."""
+    best = float("inf")
+    for _ in range(repeats):
+        start = time.perf_counter()
+        subprocess.run(
+            [sys.executable, "-m", "devlearn.cli", *args],
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+            check=False,
+        )
+        best = min(best, time.perf_counter() - start)
+    return best
+
+
 def run_bench(registry, quick: bool = False, progress: Callable[[str], None] = print) -> dict:
     """Run every measurement; return the figures (see ``devlearn bench --help``)."""
     n = 300 if quick else 2000
+    result_startup = {}
+    for name, args in STARTUP_COMMANDS.items():
+        progress(f"start-up: devlearn {' '.join(args)}")
+        result_startup[f"startup_{name}_s"] = cli_startup_s(args, 1 if quick else 3)
     progress("infant: physics, touch, proprioception, eye render")
     result: dict[str, Any] = bench_infant(steps=n, frames=20 if quick else 100)
+    result.update(result_startup)
     result.update(touch_old_and_new(n))
     for scene in ("crib", "sitting"):
         progress(f"{scene}: physics-only steps (the ceiling)")

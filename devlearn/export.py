@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import contextlib
+import logging
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -105,7 +108,7 @@ def export_policy(policy: DeterministicPolicy, obs: dict[str, Any], fmt: str, ou
         raise UsageError(f"cannot write {out}: directory {out.parent} does not exist")
     inputs = example_inputs(policy, obs)
     try:
-        with torch.no_grad():
+        with torch.no_grad(), _known_exporter_noise_silenced():
             if fmt == "torchscript":
                 torch.jit.trace(policy, inputs, check_trace=False).save(str(out))
             else:
@@ -113,6 +116,33 @@ def export_policy(policy: DeterministicPolicy, obs: dict[str, Any], fmt: str, ou
     except PermissionError as exc:
         raise UsageError(f"cannot write {out}: {exc.strerror}") from None
     return out
+
+
+HARMLESS_WARNINGS = (
+    r".*isinstance\(treespec, LeafSpec\)` is deprecated",  # torch's own pytree use
+    r"# The axis name: .* will not be used",  # one dynamic batch axis named for all inputs
+)
+"""Messages torch's exporters print on every successful export that say nothing about it."""
+HARMLESS_LOGGERS = ("torch.onnx._internal.exporter._registration",)
+"""Loggers whose warnings (torchvision's operators not registered: a policy uses none) are
+hidden during an export; errors still show."""
+
+
+@contextlib.contextmanager
+def _known_exporter_noise_silenced():
+    """Within the block, the known harmless exporter warnings are hidden; any other shows."""
+    loggers = [logging.getLogger(name) for name in HARMLESS_LOGGERS]
+    levels = [logger.level for logger in loggers]
+    with warnings.catch_warnings():
+        for message in HARMLESS_WARNINGS:
+            warnings.filterwarnings("ignore", message=message)
+        for logger in loggers:
+            logger.setLevel(logging.ERROR)
+        try:
+            yield
+        finally:
+            for logger, level in zip(loggers, levels):
+                logger.setLevel(level)
 
 
 def _export_onnx(policy: DeterministicPolicy, inputs: tuple[torch.Tensor, ...], out: Path) -> None:

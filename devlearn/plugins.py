@@ -15,15 +15,17 @@ import re
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import pluggy
 
 from devlearn import hookspecs
 from devlearn.behavior import Behavior
 from devlearn.errors import UsageError
-from devlearn.learned import LearnedReward, LearnedRewardConfig
-from devlearn.sensors import SensorEncoder
+
+if TYPE_CHECKING:  # torch-based: imported when a plugin registers one (it has loaded torch)
+    from devlearn.learned import LearnedReward
+    from devlearn.sensors import SensorEncoder
 
 ENTRY_POINT_GROUP = "devlearn"
 DISABLE_ENV = "DEVLEARN_DISABLE_PLUGINS"
@@ -195,6 +197,8 @@ class PluginRegistry:
 
     def _register_encoders(self, info: PluginInfo):
         def register(name: str, encoder: type) -> None:
+            from devlearn.sensors import SensorEncoder
+
             if not (inspect.isclass(encoder) and issubclass(encoder, SensorEncoder)):
                 raise TypeError(f"register_encoders got {encoder!r}, not a SensorEncoder subclass")
             if self._claim("encoder", name, info):
@@ -205,6 +209,8 @@ class PluginRegistry:
 
     def _register_learned_rewards(self, info: PluginInfo):
         def register(term: type) -> None:
+            from devlearn.learned import LearnedReward, LearnedRewardConfig
+
             if not (inspect.isclass(term) and issubclass(term, LearnedReward)):
                 raise TypeError(f"register_learned_rewards got {term!r}, not a LearnedReward")
             name = getattr(term, "name", None)

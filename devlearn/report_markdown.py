@@ -30,6 +30,15 @@ def column_title(name: str, info: dict[str, Any]) -> str:
     return name if info["kind"] == "paper" else f"{name} (n={len(info['seeds'])})"
 
 
+def _runs(info: dict[str, Any]) -> str:
+    """``seeds [1, 2, 3]`` for trained runs; baselines have no training seed: their count."""
+    seeds = [s for s in info["seeds"] if s is not None]
+    if not seeds:
+        count = len(info["seeds"])
+        return f"{count} evaluation{'s' if count != 1 else ''} of an untrained policy (no seed)"
+    return f"seeds {seeds}"
+
+
 def markdown(result: dict[str, Any], evaluations: list[tuple[Path, dict]]) -> str:
     cols = list(result["columns"])
     protocol = evaluations[0][1]["protocol"]
@@ -51,7 +60,7 @@ def markdown(result: dict[str, Any], evaluations: list[tuple[Path, dict]]) -> st
         if info["kind"] == "paper":
             lines.append(f"- **{c}**: the paper's published figures (- where it gives none)")
         else:
-            lines.append(f"- **{c}**: seeds {info['seeds']} from {', '.join(info['paths'])}")
+            lines.append(f"- **{c}**: {_runs(info)} from {', '.join(info['paths'])}")
     if result["notes"]:
         lines += ["", "Notes:"] + [f"- {n}" for n in result["notes"]]
     return "\n".join(lines) + "\n"

@@ -40,7 +40,18 @@ def draw_report(result: dict[str, Any], path: Path) -> Path:
             for m, c in zip(means, columns)
         ]
         x = np.arange(len(columns))
-        ax.bar(x, means, color=colours, yerr=[low, high], capsize=4)
+        ax.bar(x, means, color=colours)
+        # an interval only where there is one (several runs): a single run's bar has no caps
+        spread = [i for i, c in enumerate(columns) if row[c]["ci_low"] is not None]
+        if spread:
+            ax.errorbar(
+                x[spread],
+                np.array(means)[spread],
+                yerr=[np.array(low)[spread], np.array(high)[spread]],
+                fmt="none",
+                ecolor="k",
+                capsize=4,
+            )
         for i, c in enumerate(columns):  # the seeds themselves
             values = row[c]["values"]
             ax.plot(np.full(len(values), i), values, "k.", markersize=4)

@@ -22,6 +22,8 @@ ROOT = Path(__file__).resolve().parents[1]
 PUBLISHED = {  # separate actor and critic; hand regard's with the old double image scaling
     "self_touch": ROOT / "results/self_touch/run/policy.pt",
     "hand_regard": ROOT / "results/hand_regard/run/policy.pt",
+    # a small fixture of the same (separate, pre-layout) kind, whatever stays published
+    "hand_to_mouth": ROOT / "tests/training/data/hand_to_mouth_separate_legacy.pt",
 }
 BEHAVIORS = ["self_touch", "hand_regard", "hand_to_mouth"]
 
@@ -84,7 +86,7 @@ def test_exported_policies_match_torch_on_recorded_observations(name, registry, 
 
     recorded = record(registry.create(name))
     checkpoints = [fresh_checkpoint(name, registry, tmp_path / f"{name}.pt")]
-    if name in PUBLISHED:
+    if name in PUBLISHED and PUBLISHED[name].exists():
         checkpoints.append(published_checkpoint(name, tmp_path))
     for checkpoint in checkpoints:
         policy, obs = load_policy(name, checkpoint, registry)
@@ -162,3 +164,28 @@ def test_bad_input_is_one_line_and_exit_2(registry, tmp_path, capsys):
     )
     assert code == 0 and Path(out).stat().st_size > 0
     assert "wrote" in capsys.readouterr().out
+
+
+def test_a_successful_export_prints_one_line_and_no_exporter_noise(registry, tmp_path, capfd):
+    import warnings
+
+    checkpoint = str(fresh_checkpoint("hand_to_mouth", registry, tmp_path / "c.pt"))
+    capfd.readouterr()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        code = main(
+            [
+                "export",
+                "hand_to_mouth",
+                "--checkpoint",
+                checkpoint,
+                "--format",
+                "onnx",
+                "--out",
+                str(tmp_path / "p.onnx"),
+            ]
+        )
+    out, err = capfd.readouterr()
+    assert code == 0 and len(out.splitlines()) == 1 and out.startswith("wrote ")
+    assert [line for line in err.splitlines() if not line.startswith("devlearn: ")] == []
+    assert [str(w.message) for w in caught] == []

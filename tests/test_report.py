@@ -14,16 +14,31 @@ from devlearn.report import write_report
 
 def fake_eval(folder, score, seed, behavior="self_touch", policy="checkpoint", max_std=1.0):
     folder.mkdir(parents=True)
-    config = {"seed": seed, "total_steps": 100, "out_dir": f"runs/{folder.name}",
-              "behavior": {"max_std": max_std, "touch_threshold": 0.1}}
+    config = {
+        "seed": seed,
+        "total_steps": 100,
+        "out_dir": f"runs/{folder.name}",
+        "behavior": {"max_std": max_std, "touch_threshold": 0.1},
+    }
     summary = {
-        "episodes": 100, "score": score, "coverage_total": 30 * score,
-        "episode_score_mean": score / 2, "episode_score_std": 0.1,
+        "episodes": 100,
+        "score": score,
+        "coverage_total": 30 * score,
+        "episode_score_mean": score / 2,
+        "episode_score_std": 0.1,
         "part_touch_steps": {"left": {"head": 3}},
-        "behavior": behavior, "policy": policy, "checkpoint_env_steps": 100,
-        "training_seed": seed if policy == "checkpoint" else None, "config": config,
-        "protocol": {"episodes": 100, "seed": 0, "settle_steps": 10, "headline": "score",
-                     "criteria": {"hand_touch": "..."}},
+        "behavior": behavior,
+        "policy": policy,
+        "checkpoint_env_steps": 100,
+        "training_seed": seed if policy == "checkpoint" else None,
+        "config": config,
+        "protocol": {
+            "episodes": 100,
+            "seed": 0,
+            "settle_steps": 10,
+            "headline": "score",
+            "criteria": {"hand_touch": "..."},
+        },
     }
     (folder / "eval.json").write_text(json.dumps(summary))
     return folder
@@ -31,8 +46,10 @@ def fake_eval(folder, score, seed, behavior="self_touch", policy="checkpoint", m
 
 @pytest.fixture
 def three_seeds(tmp_path):
-    runs = [fake_eval(tmp_path / f"seed{s}" / "eval", v, s)
-            for s, v in ((1, 0.90), (2, 0.96), (3, 0.81))]
+    runs = [
+        fake_eval(tmp_path / f"seed{s}" / "eval", v, s)
+        for s, v in ((1, 0.90), (2, 0.96), (3, 0.81))
+    ]
     fake_eval(tmp_path / "baseline_zero", 0.2, 0, policy="zero")
     fake_eval(tmp_path / "baseline_random", 0.3, 0, policy="random")
     return [r.parent for r in runs]  # run folders holding evaluation folders
@@ -148,3 +165,25 @@ def test_paper_figures_name_real_metrics(behavior, eval_json, config):
     metrics = _metrics(json.loads((root / eval_json).read_text()))
     assert label.startswith("paper") and figures
     assert set(figures) <= set(metrics)
+
+
+def test_baselines_are_counted_not_seeded_and_single_runs_get_no_caps(
+    three_seeds, tmp_path, monkeypatch
+):
+    from matplotlib.figure import Figure
+
+    drawn = []
+    monkeypatch.setattr(Figure, "savefig", lambda self, *a, **k: drawn.append(self))
+    result = write_report(three_seeds, tmp_path / "report")
+    markdown = (tmp_path / "report" / "report.md").read_text()
+    assert "None" not in markdown
+    assert "- **zero baseline**: 1 evaluation of an untrained policy (no seed) from" in markdown
+    assert "- **trained**: seeds [1, 2, 3] from" in markdown
+    (fig,) = drawn
+    columns = list(result["columns"])
+    for ax in fig.axes:
+        bars = [c for c in ax.containers if type(c).__name__ == "BarContainer"]
+        errors = [c for c in ax.containers if type(c).__name__ == "ErrorbarContainer"]
+        assert len(bars) == 1 and len(bars[0]) == len(columns)
+        # one interval: the three seeds; the single baseline evaluations have none
+        assert len(errors) == 1 and len(errors[0].lines[2][0].get_segments()) == 1

@@ -58,8 +58,30 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict]:
     return parser, handlers
 
 
+def follow_parent() -> None:
+    """When started by a sweep (``DEVLEARN_PARENT_PID`` set), ask Linux for SIGTERM when that
+    process dies (as a Ctrl-C: a run saves a checkpoint), and stop at once if it already has;
+    elsewhere, or without ``prctl``, nothing."""
+    import os
+    import signal
+
+    parent = os.environ.pop("DEVLEARN_PARENT_PID", "")
+    if not parent.isdigit():
+        return
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, int(signal.SIGTERM))  # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        return
+    if os.getppid() != int(parent):  # the sweep died before prctl took effect
+        raise SystemExit(130)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI; return the exit code (2 for bad input, with a one-line message)."""
+    follow_parent()
     parser, handlers = build_parser()
     args = parser.parse_args(argv)
     if args.command is None:

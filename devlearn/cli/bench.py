@@ -100,6 +100,10 @@ ROWS = [
     ("self_touch_train_steps_per_s_old", "self-touch training, before", "/s", "-", "-", 1),
     ("hand_regard_train_steps_per_s_old", "hand-regard training, before", "/s", "-", "-", 1),
     ("build_s", "environment build", "s", "19", "< 3", 0),
+    ("startup_help_s", "start-up: devlearn --help", "s", "-", "< 1.5", 0),
+    ("startup_plugins_s", "start-up: devlearn plugins", "s", "-", "< 1.5", 0),
+    ("startup_config_s", "start-up: devlearn config self_touch", "s", "-", "< 1.5", 0),
+    ("startup_info_s", "start-up: devlearn info self_touch", "s", "-", "< 1.5", 0),
     ("peak_memory_mb", "peak memory", "MB", "-", "-", 0),
 ]
 

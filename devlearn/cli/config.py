@@ -61,11 +61,21 @@ def run(args: argparse.Namespace, registry) -> int:
     for name, values in presets.items():
         shown = ", ".join(f"{k}={json.dumps(v)}" for k, v in values.items())
         print(f"preset {name} (--preset {name}): {shown}")
+
+    def head(row: dict) -> str:
+        return row["key"].split(".", 1)[0] if "." in row["key"] else "run"
+
+    order: dict[str, int] = {}
+    for row in rows:
+        order.setdefault(head(row), len(order))
+    # one block per section, in order of first appearance (the run's own keys come both
+    # before and after the nested sections in the dataclass)
+    rows = sorted(rows, key=lambda row: order[head(row)])
     section = None
     for row in rows:
-        head = row["key"].split(".", 1)[0] if "." in row["key"] else "run"
-        if head != section:
-            section = head
+        head_name = head(row)
+        if head_name != section:
+            section = head_name
             print(f"\n[{section}]")
         mark = {
             "behavior": "  (set by the behaviour)",

@@ -2,8 +2,10 @@
 
 Run folders (``metrics.jsonl``, from ``devlearn run``) give one line each: training metrics per
 iteration. Evaluation folders (``eval.json``, from ``devlearn eval --out``) of checkpoints of one
-run give together one line: each evaluation is a point at its checkpoint's environment steps;
-``--vs`` adds another line (say, the evaluations of a second run, to compare the two).
+run give together one line per start (random starts and rest starts, as each eval.json records,
+are kept apart): each evaluation is a point at its checkpoint's environment steps; ``--vs`` adds
+another line (say, the evaluations of a second run, to compare the two). Evaluations show the
+behaviour's headline and its per-episode mean (with its 95% interval) unless ``--metric`` says.
 """
 
 from __future__ import annotations
@@ -14,6 +16,9 @@ import os
 from pathlib import Path
 
 from devlearn.errors import UsageError
+
+SMOOTH_MAX = 100_000
+"""Largest ``--smooth`` window (iterations)."""
 
 
 def add_parser(subparsers) -> list[str]:
@@ -32,7 +37,7 @@ def add_parser(subparsers) -> list[str]:
         action="append",
         default=None,
         help="metrics.jsonl or eval.json key to plot (repeatable; default: every metrics/* "
-        "key of runs, every numeric key of evaluations)",
+        "key of runs; of evaluations, the behaviour's headline and its per-episode mean)",
     )
     p.add_argument(
         "--vs",
@@ -44,7 +49,12 @@ def add_parser(subparsers) -> list[str]:
         help="another line to compare: evaluation folders of another run (repeatable)",
     )
     p.add_argument("--smooth", type=int, default=10, help="moving-average window (iterations)")
-    p.add_argument("--out", type=Path, help="PNG path (default: FIRST_DIR/learning_curve.png)")
+    p.add_argument(
+        "--out",
+        type=Path,
+        help="PNG path (default: FIRST_DIR/learning_curve.png for runs; for evaluations "
+        "eval_curve.png in the folder holding them, e.g. RUN/eval_curve.png for RUN/eval_*)",
+    )
     return ["curve"]
 
 
@@ -80,8 +90,65 @@ def read_evaluations(eval_dirs: list[Path]) -> list[dict]:
                 "evaluate the checkpoint again"
             )
         numbers = {k: v for k, v in summary.items() if isinstance(v, (int, float))}
-        rows.append({**numbers, "step": summary["checkpoint_env_steps"]})
+        protocol = summary.get("protocol") if isinstance(summary.get("protocol"), dict) else {}
+        rows.append(
+            {
+                **numbers,
+                "step": summary["checkpoint_env_steps"],
+                "_start": start_label(protocol),
+                "_headline": protocol.get("headline") or "",
+            }
+        )
     return sorted(rows, key=lambda row: row["step"])
+
+
+def start_label(protocol: dict) -> str:
+    """Where an evaluation's episodes started, from its protocol: ``rest start`` (``--start
+    rest``), ``random starts`` (the stage's seeded random poses) or ``stage starts``."""
+    if protocol.get("start") == "rest":
+        return "rest start"
+    stage = protocol.get("stage") if isinstance(protocol.get("stage"), dict) else {}
+    return "random starts" if stage.get("random_pose", True) else "stage starts"
+
+
+BOOKKEEPING = {"step", "checkpoint_env_steps", "episodes", "steps", "settle_steps", "training_seed"}
+"""Numbers an eval.json records about the protocol or the run, not results: never a default."""
+
+
+def default_eval_metrics(rows: list[dict]) -> list[str]:
+    """What ``devlearn curve EVAL_DIRS`` draws unless ``--metric`` says: each headline (the
+    behaviour's, recorded in the protocol) and its per-episode mean; without a recorded
+    headline every result number except spreads and intervals (``*_std``, ``*_ci_low``...)."""
+    present = {k for r in rows for k in r if not k.startswith("_")}
+    keys = []
+    for name in dict.fromkeys(r["_headline"] for r in rows if r.get("_headline")):
+        keys += [k for k in (name, f"episode_{name}_mean") if k in present and k not in keys]
+    if keys:
+        return keys
+    spread = ("_std", "_ci_low", "_ci_high", "_sem")
+    return sorted(k for k in present - BOOKKEEPING if not k.endswith(spread))
+
+
+def _by_start(lines: list[tuple[Path, list[dict]]]) -> list[tuple[str, list[dict]]]:
+    """Each line of evaluations split by where their episodes started (random and rest starts
+    of the same checkpoints are different measurements), labelled with the start."""
+    split = []
+    for label, rows in lines:
+        for start in dict.fromkeys(r["_start"] for r in rows):
+            split.append((f"{label}, {start}", [r for r in rows if r["_start"] == start]))
+    return split
+
+
+def default_out(dirs: list[Path], evaluations: bool) -> Path:
+    """Runs: the first run folder's ``learning_curve.png``. Evaluations: ``eval_curve.png`` in
+    the folder that holds them all (the run folder for ``RUN/eval_*``), never inside one of the
+    evaluation folders."""
+    if not evaluations:
+        return dirs[0] / "learning_curve.png"
+    common = Path(os.path.commonpath([d.resolve() for d in dirs]))
+    while (common / "eval.json").exists() and common.parent != common:
+        common = common.parent
+    return common / "eval_curve.png"
 
 
 def _load(groups: list[list[Path]]) -> tuple[list[tuple[Path, list[dict]]], bool]:
@@ -111,16 +178,18 @@ def run(args: argparse.Namespace, registry) -> int:
     import numpy as np
 
     runs, evaluations = _load([list(args.run_dirs), *(args.vs or [])])
-    every = {k for _, rows in runs for r in rows for k in r}
-    default = (k for k in every if k not in ("step", "checkpoint_env_steps", "episodes"))
-    if not evaluations:
-        default = (k for k in every if k.startswith("metrics/"))
-    keys = args.metric or sorted(default) or ["mean_step_reward"]  # before any episode ended
+    every = {k for _, rows in runs for r in rows for k in r if not k.startswith("_")}
+    if evaluations:
+        default = default_eval_metrics([r for _, rows in runs for r in rows])
+        runs = _by_start(runs)
+    else:
+        default = sorted(k for k in every if k.startswith("metrics/"))
+    keys = args.metric or default or ["mean_step_reward"]  # before any episode ended
     unknown = [k for k in keys if k not in every]
     if unknown or not keys:
         raise UsageError(f"no such metric(s) {unknown}; valid: {', '.join(sorted(every))}")
-    if args.smooth < 1:
-        raise UsageError("--smooth must be at least 1")
+    if not 1 <= args.smooth <= SMOOTH_MAX:
+        raise UsageError(f"--smooth must be from 1 to {SMOOTH_MAX}, got {args.smooth}")
     fig, axes = plt.subplots(len(keys), 1, figsize=(7, 2.4 * len(keys)), squeeze=False)
     for ax, key in zip(axes[:, 0], keys):
         for run_dir, rows in runs:
@@ -129,7 +198,15 @@ def run(args: argparse.Namespace, registry) -> int:
                 continue
             steps, values = (np.array(v, dtype=float) for v in zip(*points))
             if evaluations:
-                ax.plot(steps, values, marker="o", lw=1.6, label=str(run_dir))
+                line = ax.plot(steps, values, marker="o", lw=1.6, label=str(run_dir))[0]
+                base = key.removesuffix("_mean")
+                band = [
+                    (r["step"], r.get(f"{base}_ci_low"), r.get(f"{base}_ci_high")) for r in rows
+                ]
+                band = [b for b in band if b[1] is not None and b[2] is not None]
+                if key.endswith("_mean") and band:  # the per-episode 95% interval
+                    x, low, high = (np.array(v, dtype=float) for v in zip(*band))
+                    ax.fill_between(x, low, high, color=line.get_color(), alpha=0.15, lw=0)
                 continue
             window = min(args.smooth, len(values))
             smooth = np.convolve(values, np.ones(window) / window, mode="valid")
@@ -138,18 +215,19 @@ def run(args: argparse.Namespace, registry) -> int:
             ax.plot(steps[window - 1 :], smooth, lw=1.6, label=run_dir.name)
         ax.set_ylabel(key.split("/")[-1])
         ax.grid(alpha=0.3)
-    if len(runs) > 1:
+    if len(runs) > 1 or evaluations:
         axes[0, 0].legend(fontsize=8)
     title = args.run_dirs[0].name if len(runs) == 1 else f"{len(runs)} runs"
     if evaluations:
         axes[-1, 0].set_xlabel("environment steps of the checkpoint")
-        count = sum(len(rows) for _, rows in runs)
-        fig.suptitle(f"evaluations of {count} checkpoints")
+        count = len({(label.rsplit(", ", 1)[0], r["step"]) for label, rows in runs for r in rows})
+        starts = sorted({r["_start"] for _, rows in runs for r in rows})
+        fig.suptitle(f"evaluations of {count} checkpoints ({' / '.join(starts)})")
     else:
         axes[-1, 0].set_xlabel("environment steps")
         fig.suptitle(f"{title}: mean over episodes ending in each iteration")
     fig.tight_layout()
-    out = args.out or args.run_dirs[0] / "learning_curve.png"
+    out = args.out or default_out(list(args.run_dirs), evaluations)
     fig.savefig(out, dpi=110)
     print(out)
     return 0

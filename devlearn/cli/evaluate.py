@@ -7,6 +7,7 @@ import json
 import sys
 from pathlib import Path
 
+from devlearn.cli.folders import removed_on_failure
 from devlearn.errors import UsageError
 
 
@@ -64,13 +65,19 @@ def add_parser(subparsers) -> list[str]:
     return ["eval"]
 
 
-def _count(text: str, option: str, minimum: int) -> int:
+EPISODES_MAX = 1_000_000
+"""Largest ``--episodes``."""
+
+
+def _count(text: str, option: str, minimum: int, maximum: int) -> int:
     try:
         value = int(text)
     except ValueError:
         raise UsageError(f"{option} must be an integer, got '{text}'") from None
     if value < minimum:
         raise UsageError(f"{option} must be at least {minimum}, got {value}")
+    if value > maximum:
+        raise UsageError(f"{option} must be at most {maximum}, got {value}")
     return value
 
 
@@ -93,8 +100,10 @@ def run(args: argparse.Namespace, registry) -> int:
     from devlearn.training.evaluate import EvalWriteError, evaluate, resolve_checkpoint
 
     registry.behavior(args.behavior)  # unknown behaviour: one clear line
-    episodes = _count(args.episodes, "--episodes", 1)
-    seed = _count(args.seed, "--seed", 0)
+    from devlearn.training.checks import SEED_MAX
+
+    episodes = _count(args.episodes, "--episodes", 1, EPISODES_MAX)
+    seed = _count(args.seed, "--seed", 0, SEED_MAX)
     checkpoint = resolve_checkpoint(args.checkpoint) if args.checkpoint else None
     if args.out:
         out_dir = Path(args.out)
@@ -103,18 +112,19 @@ def run(args: argparse.Namespace, registry) -> int:
     else:
         out_dir = Path(f"eval_{args.behavior}_{args.policy}")
     try:
-        summary = evaluate(
-            args.behavior,
-            checkpoint,
-            episodes,
-            registry,
-            video=args.video,
-            seed=seed,
-            out_dir=out_dir,
-            policy=args.policy or "checkpoint",
-            start=args.start,
-            overrides=args.overrides,
-        )
+        with removed_on_failure(out_dir):
+            summary = evaluate(
+                args.behavior,
+                checkpoint,
+                episodes,
+                registry,
+                video=args.video,
+                seed=seed,
+                out_dir=out_dir,
+                policy=args.policy or "checkpoint",
+                start=args.start,
+                overrides=args.overrides,
+            )
     except EvalWriteError as exc:
         _print(exc.summary, args.json)
         raise

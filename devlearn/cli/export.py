@@ -31,9 +31,12 @@ def run(args: argparse.Namespace, registry) -> int:
 
     if args.format not in FORMATS:
         raise UsageError(f"unknown export format '{args.format}'; valid: {', '.join(FORMATS)}")
+    from devlearn.cli.folders import removed_on_failure
+
     registry.behavior(args.behavior)  # unknown behaviour: one clear line
     policy, obs = load_policy(args.behavior, Path(args.checkpoint), registry)
-    out = export_policy(policy, obs, args.format, Path(args.out))
+    with removed_on_failure(args.out):  # an empty file the exporter opened first
+        out = export_policy(policy, obs, args.format, Path(args.out))
     inputs = ", ".join(f"{n} {tuple(obs[n].shape)} {obs[n].dtype}" for n in policy.names)
     print(f"wrote {out} ({args.format}); inputs (batch first): {inputs}; output: action")
     return 0

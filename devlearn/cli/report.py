@@ -32,7 +32,10 @@ def run(args: argparse.Namespace, registry) -> int:
             return None  # its plugin is not installed: no paper column
         return registry.behavior(behavior).paper_results(config)
 
-    write_report(args.paths, args.out, paper_results)
+    from devlearn.cli.folders import removed_on_failure
+
+    with removed_on_failure(args.out):
+        write_report(args.paths, args.out, paper_results)
     print((Path(args.out) / "report.md").read_text(), end="")
     print(f"written to {args.out}: report.md, report.png")
     return 0

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import signal
+import sys
 from pathlib import Path
 
 from devlearn.errors import UsageError
@@ -67,7 +68,7 @@ def add_parser(subparsers) -> list[str]:
 
 def run(args: argparse.Namespace, registry) -> int:
     """Build the config, train, print the run directory and a final summary."""
-    from devlearn.cli.summary import finished_message, run_summary
+    from devlearn.cli.summary import finished_message, paper_budget, run_summary
     from devlearn.training.config import default_config
     from devlearn.training.config_values import apply_overrides
     from devlearn.training.train import load_run_config, train
@@ -101,8 +102,16 @@ def run(args: argparse.Namespace, registry) -> int:
         cfg = load_run_config(run_dir, registry)
         if cfg.behavior_name != args.behavior:
             raise UsageError(f"run {run_dir} trains '{cfg.behavior_name}', not '{args.behavior}'")
+        recorded_seed = cfg.seed
         apply_overrides(cfg, {k: v for k, v in top.items() if v is not None})
         apply_overrides(cfg, args.overrides)
+        if cfg.seed != recorded_seed:
+            raise UsageError(
+                f"run {run_dir} was trained with seed {recorded_seed}, which a resumed run keeps "
+                "(its random states continue from the checkpoint); for another seed start a new "
+                f"run from its checkpoint: --from {run_dir / 'checkpoint_latest.pt'} "
+                f"--seed {cfg.seed} --out NEW_DIR"
+            )
     else:
         cfg = default_config(behavior_cls, args.overrides, args.preset, out_dir=args.out, **top)
     check_config(cfg)
@@ -110,15 +119,32 @@ def run(args: argparse.Namespace, registry) -> int:
         from devlearn.training.train import default_run_dir
 
         cfg.out_dir = str(default_run_dir(cfg.behavior_name))
-    if args.resume and (message := finished_message(args.resume, cfg)):
-        print(message)
-        return 0
-    print(f"run directory: {cfg.out_dir}", flush=True)
+    if args.resume:
+        from devlearn.training.checkpoint import resume_checkpoint
+
+        skipped: list[str] = []
+        found = resume_checkpoint(args.resume, skipped)
+        for note in skipped:  # an unreadable newer checkpoint: say which one is used instead
+            print(f"devlearn: warning: {note}", file=sys.stderr)
+        if message := finished_message(args.resume, cfg, found):
+            print(message)
+            return 0
+
+    def started(run_dir: Path) -> None:  # once every check has passed
+        print(f"run directory: {run_dir}", flush=True)
+
     with _interrupt_on_signals():
         result = train(
-            cfg, registry, resume=args.resume, start_from=args.start_from, force=args.force
+            cfg,
+            registry,
+            resume=args.resume,
+            start_from=args.start_from,
+            force=args.force,
+            started=started,
         )
-    print(run_summary(result, cfg.behavior_name, behavior_cls.headline_metric, cfg.total_steps))
+    budget = paper_budget(behavior_cls(cfg.behavior).presets())
+    metric = behavior_cls.headline_metric
+    print(run_summary(result, cfg.behavior_name, metric, cfg.total_steps, cfg.num_envs, budget))
     return 0
 
 

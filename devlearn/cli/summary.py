@@ -40,7 +40,43 @@ def _number(value: Any) -> str:
     return "-" if value is None else f"{value:.4g}"
 
 
-def run_summary(result: Any, behavior_name: str, metric: str, total_steps: int) -> str:
+def paper_budget(presets: dict[str, dict[str, Any]]) -> tuple[str, int] | None:
+    """``(preset, total_steps)`` of the behaviour's preset that sets the longest run (its
+    ``paper`` preset for the built-in behaviours), or None when no preset sets one."""
+    budgets = [
+        (name, int(values["total_steps"]))
+        for name, values in presets.items()
+        if isinstance(values.get("total_steps"), (int, float))
+    ]
+    return max(budgets, key=lambda b: b[1]) if budgets else None
+
+
+def baseline_dirs(behavior_name: str) -> dict[str, Path]:
+    """Where ``devlearn eval BEHAVIOR --policy zero|random`` writes by default (this folder)."""
+    return {p: Path(f"eval_{behavior_name}_{p}") for p in ("random", "zero")}
+
+
+def _baseline_values(behavior_name: str, metric: str) -> dict[str, Any]:
+    """The headline ``metric`` of the baseline evaluations already in their default folders."""
+    found = {}
+    for policy, folder in baseline_dirs(behavior_name).items():
+        try:
+            summary = json.loads((folder / "eval.json").read_text())
+        except (OSError, ValueError):
+            continue
+        if isinstance(summary, dict) and isinstance(summary.get(metric), (int, float)):
+            found[policy] = summary[metric]
+    return found
+
+
+def run_summary(
+    result: Any,
+    behavior_name: str,
+    metric: str,
+    total_steps: int,
+    num_envs: int = 1,
+    budget: tuple[str, int] | None = None,
+) -> str:
     """The lines printed when a run finishes.
 
     Args:
@@ -48,6 +84,9 @@ def run_summary(result: Any, behavior_name: str, metric: str, total_steps: int) 
         behavior_name: The behaviour trained.
         metric: The behaviour's ``headline_metric``.
         total_steps: The run's step budget (for the resume hint).
+        num_envs: Environments per rank (to say why no episode finished, if none did).
+        budget: ``(preset, steps)`` of a full run (:func:`paper_budget`), if the behaviour
+            has one: a shorter run is said to be a demonstration.
     """
     run_dir = Path(result.run_dir)
     rows = _rows(run_dir)
@@ -59,31 +98,64 @@ def run_summary(result: Any, behavior_name: str, metric: str, total_steps: int) 
         f"finished: {result.env_steps:,} environment steps, {result.iterations} iterations",
         f"  checkpoint  {run_dir / LATEST}",
         f"  logs        {run_dir / 'metrics.jsonl'}, TensorBoard: tensorboard --logdir {folder}",
-        f"  {key}  {_number(last)} now, {_number(first)} at the start (step {first_step:,})",
     ]
+    if last is None:
+        per_env = result.env_steps // max(num_envs, 1)
+        lines.append(
+            f"  {key}  - (no episode finished: each of the {num_envs} environments ran "
+            f"{per_env:,} steps, less than one episode; train longer for episode metrics)"
+        )
+    else:
+        lines.append(
+            f"  {key}  {_number(last)} now, {_number(first)} at the start (step {first_step:,}), "
+            "over training episodes"
+        )
     if result.last.get("stage"):
         lines.append(f"  stage       {result.last['stage']}")
     lines += [f"  {warning}" for warning in getattr(result, "warnings", [])]
+    if budget is not None and total_steps < budget[1]:
+        lines.append(
+            f"  budget      {total_steps:,} steps, {100 * total_steps / budget[1]:.2g}% of a full "
+            f"run ({budget[1]:,}, --preset {budget[0]}): a demonstration, whose evaluation may "
+            "well score at or below the random baseline"
+        )
+    baselines = _baseline_values(behavior_name, metric) if metric else {}
+    dirs = baseline_dirs(behavior_name)
+    if baselines:
+        shown = ", ".join(f"{p} {_number(v)} ({dirs[p]})" for p, v in baselines.items())
+        lines.append(f"  baselines   {metric} under the evaluation protocol: {shown}")
     more = max(2 * total_steps, total_steps + 1)
+    eval_dir = shlex.quote(str(run_dir / "eval"))
     lines += [
         "next:",
         f"  devlearn eval {behavior_name} --checkpoint {checkpoint} --episodes 100",
+    ]
+    missing = [p for p in dirs if p not in baselines]
+    lines += [
+        f"  devlearn eval {behavior_name} --policy {p} --episodes 100   # baseline, same protocol"
+        for p in missing
+    ]
+    lines += [
+        f"  devlearn report {eval_dir} {' '.join(str(d) for d in dirs.values())}"
+        "   # the run beside the baselines",
         f"  devlearn curve {folder}",
         f"  devlearn run {behavior_name} --resume {folder} --steps {more:g}   # train longer",
     ]
     return "\n".join(lines)
 
 
-def finished_message(run_dir: str | Path, cfg) -> str | None:
+def finished_message(run_dir: str | Path, cfg, found: tuple | None = None) -> str | None:
     """If the run's newest checkpoint already reached ``cfg.total_steps``, say so; else None.
 
-    Reads only the newest checkpoint, so nothing in the run is touched; a checkpoint that
-    ``cfg`` could not continue (other behaviour or env count) is refused first, finished or not.
+    Reads only the newest checkpoint (or takes ``found``, the ``(path, state)`` of
+    :func:`~devlearn.training.checkpoint.resume_checkpoint`), so nothing in the run is touched;
+    a checkpoint that ``cfg`` could not continue (other behaviour or env count) is refused
+    first, finished or not.
     """
     from devlearn.training.checkpoint import resume_checkpoint
     from devlearn.training.train import check_resumable
 
-    path, state = resume_checkpoint(run_dir)
+    path, state = found if found is not None else resume_checkpoint(run_dir)
     check_resumable(cfg, state, path)
     done = int(state.get("env_steps", 0))
     total_steps = cfg.total_steps

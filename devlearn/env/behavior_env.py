@@ -243,7 +243,12 @@ def term_values(envs: list[BehaviorEnv], contexts: list[StepContext]) -> np.ndar
         if isinstance(term, BatchedIntrinsicReward):
             if batch is None:
                 batch = BatchContext(contexts)
-            value = term(batch)
+            try:
+                value = term(batch)
+            except Exception as exc:  # named, and the run stops as on a NaN (guards.py)
+                from devlearn.env.guards import TermError
+
+                raise TermError.wrap(term.name, exc, -1, contexts[0].step) from exc
             shape = value.shape if isinstance(value, np.ndarray) else np.shape(value)
             if shape != (n,):
                 raise ValueError(
@@ -254,7 +259,12 @@ def term_values(envs: list[BehaviorEnv], contexts: list[StepContext]) -> np.ndar
         else:
             own_terms = True
             for i, (env, ctx) in enumerate(zip(envs, contexts)):
-                raw[k, i] = float(env.terms[k](ctx))
+                try:
+                    raw[k, i] = float(env.terms[k](ctx))
+                except Exception as exc:  # named, and the run stops as on a NaN (guards.py)
+                    from devlearn.env.guards import TermError
+
+                    raise TermError.wrap(term.name, exc, env.index, ctx.step) from exc
     if not reward_within_bound(raw):  # name the first bad value: term order, then env
         for k, i in np.argwhere(~(np.abs(raw) <= REWARD_BOUND)):  # also NaN
             check_reward(terms[k].name, float(raw[k, i]), envs[i].index, contexts[i].step)

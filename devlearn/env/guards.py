@@ -42,6 +42,38 @@ class GuardError(UsageError):
         return GuardError, (self.kind, self.name, self.value, self.env_index, self.step)
 
 
+class TermError(GuardError):
+    """A reward term raised an exception instead of returning a value; stops the run like a
+    :class:`GuardError` (the last good state is saved), naming the term, the environment and
+    the step.
+
+    Attributes:
+        error: The exception's type and message (``ZeroDivisionError: division by zero``).
+        env_index: The environment's index on this rank (-1 for a batched term, which is
+            called once for the whole batch).
+    """
+
+    def __init__(self, name: str, error: str, env_index: int, step: int) -> None:
+        self.kind, self.name, self.value, self.error = "reward term", name, float("nan"), error
+        self.env_index, self.step = int(env_index), int(step)
+        where = f"env {self.env_index}" if self.env_index >= 0 else "a batch of envs"
+        UsageError.__init__(
+            self, f"reward term '{name}' raised {error} in {where} at episode step {self.step}"
+        )
+
+    def __reduce__(self):
+        return TermError, (self.name, self.error, self.env_index, self.step)
+
+    @classmethod
+    def wrap(cls, name: str, exc: BaseException, env_index: int, step: int) -> TermError:
+        """The error for ``exc`` raised by term ``name`` (its message cut to one line)."""
+        text = " ".join(str(exc).split())
+        text = text if len(text) <= 200 else text[:197] + "..."
+        return cls(
+            name, f"{type(exc).__name__}: {text}" if text else type(exc).__name__, env_index, step
+        )
+
+
 def check_reward(name: str, value: float, env_index: int, step: int) -> float:
     """Return ``value`` if it is finite with ``abs(value) <= REWARD_BOUND``.
 

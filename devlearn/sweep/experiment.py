@@ -168,7 +168,12 @@ def run_sweep(
             else:
                 folder.mark_queued(run.job)
                 progress.line("queued", run.job.name)
-                executor.submit(run.job)
+                try:
+                    executor.submit(run.job)
+                except BaseException:  # an interrupt while queueing: stop what was queued
+                    executor.interrupt()
+                    executor.close()
+                    raise
                 active.append(run.job)
         totals = {run.job.name: run.total_steps for run in runs}
 
@@ -183,8 +188,10 @@ def run_sweep(
                 collect(POLL_S)
                 active = [job for job in active if job.name not in records]
                 progress.tick(active, totals)
-        except KeyboardInterrupt:
-            executor.interrupt()  # running runs save a checkpoint; queued ones never start
+        except BaseException:
+            # Ctrl-C, SIGTERM or any error: running runs save a checkpoint; queued ones never
+            # start (a sweep that stopped must not go on starting runs and evaluations)
+            executor.interrupt()
             executor.close()
             collect(0)
             raise

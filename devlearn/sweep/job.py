@@ -19,6 +19,9 @@ from typing import Any
 
 LOG_TAIL_LINES = 15
 """Lines of a failed run's log shown in its record and on the console."""
+PARENT_ENV = "DEVLEARN_PARENT_PID"
+"""Set by a sweep for the commands it starts: ``devlearn`` then gets SIGTERM when the sweep dies
+(see :func:`devlearn.cli.follow_parent`), so no run outlives a killed sweep."""
 STOP_GRACE_S = 2.0
 """After a stop request, how long a run may take to stop on its own (Ctrl-C reaches it
 directly) before it is sent SIGTERM, which also makes ``devlearn run`` save a checkpoint."""
@@ -171,6 +174,8 @@ class _Run:
                 stderr=subprocess.STDOUT,
                 stdin=subprocess.DEVNULL,
                 pass_fds=(lock_fd,),  # the run stays locked while its process lives
+                # the command ends (saving a checkpoint) when this sweep dies, even by SIGKILL
+                env={**os.environ, PARENT_ENV: str(os.getpid())},
             )
             if self.cores:
                 try:  # before the process starts its threads and workers, which inherit it

@@ -41,6 +41,7 @@ from devlearn.sweep.spec import (
     parse_seeds,
     value_text,
 )
+from devlearn.training.checks import ENVS_MAX, SEED_MAX, STEPS_MAX
 
 SECTIONS = {
     "": {"behavior", "out", "seeds", "grid", "train", "eval", "executor", "report"},
@@ -90,7 +91,7 @@ def read_sweep_file(path: str | Path) -> dict[str, Any]:
     return data
 
 
-def _integer(value: Any, option: str, minimum: int) -> int:
+def _integer(value: Any, option: str, minimum: int, maximum: int = 4_096) -> int:
     try:
         number = float(value)
         if not number.is_integer():
@@ -99,6 +100,8 @@ def _integer(value: Any, option: str, minimum: int) -> int:
         raise UsageError(f"{option} must be an integer, got '{value}'") from None
     if number < minimum:
         raise UsageError(f"{option} must be at least {minimum}, got {int(number)}")
+    if number > maximum:
+        raise UsageError(f"{option} must be at most {maximum:g}, got {number:g}")
     return int(number)
 
 
@@ -174,16 +177,18 @@ def build_spec(behavior: str, options: dict[str, Any], file: str | Path | None) 
         grid=grid,
         seeds=seeds,
         train=TrainSpec(
-            steps=None if steps is None else _integer(steps, "--steps", 1),
-            envs=None if envs is None else _integer(envs, "--envs", 1),
+            steps=None if steps is None else _integer(steps, "--steps", 1, STEPS_MAX),
+            envs=None if envs is None else _integer(envs, "--envs", 1, ENVS_MAX),
             workers=_integer(pick("workers", train, "workers", 0), "--workers", 0),
             cores=None if cores is None else _integer(cores, "--cores", 1),
             overrides=overrides,
             preset=str(pick("preset", train, "preset", "") or ""),
         ),
         evaluation=EvalSpec(
-            episodes=_integer(pick("episodes", evaluation, "episodes", 10), "--episodes", 1),
-            seed=_integer(pick("eval_seed", evaluation, "seed", 0), "--eval-seed", 0),
+            episodes=_integer(
+                pick("episodes", evaluation, "episodes", 10), "--episodes", 1, 1_000_000
+            ),
+            seed=_integer(pick("eval_seed", evaluation, "seed", 0), "--eval-seed", 0, SEED_MAX),
             args=_strings(pick("eval_args", evaluation, "args", []), "eval args"),
         ),
         executor=executor,

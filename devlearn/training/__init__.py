@@ -2,17 +2,53 @@
 
 from __future__ import annotations
 
-from devlearn.training.config import (
-    PPOConfig,
-    RunConfig,
-    default_config,
-    from_dict,
-    to_dict,
-    to_rsl_rl,
-)
-from devlearn.training.config_values import apply_overrides
-from devlearn.training.evaluate import evaluate
-from devlearn.training.train import TrainResult, train
+import sys
+import types
+
+# Loaded on first use (PEP 562): the light modules of this package (config, checks,
+# checkpoint names) are imported by commands that must not pay for torch.
+_PUBLIC = {
+    "PPOConfig": "devlearn.training.config",
+    "RunConfig": "devlearn.training.config",
+    "default_config": "devlearn.training.config",
+    "from_dict": "devlearn.training.config",
+    "to_dict": "devlearn.training.config",
+    "to_rsl_rl": "devlearn.training.config",
+    "apply_overrides": "devlearn.training.config_values",
+    "evaluate": "devlearn.training.evaluate",
+    "TrainResult": "devlearn.training.train",
+    "train": "devlearn.training.train",
+}
+
+
+def __getattr__(name: str):
+    module = _PUBLIC.get(name)
+    if module is None:
+        raise AttributeError(f"module 'devlearn.training' has no attribute '{name}'")
+    import importlib
+
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_PUBLIC))
+
+
+class _Package(types.ModuleType):
+    """``devlearn.training.train`` and ``.evaluate`` stay the functions, as when this package
+    imported them eagerly, also once their modules are imported (the import system then sets
+    the module as an attribute of its package)."""
+
+    def __setattr__(self, name: str, value) -> None:
+        if name in ("train", "evaluate") and isinstance(value, types.ModuleType):
+            value = getattr(value, name)
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Package
+
 
 __all__ = [
     "PPOConfig",

@@ -143,6 +143,70 @@ def remove_temporaries(run_dir: Path) -> list[Path]:
     return removed
 
 
+_STRINGS = {
+    "SHORT_BINUNICODE",
+    "BINUNICODE",
+    "BINUNICODE8",
+    "UNICODE",
+    "STRING",
+    "BINSTRING",
+    "SHORT_BINSTRING",
+}
+
+
+def _pickle_globals(path: Path, limit: int = 1 << 30) -> set[str]:
+    """The ``module.name`` of every class or function the pickles in ``path`` would import,
+    read from their opcodes (``pickletools``: nothing is executed). A legacy torch file is
+    several pickles in a row; bytes that are not a pickle end the scan."""
+    import pickletools
+    from _compat_pickle import IMPORT_MAPPING, NAME_MAPPING
+
+    names: set[str] = set()
+    try:
+        data = path.read_bytes()[:limit]
+    except OSError:
+        return names
+    stream = io.BytesIO(data)
+    while stream.tell() < len(data):
+        start = stream.tell()
+        memo: dict[int, Any] = {}
+        recent: list[Any] = []  # values pushed lately (STACK_GLOBAL takes the last two)
+        try:
+            for op, arg, _ in pickletools.genops(stream):
+                if op.name == "GLOBAL":  # protocols 0-2: Python 2 names mapped as load does
+                    module, _, name = str(arg).partition(" ")
+                    module, name = NAME_MAPPING.get((module, name), (module, name))
+                    names.add(f"{IMPORT_MAPPING.get(module, module)}.{name}")
+                elif op.name in _STRINGS:
+                    recent.append(arg)
+                elif op.name == "MEMOIZE" and recent:
+                    memo[len(memo)] = recent[-1]
+                elif op.name in ("PUT", "BINPUT", "LONG_BINPUT") and recent:
+                    memo[int(arg)] = recent[-1]
+                elif op.name in ("GET", "BINGET", "LONG_BINGET"):
+                    recent.append(memo.get(int(arg)))
+                elif op.name == "STACK_GLOBAL" and len(recent) >= 2:
+                    names.add(f"{recent[-2]}.{recent[-1]}")
+                elif op.name != "MEMOIZE":
+                    recent.append(None)
+        except Exception:
+            break  # not (or no longer) a pickle
+        if stream.tell() == start:
+            break
+    return names
+
+
+def _torch_safe_globals() -> set[str]:
+    """The names torch's weights-only loader allows in any file (tensors, storages, ordered
+    dicts...), so that only foreign ones are reported."""
+    try:
+        from torch import _weights_only_unpickler
+
+        return set(_weights_only_unpickler._get_allowed_globals())
+    except Exception:  # a torch without it: report every name found
+        return set()
+
+
 def _refused(path: Path, names: list[str]) -> UsageError:
     return UsageError(
         f"checkpoint {path} refused: it needs {', '.join(names)}, which a devlearn checkpoint "
@@ -167,10 +231,11 @@ def load_checkpoint(path: str | Path, required: tuple[str, ...] = POLICY_KEYS) -
         raise UsageError(f"checkpoint {path} does not exist")
     try:
         # A scan of the pickle's opcodes (nothing executed) names every foreign type at once.
-        unsafe = torch.serialization.get_unsafe_globals_in_checkpoint(path)
+        unsafe = set(torch.serialization.get_unsafe_globals_in_checkpoint(path))
     except Exception:
-        unsafe = []  # not a zip checkpoint: torch.load below says what is wrong
-    foreign = sorted(set(unsafe) - _global_names())
+        # not a zip checkpoint (a plain or legacy torch pickle): scan its opcodes ourselves
+        unsafe = _pickle_globals(path) - _torch_safe_globals()
+    foreign = sorted(unsafe - _global_names())
     if foreign:
         raise _refused(path, foreign)
     try:
@@ -225,10 +290,67 @@ def _check_shapes(state: dict[str, Any], path: Path, required: tuple[str, ...]) 
             and isinstance(ranks[0].get("envs"), list)
         ):
             raise UsageError(f"checkpoint {path} is damaged: 'env' lacks the envs' state")
+    for key in ("iteration", "env_steps"):
+        if key in required and state[key] < 0:
+            raise UsageError(f"checkpoint {path} is damaged: '{key}' is {state[key]}, below 0")
     if "rng" in required:
         missing = [k for k in ("torch", "numpy", "random") if k not in state["rng"]]
         if missing:
             raise UsageError(f"checkpoint {path} is damaged: 'rng' lacks {', '.join(missing)}")
+        _check_rng(state["rng"], path)
+
+
+def _check_rng(rng: dict[str, Any], path: Path) -> None:
+    """Raise UsageError unless each saved generator state loads into a fresh generator of its
+    kind (so a resume cannot fail half-way through its restore)."""
+    import random
+
+    loaders = {
+        "torch": lambda v: torch.Generator().set_state(v),
+        "numpy": lambda v: np.random.RandomState().set_state(v),
+        "random": lambda v: random.Random().setstate(v),
+    }
+    for name, load in loaders.items():
+        try:
+            load(rng[name])
+        except Exception as exc:
+            reason = " ".join(str(exc).split())[:120] or type(exc).__name__
+            raise UsageError(
+                f"checkpoint {path} is damaged: 'rng' holds an unusable {name} state ({reason})"
+            ) from None
+
+
+def state_dict_mismatch(expected: dict[str, Any], saved: Any) -> str | None:
+    """What keeps ``saved`` (a checkpoint's network weights) from loading into a network whose
+    ``state_dict()`` is ``expected``: the first missing, unexpected or mis-shaped entry (None
+    when it fits)."""
+    if not isinstance(saved, dict):
+        return f"it holds a {type(saved).__name__}, not weights by name"
+    missing = [k for k in expected if k not in saved]
+    if missing:
+        return f"it lacks '{missing[0]}' ({len(missing)} missing in all)"
+    extra = [k for k in saved if k not in expected]
+    if extra:
+        return f"it holds '{extra[0]}', which the network has not ({len(extra)} unknown in all)"
+    for key, value in expected.items():
+        got = saved[key]
+        if not isinstance(got, torch.Tensor):
+            return f"'{key}' is a {type(got).__name__}, not a tensor"
+        if tuple(got.shape) != tuple(value.shape):
+            return f"'{key}' has shape {tuple(got.shape)}, the network expects {tuple(value.shape)}"
+    return None
+
+
+def check_fits(expected: dict[str, Any], saved: Any, source: str, what: str) -> None:
+    """Raise UsageError when ``what`` of a checkpoint (e.g. ``actor_state_dict``), named by
+    ``source`` (``checkpoint PATH``), cannot load into a network whose ``state_dict()`` is
+    ``expected`` (the one its behaviour builds under its config)."""
+    reason = state_dict_mismatch(expected, saved)
+    if reason:
+        raise UsageError(
+            f"{source} does not fit the network its behaviour builds under its config: "
+            f"{what}: {reason}"
+        )
 
 
 def check_behavior(state: dict[str, Any], path: str | Path, behavior_name: str) -> None:
@@ -249,19 +371,32 @@ def periodic_checkpoints(run_dir: Path) -> list[Path]:
     return [p for _, p in sorted(found, reverse=True)]
 
 
-def resume_checkpoint(run_dir: str | Path) -> tuple[Path, dict[str, Any]]:
+def resume_checkpoint(
+    run_dir: str | Path, skipped: list[str] | None = None
+) -> tuple[Path, dict[str, Any]]:
     """Return the run's newest checkpoint that loads, by the env steps it holds:
     ``checkpoint_latest.pt`` unless a ``checkpoint_<step>.pt`` that loads is further along.
 
+    Args:
+        run_dir: The run folder.
+        skipped: If given, receives one sentence per newer checkpoint that did not load and
+            was passed over (so that a caller can say it resumes from an older one).
     Raises:
-        UsageError: No directory, or no readable checkpoint in it.
+        UsageError: No directory, or no readable checkpoint in it (a run stopped before its
+            first checkpoint is told to start again with --force; the unfinished temporary
+            files such a run leaves are removed).
     """
     run_dir = Path(run_dir)
     if not run_dir.is_dir():
         raise UsageError(f"run directory {run_dir} does not exist")
     periodic = periodic_checkpoints(run_dir)
     if not (run_dir / LATEST).exists() and not periodic:
-        raise UsageError(f"no checkpoint in {run_dir} (expected {LATEST}); nothing to resume")
+        removed = remove_temporaries(run_dir)
+        note = f" (removed {len(removed)} unfinished checkpoint file(s))" if removed else ""
+        raise UsageError(
+            f"no checkpoint in {run_dir}: the run stopped before its first checkpoint, so there "
+            f"is nothing to resume{note}; start it again with --out {run_dir} --force"
+        )
     errors = []
     best: tuple[Path, dict[str, Any]] | None = None
     if (run_dir / LATEST).exists():
@@ -282,4 +417,10 @@ def resume_checkpoint(run_dir: str | Path) -> tuple[Path, dict[str, Any]]:
         break
     if best is None:
         raise UsageError(f"no readable checkpoint in {run_dir}: {errors[0]}")
+    if errors and skipped is not None:
+        skipped += [
+            f"{error}; resuming from {best[0].name} (step {best[1]['env_steps']:,}), the newest "
+            "that loads"
+            for error in errors
+        ]
     return best

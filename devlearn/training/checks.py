@@ -31,27 +31,50 @@ def _positive(cfg, name: str, low: float = 0.0, high: float = math.inf, closed: 
         raise UsageError(f"ppo.{name} must be a finite number in {lo}{low:g}, {hi}, got {value}")
 
 
+STEPS_MAX = 10**12
+"""Largest ``--steps`` (a million times the paper's 8M-step runs; beyond it counters and the
+progress bar overflow)."""
+ENVS_MAX = 1_000_000
+"""Largest ``--envs`` per rank."""
+WORKERS_MAX = 4_096
+"""Largest ``--workers`` per rank."""
+THREADS_MAX = 4_096
+"""Largest ``torch_threads`` / ``update_threads``."""
+INTERVAL_MAX = 10**9
+"""Largest ``save_interval`` (iterations)."""
+PPO_COUNT_MAX = 10**6
+"""Largest rollout length, epochs and mini-batches per iteration."""
+
+
+def _whole(value, option: str, low: int, high: int, low_note: str = "") -> None:
+    """Raise UsageError unless ``value`` is an integer in ``[low, high]``."""
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise UsageError(f"{option} must be an integer, got {value!r}")
+    if value < low:
+        note = f" ({low_note})" if low_note else ""
+        raise UsageError(f"{option} must be at least {low}{note}, got {value}")
+    if value > high:
+        raise UsageError(f"{option} must be at most {high:g}, got {value:g}")
+
+
 def check_config(cfg) -> None:
-    """Reject values that would fail later (or train on garbage) with a less clear error."""
-    if cfg.total_steps < 1:
-        raise UsageError(f"--steps must be at least 1, got {cfg.total_steps}")
-    if cfg.num_envs < 1:
-        raise UsageError(f"--envs must be at least 1, got {cfg.num_envs}")
-    if cfg.workers < -1:
-        raise UsageError(f"--workers must be 0 or more (or -1: automatic), got {cfg.workers}")
+    """Reject values that would fail later (or train on garbage) with a less clear error: every
+    number within bounds (each message one line naming the option and its valid range), checked
+    before anything is written."""
+    _whole(cfg.total_steps, "--steps", 1, STEPS_MAX)
+    _whole(cfg.num_envs, "--envs", 1, ENVS_MAX)
+    _whole(cfg.workers, "--workers", -1, WORKERS_MAX, "-1: one per core, 0: in process")
     if not 0 <= cfg.seed <= SEED_MAX:
-        raise UsageError(f"--seed must be an integer from 0 to {SEED_MAX}, got {cfg.seed}")
-    if cfg.torch_threads < 0 or cfg.update_threads < 0:
-        raise UsageError("torch_threads and update_threads must be 0 (automatic) or more")
-    if cfg.save_interval < 1:
-        raise UsageError(f"save_interval must be at least 1, got {cfg.save_interval}")
+        raise UsageError(f"--seed must be an integer from 0 to {SEED_MAX}, got {cfg.seed:g}")
+    _whole(cfg.torch_threads, "torch_threads", 0, THREADS_MAX, "0: automatic")
+    _whole(cfg.update_threads, "update_threads", 0, THREADS_MAX, "0: automatic")
+    _whole(cfg.save_interval, "save_interval", 1, INTERVAL_MAX)
     if not _DEVICE.match(cfg.device):
         raise UsageError(f"--device must be cpu, cuda or cuda:N, got '{cfg.device}'")
     if cfg.ppo.schedule not in ("adaptive", "fixed"):
         raise UsageError(f"ppo.schedule must be adaptive or fixed, got '{cfg.ppo.schedule}'")
     for name in ("num_steps_per_env", "num_learning_epochs", "num_mini_batches"):
-        if getattr(cfg.ppo, name) < 1:
-            raise UsageError(f"ppo.{name} must be at least 1, got {getattr(cfg.ppo, name)}")
+        _whole(getattr(cfg.ppo, name), f"ppo.{name}", 1, PPO_COUNT_MAX)
     _positive(cfg, "learning_rate", high=1.0)
     _positive(cfg, "clip_param", high=1.0)
     _positive(cfg, "gamma", high=1.0)

@@ -260,7 +260,13 @@ def _fill(obj: Any, data: dict[str, Any], prefix: str) -> None:
     hints = field_types(obj)
     for name, value in data.items():
         current = getattr(obj, name, None)
-        if dataclasses.is_dataclass(current) and isinstance(value, dict):
+        if dataclasses.is_dataclass(current):
+            if not isinstance(value, dict):
+                shown = repr(value) if len(repr(value)) <= 40 else repr(value)[:37] + "..."
+                raise UsageError(
+                    f"saved config is damaged: '{prefix}{name}' holds {shown}, "
+                    "not a table of its fields"
+                )
             _fill(current, value, f"{prefix}{name}.")
         elif name in {f.name for f in dataclasses.fields(obj)}:
             setattr(obj, name, convert(value, hints.get(name, Any), prefix + name))

@@ -55,8 +55,11 @@ def convert(value: Any, kind: Any, key: str) -> Any:
             item_kind = args[0] if args else Any
             items = [convert(v, item_kind, key) for v in items]
             return tuple(items) if (origin or kind) is tuple else list(items)
-        if isinstance(value, str) and (origin is dict or kind is dict):
-            return json.loads(value)
+        if origin is dict or kind is dict:
+            table = json.loads(value) if isinstance(value, str) else value
+            if not isinstance(table, dict):
+                raise ValueError("expected a table")
+            return table
     except (ValueError, TypeError):
         raise UsageError(f"bad value {value!r} for {key}: expected {_expected(kind)}") from None
     return value

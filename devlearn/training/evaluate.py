@@ -18,7 +18,7 @@ from tqdm import tqdm
 
 from devlearn.env.behavior_env import BehaviorEnv
 from devlearn.errors import UsageError
-from devlearn.training.checkpoint import LATEST, check_behavior, load_checkpoint
+from devlearn.training.checkpoint import LATEST, check_behavior, check_fits, load_checkpoint
 from devlearn.training.config import (
     RunConfig,
     apply_overrides,
@@ -145,6 +145,8 @@ def load_actor(
         groups = resolve_obs_groups(batch, train_cfg["obs_groups"], ["actor", "critic"])
     actor_class, actor_kwargs = resolve_class(train_cfg["actor"])
     actor = actor_class(batch, groups, "actor", action_dim, **actor_kwargs)
+    source = f"the {behavior.name} checkpoint"
+    check_fits(actor.state_dict(), checkpoint["actor_state_dict"], source, "actor_state_dict")
     actor.load_state_dict(checkpoint["actor_state_dict"])
     return actor.eval()
 

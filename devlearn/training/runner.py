@@ -261,8 +261,11 @@ class DevRunner(RunnerCheckpoints, RunnerMetrics, OnPolicyRunner):
             saved = self._fault_checkpoint(good)
             if isinstance(exc, GuardError) or exc.died:
                 rank = f" on rank {self.gpu_global_rank}" if self.is_distributed else ""
+                # counted from 1, of the run's total: the iteration under way, after the
+                # completed ones the checkpoint holds
+                under_way = self.current_learning_iteration + 1
                 raise RunStopped(
-                    f"{exc}{rank}, in iteration {self.current_learning_iteration}; {saved}"
+                    f"{exc}{rank}, during iteration {under_way} of {total_it}; {saved}"
                 ) from None
             print(f"devlearn: {saved}", file=sys.stderr)
             raise

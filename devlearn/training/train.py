@@ -6,6 +6,7 @@ import errno
 import json
 import os
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -15,9 +16,12 @@ import torch
 from devlearn.env import DevVecEnv
 from devlearn.errors import UsageError
 from devlearn.training.checkpoint import (
+    LATEST,
     RESUME_KEYS,
     check_behavior,
+    check_fits,
     load_checkpoint,
+    periodic_checkpoints,
     remove_temporaries,
     resume_checkpoint,
 )
@@ -109,6 +113,7 @@ def train(
     infant_factory=None,
     progress: bool = True,
     force: bool = False,
+    started: Callable[[Path], None] | None = None,
 ) -> TrainResult:
     """Train ``cfg.behavior_name`` with PPO; return where and how far it got.
 
@@ -127,6 +132,8 @@ def train(
         progress: Show a progress bar.
         force: Start a new run in ``cfg.out_dir`` even if it holds one (its contents are
             deleted once the new run has started); without it such a folder is refused.
+        started: Called with the run folder once every check has passed, before anything is
+            written (``devlearn run`` prints it there, so a refusal prints only its error).
 
     Everything that can be checked (config values, the checkpoint's env count, memory, the
     folder) is checked before anything is written; a start that fails anyway (e.g. the envs
@@ -138,7 +145,7 @@ def train(
             last good state is written first).
     """
     # Config (and, when resuming, the checkpoint it continues from).
-    checkpoint = None
+    checkpoint, ckpt_path = None, None
     if resume is not None:
         run_dir = Path(resume)
         ckpt_path, checkpoint = resume_checkpoint(run_dir)
@@ -149,11 +156,16 @@ def train(
     else:
         run_dir = Path(cfg.out_dir) if cfg.out_dir else default_run_dir(cfg.behavior_name)
         if start_from is not None:
-            checkpoint = load_checkpoint(start_from, RESUME_KEYS)
+            checkpoint, ckpt_path = load_checkpoint(start_from, RESUME_KEYS), start_from
             check_resumable(cfg, checkpoint, start_from)
             cfg.start_from = str(start_from)
     rank = int(os.environ.get("RANK", "0"))
     if resume is None and rank == 0 and holds_run(run_dir) and not force:
+        if not (run_dir / LATEST).exists() and not periodic_checkpoints(run_dir):
+            raise UsageError(
+                f"--out {run_dir} holds a run that stopped before its first checkpoint "
+                "(nothing to resume); replace it with --force (deletes what the folder holds)"
+            )
         raise UsageError(
             f"--out {run_dir} already holds a run; continue it with --resume {run_dir}, "
             "or replace it with --force (deletes what the folder holds)"
@@ -166,6 +178,8 @@ def train(
     cfg.workers = resolve_workers(cfg.workers, cfg.num_envs)  # config.json records the number
     learned = LearnedRewards.from_config(cfg, registry)  # names checked before the slow set-up
     check_memory(cfg.num_envs, cfg.workers)
+    if started is not None and rank == 0:
+        started(run_dir)
     with start_up(run_dir, replace=force and resume is None, owner=rank == 0):
         env, runner = _build(
             cfg,
@@ -179,6 +193,7 @@ def train(
             device,
             learned,
             start_from,
+            ckpt_path,
         )
     try:
         # Learn; the runner saves checkpoints periodically, at the end and on Ctrl-C.
@@ -213,6 +228,7 @@ def _build(
     device,
     learned,
     start_from=None,
+    ckpt_path=None,
 ):
     """Start-up after the checks: seed, prepare the behaviour, write config.json, build the
     envs and the runner (restored from ``checkpoint``, with the ``learned`` rewards; from
@@ -270,7 +286,7 @@ def _build(
         if checkpoint is not None:
             if start_from is not None and rank == 0:
                 copy_metrics(Path(start_from).parent, run_dir, int(checkpoint["env_steps"]))
-            runner.restore(checkpoint, curriculum=start_from is None)
+            _restore(runner, checkpoint, start_from is None, f"checkpoint {ckpt_path}")
         if rank > 0:
             # Every rank built its networks from the same seed (rank 0's are broadcast anyway);
             # from here on each rank draws its own action noise, also after a resume, which
@@ -280,3 +296,18 @@ def _build(
         env.close()
         raise
     return env, runner
+
+
+def _restore(runner, checkpoint: dict[str, Any], curriculum: bool, source: str) -> None:
+    """``runner.restore`` after checking that the checkpoint's weights fit the networks this
+    config builds; a value that still does not load is one line naming the checkpoint."""
+    fresh = runner.alg.save()
+    for key in ("actor_state_dict", "critic_state_dict"):
+        if key in fresh:
+            check_fits(fresh[key], checkpoint[key], source, key)
+    try:
+        runner.restore(checkpoint, curriculum=curriculum)
+    except (RuntimeError, ValueError, TypeError, KeyError, IndexError) as exc:
+        reason = " ".join(str(exc).split())
+        reason = reason if len(reason) <= 200 else reason[:197] + "..."
+        raise UsageError(f"{source} cannot be restored: {type(exc).__name__}: {reason}") from None

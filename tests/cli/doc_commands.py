@@ -6,8 +6,9 @@ import re
 import shlex
 import sys
 
-TINY = {"--steps": "256", "--envs": "2", "--episodes": "1", "--workers": "0"}
-"""Option -> the small value a test substitutes (added to ``devlearn run`` when missing)."""
+TINY = {"--steps": "256", "--envs": "2", "--episodes": "1", "--workers": "0", "--seeds": "1"}
+"""Option -> the small value a test substitutes (added to ``devlearn run`` when missing). A
+sweep keeps its grid (each variant still trains, evaluates and reports) but runs one seed."""
 
 
 def blocks(markdown: str, language: str) -> list[str]:

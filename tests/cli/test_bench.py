@@ -83,3 +83,12 @@ def test_batched_and_per_env_observation_paths_are_measured_in_one_run():
     assert observations_old_and_new(old, steps=20, vec_steps=2) == {}  # nothing batched
     table = format_table(figures)
     assert "self_touch_per_env_observations, ms per step" in table
+
+
+def test_bench_reports_cli_start_up():
+    from devlearn.bench import STARTUP_COMMANDS, cli_startup_s
+
+    assert set(STARTUP_COMMANDS) == {"help", "plugins", "config", "info"}
+    assert cli_startup_s(["--help"], repeats=1) > 0
+    table = format_table({"startup_help_s": 0.84})
+    assert "| start-up: devlearn --help | 0.84 s | - | < 1.5 |" in table

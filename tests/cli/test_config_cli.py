@@ -50,6 +50,10 @@ def test_table_groups_sections(capsys):
     out = capsys.readouterr().out
     assert "[run]" in out and "[ppo]" in out and "[behavior]" in out
     assert "  ppo.clip_param: float = 0.2" in out
+    headers = [line for line in out.splitlines() if line.startswith("[")]
+    assert len(headers) == len(set(headers)), headers  # each section once
+    run = out.split("[run]")[1].split("\n[")[0]
+    assert "  curiosity: " in run and "  total_steps: " in run  # the run's keys together
 
 
 @pytest.mark.parametrize(

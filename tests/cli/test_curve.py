@@ -96,3 +96,52 @@ def test_curve_compares_the_evaluations_of_two_runs(tmp_path, monkeypatch):
     args.run_dirs = first
     assert curve.run(args, None) == 0
     assert out.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_curve_of_evaluations_draws_headlines_keeps_starts_apart_and_saves_beside(
+    tmp_path, monkeypatch
+):
+    from matplotlib.figure import Figure
+
+    run = tmp_path / "run"
+    dirs = []
+    for steps in (1000, 2000):
+        for start, score in (("stage", 0.2 * steps / 1000), ("rest", 0.9)):
+            eval_dir = run / f"eval_{steps}_{start}"
+            eval_dir.mkdir(parents=True)
+            summary = {
+                "episodes": 100,
+                "score": score,
+                "coverage_total": 30,
+                "settle_steps": 10,
+                "episode_score_mean": score / 2,
+                "episode_score_std": 0.1,
+                "episode_score_ci_low": score / 2 - 0.05,
+                "episode_score_ci_high": score / 2 + 0.05,
+                "training_seed": 1,
+                "checkpoint_env_steps": steps,
+                "protocol": {"headline": "score", "start": start, "stage": {"random_pose": True}},
+            }
+            (eval_dir / "eval.json").write_text(json.dumps(summary))
+            dirs.append(eval_dir)
+    rows = curve.read_evaluations(dirs)
+    assert curve.default_eval_metrics(rows) == ["score", "episode_score_mean"]
+    lines = curve._by_start([(run, rows)])
+    assert [label for label, _ in lines] == [f"{run}, random starts", f"{run}, rest start"]
+    assert [r["score"] for r in lines[0][1]] == [0.2, 0.4] and [
+        r["score"] for r in lines[1][1]
+    ] == [0.9, 0.9]
+    drawn = []
+    save = Figure.savefig
+    monkeypatch.setattr(
+        Figure, "savefig", lambda fig, *a, **k: (drawn.append(fig), save(fig, *a, **k))
+    )
+    args = _args(dirs[0])
+    args.run_dirs = dirs
+    assert curve.run(args, None) == 0
+    assert (run / "eval_curve.png").exists()  # beside the evaluations, not inside one
+    assert not any(p.name.endswith(".png") for d in dirs for p in d.iterdir())
+    (fig,) = drawn
+    assert [ax.get_ylabel() for ax in fig.axes] == ["score", "episode_score_mean"]
+    assert all(len(ax.get_lines()) == 2 for ax in fig.axes)  # one line per start
+    assert "evaluations of 2 checkpoints (random starts / rest start)" in fig._suptitle.get_text()

@@ -1,7 +1,7 @@
 """Every command in the README's bash blocks runs (tiny budgets), so the README cannot drift.
 
 What is substituted (printed by ``-v`` runs through the test ids): ``--steps``, ``--envs``,
-``--episodes`` and ``--workers`` get the small values of ``doc_commands.TINY`` (``devlearn
+``--episodes``, ``--workers`` and a sweep's ``--seeds`` get the small values of ``doc_commands.TINY`` (``devlearn
 run`` gets them added when missing); ``.venv/bin/`` prefixes are dropped (the test runs the
 installed ``devlearn`` of this interpreter); globs expand in the test's folder. Skipped, by rule:
 the set-up script and ``python -m pytest`` (CI runs them around this very test), ``source``, and
@@ -68,6 +68,8 @@ def test_shrink_substitutes_tiny_budgets():
     resume = doc_commands.shrink("devlearn run x --resume runs/a".split())
     assert "--steps" not in resume  # a resumed run keeps its own budget
     assert doc_commands.shrink(["devlearn", "eval", "--episodes", "100"])[-1] == "1"
+    sweep = doc_commands.shrink("devlearn sweep x --grid a=1,2 --seeds 1,2,3".split())
+    assert sweep[-4:] == ["--grid", "a=1,2", "--seeds", "1"]  # the grid stays, one seed
 
 
 @pytest.mark.slow

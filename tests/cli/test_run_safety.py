@@ -116,6 +116,15 @@ def test_a_rejected_resume_leaves_config_json_as_it_was(cli, run_dir, capsys):
         (["--set", "ppo.learning_rate=inf"], "ppo.learning_rate must be a finite number"),
         (["--set", "ppo.gamma=inf"], "ppo.gamma must be a finite number in (0, 1], got inf"),
         (["--set", "ppo.clip_param=-1"], "ppo.clip_param must be a finite number in (0, 1]"),
+        (["--steps", "1e30"], "--steps must be at most 1e+12, got 1e+30"),
+        (["--envs", "1e9"], "--envs must be at most 1e+06, got 1e+09"),
+        (["--workers", "1e9"], "--workers must be at most 4096, got 1e+09"),
+        (["--workers", "-2"], "--workers must be at least -1 (-1: one per core, 0: in process)"),
+        (["--set", "save_interval=1e20"], "save_interval must be at most 1e+09, got 1e+20"),
+        (["--set", "torch_threads=1e9"], "torch_threads must be at most 4096"),
+        (["--set", "update_threads=-1"], "update_threads must be at least 0 (0: automatic)"),
+        (["--set", "ppo.num_steps_per_env=1e12"], "ppo.num_steps_per_env must be at most 1e+06"),
+        (["--set", "ppo.num_mini_batches=0"], "ppo.num_mini_batches must be at least 1, got 0"),
     ],
 )
 def test_bad_values_are_one_line_errors(cli, tmp_path, capsys, argv, expected):
@@ -124,11 +133,38 @@ def test_bad_values_are_one_line_errors(cli, tmp_path, capsys, argv, expected):
     assert not out.exists()
 
 
+@pytest.mark.parametrize(
+    ("argv", "expected"),
+    [
+        (["--episodes", "100000000000"], "--episodes must be at most 1000000"),
+        (["--episodes", "0"], "--episodes must be at least 1, got 0"),
+        (["--seed", "1" + "0" * 20], "--seed must be at most 4294967295"),
+    ],
+)
+def test_bad_eval_numbers_are_one_line_errors(cli, tmp_path, capsys, argv, expected):
+    out = tmp_path / "eval"
+    err = error(cli, capsys, "eval", "tiny", "--policy", "zero", "--out", str(out), *argv)
+    assert expected in err
+    assert not out.exists()
+
+
 def test_more_envs_than_memory_is_refused_before_building_them(cli, tmp_path, capsys, monkeypatch):
     monkeypatch.setattr(checks, "available_memory_mb", lambda: 1000.0)
     out = tmp_path / "run"
-    err = error(cli, capsys, "run", "tiny", "--steps", "16", "--envs", "1000", "--workers", "0",
-                "--out", str(out))
+    err = error(
+        cli,
+        capsys,
+        "run",
+        "tiny",
+        "--steps",
+        "16",
+        "--envs",
+        "1000",
+        "--workers",
+        "0",
+        "--out",
+        str(out),
+    )
     assert "--envs 1000 needs at least 9.8 GB of memory" in err and "use --envs 100 or fewer" in err
     assert not out.exists()
     assert "--envs 100000 needs at least" in error(cli, capsys, "run", "tiny", "--envs", "100000")
@@ -186,6 +222,87 @@ def test_a_checkpoint_missing_keys_is_refused(cli, run_dir, tmp_path, capsys):
     assert "is incomplete: it lacks actor_state_dict" in err
 
 
+def damage(run_dir: Path, change) -> dict:
+    """Apply ``change(state)`` to every checkpoint of the run (our own files: trusted here)."""
+    for path in run_dir.glob("checkpoint_*.pt"):
+        state = torch.load(path, weights_only=False)
+        change(state)
+        path.unlink()
+        torch.save(state, path)
+    return state
+
+
+def first_tensor(state: dict, key: str) -> str:
+    return next(iter(state[key]))
+
+
+@pytest.mark.parametrize(
+    ("change", "expected"),
+    [
+        (
+            lambda s: s["actor_state_dict"].update(
+                {first_tensor(s, "actor_state_dict"): torch.zeros(3, 3)}
+            ),
+            "does not fit the network its behaviour builds under its config: actor_state_dict:",
+        ),
+        (lambda s: s.update(iteration=-100), "is damaged: 'iteration' is -100, below 0"),
+        (lambda s: s.update(env_steps=-100), "is damaged: 'env_steps' is -100, below 0"),
+        (
+            lambda s: s["rng"].update(numpy=("MT19937", [1, 2, 3])),
+            "is damaged: 'rng' holds an unusable numpy state",
+        ),
+        (
+            lambda s: s["rng"].update(torch=torch.zeros(7, dtype=torch.uint8)),
+            "is damaged: 'rng' holds an unusable torch state",
+        ),
+        (lambda s: s["rng"].update(random=(3, (1, 2), None)), "unusable random state"),
+    ],
+)
+def test_a_checkpoint_with_bad_values_is_refused_on_resume(cli, run_dir, capsys, change, expected):
+    damage(run_dir, change)
+    before = files(run_dir)
+    err = error(cli, capsys, "run", "tiny", "--resume", str(run_dir), "--steps", "64")
+    assert expected in err
+    assert files(run_dir) == before
+
+
+@pytest.mark.parametrize(
+    ("change", "expected"),
+    [
+        (
+            lambda s: s["actor_state_dict"].update(
+                {first_tensor(s, "actor_state_dict"): torch.zeros(3, 3)}
+            ),
+            "does not fit the network its behaviour builds under its config: actor_state_dict: '",
+        ),
+        (
+            lambda s: s["actor_state_dict"].pop(first_tensor(s, "actor_state_dict")),
+            "actor_state_dict: it lacks '",
+        ),
+        (lambda s: s["config"].update(behavior=5), "'behavior' holds 5, not a table of its fields"),
+        (lambda s: s["config"].update(ppo=[1]), "'ppo' holds [1], not a table of its fields"),
+    ],
+)
+def test_a_checkpoint_with_bad_values_is_refused_on_eval(
+    cli, run_dir, tmp_path, capsys, change, expected
+):
+    damage(run_dir, change)
+    out = tmp_path / "eval"
+    err = error(
+        cli,
+        capsys,
+        "eval",
+        "tiny",
+        "--checkpoint",
+        str(run_dir),
+        "--episodes",
+        "1",
+        "--out",
+        str(out),
+    )
+    assert expected in err
+
+
 def test_a_full_disk_is_reported_as_such(cli, run_dir, capsys, monkeypatch):
     class FullDisk:
         def __init__(self, *args, **kwargs):
@@ -209,3 +326,78 @@ def test_a_full_disk_is_reported_as_such(cli, run_dir, capsys, monkeypatch):
     assert err.startswith("devlearn: error: ") and "Traceback" not in printed
     assert "disk full: cannot write" in err and "the previous checkpoint is kept" in err
     assert (run_dir / "checkpoint_latest.pt").read_bytes() == before
+
+
+# --- resuming: what it keeps and what it says -----------------------------------------------
+
+
+def test_resume_refuses_another_seed_and_keeps_config_json(cli, run_dir, capsys):
+    config = (run_dir / "config.json").read_bytes()
+    for argv in (["--seed", "7"], ["--set", "seed=7"]):
+        err = error(cli, capsys, "run", "tiny", "--resume", str(run_dir), "--steps", "64", *argv)
+        assert f"run {run_dir} was trained with seed 1, which a resumed run keeps" in err
+        assert "--seed 7 --out NEW_DIR" in err
+        assert (run_dir / "config.json").read_bytes() == config
+    assert cli(["run", "tiny", "--resume", str(run_dir), "--steps", "48", "--seed", "1"]) == 0
+
+
+def test_resume_says_when_it_falls_back_to_an_older_checkpoint(cli, run_dir, capsys):
+    assert sorted(p.name for p in run_dir.glob("checkpoint_*.pt"))[-1] == "checkpoint_latest.pt"
+    (run_dir / "checkpoint_latest.pt").unlink()
+    (run_dir / "checkpoint_latest.pt").write_bytes(b"garbage")
+    capsys.readouterr()
+    assert cli(["run", "tiny", "--resume", str(run_dir), "--steps", "48"]) == 0
+    err = capsys.readouterr().err
+    assert "devlearn: warning: checkpoint " in err and "checkpoint_latest.pt is corrupt" in err
+    assert "resuming from checkpoint_32.pt (step 32), the newest that loads" in err
+
+
+def test_a_run_killed_before_its_first_checkpoint_says_how_to_restart(cli, run_dir, capsys):
+    for path in run_dir.glob("checkpoint_*.pt"):
+        path.unlink()
+    temporary = run_dir / ".checkpoint_latest.pt.tmp-12345"
+    temporary.write_bytes(b"")  # what a kill during the first save leaves
+    err = error(cli, capsys, "run", "tiny", "--resume", str(run_dir))
+    assert "the run stopped before its first checkpoint, so there is nothing to resume" in err
+    assert f"start it again with --out {run_dir} --force" in err
+    assert "removed 1 unfinished checkpoint file" in err and not temporary.exists()
+    err = error(cli, capsys, "run", "tiny", "--out", str(run_dir), *SMALL)
+    assert "holds a run that stopped before its first checkpoint (nothing to resume)" in err
+    assert "--resume" not in err
+    assert cli(["run", "tiny", "--steps", "16", "--out", str(run_dir), "--force", *SMALL]) == 0
+
+
+def test_a_refusal_prints_only_its_error(cli, run_dir, capsys):
+    capsys.readouterr()
+    assert cli(["run", "tiny", "--steps", "16", "--out", str(run_dir), *SMALL]) == 2
+    printed = capsys.readouterr()
+    assert printed.out == "" and "already holds a run" in printed.err
+
+
+@pytest.mark.parametrize("protocol", [0, 2, 4, 5, "legacy"])
+def test_a_plain_pickle_with_a_payload_is_refused_by_name(cli, tmp_path, capsys, protocol):
+    marker = tmp_path / "marker"
+    crafted = tmp_path / "crafted.pt"
+    state = {"format": "devlearn-checkpoint-1", "behavior": "tiny", "x": Payload(marker)}
+    if protocol == "legacy":
+        torch.save(state, crafted, _use_new_zipfile_serialization=False)
+    else:
+        import pickle
+
+        crafted.write_bytes(pickle.dumps(state, protocol=protocol))
+    err = error(cli, capsys, "eval", "tiny", "--checkpoint", str(crafted), "--episodes", "1")
+    assert f"checkpoint {crafted} refused: it needs builtins.exec" in err
+    assert not marker.exists()
+
+
+def test_failed_commands_leave_no_new_folders(cli, tmp_path, capsys):
+    missing = tmp_path / "runs" / "nope" / "checkpoint_latest.pt"
+    err = error(cli, capsys, "eval", "tiny", "--checkpoint", str(missing), "--episodes", "1")
+    assert "does not exist" in err and not (tmp_path / "runs").exists()
+    out = tmp_path / "reports" / "r"
+    error(cli, capsys, "report", str(tmp_path / "no_eval_here"), "--out", str(out))
+    assert not (tmp_path / "reports").exists()
+    kept = tmp_path / "kept"
+    kept.mkdir()
+    error(cli, capsys, "eval", "tiny", "--checkpoint", str(missing), "--out", str(kept))
+    assert kept.is_dir()  # what existed before stays

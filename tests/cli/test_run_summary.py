@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+import json
 import sys
 from pathlib import Path
 
@@ -92,3 +93,46 @@ def test_the_suggested_curve_works_before_any_episode_ended(tmp_path):
     args = {"run_dirs": [tmp_path], "metric": None, "smooth": 3, "out": None, "vs": None}
     assert curve.run(argparse.Namespace(**args), None) == 0  # plots mean_step_reward
     assert (tmp_path / "learning_curve.png").exists()
+
+
+def test_a_run_without_finished_episodes_says_why(cli, tmp_path, capsys):
+    out = tmp_path / "run"  # 2 envs x 8 steps: the 10-step episodes never end
+    assert cli(["run", "tiny", "--steps", "16", "--out", str(out), *SMALL]) == 0
+    printed = capsys.readouterr().out
+    assert (
+        "- (no episode finished: each of the 2 environments ran 8 steps, less than one episode"
+        in printed
+    )
+
+
+class PaperTiny(TinyBehavior):
+    """The tiny behaviour with a preset that sets a full run's budget."""
+
+    name = "tiny"
+
+    def presets(self):
+        return {"paper": {"total_steps": 320}, "other": {"seed": 3}}
+
+
+def test_the_summary_puts_the_run_beside_baselines_and_its_budget(tmp_path, monkeypatch, capsys):
+    registry = registry_for(PaperTiny)
+    monkeypatch.setattr(devlearn.plugins, "PluginRegistry", lambda *a, **k: registry)
+    fake = functools.partial(fake_infant_factory, episode_steps=10)
+    monkeypatch.setattr("devlearn.env.behavior_env.build_default_infant", fake)
+    monkeypatch.chdir(tmp_path)
+    baseline = tmp_path / "eval_tiny_random"
+    baseline.mkdir()
+    (baseline / "eval.json").write_text(json.dumps({"close": 0.25, "policy": "random"}))
+    assert main(["run", "tiny", "--steps", "64", "--out", "run", *SMALL]) == 0
+    printed = capsys.readouterr().out
+    assert (
+        "budget      64 steps, 20% of a full run (320, --preset paper): a demonstration" in printed
+    )
+    assert (
+        "baselines   close under the evaluation protocol: random 0.25 (eval_tiny_random)" in printed
+    )
+    assert "devlearn eval tiny --policy zero --episodes 100   # baseline" in printed
+    assert "devlearn eval tiny --policy random" not in printed  # already there
+    assert "devlearn report run/eval eval_tiny_random eval_tiny_zero" in printed
+    assert main(["run", "tiny", "--steps", "320", "--out", "full", *SMALL]) == 0
+    assert "budget " not in capsys.readouterr().out  # a full run is no demonstration

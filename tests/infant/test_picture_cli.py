@@ -3,11 +3,21 @@
 from __future__ import annotations
 
 import argparse
+import gc
 
 import cv2
 import pytest
 
 from devlearn.cli import picture
+
+
+@pytest.fixture(autouse=True)
+def no_leftover_renderers():
+    """Renderers that earlier tests dropped without closing are freed now, not mid-render: a
+    garbage-collected renderer frees its OpenGL context whenever the collector runs, which
+    in a full run could land inside this test's render (it passed alone, failed in order)."""
+    gc.collect()
+    yield
 
 
 def _parse(argv):

@@ -239,7 +239,7 @@ def test_a_failing_combination_is_reported_and_the_others_finish(tmp_path):
     statuses = {name: r["status"] for name, r in found.items()}
     assert statuses == {"break_after=20,seed=3": "failed", "break_after=0,seed=3": "done"}
     failed = found["break_after=20,seed=3"]
-    assert failed["error"].startswith("exit code 1 while training")
+    assert failed["error"].startswith("exit code 2 while training")  # a reward term that raises
     assert any("fragile reward broke after 20 steps" in line for line in failed["log_tail"])
     lines = stdout.splitlines()
     at = next(i for i, line in enumerate(lines) if line.startswith("failed      break_after=20"))
@@ -274,3 +274,73 @@ def test_ray_executor_gives_the_same_numbers(local_sweep, local_ray, tmp_path):
         assert found[name]["attempts"][0]["cores"] is None  # Ray holds the CPUs, no pinning
     trained = {json.dumps(metrics(out / "runs" / name)) for name in NAMES}
     assert len(trained) == len(NAMES)  # the runs differ, so equal numbers are no coincidence
+
+
+def descendants(pid: int) -> set[int]:
+    """Every living process below ``pid`` (from /proc)."""
+    parents = {}
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
+            except OSError:
+                continue
+            if fields[0] != "Z":  # a zombie has ended
+                parents[int(entry.name)] = int(fields[1])
+    found, frontier = set(), {pid}
+    while frontier:
+        frontier = {p for p, parent in parents.items() if parent in frontier} - found
+        found |= frontier
+    return found
+
+
+def alive(pids: set[int]) -> set[int]:
+    living = set()
+    for pid in pids:
+        try:
+            state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+        except OSError:
+            continue
+        if state != "Z":
+            living.add(pid)
+    return living
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("how", ["ctrl-c", "kill -9"])
+def test_a_stopped_sweep_leaves_no_process_behind(tmp_path, how):
+    """One Ctrl-C (SIGINT to the terminal's process group) stops the sweep and everything it
+    started; a sweep killed outright (SIGKILL, nothing of it runs) takes its runs with it."""
+    out = tmp_path / "sweep"
+    argv = sweep_argv(out, 10**6, "--grid", "behavior.target=0.3", "--seeds", "1", "--no-report")
+    proc = subprocess.Popen(
+        [sys.executable, tiny_devlearn.__file__, *argv],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        start_new_session=True,  # its own group, as a shell's foreground job
+    )
+    run_dir = out / "runs" / "target=0.3,seed=1"
+    started: set[int] = set()
+    try:
+        deadline = time.time() + 900  # generous: the machine may be busy with other work
+        while not (run_dir / "checkpoint_latest.pt").exists():
+            assert proc.poll() is None, proc.communicate()[0].decode()
+            assert time.time() < deadline, "the run wrote no checkpoint in 15 minutes"
+            time.sleep(0.05)
+        started = descendants(proc.pid)
+        assert started, "the sweep's run is not running"
+        if how == "ctrl-c":
+            os.killpg(proc.pid, signal.SIGINT)
+            proc.communicate(timeout=120)
+            assert proc.returncode == 130
+        else:
+            proc.kill()
+            proc.wait(timeout=30)
+        deadline = time.time() + 60
+        while alive(started) and time.time() < deadline:
+            time.sleep(0.1)
+        assert not alive(started), f"left behind: {alive(started)}"
+    finally:
+        for pid in alive(started) | ({proc.pid} if proc.poll() is None else set()):
+            with contextlib.suppress(OSError):
+                os.kill(pid, signal.SIGKILL)

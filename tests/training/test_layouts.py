@@ -21,6 +21,9 @@ ROOT = Path(__file__).resolve().parents[2]
 DATA = Path(__file__).resolve().parent / "data"
 # Raw head outputs (mean row, then std row; first 4 actions) on synthetic() observations,
 # computed with the code these runs were trained with (main at 9026bfa, before the layouts).
+# Published runs whose policy files moved to git history (issue #32: max_std/run and
+# max_std_seed2/run, at fc8804f) are covered by the small committed fixture
+# data/hand_to_mouth_separate_legacy.pt instead.
 TRAINED_AS = {
     "results/self_touch/run": [
         -2392.8337,
@@ -31,26 +34,6 @@ TRAINED_AS = {
         13065.871,
         12863.380,
         6808.2773,
-    ],
-    "results/self_touch/max_std/run": [
-        -2.2152386,
-        0.55740386,
-        -1.9742167,
-        5.5861535,
-        41.701790,
-        79.898872,
-        59.426762,
-        29.241865,
-    ],
-    "results/self_touch/max_std_seed2/run": [
-        8.2613440,
-        5.3815775,
-        -0.81355989,
-        11.855684,
-        72.673317,
-        49.798161,
-        29.578957,
-        43.518071,
     ],
     "results/hand_regard/run": [
         0.56497365,
@@ -144,6 +127,23 @@ def test_published_separate_checkpoints_act_as_trained(run, registry):
         # only slightly (up to ~7e-3 here): trained on near-black images, the eye CNNs'
         # biases drown their input, so this policy hardly looks
         assert not np.allclose(raw_head(fixed, obs), TRAINED_AS[run], rtol=1e-5)
+
+
+def test_committed_separate_legacy_checkpoint_acts_as_saved(registry):
+    """A policy file as every run before the layouts saved it (no network section): rebuilt in
+    the separate layout with the double uint8 scale; its raw head as pinned when it was made
+    (data/hand_to_mouth_separate_legacy.txt, by data/make_separate_legacy.py)."""
+    cfg, env, obs, actor = rebuild(DATA / "hand_to_mouth_separate_legacy.pt", registry)
+    try:
+        assert cfg.network.layout == "separate" and cfg.network.legacy_uint8_scale
+        assert not actor.shared
+        text = (DATA / "hand_to_mouth_separate_legacy.txt").read_text()
+        np.testing.assert_allclose(
+            raw_head(actor, obs), [float(v) for v in text.split()], rtol=1e-5, atol=1e-6
+        )
+        act_a_few_steps(env, actor, obs)
+    finally:
+        env.close()
 
 
 def test_committed_shared_checkpoint_acts_as_trained(registry):

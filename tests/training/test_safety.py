@@ -127,6 +127,8 @@ class BadConfig(TinyConfig):
     """Lifetime step of each env from which it goes bad (at episode step 3)."""
     bad_observation: bool = False
     """Spoil the proprioception observation instead of the reward."""
+    bad_raise: bool = False
+    """The ``explode`` term raises ZeroDivisionError instead of returning ``bad_value``."""
 
 
 class Explode(devlearn.IntrinsicReward):
@@ -134,13 +136,16 @@ class Explode(devlearn.IntrinsicReward):
 
     name = "explode"
 
-    def __init__(self, value: float, start: int) -> None:
+    def __init__(self, value: float, start: int, raises: bool = False) -> None:
         super().__init__(1.0)
-        self.value, self.start, self.count = value, start, 0
+        self.value, self.start, self.count, self.raises = value, start, 0, raises
 
     def __call__(self, ctx) -> float:
         self.count += 1
-        return self.value if self.count > self.start and ctx.step == 3 else 0.0
+        bad = self.count > self.start and ctx.step == 3
+        if bad and self.raises:
+            return 1 / 0
+        return self.value if bad else 0.0
 
 
 class BadTiny(TinyBehavior):
@@ -150,7 +155,10 @@ class BadTiny(TinyBehavior):
     config_class = BadConfig
 
     def reward_terms(self):
-        return [*super().reward_terms(), Explode(self.config.bad_value, self.config.bad_from)]
+        return [
+            *super().reward_terms(),
+            Explode(self.config.bad_value, self.config.bad_from, self.config.bad_raise),
+        ]
 
     def observe(self, infant, facts):
         obs = super().observe(infant, facts)
@@ -184,6 +192,22 @@ def test_a_bad_reward_stops_training_named_with_a_good_checkpoint(tmp_path, valu
     rows = [json.loads(r) for r in (out / "metrics.jsonl").read_text().splitlines()]
     assert [r["step"] for r in rows] == [32, 64]
     assert all(math.isfinite(v) for r in rows for v in r.values() if isinstance(v, float))
+
+
+@pytest.mark.parametrize("workers", [0, 2])
+def test_a_term_that_raises_stops_training_named_with_a_good_checkpoint(tmp_path, workers):
+    out = tmp_path / "r"
+    cfg = bad_config(out, "behavior.bad_raise=true", workers=workers)
+    with pytest.raises(RunStopped) as caught:
+        train(cfg, registry_for(BadTiny), infant_factory=tiny_run.factory, progress=False)
+    message = str(caught.value)
+    assert (
+        "reward term 'explode' raised ZeroDivisionError: division by zero in env 0 at episode "
+        "step 3" in message
+    )
+    assert "\n" not in message and "step 64" in message and f"--resume {out}" in message
+    state = load_checkpoint(out / "checkpoint_latest.pt", RESUME_KEYS)
+    assert state["env_steps"] == 2 * PER_ITERATION
 
 
 def test_a_bad_observation_stops_training_named(tmp_path):
@@ -222,8 +246,10 @@ def test_a_killed_worker_leaves_a_resumable_checkpoint(tmp_path):
         RunStopped,
         match=r"env worker \d \(pid \d+\) died unexpectedly, killed by "
         r"SIGKILL.*last good state \(step 64\)",
-    ):
+    ) as caught:
         train(cfg, tiny_run.registry(), infant_factory=dying, progress=False)
+    # two iterations completed (rows 0 and 1 of metrics.jsonl), the third was under way
+    assert "during iteration 3 of 3125;" in str(caught.value)
     _, state = resume_checkpoint(out)
     assert state["env_steps"] == 2 * PER_ITERATION
     cfg = tiny_run.config(out, 3 * PER_ITERATION)

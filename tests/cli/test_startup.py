@@ -1,0 +1,73 @@
+"""Start-up: commands that neither train nor evaluate import no torch (nor rsl-rl, MuJoCo...).
+
+Measured, not timed: ``devlearn bench`` reports each command's start-up (``startup_*_s``); here
+the modules a command loaded are checked, which does not depend on the machine's load.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+
+HEAVY = ("torch", "rsl_rl", "mujoco", "dm_control", "numba", "matplotlib")
+# the built-in plugins import torch themselves (their encoders are torch modules); the example
+# plugin, written against the public API only, imports none of it
+ONLY_THE_EXAMPLE = "self_touch,hand_regard,curiosity"
+SCRIPT = """
+import json, sys
+from devlearn.cli import main
+try:
+    main(sys.argv[1:])
+except SystemExit:
+    pass
+print(json.dumps(sorted(m for m in {heavy} if m in sys.modules)), file=sys.stderr)
+"""
+
+
+def heavy_modules(*args: str, disable: str = "") -> list[str]:
+    env = {**os.environ, "DEVLEARN_DISABLE_PLUGINS": disable}
+    done = subprocess.run(
+        [sys.executable, "-c", SCRIPT.format(heavy=HEAVY), *args],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=300,
+    )
+    return json.loads(done.stderr.strip().splitlines()[-1])
+
+
+@pytest.mark.parametrize("args", [["--help"], ["run", "--help"], ["eval", "--help"], []])
+def test_help_imports_nothing_heavy(args):
+    assert heavy_modules(*args) == []
+
+
+def test_plugins_imports_nothing_heavy_of_its_own():
+    assert heavy_modules("plugins", disable=ONLY_THE_EXAMPLE) == []
+    assert heavy_modules("plugins", "--json", disable=ONLY_THE_EXAMPLE) == []
+
+
+def test_info_needs_the_body_but_not_torch():
+    loaded = heavy_modules("info", "hand_to_mouth", disable=ONLY_THE_EXAMPLE)
+    assert "torch" not in loaded and "rsl_rl" not in loaded and "matplotlib" not in loaded
+
+
+def test_the_public_api_loads_on_first_use():
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            "import sys, devlearn; from devlearn import Behavior, IntrinsicReward, hookimpl; "
+            "import devlearn.training.config, devlearn.training.checks; "
+            "light = 'torch' not in sys.modules; "
+            "from devlearn import MLPEncoder; from devlearn.training import train, evaluate; "
+            "print(light, 'torch' in sys.modules, callable(train), callable(evaluate))",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert done.stdout.split() == ["True", "True", "True", "True"], done.stderr
