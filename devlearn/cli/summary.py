@@ -112,7 +112,7 @@ def run_summary(
         )
     if result.last.get("stage"):
         lines.append(f"  stage       {result.last['stage']}")
-    lines += [f"  {warning}" for warning in getattr(result, "warnings", [])]
+    lines += [f"  {warning}" for warning in result.warnings]  # the learner-health warnings
     if budget is not None and total_steps < budget[1]:
         lines.append(
             f"  budget      {total_steps:,} steps, {100 * total_steps / budget[1]:.2g}% of a full "

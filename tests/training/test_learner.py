@@ -197,3 +197,15 @@ def test_a_run_records_health_figures_and_its_warnings(tmp_path):
     }
     paper = default_config(TinyBehavior, ["ppo.normalize_rewards=false"])
     assert paper.ppo.normalize_rewards is False
+
+
+def test_the_end_of_run_summary_repeats_the_health_warnings(tmp_path):
+    from devlearn.cli.summary import run_summary
+    from devlearn.training.train import TrainResult
+
+    warning = "learner warning at step 640: the surrogate loss has stayed >= 0 ..."
+    result = TrainResult(tmp_path, 640, 20, {}, [warning])
+    assert f"  {warning}" in run_summary(result, "tiny", "close", 640).splitlines()
+    assert "learner warning" not in run_summary(
+        TrainResult(tmp_path, 640, 20), "tiny", "close", 640
+    )
