@@ -18,7 +18,39 @@ def inverse_softplus(y: float) -> float:
     return y + math.log(-math.expm1(-y))
 
 
-class TanhSoftplusGaussian(Distribution):
+class DiagonalNormal(Distribution):
+    """What both policy heads share: a diagonal Normal set by :meth:`update`, sampled, scored
+    and compared dimension by dimension (summed over actions)."""
+
+    _distribution: Normal | None = None
+
+    def sample(self) -> torch.Tensor:
+        return self._distribution.sample()  # type: ignore[union-attr]
+
+    @property
+    def mean(self) -> torch.Tensor:
+        return self._distribution.mean  # type: ignore[union-attr]
+
+    @property
+    def std(self) -> torch.Tensor:
+        return self._distribution.stddev  # type: ignore[union-attr]
+
+    @property
+    def entropy(self) -> torch.Tensor:
+        return self._distribution.entropy().sum(dim=-1)  # type: ignore[union-attr]
+
+    @property
+    def params(self) -> tuple[torch.Tensor, ...]:
+        return (self.mean, self.std)
+
+    def log_prob(self, outputs: torch.Tensor) -> torch.Tensor:
+        return self._distribution.log_prob(outputs).sum(dim=-1)  # type: ignore[union-attr]
+
+    def kl_divergence(self, old_params, new_params) -> torch.Tensor:
+        return torch.distributions.kl_divergence(Normal(*old_params), Normal(*new_params)).sum(-1)
+
+
+class TanhSoftplusGaussian(DiagonalNormal):
     """Diagonal Gaussian with ``mean = tanh(W_mu h + b_mu)`` and ``std = softplus(W_s h + b_s)``.
 
     Both heads read the trunk features, so the spread is state-dependent (paper, sec. II-A4,
@@ -66,38 +98,11 @@ class TanhSoftplusGaussian(Distribution):
             std = self.min_std + (self.max_std - self.min_std) * torch.sigmoid(raw_std)
         self._distribution = Normal(torch.tanh(raw_mean), std)
 
-    def sample(self) -> torch.Tensor:
-        return self._distribution.sample()  # type: ignore[union-attr]
-
     def deterministic_output(self, mlp_output: torch.Tensor) -> torch.Tensor:
         return torch.tanh(mlp_output[..., 0, :])
 
     def as_deterministic_output_module(self) -> nn.Module:
         return _TanhFirstSlice()
-
-    @property
-    def mean(self) -> torch.Tensor:
-        return self._distribution.mean  # type: ignore[union-attr]
-
-    @property
-    def std(self) -> torch.Tensor:
-        return self._distribution.stddev  # type: ignore[union-attr]
-
-    @property
-    def entropy(self) -> torch.Tensor:
-        return self._distribution.entropy().sum(dim=-1)  # type: ignore[union-attr]
-
-    @property
-    def params(self) -> tuple[torch.Tensor, ...]:
-        return (self.mean, self.std)
-
-    def log_prob(self, outputs: torch.Tensor) -> torch.Tensor:
-        return self._distribution.log_prob(outputs).sum(dim=-1)  # type: ignore[union-attr]
-
-    def kl_divergence(self, old_params, new_params) -> torch.Tensor:
-        old = Normal(*old_params)
-        new = Normal(*new_params)
-        return torch.distributions.kl_divergence(old, new).sum(dim=-1)
 
     def init_mlp_weights(self, mlp: nn.Module) -> None:
         """Start near mean 0 and std ``init_std``: small head weights, matching std bias."""
@@ -120,7 +125,7 @@ class _TanhFirstSlice(nn.Module):
         return torch.tanh(mlp_output[..., 0, :])
 
 
-class BoundedGaussian(Distribution):
+class BoundedGaussian(DiagonalNormal):
     """Diagonal Gaussian with a linear mean and a state-independent, bounded spread.
 
     ``mean = W_mu h + b_mu`` (no squashing) and, per action dimension,
@@ -168,37 +173,12 @@ class BoundedGaussian(Distribution):
     def update(self, mlp_output: torch.Tensor) -> None:
         self._distribution = Normal(mlp_output, self.current_std().expand_as(mlp_output))
 
-    def sample(self) -> torch.Tensor:
-        return self._distribution.sample()  # type: ignore[union-attr]
-
     def deterministic_output(self, mlp_output: torch.Tensor) -> torch.Tensor:
         """The mean as the env applies it: clipped to [-1, 1]."""
         return mlp_output.clamp(-1.0, 1.0)
 
     def as_deterministic_output_module(self) -> nn.Module:
         return nn.Hardtanh()  # clamp to [-1, 1], exportable
-
-    @property
-    def mean(self) -> torch.Tensor:
-        return self._distribution.mean  # type: ignore[union-attr]
-
-    @property
-    def std(self) -> torch.Tensor:
-        return self._distribution.stddev  # type: ignore[union-attr]
-
-    @property
-    def entropy(self) -> torch.Tensor:
-        return self._distribution.entropy().sum(dim=-1)  # type: ignore[union-attr]
-
-    @property
-    def params(self) -> tuple[torch.Tensor, ...]:
-        return (self.mean, self.std)
-
-    def log_prob(self, outputs: torch.Tensor) -> torch.Tensor:
-        return self._distribution.log_prob(outputs).sum(dim=-1)  # type: ignore[union-attr]
-
-    def kl_divergence(self, old_params, new_params) -> torch.Tensor:
-        return torch.distributions.kl_divergence(Normal(*old_params), Normal(*new_params)).sum(-1)
 
     def init_mlp_weights(self, mlp: nn.Module) -> None:
         """Start near mean 0: small weights and zero bias on the mean's layer."""
