@@ -38,6 +38,7 @@ from devlearn.conformance import (
 from devlearn.conformance_values import ConformanceError, check_number, check_picklable
 from devlearn.conformance_values import require as _require
 from devlearn.curriculum import Curriculum
+from devlearn.env.guards import TermError
 from devlearn.learned_conformance import check_learned_reward
 from devlearn.plugins import PluginRegistry, PluginSource
 from devlearn.rewards import BatchedIntrinsicReward, IntrinsicReward
@@ -195,7 +196,12 @@ def check_behavior(
 
         def step(action: np.ndarray, where: str) -> bool:
             phase[0] = where
-            obs, reward, done, _, info = env.step(action)
+            try:
+                obs, reward, done, _, info = env.step(action)
+            except TermError as exc:  # a checked term's own finding: report it as such
+                if isinstance(exc.__cause__, ConformanceError):
+                    raise exc.__cause__ from None
+                raise
             check_number(reward, "the summed reward", where)
             check_observations(obs, shapes, where)
             if batches:

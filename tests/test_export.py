@@ -14,7 +14,7 @@ from devlearn.env import BehaviorEnv
 from devlearn.export import DeterministicPolicy, export_policy, load_policy
 from devlearn.plugins import PluginRegistry
 from devlearn.training.checkpoint import FORMAT, load_checkpoint, save_atomic
-from devlearn.training.config import default_config, to_dict, to_rsl_rl
+from devlearn.training.config import default_config, from_dict, to_dict, to_rsl_rl
 from devlearn.training.evaluate import _batch
 from devlearn.training.process import quiet
 
@@ -84,11 +84,14 @@ def published_checkpoint(name: str, tmp_path: Path) -> Path:
 def test_exported_policies_match_torch_on_recorded_observations(name, registry, tmp_path):
     import onnxruntime  # an optional extra, installed by scripts/setup.sh for the tests
 
-    recorded = record(registry.create(name))
     checkpoints = [fresh_checkpoint(name, registry, tmp_path / f"{name}.pt")]
     if name in PUBLISHED and PUBLISHED[name].exists():
         checkpoints.append(published_checkpoint(name, tmp_path))
     for checkpoint in checkpoints:
+        # observations of the behaviour as the checkpoint configures it (a published
+        # hand-regard policy sees the eyes; today's default policy does not)
+        saved = from_dict(load_checkpoint(checkpoint)["config"], registry.behavior(name))
+        recorded = record(registry.create(name, saved.behavior))
         policy, obs = load_policy(name, checkpoint, registry)
         inputs = [recorded[n] for n in policy.names]
         with torch.inference_mode():
