@@ -7,7 +7,9 @@ facts and observations, the compiled proprioception and the compiled guards) wit
     git archive f17ca1c | tar -x -C BASE
     PYTHONPATH=BASE:BASE/plugins/self_touch/src python recorded_rollout.py OUT.npz
 
-Only APIs that commit already had are used, so the same function replays it on today's code.
+Only APIs that commit already had are used, so the same function replays it on today's code:
+a decision every physics step (``make_envs``' default ``action_repeat=1``), so the test also
+checks that K=1 is bit for bit the environment from before the decision rate (issue #28).
 """
 
 from __future__ import annotations
@@ -44,6 +46,7 @@ def record_rollout() -> dict[str, np.ndarray]:
     behavior = SelfTouch()
     # the memory f17ca1c had (each env its own); an unknown attribute there, so harmless
     behavior.config.lifetime_memory = "per_env"
+    behavior.config.touch_count = "step"  # the paper's count, which f17ca1c had (issue #28)
     envs = make_envs(behavior, list(range(NUM_ENVS)), None)
     rng = np.random.default_rng(SEED)
     out: dict[str, list] = {"body_map": [], "proprioception": [], "rewards": [], "dones": []}
