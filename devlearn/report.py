@@ -101,8 +101,8 @@ def _read(file: Path) -> dict[str, Any] | None:
 
 
 def collect(paths: Sequence[str | Path]) -> tuple[list[tuple[Path, dict]], list[str]]:
-    """The evaluations under ``paths`` plus baselines found beside them (in the folders next to
-    a path or next to its parent).
+    """The evaluations under ``paths`` plus baselines of the same behaviour found beside them
+    (in the folders next to a path or next to its parent).
 
     Returns:
         ``([(eval.json path, summary), ...], notes)``.
@@ -126,10 +126,12 @@ def collect(paths: Sequence[str | Path]) -> tuple[list[tuple[Path, dict]], list[
         if not found:
             continue
         near = path.resolve().parent
+        behaviors = {d.get("behavior") for d in found.values()}
         for file in sorted([*near.glob("*/eval.json"), *near.parent.glob("*/eval.json")]):
-            data = _read(file)
+            data = _read(file)  # a baseline beside it, of the same behaviour
             if data is not None and data.get("policy") in BASELINES:
-                found.setdefault(file.resolve(), data)
+                if data.get("behavior") in behaviors:
+                    found.setdefault(file.resolve(), data)
     if old:
         notes.append(
             f"skipped {len(old)} evaluation(s) made before the protocol was recorded "

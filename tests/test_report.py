@@ -187,3 +187,13 @@ def test_baselines_are_counted_not_seeded_and_single_runs_get_no_caps(
         assert len(bars) == 1 and len(bars[0]) == len(columns)
         # one interval: the three seeds; the single baseline evaluations have none
         assert len(errors) == 1 and len(errors[0].lines[2][0].get_segments()) == 1
+
+
+def test_baselines_beside_an_evaluation_are_taken_only_of_its_behaviour(tmp_path):
+    """A runs/ folder holding another behaviour's baseline (the README's hand-regard
+    held_random) beside a self-touch evaluation: the report takes self-touch's only."""
+    run = fake_eval(tmp_path / "runs" / "st" / "eval", 0.5, 1)
+    fake_eval(tmp_path / "runs" / "st_zero", 0.2, 0, policy="zero")
+    fake_eval(tmp_path / "runs" / "hr_held", 0.0, 0, behavior="hand_regard", policy="random")
+    result = write_report([run, tmp_path / "runs" / "st_zero"], tmp_path / "report")
+    assert set(result["columns"]) == {"trained", "zero baseline"}
