@@ -100,6 +100,8 @@ def test_hand_regard_trains_and_resumes_with_curiosity(tmp_path, term):
         "--set",
         f"curiosity={term}",
         "--set",
+        "env.action_repeat=1",  # iterations of 16 physics steps, as the test counts
+        "--set",
         "ppo.num_steps_per_env=8",
         "--set",
         "ppo.num_mini_batches=1",

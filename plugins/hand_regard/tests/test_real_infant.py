@@ -49,7 +49,10 @@ def test_babbling_finds_arm_correlated_tracks(real):
     params = real[0]
     report = params.calibration
     assert report["hand_tracks"] >= 5 and min(report["rho_hand_tracks"]) > 0.6
-    assert params.position_model, "both hands were tracked: a posture model is learned"
+    # since issue #29 the posture model is kept only if it predicts hand tracks of babbling
+    # episodes it was not fitted on (within a quarter of the image); 1,500 steps may not pass
+    model = params.position_model
+    assert not model or model["validation_error_px"] <= 0.25 * params.image_size[1]
 
 
 def test_no_toy_colour_is_hand_coloured(real):
@@ -108,6 +111,8 @@ def test_tiny_training_run_and_eval(tmp_path, real):
         str(out),
         "--set",
         "ppo.num_steps_per_env=16",
+        "--set",
+        "env.action_repeat=1",  # a decision every physics step: stages of 32 and 16 steps
         "--set",
         "behavior.left_arm_steps=32",
         "--set",
