@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import os
 
+from devlearn.lazy import lazy_getattr
+
 # MuJoCo picks its GL backend when first imported: headless EGL (no display needed) unless the
 # user chose another. Set here, before anything can import mujoco through devlearn.
 os.environ.setdefault("MUJOCO_GL", "egl")
@@ -39,15 +41,7 @@ _PUBLIC = {
 }
 
 
-def __getattr__(name: str):
-    module = _PUBLIC.get(name)
-    if module is None:
-        raise AttributeError(f"module 'devlearn' has no attribute '{name}'")
-    import importlib
-
-    value = getattr(importlib.import_module(module), name)
-    globals()[name] = value  # later look-ups skip this function
-    return value
+__getattr__ = lazy_getattr("devlearn", _PUBLIC, globals())
 
 
 def __dir__() -> list[str]:

@@ -5,6 +5,8 @@ from __future__ import annotations
 import sys
 import types
 
+from devlearn.lazy import lazy_getattr
+
 # Loaded on first use (PEP 562): the light modules of this package (config, checks,
 # checkpoint names) are imported by commands that must not pay for torch.
 _PUBLIC = {
@@ -21,15 +23,7 @@ _PUBLIC = {
 }
 
 
-def __getattr__(name: str):
-    module = _PUBLIC.get(name)
-    if module is None:
-        raise AttributeError(f"module 'devlearn.training' has no attribute '{name}'")
-    import importlib
-
-    value = getattr(importlib.import_module(module), name)
-    globals()[name] = value
-    return value
+__getattr__ = lazy_getattr("devlearn.training", _PUBLIC, globals())
 
 
 def __dir__() -> list[str]:

@@ -190,10 +190,10 @@ class DevRunner(RunnerCheckpoints, RunnerMetrics, OnPolicyRunner):
                             check_nan(obs, rewards, dones)
                         obs, rewards = obs.to(self.device), rewards.to(self.device)
                         dones = dones.to(self.device)
-                        learned_from = rewards
+                        ppo_rewards = rewards
                         if self.reward_norm is not None:  # PPO sees the scaled rewards
-                            learned_from = self.reward_norm(rewards, dones)
-                        alg.process_env_step(obs, learned_from, dones, extras)
+                            ppo_rewards = self.reward_norm(rewards, dones)
+                        alg.process_env_step(obs, ppo_rewards, dones, extras)
                         intrinsic = alg.intrinsic_rewards if rnd else None
                         self.logger.process_env_step(rewards, dones, extras, intrinsic)
                         finished += extras["episode_infos"]
