@@ -80,11 +80,13 @@ def add_infant(
     held: Mapping[str, float],
     vestibular: bool,
     hand_rgba: tuple[float, float, float, float] = MITTEN_RGBA,
+    right_hand_rgba: tuple[float, float, float, float] | None = None,
 ) -> list[str]:
     """Add the infant's bodies, joints, motors and contact exclusions to ``root``.
 
     The hand and fingers bodies are coloured ``hand_rgba`` (default: purple mittens; pass
-    ``SKIN_RGBA`` for bare hands), every other body part skin, the eyes dark.
+    ``SKIN_RGBA`` for bare hands), or the right hand ``right_hand_rgba`` when given; every other
+    body part skin, the eyes dark.
 
     Joints whose group is not in ``actuated_groups`` are locked: left out of the model, their
     body rotated by the held angle (``held``, keyed by full joint name "left_knee"; default 0).
@@ -150,7 +152,7 @@ def add_infant(
                     size=geom.size,
                     contype=collide,
                     conaffinity=collide,
-                    rgba=_colour(spec, hand_rgba),
+                    rgba=_colour(spec, right_hand_rgba if right and right_hand_rgba else hand_rgba),
                     **kwargs,
                 )
             if spec.camera:

@@ -15,6 +15,10 @@ colour apart from the skin and from the toys, as an infant's mittens would be. I
 appearance (``build_infant(..., appearance="skin")``) they are bare, ``SKIN_RGBA`` like the rest
 of the body (as in MIMo). Nothing in devlearn tells a behaviour either colour: hand_regard
 learns what its hands look like from motor babbling."""
+RIGHT_MITTEN_RGBA = (0.88, 0.22, 0.62, 1.0)
+"""The right mitten's colour in the ``two_colour_mittens`` appearance: magenta (OpenCV hue
+about 162), 24 hue steps from the left's purple (138) and 18 from the red toy (0), so that a
+detector can learn which hand it sees from its colour."""
 MITTEN_BODIES = ("hand", "fingers")
 """Bodies coloured by the appearance's hand colour."""
 EYE_RGBA = (0.15, 0.10, 0.08, 1.0)

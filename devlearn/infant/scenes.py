@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 from dm_control import mjcf
 
 from devlearn.infant.body import WORLD_CONTYPE, add_infant
-from devlearn.infant.body_table import MITTEN_RGBA, SKIN_RGBA
+from devlearn.infant.body_table import MITTEN_RGBA, RIGHT_MITTEN_RGBA, SKIN_RGBA
 
 SCENE_GROUP = 2  # geom group of everything that is not the infant (hidden in body-map pictures)
 PHYSICS_TIMESTEP = 0.005  # facts sec. 1: 5 ms, one physics step per control step (200 Hz)
@@ -43,10 +43,12 @@ class Appearance:
     Attributes:
         hand_rgba: Colour of the hand and fingers bodies.
         toy_colours: Colours of the toy blocks (sitting) and of the mobile (crib), in order.
+        right_hand_rgba: The right hand's colour when it differs from ``hand_rgba``.
     """
 
     hand_rgba: tuple[float, float, float, float]
     toy_colours: tuple[tuple[float, float, float, float], ...]
+    right_hand_rgba: tuple[float, float, float, float] | None = None
 
 
 APPEARANCES = {
@@ -55,6 +57,9 @@ APPEARANCES = {
     # Bare hands the colour of the body (as in MIMo), toys in the natural palette: the
     # paper's problem, hands told apart from arms, legs and toys only by how they move.
     "skin": Appearance(SKIN_RGBA, NATURAL_TOY_COLOURS),
+    # Purple left mitten, magenta right one: which hand is in view shows in its colour (in
+    # BabyBench's scene both hands rise into view at the same places, so position cannot tell).
+    "two_colour_mittens": Appearance(MITTEN_RGBA, TOY_COLOURS, RIGHT_MITTEN_RGBA),
 }
 """Appearances by name (``build_infant(..., appearance=NAME)``); ``mittens`` is the default."""
 
@@ -326,6 +331,7 @@ def build_scene_model(
         held=spec.held,
         vestibular=vestibular,
         hand_rgba=look.hand_rgba,
+        right_hand_rgba=look.right_hand_rgba,
     )
     for joint, angle in spec.equality.items():
         # joint1 = polycoef[0]: the angle held; the motor on it pushes against the constraint.

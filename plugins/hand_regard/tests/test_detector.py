@@ -8,7 +8,7 @@ import pytest
 from devlearn_hand_regard.calibration import CalibrationError, calibrate
 from devlearn_hand_regard.detector import DetectorParams, HandDetector, HandFlow
 from devlearn_hand_regard.hand_colour import hsv_boxes
-from synthetic import BLOCKS, SKIN, draw, synthetic_babbling
+from synthetic import BLOCKS, MAGENTA, SKIN, draw, synthetic_babbling
 
 BLOCK_POSITIONS = np.array([[12.0, 52.0], [32.0, 56.0], [52.0, 50.0]])
 
@@ -179,3 +179,65 @@ def test_posture_model_is_kept_only_when_it_predicts_unseen_tracks():
     kept = position_model(linear, proprioception, ridge=0.1, max_error=16.0, episode=episode)
     assert kept and kept["validation_error_px"] < 2.0
     assert position_model(noise, proprioception, 0.1, max_error=16.0, episode=episode) == {}
+
+
+def test_a_still_arm_jostled_in_rhythm_does_not_claim_the_moving_hand(monkeypatch):
+    """One arm babbles per episode while the other turns at 1% of its speed in the same
+    rhythm: correlation ignores scale, so before issue #29's rule (candidates must move) the
+    still arm claimed many of the moving hand's tracks."""
+    import devlearn_hand_regard.calibration as calibration
+
+    data = synthetic_babbling(3000, seed=0, alternate=500)
+    seen = {}
+
+    def keep(hands, *args, **kwargs):
+        seen["hands"] = hands
+        return {}
+
+    monkeypatch.setattr(calibration, "position_model", keep)
+    calibrate(data)
+    hands = seen["hands"]
+    assert len(hands) >= 4
+    wrong = [t for t in hands if t.side != data.episode[t.steps[0]] % 2]
+    assert not wrong, [(t.side, int(data.episode[t.steps[0]])) for t in wrong]
+
+
+def test_two_coloured_hands_are_told_apart_by_colour_wherever_they_are():
+    """Hands of two colours, babbling one arm at a time: calibration learns each hand's own
+    colour, and the detector attributes by colour, even with the hands crossed (positions
+    would swap them)."""
+    colours = (SKIN, MAGENTA)
+    params = calibrate(synthetic_babbling(3000, seed=0, colours=colours, alternate=500))
+    assert params.calibration["hands_told_by_colour"]
+    assert inside(params.side_hsv_ranges[0], hsv(SKIN))
+    assert not inside(params.side_hsv_ranges[0], hsv(MAGENTA))
+    assert inside(params.side_hsv_ranges[1], hsv(MAGENTA))
+    assert not inside(params.side_hsv_ranges[1], hsv(SKIN))
+    detector = HandDetector(params)
+    crossed = draw(np.array([[50.0, 40.0], [14.0, 40.0]]), BLOCK_POSITIONS, colours=colours)
+    detections, masks = detector.detect(np.stack([crossed, crossed]))
+    assert detections.all()
+    assert np.nonzero(masks[0, 0])[1].mean() > 40  # the left hand, on the right
+    only_left = draw(np.array([[40.0, 40.0], [np.nan, np.nan]]), BLOCK_POSITIONS, colours=colours)
+    detections, _ = detector.detect(np.stack([only_left, only_left]))
+    np.testing.assert_array_equal(detections, [[True, False], [True, False]])
+
+
+def test_one_colour_for_both_hands_keeps_attribution_by_position(synthetic_params):
+    assert synthetic_params.side_hsv_ranges == []
+    assert synthetic_params.calibration["hands_told_by_colour"] is False
+
+
+def test_in_a_one_arm_stage_a_blob_is_the_moving_arms_hand(synthetic_params):
+    """With the right arm switched off (hanging out of view), a blob where the left hand
+    usually is still is the left hand; with the left arm off, the same blob is the right
+    hand: position would have said left."""
+    detector = HandDetector(synthetic_params)
+    frame = draw(np.array([[20.0, 40.0], [np.nan, np.nan]]), BLOCK_POSITIONS)
+    eyes = np.stack([frame, frame])
+    np.testing.assert_array_equal(detector.detect(eyes)[0], [[True, False], [True, False]])
+    np.testing.assert_array_equal(detector.detect(eyes, hands=[0])[0], [[True, False]] * 2)
+    np.testing.assert_array_equal(detector.detect(eyes, hands=[1])[0], [[False, True]] * 2)
+    both = draw(np.array([[20.0, 40.0], [44.0, 40.0]]), BLOCK_POSITIONS)
+    detections, masks = detector.detect(np.stack([both, both]), hands=[1])
+    np.testing.assert_array_equal(detections, [[False, True]] * 2)

@@ -16,6 +16,8 @@ PROGRESS_SECONDS = 5.0
 """Babbling prints a progress line at most this often (it takes minutes on a CPU)."""
 
 SIDES = ("left", "right")
+ARMS = ("both", "alternate")
+"""Valid ``arms`` of :func:`babble`."""
 
 
 @dataclass
@@ -79,6 +81,7 @@ def babble(
     scene: str = "sitting_babybench",
     start: str = "babybench",
     progress: bool = False,
+    arms: str = "both",
 ) -> BabblingData:
     """Move every actuator randomly and record eyes, proprioception, actions and arm speeds.
 
@@ -90,6 +93,12 @@ def babble(
     visiting many gaze directions. Held actions swing the hands up from their hanging pose
     into view, which i.i.d. noise never does. Every episode starts as ``start`` says (the
     training start), or from a random start (``random_pose``: for measuring a detector).
+
+    ``arms="alternate"`` babbles one arm per episode (left in even episodes, right in odd
+    ones; the other arm's action is 0, so it hangs still): in BabyBench's scene a hand rising
+    from below into view moves with the whole body, and with both arms babbling its track
+    correlates with both arms' speeds, so calibration cannot tell which hand it is. With one
+    arm moving at a time, the infant knows which arm it moved (issue #29).
 
     Args:
         steps: Steps to record (paper: 10,000).
@@ -105,6 +114,8 @@ def babble(
         scene: The scene when the infant is built here.
         start: How episodes start (``devlearn.infant.starts.STARTS``) unless ``random_pose``.
         progress: Print a line to stderr every :data:`PROGRESS_SECONDS` (steps done, rate).
+        arms: ``both`` (every arm babbles all the time) or ``alternate`` (one arm per
+            episode, see above).
     Returns:
         The recording.
     """
@@ -113,6 +124,8 @@ def babble(
             f"babbling needs steps >= 2 and hold steps >= 1, got {steps}, "
             f"{hold_steps}, {head_hold_steps}"
         )
+    if arms not in ARMS:
+        raise ValueError(f"babbling arms must be one of {', '.join(ARMS)}, got {arms!r}")
     own = infant is None
     if own:
         from devlearn.infant import build_infant
@@ -129,8 +142,12 @@ def babble(
         groups = {k: np.asarray(v) for k, v in infant.actuator_groups.items()}
         eyes, proprio, actions, speeds, heads, episode = [], [], [], [], [], []
         action = np.zeros(infant.action_dim)
+        still = np.zeros(infant.action_dim, bool)
         for t in range(steps):
             if t % length == 0:
+                if arms == "alternate":  # this episode's other arm hangs still
+                    still[:] = False
+                    still[groups[f"{SIDES[1 - (t // length) % 2]}_arm"]] = True
                 if random_pose:
                     infant.reset(rng, random_pose=True)
                 else:
@@ -146,6 +163,7 @@ def babble(
                 )
             redraw = rng.random(infant.action_dim) < switch
             action = np.where(redraw, rng.uniform(-scale, scale), action)
+            action[still] = 0.0
             infant.step(action)
             p = np.asarray(infant.proprioception(), dtype=np.float32)
             speed, head = joint_state(p, groups)

@@ -16,6 +16,7 @@ from devlearn.sensors import MLPEncoder
 from devlearn_hand_regard import detector_store
 from devlearn_hand_regard.config import (
     APPEARANCE_CHOICES,
+    BABBLING_ARMS_CHOICES,
     POLICY_CHOICES,
     REWARD_CHOICES,
     SCENE_CHOICES,
@@ -104,6 +105,7 @@ class HandRegard(Behavior):
         self.scene = self.config.scene  # the env builds the infant in this scene
         self._detector: HandDetector | None = None
         self._flow = HandFlow()
+        self._moving_hands = [0, 1]  # the hands whose arms the stage moves (process_action)
         self._arm_actuators: dict[str, np.ndarray] | None = None
 
     def __getstate__(self) -> dict[str, Any]:
@@ -126,6 +128,7 @@ class HandRegard(Behavior):
         _check_choice("start", cfg.start, START_CHOICES)
         _check_choice("eval_start", cfg.eval_start, START_CHOICES)
         _check_choice("policy", cfg.policy, POLICY_CHOICES)
+        _check_choice("babbling_arms", cfg.babbling_arms, BABBLING_ARMS_CHOICES)
         self.scene = cfg.scene  # the config may have changed since __init__
         return {"appearance": cfg.appearance, "start": cfg.start}
 
@@ -204,9 +207,11 @@ class HandRegard(Behavior):
             m_t over both hands; ``proprioception`` (P,) float32.
         """
         eyes = infant.eyes()
-        # The posture tells which blob is which hand (the position model babbling learned).
+        # The posture tells which blob is which hand (the position model babbling learned);
+        # in a one-arm stage the other arm hangs still, out of view, so a blob is the moving
+        # arm's hand (the infant knows which arm it moves).
         proprioception = np.asarray(infant.proprioception(), dtype=np.float32)
-        detections, masks = self.detector.detect(eyes, proprioception)
+        detections, masks = self.detector.detect(eyes, proprioception, self._moving_hands)
         flow, pixels = self._flow.update(eyes, masks)
         facts = {
             "eyes": eyes,
@@ -243,6 +248,7 @@ class HandRegard(Behavior):
         """
         cfg = self.config
         _check_choice("policy", cfg.policy, POLICY_CHOICES)
+        _check_choice("babbling_arms", cfg.babbling_arms, BABBLING_ARMS_CHOICES)
         if cfg.policy == "proprio":
             return NetworkSpec(
                 encoders={
@@ -328,6 +334,7 @@ class HandRegard(Behavior):
             (17,) action, inactive arm's actuators (shoulder, elbow, wrist) set to 0.
         """
         arms = stage.get("active_arms", HANDS)
+        self._moving_hands = [i for i, side in enumerate(HANDS) if side in arms]
         inactive = [side for side in HANDS if side not in arms]
         if not inactive:
             return action

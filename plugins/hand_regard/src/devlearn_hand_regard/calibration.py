@@ -140,6 +140,16 @@ def _validation_error(
     return float(np.median(np.concatenate(errors))) if errors else None
 
 
+def _share_in_boxes(hsv: np.ndarray, boxes: list[list[int]]) -> float:
+    """Share of (N, 3) HSV pixels inside any of ``boxes`` (1.0 when there are no pixels)."""
+    if len(hsv) == 0:
+        return 1.0
+    inside = np.zeros(len(hsv), bool)
+    for box in boxes:
+        inside |= np.all((hsv >= box[:3]) & (hsv <= box[3:]), axis=1)
+    return float(inside.mean())
+
+
 class CalibrationError(RuntimeError):
     """Babbling found no hand (too short a recording, or hands never in view)."""
 
@@ -157,6 +167,7 @@ def calibrate(
     max_coverage: float = 0.25,
     ridge: float = 4.0,
     max_position_error: float = 0.25,
+    max_colour_confusion: float = 0.05,
 ) -> DetectorParams:
     """Discover the hands in a babbling recording and calibrate the detector.
 
@@ -183,6 +194,10 @@ def calibrate(
         max_position_error: The posture model is kept only if its median error on hand
             tracks it was not fitted on is at most this share of the image width; otherwise
             the hands' mean positions attribute the blobs.
+        max_colour_confusion: Each hand's colour boxes are also learned from its own tracks;
+            when at most this share of either hand's pixels falls in the other hand's boxes
+            (two differently coloured mittens), the detector tells the hands apart by colour
+            (``side_hsv_ranges``); otherwise by position.
     Returns:
         The detector parameters, with a ``calibration`` report.
     Raises:
@@ -214,34 +229,68 @@ def calibrate(
             f"tracks of >= {min_track} steps, best {report['rho_other_tracks_max']}); babble "
             "for more steps"
         )
-    motion = np.bincount(
-        [t.cluster for t in hands], [len(t.steps) * t.motion(window) for t in hands], clusters
-    )
     tracked = np.bincount([t.cluster for t in tracks], [sum(t.areas) for t in tracks], clusters)
-    in_hands = np.bincount([t.cluster for t in hands], [sum(t.areas) for t in hands], clusters)
-    purity = in_hands / np.maximum(tracked, 1)
-    keep = [k for k in range(clusters) if motion[k] >= min_cluster_share * motion.max()]
-    best = max(purity[k] for k in keep)
-    keep = [k for k in keep if purity[k] >= min_purity_share * best]
-    hands = [t for t in hands if t.cluster in keep]
-    boxes: list[list[int]] = []
-    for k in keep:
+    motion = np.zeros((2, clusters))
+    keep_side: list[list[int]] = [[], []]
+    for side in range(2):  # each hand's colours, chosen among its own tracks
+        own = [t for t in hands if t.side == side]
+        if not own:
+            continue
+        motion[side] = np.bincount(
+            [t.cluster for t in own], [len(t.steps) * t.motion(window) for t in own], clusters
+        )
+        in_hands = np.bincount([t.cluster for t in own], [sum(t.areas) for t in own], clusters)
+        purity = in_hands / np.maximum(tracked, 1)
+        keep = [
+            k for k in range(clusters) if motion[side, k] >= min_cluster_share * motion[side].max()
+        ]
+        best = max(purity[k] for k in keep)
+        keep_side[side] = [k for k in keep if purity[k] >= min_purity_share * best]
+    keep = sorted(set(keep_side[0]) | set(keep_side[1]))
+    hands = [t for t in hands if t.cluster in keep_side[t.side]]
+    index = np.linspace(0, n_steps - 1, min(200, n_steps)).astype(int)
+    sample = data.eyes[index].reshape(-1, height, width, 3)
+    labels = np.stack([label_image(im, centres) for im in sample])
+    side_boxes: list[list[list[int]]] = [[], []]
+    dropped: list[list[int]] = []
+    side_pixels = []
+    for side in range(2):
         pixels = [
             data.eyes[s, t.eye].reshape(-1, 3)[p]
             for t in hands
-            if t.cluster == k
+            if t.side == side
             for s, p in zip(t.steps, t.pixels)
         ]
-        rgb = np.concatenate(pixels)[:, None, :]
-        boxes += hsv_boxes(cv2.cvtColor(rgb, cv2.COLOR_RGB2HSV)[:, 0, :])
-    index = np.linspace(0, n_steps - 1, min(200, n_steps)).astype(int)
-    sample = data.eyes[index].reshape(-1, height, width, 3)
-    hand_pixels = np.isin(np.stack([label_image(im, centres) for im in sample]), keep)
-    boxes, dropped = drop_background_boxes(boxes, sample, hand_pixels, max_coverage)
+        if not pixels:
+            side_pixels.append(np.zeros((0, 3), np.uint8))
+            continue
+        hsv = cv2.cvtColor(np.concatenate(pixels)[:, None, :], cv2.COLOR_RGB2HSV)[:, 0, :]
+        side_pixels.append(hsv)
+        boxes = []
+        for k in keep_side[side]:
+            boxes += hsv_boxes(
+                hsv[
+                    np.concatenate(
+                        [
+                            np.full(len(p), t.cluster == k)
+                            for t in hands
+                            if t.side == side
+                            for p in t.pixels
+                        ]
+                    )
+                ]
+            )
+        side_boxes[side], gone = drop_background_boxes(
+            boxes, sample, np.isin(labels, keep), max_coverage
+        )
+        dropped += gone
+    boxes = side_boxes[0] + [b for b in side_boxes[1] if b not in side_boxes[0]]
     if not boxes:
         raise CalibrationError(
             f"every hand colour found also covers most of the view (background); dropped {dropped}"
         )
+    confusion = [_share_in_boxes(side_pixels[side], side_boxes[1 - side]) for side in range(2)]
+    distinct = all(side_boxes) and max(confusion) <= max_colour_confusion
     areas = np.concatenate([t.areas for t in hands])
     means = np.zeros((n_eyes, 2, 2))
     for eye in range(n_eyes):
@@ -254,13 +303,12 @@ def calibrate(
                 x, y = np.mean(other, axis=0) if other else (width * (0.25 + 0.5 * side), height)
                 means[eye, side] = (width - 1 - x, y) if other else (x, y)
     report.update(
-        hand_cluster_motion={
-            str(k): round(float(motion[k])) for k in np.argsort(-motion) if motion[k] > 0
-        },
-        hand_cluster_purity={
-            str(k): round(float(purity[k]), 3) for k in np.argsort(-motion) if motion[k] > 0
-        },
-        hand_clusters=[int(k) for k in keep],
+        hand_cluster_motion=[
+            {str(k): round(float(m[k])) for k in np.argsort(-m) if m[k] > 0} for m in motion
+        ],
+        hand_clusters=[[int(k) for k in side] for side in keep_side],
+        hand_colour_confusion=[round(c, 3) for c in confusion],
+        hands_told_by_colour=bool(distinct),
         dropped_background_boxes=dropped,
         hand_frames={
             f"eye{e}_side{s}": int(sum(len(t.steps) for t in hands if t.eye == e and t.side == s))
@@ -271,6 +319,7 @@ def calibrate(
     )
     return DetectorParams(
         hsv_ranges=boxes,
+        side_hsv_ranges=side_boxes if distinct else [],
         min_area=float(max(0.5 * np.percentile(areas, 2), 0.002 * height * width)),
         max_area=float(2.0 * np.percentile(areas, 98)),
         expected_area=float(np.median(areas)),

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
-APPEARANCE_CHOICES = ("skin", "mittens")
+APPEARANCE_CHOICES = ("two_colour_mittens", "mittens", "skin")
 """Valid ``appearance`` values (``devlearn.infant.scenes.APPEARANCES``)."""
 REWARD_CHOICES = ("paper", "bilateral")
 """Valid ``reward`` values."""
@@ -15,6 +15,8 @@ START_CHOICES = ("babybench", "rest", "random")
 """Valid ``start`` and ``eval_start`` values (``devlearn.infant.starts.STARTS``)."""
 POLICY_CHOICES = ("proprio", "cnn")
 """Valid ``policy`` values."""
+BABBLING_ARMS_CHOICES = ("alternate", "both")
+"""Valid ``babbling_arms`` values."""
 
 
 @dataclass
@@ -28,6 +30,7 @@ class HandRegardConfig:
         "start": "rest",
         "eval_start": "random",
         "policy": "cnn",
+        "babbling_arms": "both",
     }
     """Values for keys a saved config lacks: runs saved before these keys existed were trained
     with mittens and the bilateral term, in the ``sitting`` scene from its rest pose, with the
@@ -74,6 +77,12 @@ class HandRegardConfig:
     200 Hz i.i.d. noise barely moves the damped arms, so the hands would hardly move). In
     BabyBench's scene the hands hang out of view: held 25 steps (0.125 s) they swing into
     view in ~13% of babbling frames, held 8 (the runs before issue #29, in ``sitting``) ~8%."""
+    babbling_arms: str = "alternate"
+    """Which arms babble: ``alternate`` (one arm per babbling episode, the other hanging
+    still, so the infant knows which hand it moved: in BabyBench's scene a hand rising into
+    view with both arms babbling correlates with both arms' speeds and calibration cannot
+    tell left from right) or ``both`` (every arm all the time: the paper's random-action
+    phase, and runs before this key)."""
     babbling_head_hold_steps: int = 50
     """Mean steps a head action is held while babbling (a slow head keeps the view steady)."""
     babbling_head_scale: float = 0.3

@@ -41,8 +41,15 @@ def track_correlation(
     ego: np.ndarray,
     window: int,
     max_lag: int,
+    min_speed_share: float = 0.25,
 ) -> tuple[float, int]:
     """Best correlation of a track's own motion with either arm's speed, head motion removed.
+
+    Only arms that moved during the track are candidates: an arm whose mean joint speed over
+    the track is under ``min_speed_share`` of the fastest arm's cannot have carried a hand
+    across the view. Correlation ignores scale, and a still arm jostled by the moving one
+    (its speed ~1% of the other's) follows the same rhythm: without this rule, tracks of the
+    babbling arm's hand went to the still arm's side (issue #29, one arm babbling at a time).
 
     The centroid's displacement over ``window`` steps (minus the eye's median displacement)
     is compared with each arm's mean joint speed over the same steps, ``lag`` steps earlier.
@@ -56,6 +63,7 @@ def track_correlation(
         ego: (T, n_eyes, 2) from :func:`ego_motion`.
         window: Steps per displacement.
         max_lag: Largest lag tried.
+        min_speed_share: Arms slower than this share of the fastest are not candidates.
     Returns:
         (rho, side): the correlation and the arm (0 left, 1 right) achieving it.
     """
@@ -65,6 +73,8 @@ def track_correlation(
     shift = ego[steps[window:], track.eye]
     move = move - np.where(np.isnan(shift), 0.0, shift)
     displacement = np.linalg.norm(move, axis=1)
+    moving = arm_speed[steps].mean(axis=0)
+    moving = moving >= min_speed_share * moving.max()
     best, side = 0.0, -1
     for lag in range(max_lag + 1):
         idx = steps[window:, None] - lag - np.arange(window)[None, :]
@@ -72,13 +82,13 @@ def track_correlation(
             continue
         head = head_speed[idx].mean(axis=1)[:, None]
         d = _residual(displacement, head)
-        for s in range(arm_speed.shape[1]):
+        for s in np.flatnonzero(moving):
             a = _residual(arm_speed[idx, s].mean(axis=1), head)
             if d.std() < 1e-9 or a.std() < 1e-9:
                 continue
             rho = float(np.corrcoef(d, a)[0, 1])
             if rho > best:
-                best, side = rho, s
+                best, side = rho, int(s)
     return best, side
 
 

@@ -40,6 +40,10 @@ class DetectorParams:
             ``joint_scale`` (J,) standardise the joint angles (the first J proprioception
             values), ``weights`` (2 hands, 2 + J, 2) map [1, eye - 0.5, standardised angles]
             to the image position (x, y). Empty: ``hand_means`` alone attribute the blobs.
+        side_hsv_ranges: Each hand's own colour boxes, [left boxes, right boxes], when
+            babbling found that the hands differ in colour (``two_colour_mittens``): then a
+            hand is the largest blob of its own colour, and positions are not used. Empty:
+            one colour for both hands, attributed by position.
     """
 
     hsv_ranges: list[list[int]]
@@ -51,6 +55,7 @@ class DetectorParams:
     kernel: int = 3
     calibration: dict[str, Any] = field(default_factory=dict)
     position_model: dict[str, Any] = field(default_factory=dict)
+    side_hsv_ranges: list[list[list[int]]] = field(default_factory=list)
 
     def save(self, path: str | Path) -> Path:
         """Write the parameters as JSON; return the path."""
@@ -132,23 +137,30 @@ class HandDetector:
         self.params = params
         self.max_hands = max_hands
 
-    def colour_mask(self, image: np.ndarray) -> np.ndarray:
-        """Return (H, W) bool: pixels inside the learned hand colour boxes of an RGB image."""
+    def colour_mask(self, image: np.ndarray, side: int | None = None) -> np.ndarray:
+        """Return (H, W) bool: pixels inside the learned hand colour boxes of an RGB image
+        (``side`` 0 or 1: that hand's own boxes, ``side_hsv_ranges``)."""
         hsv = cv2.cvtColor(np.ascontiguousarray(image), cv2.COLOR_RGB2HSV)
         mask = np.zeros(image.shape[:2], dtype=np.uint8)
-        for box in self.params.hsv_ranges if self.params else []:
+        if self.params is None:
+            boxes = []
+        elif side is None:
+            boxes = self.params.hsv_ranges
+        else:
+            boxes = self.params.side_hsv_ranges[side]
+        for box in boxes:
             lo, hi = np.array(box[:3], np.uint8), np.array(box[3:], np.uint8)
             mask |= cv2.inRange(hsv, lo, hi)
         return mask > 0
 
-    def blobs(self, image: np.ndarray) -> list[Blob]:
+    def blobs(self, image: np.ndarray, side: int | None = None) -> list[Blob]:
         """Return the hand blobs of one (H, W, 3) uint8 RGB image, largest first (at most
-        ``max_hands``)."""
+        ``max_hands``; with ``side``, the blobs of that hand's own colour)."""
         if self.params is None:
             return []
         scale = image.shape[0] * image.shape[1] / float(np.prod(self.params.image_size))
         found = colour_blobs(
-            self.colour_mask(image),
+            self.colour_mask(image, side),
             self.params.min_area * scale,
             self.params.max_area * scale,
             self.params.kernel,
@@ -210,14 +222,21 @@ class HandDetector:
         return [blobs[0], blobs[1]] if straight <= crossed else [blobs[1], blobs[0]]
 
     def detect(
-        self, eyes: np.ndarray, proprioception: np.ndarray | None = None
+        self,
+        eyes: np.ndarray,
+        proprioception: np.ndarray | None = None,
+        hands: list[int] | None = None,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Detect and attribute the hands in both eyes.
+        """Detect and attribute the hands in both eyes: by each hand's own colour when the
+        calibration learned two (``side_hsv_ranges``), else by :meth:`attribute`.
 
         Args:
             eyes: (2, H, W, 3) uint8 RGB, [left eye, right eye].
             proprioception: (P,) the infant's proprioception at the same step; with it the
                 blobs are attributed by the posture's predicted hand positions.
+            hands: The hands that can be in view (0 left, 1 right; default both): with one,
+                the largest hand blob is that hand (a one-arm curriculum stage, the other
+                arm hanging out of view).
         Returns:
             detections: (2 eyes, 2 hands) bool, hands ordered [left, right].
             masks: (2 eyes, 2 hands, H, W) bool, each detected hand's pixels.
@@ -225,10 +244,18 @@ class HandDetector:
         n_eyes, height, width = eyes.shape[:3]
         detections = np.zeros((n_eyes, 2), dtype=bool)
         masks = np.zeros((n_eyes, 2, height, width), dtype=bool)
+        by_colour = self.params is not None and bool(self.params.side_hsv_ranges)
         for eye in range(n_eyes):
-            found = self.blobs(eyes[eye])
-            for hand, blob in enumerate(self.attribute(found, eye, width, proprioception)):
-                if blob is not None:
+            if by_colour:  # each hand is the largest blob of its own colour
+                attributed = [next(iter(self.blobs(eyes[eye], side)), None) for side in range(2)]
+            elif hands is not None and len(hands) == 1:
+                attributed = [None, None]
+                attributed[hands[0]] = next(iter(self.blobs(eyes[eye])), None)
+            else:
+                found = self.blobs(eyes[eye])
+                attributed = self.attribute(found, eye, width, proprioception)
+            for hand, blob in enumerate(attributed):
+                if blob is not None and (hands is None or hand in hands):
                     detections[eye, hand] = True
                     masks[eye, hand] = blob.mask
         return detections, masks

@@ -51,6 +51,7 @@ def calibrate_by_babbling(
             infant=infant,
             start=cfg.start,
             progress=progress,
+            arms=cfg.babbling_arms,
         )
         if progress:
             print("babbling done; calibrating the hand detector", file=sys.stderr, flush=True)

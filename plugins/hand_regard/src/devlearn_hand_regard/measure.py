@@ -234,7 +234,9 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--babbling-steps", type=int, default=10_000)
     parser.add_argument("--seed", type=int, default=0, help="babbling seed of the calibration")
     parser.add_argument(
-        "--appearance", default="mittens", help="infant appearance: mittens or skin"
+        "--appearance",
+        default="mittens",
+        help="infant appearance: two_colour_mittens, mittens or skin",
     )
     parser.add_argument("--test-episodes", type=int, default=4, help="test episodes")
     parser.add_argument("--test-episode-steps", type=int, default=500, help="steps per episode")
@@ -249,6 +251,12 @@ def main(argv: list[str] | None = None) -> dict:
         help="how babbling and test episodes start (default babybench)",
     )
     parser.add_argument("--hold-steps", type=int, default=25, help="babbling action hold")
+    parser.add_argument(
+        "--arms",
+        default="alternate",
+        choices=("alternate", "both"),
+        help="calibration babbling: one arm per episode (default) or both arms",
+    )
     parser.add_argument("--detector", help="score this detector JSON instead of calibrating")
     parser.add_argument("--save", help="write the calibrated detector JSON here")
     parser.add_argument("--out", help="write the JSON result here too")
@@ -261,6 +269,7 @@ def main(argv: list[str] | None = None) -> dict:
         "appearance": args.appearance,
         "scene": args.scene,
         "hold_steps": args.hold_steps,
+        "arms": args.arms,
         "argv": list(sys.argv[1:] if argv is None else argv),
         "test_frames": {
             "episodes": args.test_episodes,
@@ -281,6 +290,7 @@ def main(argv: list[str] | None = None) -> dict:
                 start=start_mode,
                 hold_steps=args.hold_steps,
                 progress=True,
+                arms=args.arms,
             )
             result["babbling_s"] = round(time.perf_counter() - start, 1)
             start = time.perf_counter()
