@@ -9,9 +9,11 @@ import pytest
 import torch
 from devlearn_hand_regard import HandRegard, HandRegardConfig
 from devlearn_hand_regard.behavior import DETECTOR_FILE
+from devlearn_hand_regard.detector import DetectorParams
 from fake_sitting import LEFT_ARM, RIGHT_ARM, FakeSittingInfant
 
 from devlearn.env import BehaviorEnv
+from devlearn.errors import UsageError
 
 
 @pytest.fixture()
@@ -128,6 +130,28 @@ def test_prepare_reuses_the_saved_detector(tmp_path, synthetic_params, monkeypat
     behavior.prepare(tmp_path)
     assert behavior.config.detector_file == str((tmp_path / DETECTOR_FILE).resolve())
     assert behavior.detector.params == synthetic_params
+
+
+def test_prepare_copies_a_given_detector_instead_of_babbling(
+    tmp_path, synthetic_params, monkeypatch
+):
+    shared = synthetic_params.save(tmp_path / "shared.json")
+    run = tmp_path / "run"
+    run.mkdir()
+
+    def no_babbling(*args, **kwargs):
+        raise AssertionError("prepare must not babble when behavior.detector_file is given")
+
+    monkeypatch.setattr("devlearn_hand_regard.babbling.babble", no_babbling)
+    behavior = HandRegard()
+    behavior.config.detector_file = str(shared)
+    behavior.prepare(run)
+    assert behavior.config.detector_file == str((run / DETECTOR_FILE).resolve())
+    assert DetectorParams.load(run / DETECTOR_FILE) == synthetic_params
+    missing = HandRegard()
+    missing.config.detector_file = str(tmp_path / "nope.json")
+    with pytest.raises(UsageError, match="does not exist"):
+        missing.prepare(tmp_path / "other")
 
 
 def test_behavior_pickles_without_runtime_state(behavior):

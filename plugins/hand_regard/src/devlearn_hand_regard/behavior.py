@@ -133,12 +133,26 @@ class HandRegard(Behavior):
         return {"appearance": cfg.appearance, "start": cfg.start}
 
     def prepare(self, run_dir: Path) -> None:
-        """Calibrate the hand detector by motor babbling, or reuse ``run_dir/hand_detector.json``.
+        """Reuse ``run_dir/hand_detector.json`` (a resumed run), else copy the detector
+        ``config.detector_file`` names (one calibration shared by several runs), else
+        calibrate one by motor babbling; either way the run folder holds its detector.
 
         Sets ``config.detector_file`` to the file's absolute path.
+
+        Raises:
+            UsageError: ``config.detector_file`` names a missing file.
         """
         path = Path(run_dir) / DETECTOR_FILE
-        if not path.exists():
+        given = self.config.detector_file
+        if not path.exists() and given:
+            if not Path(given).is_file():
+                raise UsageError(
+                    f"hand_regard: behavior.detector_file {given} does not exist; give a "
+                    "detector JSON (e.g. a run's hand_detector.json) or leave it empty to "
+                    "calibrate by babbling"
+                )
+            DetectorParams.load(given).save(path)
+        elif not path.exists():
             detector_store.calibrate_by_babbling(self.config).save(path)
         self.config.detector_file = str(path.resolve())
         self._detector = None
