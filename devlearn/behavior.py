@@ -58,6 +58,37 @@ class Evaluator:
         """
         return {}
 
+    def episode_record(self) -> Any:
+        """What :class:`RunMetrics` need of the episode :meth:`end_episode` just closed, or
+        None (then nothing travels): small and picklable (it crosses from env workers to the
+        runner with the episode's metrics); never logged itself."""
+        return None
+
+
+class RunMetrics:
+    """Metrics over all of a run's finished training episodes (every env, worker and rank),
+    kept by the runner: one instance per run, from :meth:`Behavior.run_metrics`.
+
+    After each PPO iteration the runner passes the :meth:`Evaluator.episode_record` of every
+    episode that ended in it (all ranks', in rank order) to :meth:`add`, and logs
+    :meth:`values` as ``metrics/<name>`` in metrics.jsonl and TensorBoard. Its state is saved
+    in checkpoints, so ``--resume`` and ``--from`` continue it.
+    """
+
+    def add(self, records: list[Any]) -> None:
+        """Take note of finished episodes' records, oldest first."""
+
+    def values(self) -> dict[str, float]:
+        """The metrics now (name -> float); empty before any episode ended."""
+        return {}
+
+    def state_dict(self) -> dict[str, Any]:
+        """The state a checkpoint keeps (picklable)."""
+        return {}
+
+    def load_state_dict(self, state: dict[str, Any]) -> None:
+        """Restore :meth:`state_dict`'s output."""
+
 
 class Behavior(ABC):
     """What the infant should learn: scene, senses, observations, rewards, curriculum, metrics.
@@ -215,6 +246,11 @@ class Behavior(ABC):
     def evaluator(self, training: bool) -> Evaluator:
         """Return a fresh metrics collector (``training=False`` for ``devlearn eval``)."""
         return Evaluator()
+
+    def run_metrics(self) -> RunMetrics | None:
+        """Return the run-wide metrics over finished training episodes (:class:`RunMetrics`),
+        or None (the default) when the behaviour keeps none."""
+        return None
 
     def train_defaults(self) -> dict[str, Any]:
         """Run-config overrides this behaviour prefers, as dotted keys (``{"total_steps": 8e6}``).

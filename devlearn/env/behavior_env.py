@@ -19,6 +19,10 @@ from devlearn.rewards import BatchContext, BatchedIntrinsicReward, StepContext
 if TYPE_CHECKING:
     from devlearn.behavior import Behavior
 
+EPISODE_RECORD = "episode_record"
+"""Key of an episode summary holding :meth:`~devlearn.behavior.Evaluator.episode_record`
+(not a float: the runner hands it to the behaviour's :class:`~devlearn.behavior.RunMetrics`)."""
+
 InfantFactory = Callable[..., Any]
 """``factory(scene, senses=..., **behavior.infant_options()) -> Infant``; defaults to
 :func:`devlearn.infant.build_infant`."""
@@ -118,7 +122,8 @@ class BehaviorEnv:
             ``(obs, reward, done, time_out, episode_info)``. On the episode's last step ``done``
             and ``time_out`` are True, ``obs`` is the first observation of the next episode and
             ``episode_info`` holds ``reward/<term>`` (weighted per-episode sums) and
-            ``metrics/<name>`` (evaluator); otherwise ``episode_info`` is None.
+            ``metrics/<name>`` (evaluator), and under :data:`EPISODE_RECORD` the evaluator's
+            ``episode_record()`` when it has one; otherwise ``episode_info`` is None.
         Raises:
             GuardError: A term's value or an observation is NaN, infinite or beyond its bound
                 (:mod:`devlearn.env.guards`).
@@ -145,6 +150,9 @@ class BehaviorEnv:
             return ctx.observations, reward, False, False, None
         info = {f"reward/{name}": total for name, total in self._sums.items()}
         info.update({f"metrics/{k}": float(v) for k, v in self.evaluator.end_episode().items()})
+        record = self.evaluator.episode_record()
+        if record is not None:  # for the runner's RunMetrics, not a logged value
+            info[EPISODE_RECORD] = record
         return self.reset(), reward, True, True, info
 
     def set_stage(self, options: dict[str, Any]) -> None:

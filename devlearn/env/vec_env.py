@@ -13,6 +13,7 @@ from rsl_rl.env import VecEnv
 from tensordict import TensorDict
 
 from devlearn.env.behavior_env import (
+    EPISODE_RECORD,
     InfantFactory,
     load_run_memories,
     merge_run_memories,
@@ -194,8 +195,9 @@ class DevVecEnv(VecEnv):
 
 
 def mean_episode_info(episodes: list[dict[str, float]]) -> dict[str, float]:
-    """Mean of every key over the given episode summaries (keys missing from some are skipped)."""
-    keys = dict.fromkeys(k for ep in episodes for k in ep)
+    """Mean of every key over the given episode summaries (keys missing from some are skipped;
+    the :data:`~devlearn.env.behavior_env.EPISODE_RECORD` is no number and is left out)."""
+    keys = dict.fromkeys(k for ep in episodes for k in ep if k != EPISODE_RECORD)
     return {k: float(np.mean([ep[k] for ep in episodes if k in ep])) for k in keys}
 
 

@@ -18,7 +18,9 @@ from rsl_rl.runners import OnPolicyRunner
 from rsl_rl.utils import check_nan
 from tqdm import tqdm
 
+from devlearn.behavior import RunMetrics
 from devlearn.curriculum import Curriculum
+from devlearn.env.behavior_env import EPISODE_RECORD
 from devlearn.env.guards import GuardError
 from devlearn.env.workers import EnvWorkerError
 from devlearn.errors import RunStopped
@@ -79,6 +81,9 @@ class DevRunner(RunnerCheckpoints, RunnerMetrics, OnPolicyRunner):
         learned: The run's learned rewards (built here, after the networks, so the networks'
             initial parameters do not depend on them); see
             :class:`~devlearn.training.learned_rewards.LearnedRewards`.
+        run_metrics: The behaviour's metrics over all finished training episodes
+            (:meth:`~devlearn.behavior.Behavior.run_metrics`), fed every iteration's episode
+            records (all ranks'), logged as ``metrics/<name>`` and saved in checkpoints.
     """
 
     def __init__(
@@ -92,8 +97,10 @@ class DevRunner(RunnerCheckpoints, RunnerMetrics, OnPolicyRunner):
         device: str = "cpu",
         progress: bool = True,
         learned: LearnedRewards | None = None,
+        run_metrics: RunMetrics | None = None,
     ) -> None:
         self.run_cfg = cfg
+        self.run_metrics = run_metrics
         self.run_dir = Path(run_dir)
         self.curriculum = curriculum
         self.headline_metric = headline_metric
@@ -214,6 +221,7 @@ class DevRunner(RunnerCheckpoints, RunnerMetrics, OnPolicyRunner):
                     self.env_steps += per_iteration
                     # one agent's lifetime memory: merge the workers' (and ranks') copies
                     env.sync_run_memory(self._all_ranks if self.is_distributed else None)
+                    self._add_run_metrics(finished)
                     good = self._snapshot()
                     with quiet():
                         self.logger.log(
@@ -276,6 +284,16 @@ class DevRunner(RunnerCheckpoints, RunnerMetrics, OnPolicyRunner):
             self.logger.stop_logging_writer()
             if self.logger.writer is not None:
                 self.logger.writer.close()
+
+    def _add_run_metrics(self, finished: list[dict[str, Any]]) -> None:
+        """Take the episode records out of ``finished`` (so only numbers are averaged) and give
+        every rank's, in rank order, to the run metrics (a collective when distributed)."""
+        records = [ep.pop(EPISODE_RECORD) for ep in finished if EPISODE_RECORD in ep]
+        if self.run_metrics is None:
+            return
+        if self.is_distributed:
+            records = [r for rank in self._all_ranks(records) for r in rank]
+        self.run_metrics.add(records)
 
     def _all_ranks(self, value: Any) -> list:
         """Every rank's ``value``, in rank order (a collective: all ranks call it together)."""

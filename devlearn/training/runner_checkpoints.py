@@ -28,8 +28,9 @@ class RunnerCheckpoints:
     Uses the runner's ``alg``, ``env``, ``curriculum``, ``learned``, ``run_cfg``, ``run_dir``,
     counters (``current_learning_iteration``, ``env_steps``), rank attributes and
     ``_all_ranks``. A checkpoint holds the model, optimiser, iteration, env steps,
-    curriculum, every env's reward-term state, the learned rewards, rng states, behaviour
-    name and config (``docs/checkpoints.md``).
+    curriculum, every env's reward-term state, the learned rewards, the run metrics
+    (e.g. self-touch's training-score window), rng states, behaviour name and config
+    (``docs/checkpoints.md``).
     """
 
     def _snapshot(self) -> dict[str, Any]:
@@ -46,6 +47,9 @@ class RunnerCheckpoints:
             learned=copy.deepcopy(self.learned.state_dict()),  # live tensors otherwise
             reward_norm=(
                 copy.deepcopy(self.reward_norm.state_dict()) if self.reward_norm is not None else {}
+            ),
+            run_metrics=(
+                copy.deepcopy(self.run_metrics.state_dict()) if self.run_metrics is not None else {}
             ),
             rng={
                 "torch": torch.get_rng_state(),
@@ -122,6 +126,8 @@ class RunnerCheckpoints:
         self.learned.load_state_dict(state.get("learned", {}))
         if self.reward_norm is not None and state.get("reward_norm"):
             self.reward_norm.load_state_dict(state["reward_norm"])
+        if self.run_metrics is not None and state.get("run_metrics"):
+            self.run_metrics.load_state_dict(state["run_metrics"])
         ranks = state["env"]["ranks"]
         if self.gpu_global_rank < len(ranks):
             self.env.load_state_dict(ranks[self.gpu_global_rank])

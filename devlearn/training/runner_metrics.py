@@ -14,8 +14,9 @@ from tqdm import tqdm
 class RunnerMetrics:
     """Per-iteration records for :class:`~devlearn.training.runner.DevRunner`.
 
-    Uses the runner's ``env_steps``, ``curriculum``, ``episodes``, ``learned``, ``is_main``,
-    ``logger``, ``run_dir`` and ``headline_metric``; sets ``last_row``.
+    Uses the runner's ``env_steps``, ``curriculum``, ``episodes``, ``learned``,
+    ``run_metrics``, ``is_main``, ``logger``, ``run_dir`` and ``headline_metric``; sets
+    ``last_row``.
     """
 
     def _record(
@@ -53,6 +54,10 @@ class RunnerMetrics:
             for key in dict.fromkeys(k for ep in self.episodes for k in ep):
                 row[key] = float(np.mean([ep[key] for ep in self.episodes if key in ep]))
         row.update({f"loss/{k}": float(v) for k, v in losses.items()})
+        run_metrics = {}
+        if self.run_metrics is not None:
+            run_metrics = {f"metrics/{k}": float(v) for k, v in self.run_metrics.values().items()}
+        row.update(run_metrics)
         row.update(health or {})
         row.update(self.learned.last)
         self.last_row = row
@@ -62,6 +67,8 @@ class RunnerMetrics:
         if self.logger.writer is not None:
             for key, value in (health or {}).items():
                 self.logger.writer.add_scalar(key if "/" in key else f"health/{key}", value, it)
+            for key, value in run_metrics.items():
+                self.logger.writer.add_scalar(key, value, it)
         with open(self.run_dir / "metrics.jsonl", "a") as f:
             f.write(json.dumps(row) + "\n")
         postfix = {"steps/s": f"{rate:.0f}", "stage": row["stage"]}

@@ -282,6 +282,7 @@ def _build(
             device,
             progress,
             learned,
+            behavior.run_metrics(),
         )
         if checkpoint is not None:
             if start_from is not None and rank == 0:

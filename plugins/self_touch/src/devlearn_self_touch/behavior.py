@@ -30,7 +30,7 @@ from devlearn_self_touch.body_map import (
     sparse_body_map,
 )
 from devlearn_self_touch.config import SelfTouchConfig
-from devlearn_self_touch.evaluation import PAPER_RESULTS, SelfTouchEvaluator
+from devlearn_self_touch.evaluation import PAPER_RESULTS, SelfTouchEvaluator, TrainingScore
 from devlearn_self_touch.rewards import Balance, ContactNovelty, DiversityMilestones, TouchNovelty
 
 if TYPE_CHECKING:
@@ -188,6 +188,11 @@ class SelfTouch(Behavior):
     def evaluator(self, training: bool) -> Evaluator:
         """Per-hand coverage of the 34 parts and the score (:class:`SelfTouchEvaluator`)."""
         return SelfTouchEvaluator(training=training)
+
+    def run_metrics(self) -> TrainingScore:
+        """BabyBench's training score over the last ``training_score_episodes`` training
+        episodes of the run (:class:`TrainingScore`)."""
+        return TrainingScore(self.config.training_score_episodes)
 
     @classmethod
     def paper_results(cls, config: dict[str, Any]) -> tuple[str, dict[str, float]] | None:

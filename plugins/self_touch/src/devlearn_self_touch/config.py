@@ -127,6 +127,14 @@ class SelfTouchConfig:
     """Environment steps of stage 2, random initial joint angles (paper: 4M). Informational:
     the last stage lasts until training ends (set total_steps = 8M for the paper's run)."""
 
+    # --- metrics (BabyBench's scoring) ----------------------------------------------------
+    training_score_episodes: int = 10_000
+    """Window of the training score logged as ``metrics/training_score``: the last this many
+    finished training episodes of the run (all environments, workers and ranks), as
+    BabyBench's "training score", the paper's 0.88 (BabyBench: 10,000). Each hand's distinct
+    parts (of 34) touched in any episode of the window, (left + right) / 68
+    (:class:`devlearn_self_touch.evaluation.TrainingScore`); saved in checkpoints."""
+
     def __post_init__(self) -> None:
         self.validate()
 
@@ -148,5 +156,9 @@ class SelfTouchConfig:
         if self.touch_count not in TOUCH_COUNTS:
             raise ValueError(
                 f"unknown touch_count '{self.touch_count}'; valid: {', '.join(TOUCH_COUNTS)}"
+            )
+        if self.training_score_episodes < 1:
+            raise ValueError(
+                f"training_score_episodes must be at least 1, got {self.training_score_episodes}"
             )
         self.milestones = tuple(sorted(int(m) for m in self.milestones))

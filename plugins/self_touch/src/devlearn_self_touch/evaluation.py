@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from devlearn import Evaluator, StepContext
+from devlearn.behavior import RunMetrics
 from devlearn.stats import episode_stats
 from devlearn_self_touch.body_map import HANDS, NUM_PARTS, NUM_REGIONS
 
@@ -35,6 +36,10 @@ PAPER_RESULTS = {
 """The paper's evaluation figures per curriculum (100 random-pose episodes, its protocol):
 Table I for the two-stage run, Table II ("Eval" score and coverage) for the ablation."""
 
+
+TRAINING_SCORE_PAPER = 0.88
+"""The paper's "training score" of its two-stage 8M run (BabyBench's counter over the last
+10,000 training episodes; see :class:`TrainingScore`)."""
 
 BOOTSTRAP_RESAMPLES = 2000
 """Resamples of the union score's bootstrap interval."""
@@ -100,6 +105,8 @@ class SelfTouchEvaluator(Evaluator):
         self.episodes: list[dict[str, float]] = []
         self.touched: list[dict[str, list[int]]] = []
         """Each evaluation episode's touched parts per hand (part indices), in eval.json."""
+        self.last_parts = np.zeros((len(HANDS), NUM_PARTS), dtype=bool)
+        """The touched parts of the episode :meth:`end_episode` closed last, (2, 34)."""
         self.regions: Any = None  # the infant's region table, taken from the first real step
 
     def record(self, ctx: StepContext) -> None:
@@ -136,8 +143,14 @@ class SelfTouchEvaluator(Evaluator):
                     for h, hand in enumerate(HANDS)
                 }
             )
+        self.last_parts = self.episode_parts.copy()
         self.episode_parts[:] = False
         return metrics
+
+    def episode_record(self) -> np.ndarray | None:
+        """In training, the closed episode's touched parts, (2, 34) bool (hands x parts), for
+        the run's :class:`TrainingScore`; None in evaluation (its summary keeps them)."""
+        return self.last_parts if self.training else None
 
     def part_names(self) -> list[str]:
         """Names of the 34 parts (generic ``part_NN`` before a real infant was seen)."""
@@ -202,6 +215,86 @@ class SelfTouchEvaluator(Evaluator):
             + "\n"
         )
         return [picture, counts]
+
+
+class TrainingScore(RunMetrics):
+    """BabyBench's "training score" in our terms: the union, per hand, of the parts touched
+    in the run's last ``episodes`` finished training episodes (the paper's 0.88).
+
+    ``training_score`` = (left + right) / 68, where left (right) is the number of the 34
+    side-free body parts (the evaluation's parts, :data:`~devlearn_self_touch.body_map`) that
+    the left (right) hand's palm or fingers touched in at least one episode of the window.
+    The window is global over the run: every environment, env worker and torchrun rank feeds
+    it (the runner gathers their episodes in rank order after each PPO iteration), oldest
+    episodes dropped first. Logged as ``metrics/training_score``,
+    ``metrics/training_coverage_left`` / ``_right`` (parts of 34) and
+    ``metrics/training_score_episodes`` (episodes in the window) every iteration once an
+    episode has ended; saved in checkpoints, so ``--resume`` continues the same window.
+
+    Where it differs from BabyBench's counter: BabyBench counts MIMo's geoms touched by each
+    hand's palm only and credits a palm-to-palm contact to the right hand alone (capping its
+    score at 60/68 = 0.88); here a hand is its palm and fingers, both hands are credited for
+    a hand-to-hand contact, and a part counts whichever side's region of it was touched
+    (the same rule as :class:`SelfTouchEvaluator`). Training episodes credit every step (no
+    settle period) and start from the stage's pose (fixed, then random).
+
+    Args:
+        episodes: Window length in finished episodes (BabyBench: 10,000).
+    """
+
+    def __init__(self, episodes: int = 10_000) -> None:
+        if episodes < 1:
+            raise ValueError(
+                f"the training score's window must be at least 1 episode, got {episodes}"
+            )
+        self.episodes = int(episodes)
+        self.window = np.zeros((self.episodes, len(HANDS), NUM_PARTS), dtype=bool)
+        """Ring buffer of the window's episodes, (episodes, 2, 34); slot ``n % episodes``
+        holds the n-th episode added."""
+        self.counts = np.zeros((len(HANDS), NUM_PARTS), dtype=np.int64)
+        """Episodes of the window in which hand h touched part p, (2, 34)."""
+        self.added = 0
+        """Episodes added (since the run began, or since the checkpoint's window)."""
+
+    def add(self, records: list[Any]) -> None:
+        """Append finished episodes' touched parts ((2, 34) bool each), oldest first."""
+        for parts in records:
+            slot = self.added % self.episodes
+            if self.added >= self.episodes:  # the window is full: the oldest episode leaves
+                self.counts -= self.window[slot]
+            self.window[slot] = np.asarray(parts, dtype=bool)
+            self.counts += self.window[slot]
+            self.added += 1
+
+    def values(self) -> dict[str, float]:
+        if not self.added:
+            return {}
+        left, right = (int(n) for n in (self.counts > 0).sum(axis=1))
+        return {
+            "training_score": (left + right) / (2 * NUM_PARTS),
+            "training_coverage_left": float(left),
+            "training_coverage_right": float(right),
+            "training_score_episodes": float(min(self.added, self.episodes)),
+        }
+
+    def ordered(self) -> np.ndarray:
+        """The window's episodes, oldest first: (min(added, episodes), 2, 34) bool."""
+        if self.added <= self.episodes:
+            return self.window[: self.added].copy()
+        slot = self.added % self.episodes
+        return np.concatenate([self.window[slot:], self.window[:slot]])
+
+    def state_dict(self) -> dict[str, Any]:
+        """The window's episodes as bits, oldest first: (episodes in it, 2, 5) uint8."""
+        return {"parts": np.packbits(self.ordered(), axis=-1)}
+
+    def load_state_dict(self, state: dict[str, Any]) -> None:
+        """Restore :meth:`state_dict`'s output; a shorter window keeps the newest episodes."""
+        parts = np.unpackbits(state["parts"], axis=-1, count=NUM_PARTS).astype(bool)
+        self.window[:] = False
+        self.counts[:] = 0
+        self.added = 0
+        self.add(list(parts[-self.episodes :]))  # ``added`` restarts at the window's length
 
 
 def draw_body_map_counts(region_steps: np.ndarray, regions: Any, out_dir: Path) -> Path:
