@@ -61,8 +61,10 @@ class HandRegardConfig:
     # --- the infant's look (the paper's "without manually defined skin-colors") ---------
     appearance: str = "mittens"
     """How the infant and its toys look: ``skin`` (bare hands the body's colour, as in MIMo;
-    toys in the natural palette of baby blocks, red, blue, yellow, wood) or ``mittens``
-    (purple mittens; toys recoloured away from their hue). Babbling calibrates the detector
+    toys in the natural palette of baby blocks, red, blue, yellow, wood), ``mittens``
+    (purple mittens; toys recoloured away from their hue) or ``two_colour_mittens`` (purple
+    left, magenta right: the detector can learn each hand's colour; in BabyBench's scene its
+    calibration does not find the right one yet, plugin README). Babbling calibrates the detector
     on the same appearance. Default mittens: on skin the colour babbling learns is the whole
     body's and the detector fires mostly on arms, legs and trunk (results/hand_regard/README.md,
     "Detector, both appearances")."""
