@@ -1,49 +1,38 @@
 #!/usr/bin/env bash
-# Publish finished runs of a hand-regard sweep into results/: for each run, the policy file
-# (`devlearn slim`: weights, config and detector calibration), its evaluation (written by the
-# sweep's `devlearn eval`), config, metrics, calibrated detector, the sweep's record (the code
-# commit of every training attempt), and an evaluation from the rest pose (`--start rest`,
-# one episode, into eval_rest/). A run's calibrated detector that equals the measured one
-# (results/hand_regard/detector/<appearance>_detector.json: babbling seed 0, as every run of
-# the sweep) is measured already; any other is measured on the same 2,000 random-start frames
-# (`devlearn_hand_regard.measure`, ~75 s) into detector_check.json.
+# Publish issue #29's experiment (results/hand_regard/experiment.sh's OUT folder) into
+# results/hand_regard/i29/: per run its evaluations (eval/ from BabyBench's start, eval_random/
+# from random starts), config, training metrics and the sweep's record (the code commit of every attempt); the
+# baselines; and, for the runs named, the policy file (`devlearn slim`: weights, config and the
+# detector) and a video of one evaluation episode from BabyBench's start.
 #
-#   bash results/hand_regard/publish.sh SWEEP_DIR DEST_DIR [RUN_NAME ...]
-#   bash results/hand_regard/publish.sh runs/hand_regard_300k results/hand_regard/i19
-#
-# Without run names it publishes every run of the sweep whose evaluation is written.
+#   bash results/hand_regard/publish.sh OUT [RUN_NAME ...]
+#   bash results/hand_regard/publish.sh /work/sweeps/hr29 'reward=paper,seed=2' ...
 set -euo pipefail
 cd "$(dirname "$0")/../.."
-sweep=${1:?usage: publish.sh SWEEP_DIR DEST_DIR [RUN_NAME ...]}
-dest=${2:?usage: publish.sh SWEEP_DIR DEST_DIR [RUN_NAME ...]}
-shift 2
-names=("$@")
-if [ ${#names[@]} -eq 0 ]; then
-  for run in "$sweep"/runs/*/; do
-    [ -f "$run/eval/eval.json" ] && names+=("$(basename "$run")")
-  done
-fi
-py=.venv/bin/python
-for name in "${names[@]}"; do
-  run="$sweep/runs/$name"
+sweep=${1:?usage: publish.sh OUT [RUN_NAME ...]}
+shift
+dest=results/hand_regard/i29
+mkdir -p "$dest"
+for run in "$sweep"/rewards/runs/*/ "$sweep"/curiosity/runs/*/; do
+  name=$(basename "$run")
+  [ -f "$run/eval/eval.json" ] || { echo "$run: not evaluated yet, skipped" >&2; continue; }
   out="$dest/$name"
-  [ -f "$run/eval/eval.json" ] || { echo "$run: not evaluated yet (no eval/eval.json)" >&2; exit 2; }
   mkdir -p "$out/eval"
-  cp "$run/config.json" "$run/metrics.jsonl" "$run/hand_detector.json" "$out/"
-  cp "$run/eval/"* "$out/eval/"
-  cp "$sweep/records/$name.json" "$out/sweep_record.json"
-  .venv/bin/devlearn slim "$run" --out "$out/policy.pt"
-  # the diagnostic from the rest pose (training's start; one episode: the policy is deterministic)
-  .venv/bin/devlearn eval hand_regard --checkpoint "$out/policy.pt" --episodes 1 --seed 0 \
-    --start rest --out "$out/eval_rest"
-  appearance=$("$py" -c "import json,sys; print(json.load(open(sys.argv[1]))['behavior']['appearance'])" "$run/config.json")
-  measured=results/hand_regard/detector/${appearance}_detector.json
-  if "$py" -c "import json,sys; sys.exit(json.load(open(sys.argv[1])) != json.load(open(sys.argv[2])))" \
-    "$run/hand_detector.json" "$measured"; then
-    echo "$name: detector identical to $measured (measured in detector/$appearance.json)"
-  else
-    "$py" -m devlearn_hand_regard.measure --appearance "$appearance" \
-      --detector "$run/hand_detector.json" --out "$out/detector_check.json"
+  cp "$run/config.json" "$run/metrics.jsonl" "$out/"
+  cp "$run/eval/eval.json" "$out/eval/"
+  if [ -f "$run/eval_random/eval.json" ]; then
+    mkdir -p "$out/eval_random" && cp "$run/eval_random/eval.json" "$out/eval_random/"
   fi
-  echo "published $name -> $out"
+  cp "$(dirname "$(dirname "$run")")/records/$name.json" "$out/sweep_record.json"
+done
+for base in "$sweep"/baseline_*/; do
+  mkdir -p "$dest/$(basename "$base")"
+  cp "$base/eval.json" "$dest/$(basename "$base")/"
+done
+for name in "$@"; do
+  run=$(ls -d "$sweep"/*/runs/"$name")
+  .venv/bin/devlearn slim "$run" --out "$dest/$name/policy.pt"
+  .venv/bin/devlearn eval hand_regard --checkpoint "$dest/$name/policy.pt" --episodes 1 \
+    --seed 0 --video "$dest/$name/episode.mp4" --out "$(mktemp -d)" > /dev/null
+  echo "published $name with its policy and a video"
 done
