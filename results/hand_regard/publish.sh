@@ -16,7 +16,7 @@ mkdir -p "$dest"
 for run in "$sweep"/rewards/runs/*/ "$sweep"/curiosity/runs/*/; do
   name=$(basename "$run")
   [ -f "$run/eval/eval.json" ] || { echo "$run: not evaluated yet, skipped" >&2; continue; }
-  out="$dest/$name"
+  case $run in */curiosity/runs/*) out="$dest/curiosity=forward_model,$name" ;; *) out="$dest/$name" ;; esac
   mkdir -p "$out/eval"
   cp "$run/config.json" "$run/metrics.jsonl" "$out/"
   cp "$run/eval/eval.json" "$out/eval/"
@@ -29,8 +29,8 @@ for base in "$sweep"/baseline_*/; do
   mkdir -p "$dest/$(basename "$base")"
   cp "$base/eval.json" "$dest/$(basename "$base")/"
 done
-for name in "$@"; do
-  run=$(ls -d "$sweep"/*/runs/"$name")
+for name in "$@"; do  # as published: reward=paper,seed=2 or curiosity=forward_model,seed=1
+  run=$(ls -d "$sweep"/*/runs/"${name#curiosity=forward_model,}")
   .venv/bin/devlearn slim "$run" --out "$dest/$name/policy.pt"
   .venv/bin/devlearn eval hand_regard --checkpoint "$dest/$name/policy.pt" --episodes 1 \
     --seed 0 --video "$dest/$name/episode.mp4" --out "$(mktemp -d)" > /dev/null
