@@ -4,10 +4,11 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
-import torch
-import torch.nn as nn
+if TYPE_CHECKING:  # torch loads when a term is built (training), not when a plugin registers it
+    import torch
+    import torch.nn as nn
 
 
 @dataclass
@@ -80,52 +81,6 @@ class Transitions:
         )
 
 
-class RunningScale(nn.Module):
-    """Running variance of a scalar stream (Chan et al.'s parallel update); divides by its std.
-
-    Its buffers are in :meth:`state_dict`, so a resumed run keeps the scale.
-    """
-
-    def __init__(self) -> None:
-        super().__init__()
-        self.register_buffer("count", torch.zeros((), dtype=torch.float64))
-        self.register_buffer("mean", torch.zeros((), dtype=torch.float64))
-        self.register_buffer("m2", torch.zeros((), dtype=torch.float64))
-
-    def update(self, values: torch.Tensor) -> None:
-        """Add a batch of values, (B,). All-reduced over ranks when distributed."""
-        stats = torch.stack(
-            [
-                torch.tensor(float(values.numel()), dtype=torch.float64, device=values.device),
-                values.double().sum(),
-                values.double().square().sum(),
-            ]
-        )
-        if _distributed():
-            torch.distributed.all_reduce(stats)
-        n, total, squares = stats.tolist()
-        if n == 0:
-            return
-        mean_b = total / n
-        m2_b = max(squares - n * mean_b * mean_b, 0.0)
-        count = float(self.count)
-        delta = mean_b - float(self.mean)
-        new_count = count + n
-        self.mean.fill_(float(self.mean) + delta * n / new_count)
-        self.m2.fill_(float(self.m2) + m2_b + delta * delta * count * n / new_count)
-        self.count.fill_(new_count)
-
-    @property
-    def std(self) -> float:
-        """The running standard deviation (1 before any value)."""
-        count = float(self.count)
-        return (float(self.m2) / count) ** 0.5 if count > 1 else 1.0
-
-    def forward(self, values: torch.Tensor) -> torch.Tensor:
-        """Return ``values / std``, same shape."""
-        return values / max(self.std, 1e-8)
-
-
 class LearnedReward(ABC):
     """An intrinsic reward computed from a model that learns: prediction error, novelty...
 
@@ -168,6 +123,8 @@ class LearnedReward(ABC):
         action_dim: int,
         device: str = "cpu",
     ) -> None:
+        from devlearn.learned_update import RunningScale
+
         self.config = config
         self.observation_shapes = {k: tuple(v) for k, v in observation_shapes.items()}
         self.action_dim = int(action_dim)
@@ -194,6 +151,8 @@ class LearnedReward(ABC):
 
     def make_optimizer(self) -> torch.optim.Optimizer:
         """The term's optimiser: Adam over :attr:`model`'s trainable parameters."""
+        import torch
+
         params = [p for p in self.model.parameters() if p.requires_grad]
         return torch.optim.Adam(params, lr=self.config.learning_rate)
 
@@ -224,11 +183,19 @@ class LearnedReward(ABC):
             ``(reward, log)``: the weighted, normalised reward, (B,); and ``raw`` (mean raw
             reward), ``loss`` (mean training loss), ``weight`` (the scheduled weight).
         """
+        import torch
+
+        from devlearn.learned_update import average_gradients, distributed
+
         cfg = self.config
         self.model.train()
         self.observe(batch)
         with torch.no_grad():
-            raw = self.compute_reward(batch).float().reshape(-1) if len(batch) else _empty(self)
+            raw = (
+                self.compute_reward(batch).float().reshape(-1)
+                if len(batch)
+                else torch.zeros(0, device=self.device)
+            )
         if cfg.normalize:
             self.scale.update(raw)
             reward = self.scale(raw)
@@ -240,14 +207,14 @@ class LearnedReward(ABC):
         for _ in range(cfg.epochs):
             order = torch.randperm(len(batch), device=raw.device)
             for index in torch.tensor_split(order, cfg.mini_batches):
-                if not len(index) and not _distributed():
+                if not len(index) and not distributed():
                     continue
                 self.optimizer.zero_grad(set_to_none=False)
                 if len(index):  # an empty chunk still joins the ranks' gradient average
                     loss = self.compute_loss(batch.select(index))
                     loss.backward()
                     losses.append(float(loss.detach()))
-                _average_gradients(params)
+                average_gradients(params)
                 self.optimizer.step()
         self.updates += 1
         mean_raw = float(raw.mean()) if raw.numel() else 0.0
@@ -269,29 +236,3 @@ class LearnedReward(ABC):
         self.optimizer.load_state_dict(state["optimizer"])
         self.scale.load_state_dict(state["scale"])
         self.updates = int(state["updates"])
-
-
-def _empty(term: LearnedReward) -> torch.Tensor:
-    return torch.zeros(0, device=term.device)
-
-
-def _distributed() -> bool:
-    return torch.distributed.is_available() and torch.distributed.is_initialized()
-
-
-def _average_gradients(params: list[torch.Tensor]) -> None:
-    """Average gradients over torchrun's ranks (one all-reduce of the flattened gradients)."""
-    if not _distributed():
-        return
-    world = torch.distributed.get_world_size()
-    if world < 2 or not params:
-        return
-    grads = [p.grad if p.grad is not None else torch.zeros_like(p) for p in params]
-    flat = torch.cat([g.reshape(-1) for g in grads])
-    torch.distributed.all_reduce(flat)
-    flat /= world
-    offset = 0
-    for p in params:
-        n = p.numel()
-        p.grad = flat[offset : offset + n].view_as(p).clone()
-        offset += n

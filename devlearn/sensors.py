@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from typing import TYPE_CHECKING
 
-import torch.nn as nn
+if TYPE_CHECKING:  # torch loads when a network is built, not when a plugin registers an encoder
+    import torch.nn as nn
 
 
 class SensorEncoder(ABC):
@@ -47,6 +49,8 @@ class MLPEncoder(SensorEncoder):
         self.hidden_dims = tuple(int(d) for d in hidden_dims)
 
     def build(self, obs_shape: tuple[int, ...]) -> nn.Module:
+        import torch.nn as nn
+
         layers: list[nn.Module] = [nn.Flatten()]
         in_dim = 1
         for d in obs_shape:

@@ -11,7 +11,8 @@ from learned_terms import ForgetfulPredictor, LinearConfig, LinearPredictor
 
 from devlearn import hookimpl
 from devlearn.errors import UsageError
-from devlearn.learned import LearnedReward, RunningScale
+from devlearn.learned import LearnedReward
+from devlearn.learned_update import RunningScale
 from devlearn.plugins import PluginRegistry, PluginSource
 from devlearn.testing import ConformanceError, check_learned_reward
 

@@ -7,8 +7,15 @@ import shlex
 import sys
 
 TINY = {"--steps": "256", "--envs": "2", "--episodes": "1", "--workers": "0", "--seeds": "1"}
-"""Option -> the small value a test substitutes (added to ``devlearn run`` when missing). A
-sweep keeps its grid (each variant still trains, evaluates and reports) but runs one seed."""
+"""Option -> the small value a test substitutes. A sweep keeps its grid (each variant still
+trains, evaluates and reports) but runs one seed."""
+ADDED = {"run": ("--steps", "--envs", "--workers"), "sweep": ("--envs", "--episodes")}
+"""Options of :data:`TINY` added to a command that lacks them (a resumed run keeps its
+``--steps``): a sweep's runs would otherwise train 8 environments and evaluate 10 episodes."""
+TINY_SETTINGS = {"hand_regard": ("behavior.babbling_steps=2000",)}
+"""``--set`` values added to a new ``devlearn run`` of a behaviour: hand regard's motor
+babbling (10,000 rendered steps by default) is a budget too; 2,000 steps still find the
+hands (and the calibration's fixed 2,000 held-out steps still run)."""
 
 
 def blocks(markdown: str, language: str) -> list[str]:
@@ -34,10 +41,14 @@ def shrink(words: list[str]) -> list[str]:
     if not words or words[0].rsplit("/", 1)[-1] != "devlearn":
         return list(words)
     words = [sys.executable, "-m", "devlearn.cli", *words[1:]]
+    command = words[3] if len(words) > 3 else ""
     for option, value in TINY.items():
         if option in words:
             words[words.index(option) + 1] = value
-        elif option in ("--steps", "--envs", "--workers") and "run" in words[3:4]:
+        elif option in ADDED.get(command, ()):
             if option != "--steps" or "--resume" not in words:
                 words += [option, value]
+    if command == "run" and "--resume" not in words and len(words) > 4:
+        for setting in TINY_SETTINGS.get(words[4], ()):
+            words += ["--set", setting]
     return words

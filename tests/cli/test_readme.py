@@ -1,9 +1,11 @@
 """Every command in the README's bash blocks runs (tiny budgets), so the README cannot drift.
 
 What is substituted (printed by ``-v`` runs through the test ids): ``--steps``, ``--envs``,
-``--episodes``, ``--workers`` and a sweep's ``--seeds`` get the small values of ``doc_commands.TINY`` (``devlearn
-run`` gets them added when missing); ``.venv/bin/`` prefixes are dropped (the test runs the
-installed ``devlearn`` of this interpreter); globs expand in the test's folder. Skipped, by rule:
+``--episodes``, ``--workers`` and a sweep's ``--seeds`` get the small values of
+``doc_commands.TINY`` (``devlearn run`` and ``sweep`` get them added when missing, and a new
+hand-regard run a short motor babbling: ``doc_commands.TINY_SETTINGS``); ``.venv/bin/``
+prefixes are dropped (the test runs the installed ``devlearn`` of this interpreter); globs
+expand in the test's folder. Skipped, by rule:
 the set-up script and ``python -m pytest`` (CI runs them around this very test), ``source``, and
 ``devlearn bench`` (minutes of measurement; tests/cli/test_bench.py covers it). Any other
 non-devlearn command fails the test, so a new kind of README command is noticed.
@@ -69,7 +71,12 @@ def test_shrink_substitutes_tiny_budgets():
     assert "--steps" not in resume  # a resumed run keeps its own budget
     assert doc_commands.shrink(["devlearn", "eval", "--episodes", "100"])[-1] == "1"
     sweep = doc_commands.shrink("devlearn sweep x --grid a=1,2 --seeds 1,2,3".split())
-    assert sweep[-4:] == ["--grid", "a=1,2", "--seeds", "1"]  # the grid stays, one seed
+    assert sweep[-8:] == ["--grid", "a=1,2", "--seeds", "1", "--envs", "2", "--episodes", "1"]
+    # the grid stays, one seed; hand regard's babbling is a budget too, but not on a resume
+    babbling = ["--set", "behavior.babbling_steps=2000"]
+    assert doc_commands.shrink("devlearn run hand_regard --out r".split())[-2:] == babbling
+    assert babbling[1] not in doc_commands.shrink("devlearn run hand_regard --resume r".split())
+    assert babbling[1] not in doc_commands.shrink("devlearn eval hand_regard --policy zero".split())
 
 
 @pytest.mark.slow

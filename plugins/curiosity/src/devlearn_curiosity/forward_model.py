@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-
-import torch
-import torch.nn as nn
-from rsl_rl.modules import MLP, EmpiricalNormalization
+from typing import TYPE_CHECKING
 
 from devlearn.learned import LearnedReward, LearnedRewardConfig, Transitions
+
+if TYPE_CHECKING:  # torch and rsl-rl load when a run builds the term, not when it registers
+    import torch
+    import torch.nn as nn
 
 
 @dataclass
@@ -24,44 +25,16 @@ class ForwardModelConfig(LearnedRewardConfig):
     """Hidden layers of the predictor."""
 
 
-class RandomImageFeatures(nn.Module):
-    """A fixed random CNN: (B, H, W, C) images, values 0..255 -> (B, features).
-
-    Conv(C->16, k5 s2), Conv(16->32, k3 s2), Conv(32->32, k3 s2), each + ReLU, average-pooled
-    to 4x4 (so coarse positions, e.g. where a hand is, survive), then one linear layer. Random
-    features are a stable target for a forward model: Burda et al. (2019, "Large-scale study
-    of curiosity-driven learning") found them competitive with learned ones.
-    """
-
-    def __init__(self, channels: int, features: int) -> None:
-        super().__init__()
-        self.net = nn.Sequential(
-            nn.Conv2d(channels, 16, 5, stride=2, padding=2),
-            nn.ReLU(),
-            nn.Conv2d(16, 32, 3, stride=2, padding=1),
-            nn.ReLU(),
-            nn.Conv2d(32, 32, 3, stride=2, padding=1),
-            nn.ReLU(),
-            nn.AdaptiveAvgPool2d(4),
-            nn.Flatten(),
-            nn.Linear(32 * 16, features),
-        )
-        self.requires_grad_(False)
-
-    def forward(self, images: torch.Tensor) -> torch.Tensor:
-        """Args: images (B, H, W, C). Returns: (B, features)."""
-        return self.net(images.float().permute(0, 3, 1, 2) / 255.0)
-
-
 class ForwardModel(LearnedReward):
     """A self-model of the body's effect on the senses: reward is how wrong it was.
 
-    Each chosen observation is encoded by a fixed map: images by :class:`RandomImageFeatures`,
-    vectors as they are; the concatenation φ is standardised by running statistics. An MLP
-    predicts the change of φ over one step from (φ(s), a); the reward of a transition is the
-    mean squared error of φ(s) + f(φ(s), a) against φ(s'). Consequences the model has learned
-    (a still scene, a hand moved in plain view many times) stop paying; new visual
-    consequences of motor actions pay, the self-model of the paper's future work (sec. IV).
+    Each chosen observation is encoded by a fixed map: images by
+    :class:`~devlearn_curiosity.image_features.RandomImageFeatures`, vectors as they are; the
+    concatenation φ is standardised by running statistics. An MLP predicts the change of φ over
+    one step from (φ(s), a); the reward of a transition is the mean squared error of
+    φ(s) + f(φ(s), a) against φ(s'). Consequences the model has learned (a still scene, a hand
+    moved in plain view many times) stop paying; new visual consequences of motor actions pay,
+    the self-model of the paper's future work (sec. IV).
     """
 
     name = "forward_model"
@@ -69,6 +42,12 @@ class ForwardModel(LearnedReward):
     config_class = ForwardModelConfig
 
     def build(self) -> nn.Module:
+        import torch
+        import torch.nn as nn
+        from rsl_rl.modules import MLP, EmpiricalNormalization
+
+        from devlearn_curiosity.image_features import RandomImageFeatures
+
         shapes = self.observation_shapes
         images = [k for k, s in shapes.items() if len(s) == 3]
         groups = list(self.config.observations) or images or list(shapes)
@@ -95,6 +74,8 @@ class ForwardModel(LearnedReward):
         )
 
     def _raw_features(self, observations: dict[str, torch.Tensor]) -> torch.Tensor:
+        import torch
+
         encoders = self.model["encoders"]
         with torch.no_grad():
             return torch.cat([encoders[g](observations[g].float()) for g in self.groups], dim=1)
@@ -110,6 +91,8 @@ class ForwardModel(LearnedReward):
 
     def errors(self, batch: Transitions) -> torch.Tensor:
         """(B,) mean squared error of the predicted next encoding."""
+        import torch
+
         now = self.encode(batch.observations)
         target = self.encode(batch.next_observations)
         actions = batch.actions.float()

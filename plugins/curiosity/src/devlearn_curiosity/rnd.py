@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-
-import torch
-import torch.nn as nn
-from rsl_rl.extensions import RandomNetworkDistillation
+from typing import TYPE_CHECKING
 
 from devlearn.learned import LearnedReward, LearnedRewardConfig, Transitions
+
+if TYPE_CHECKING:  # torch and rsl-rl load when a run builds the term, not when it registers
+    import torch
+    import torch.nn as nn
 
 
 @dataclass
@@ -51,6 +52,8 @@ class RND(LearnedReward):
     config_class = RNDConfig
 
     def build(self) -> nn.Module:
+        from rsl_rl.extensions import RandomNetworkDistillation
+
         shapes = self.observation_shapes
         groups = list(self.config.observations) or [k for k, s in shapes.items() if len(s) == 1]
         for group in groups:

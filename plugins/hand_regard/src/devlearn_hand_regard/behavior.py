@@ -24,7 +24,6 @@ from devlearn_hand_regard.config import (
     HandRegardConfig,
 )
 from devlearn_hand_regard.detector import DetectorParams, HandDetector, HandFlow
-from devlearn_hand_regard.encoders import EyeCNNEncoder
 from devlearn_hand_regard.evaluation import HandRegardEvaluator, paper_figures
 from devlearn_hand_regard.rewards import (
     HANDS,
@@ -276,6 +275,8 @@ class HandRegard(Behavior):
                 normalize=("proprioception",),
                 share=True,
             )
+        from devlearn_hand_regard.encoders import EyeCNNEncoder  # torch: only to build networks
+
         eye = EyeCNNEncoder()
         return NetworkSpec(
             encoders={

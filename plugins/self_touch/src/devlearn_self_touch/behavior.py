@@ -17,7 +17,6 @@ from devlearn import (
     NetworkSpec,
     Stage,
 )
-from devlearn_self_touch.batched_facts import batch_touch_facts, batch_touch_observations
 from devlearn_self_touch.batched_rewards import (
     BatchedBalance,
     BatchedContactNovelty,
@@ -94,6 +93,8 @@ class SelfTouch(Behavior):
     def batch_facts(self, infants: Sequence[Infant]) -> list[dict[str, Any]]:
         """:meth:`facts` of a worker's infants at once, bit for bit the same
         (:func:`~devlearn_self_touch.batched_facts.batch_touch_facts`)."""
+        from devlearn_self_touch.batched_facts import batch_touch_facts  # numba: only to step
+
         cfg = self.config
         return batch_touch_facts(infants, cfg.touch_source, cfg.touch_threshold)
 
@@ -102,6 +103,8 @@ class SelfTouch(Behavior):
     ) -> dict[str, np.ndarray]:
         """:meth:`observe` of a worker's infants at once: ``body_map`` (num_envs, 68) and
         ``proprioception`` (num_envs, P), row i bit for bit ``observe(infants[i], facts[i])``."""
+        from devlearn_self_touch.batched_facts import batch_touch_observations
+
         return batch_touch_observations(infants, facts, self.config.body_map_scale)
 
     def network(self) -> NetworkSpec:
