@@ -11,6 +11,7 @@ import numpy as np
 from devlearn.conformance_values import (
     check_number,
     json_problem,
+    pickle_problem,
     require,
 )
 from devlearn.rewards import BatchedIntrinsicReward
@@ -208,6 +209,15 @@ class CheckedEvaluator:
                 if label == "training":
                     out[key] = value
         return out
+
+    def episode_record(self) -> Any:
+        """The training evaluator's record of the episode just ended (checked to pickle: it
+        crosses from env workers to the runner)."""
+        record = getattr(self.training, "episode_record", lambda: None)()
+        if record is not None:
+            problem = pickle_problem(record, "training evaluator's episode_record()")
+            require(problem is None, f"{problem} (it crosses from env workers to the runner)")
+        return record
 
     def summary(self) -> dict[str, Any]:
         return self.training.summary()

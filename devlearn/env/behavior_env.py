@@ -150,7 +150,8 @@ class BehaviorEnv:
             return ctx.observations, reward, False, False, None
         info = {f"reward/{name}": total for name, total in self._sums.items()}
         info.update({f"metrics/{k}": float(v) for k, v in self.evaluator.end_episode().items()})
-        record = self.evaluator.episode_record()
+        # Evaluators that do not subclass Evaluator keep no record.
+        record = getattr(self.evaluator, "episode_record", lambda: None)()
         if record is not None:  # for the runner's RunMetrics, not a logged value
             info[EPISODE_RECORD] = record
         return self.reset(), reward, True, True, info
