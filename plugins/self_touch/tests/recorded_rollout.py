@@ -18,6 +18,8 @@ import sys
 
 import numpy as np
 
+from devlearn.env.behavior_env import EPISODE_RECORD
+
 NUM_ENVS, STEPS, EPISODE_STEPS, SEED = 2, 120, 40, 3
 
 
@@ -69,7 +71,7 @@ def record_rollout() -> dict[str, np.ndarray]:
             out["dones"].append([done for _, _, done, *_ in results])
             for *_, info in results:
                 if info is not None:
-                    keys = sorted(info)
+                    keys = sorted(k for k in info if k != EPISODE_RECORD)  # not a number
                     info_values.extend(info[k] for k in keys)
     finally:
         for env in envs:

@@ -285,12 +285,17 @@ class TrainingScore(RunMetrics):
         return np.concatenate([self.window[slot:], self.window[:slot]])
 
     def state_dict(self) -> dict[str, Any]:
-        """The window's episodes as bits, oldest first: (episodes in it, 2, 5) uint8."""
-        return {"parts": np.packbits(self.ordered(), axis=-1)}
+        """The window's episodes as bits, oldest first: (episodes in it, 2, 5) uint8, a torch
+        tensor (checkpoints hold tensors; a packed numpy array pickles through ``bytes``,
+        which the checkpoint reader refuses)."""
+        import torch
+
+        return {"parts": torch.from_numpy(np.packbits(self.ordered(), axis=-1))}
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
         """Restore :meth:`state_dict`'s output; a shorter window keeps the newest episodes."""
-        parts = np.unpackbits(state["parts"], axis=-1, count=NUM_PARTS).astype(bool)
+        packed = np.asarray(state["parts"], dtype=np.uint8)
+        parts = np.unpackbits(packed, axis=-1, count=NUM_PARTS).astype(bool)
         self.window[:] = False
         self.counts[:] = 0
         self.added = 0
