@@ -207,7 +207,8 @@ def test_two_coloured_hands_are_told_apart_by_colour_wherever_they_are():
     colour, and the detector attributes by colour, even with the hands crossed (positions
     would swap them)."""
     colours = (SKIN, MAGENTA)
-    params = calibrate(synthetic_babbling(3000, seed=0, colours=colours, alternate=500))
+    data = synthetic_babbling(3000, seed=0, colours=colours, alternate=500)
+    params = calibrate(data, per_hand_colours=True)
     assert params.calibration["hands_told_by_colour"]
     assert inside(params.side_hsv_ranges[0], hsv(SKIN))
     assert not inside(params.side_hsv_ranges[0], hsv(MAGENTA))

@@ -49,7 +49,10 @@ def test_reward_switch_on_the_command_line(capsys):
 
 @pytest.mark.parametrize(
     ("key", "value", "valid"),
-    [("reward", "papr", "paper, bilateral"), ("appearance", "gloves", "two_colour_mittens, mittens, skin")],
+    [
+        ("reward", "papr", "paper, bilateral"),
+        ("appearance", "gloves", "two_colour_mittens, mittens, skin"),
+    ],
 )
 def test_unknown_choice_names_the_valid_ones(key, value, valid):
     behavior = HandRegard(HandRegardConfig(**{key: value}))

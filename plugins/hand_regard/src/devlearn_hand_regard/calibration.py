@@ -168,6 +168,7 @@ def calibrate(
     ridge: float = 4.0,
     max_position_error: float = 0.25,
     max_colour_confusion: float = 0.05,
+    per_hand_colours: bool = False,
 ) -> DetectorParams:
     """Discover the hands in a babbling recording and calibrate the detector.
 
@@ -198,6 +199,12 @@ def calibrate(
             when at most this share of either hand's pixels falls in the other hand's boxes
             (two differently coloured mittens), the detector tells the hands apart by colour
             (``side_hsv_ranges``); otherwise by position.
+        per_hand_colours: Choose each hand's colour clusters among its own tracks only
+            (motion and purity per hand). Only when the tracks' sides are reliable, i.e. the
+            recording babbled one arm at a time (``babble(arms="alternate")``): then a hand
+            seen rarely still gets its own colour. Otherwise (both arms babbling, where a side
+            with few tracks would pick the forearm's skin) the colours are chosen over all
+            hand tracks and split by hand afterwards.
     Returns:
         The detector parameters, with a ``calibration`` report.
     Raises:
@@ -230,24 +237,41 @@ def calibrate(
             "for more steps"
         )
     tracked = np.bincount([t.cluster for t in tracks], [sum(t.areas) for t in tracks], clusters)
-    # The hand colours, chosen over all hand tracks (a side with few tracks would otherwise
-    # pick the forearm's skin); then each hand's own colours among them.
-    total = np.bincount(
-        [t.cluster for t in hands], [len(t.steps) * t.motion(window) for t in hands], clusters
-    )
-    in_hands = np.bincount([t.cluster for t in hands], [sum(t.areas) for t in hands], clusters)
-    purity = in_hands / np.maximum(tracked, 1)
-    keep = [k for k in range(clusters) if total[k] >= min_cluster_share * total.max()]
-    best = max(purity[k] for k in keep)
-    keep = [k for k in keep if purity[k] >= min_purity_share * best]
     motion = np.zeros((2, clusters))
     keep_side: list[list[int]] = [[], []]
-    for side in range(2):
-        own = [t for t in hands if t.side == side and t.cluster in keep]
-        motion[side] = np.bincount(
-            [t.cluster for t in own], [len(t.steps) * t.motion(window) for t in own], clusters
+    if per_hand_colours:  # each hand's colours, chosen among its own tracks
+        for side in range(2):
+            own = [t for t in hands if t.side == side]
+            if not own:
+                continue
+            motion[side] = np.bincount(
+                [t.cluster for t in own], [len(t.steps) * t.motion(window) for t in own], clusters
+            )
+            in_own = np.bincount([t.cluster for t in own], [sum(t.areas) for t in own], clusters)
+            purity = in_own / np.maximum(tracked, 1)
+            keep = [
+                k
+                for k in range(clusters)
+                if motion[side, k] >= min_cluster_share * motion[side].max()
+            ]
+            best = max(purity[k] for k in keep)
+            keep_side[side] = [k for k in keep if purity[k] >= min_purity_share * best]
+        keep = sorted(set(keep_side[0]) | set(keep_side[1]))
+    else:  # the hand colours over all hand tracks; each hand's own colours among them
+        total = np.bincount(
+            [t.cluster for t in hands], [len(t.steps) * t.motion(window) for t in hands], clusters
         )
-        keep_side[side] = [k for k in keep if motion[side, k] > 0]
+        in_hands = np.bincount([t.cluster for t in hands], [sum(t.areas) for t in hands], clusters)
+        purity = in_hands / np.maximum(tracked, 1)
+        keep = [k for k in range(clusters) if total[k] >= min_cluster_share * total.max()]
+        best = max(purity[k] for k in keep)
+        keep = [k for k in keep if purity[k] >= min_purity_share * best]
+        for side in range(2):
+            own = [t for t in hands if t.side == side and t.cluster in keep]
+            motion[side] = np.bincount(
+                [t.cluster for t in own], [len(t.steps) * t.motion(window) for t in own], clusters
+            )
+            keep_side[side] = [k for k in keep if motion[side, k] > 0]
     hands = [t for t in hands if t.cluster in keep_side[t.side]]
     index = np.linspace(0, n_steps - 1, min(200, n_steps)).astype(int)
     sample = data.eyes[index].reshape(-1, height, width, 3)

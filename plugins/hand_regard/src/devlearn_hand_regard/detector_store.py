@@ -55,7 +55,11 @@ def calibrate_by_babbling(
         )
         if progress:
             print("babbling done; calibrating the hand detector", file=sys.stderr, flush=True)
-        params = calibrate(data, threshold=cfg.correlation_threshold)
+        params = calibrate(
+            data,
+            threshold=cfg.correlation_threshold,
+            per_hand_colours=cfg.babbling_arms == "alternate",
+        )
         del data
         if held_out_steps >= 2:
             test, segmentation = held_out(

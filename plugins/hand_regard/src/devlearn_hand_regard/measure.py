@@ -294,7 +294,7 @@ def main(argv: list[str] | None = None) -> dict:
             )
             result["babbling_s"] = round(time.perf_counter() - start, 1)
             start = time.perf_counter()
-            params = calibrate(data)
+            params = calibrate(data, per_hand_colours=args.arms == "alternate")
             result["calibration_s"] = round(time.perf_counter() - start, 1)
             del data
         if args.save:
