@@ -7,6 +7,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from devlearn import StepContext
+from devlearn.env.behavior_env import EPISODE_RECORD
 
 
 def make_ctx(
@@ -143,3 +144,12 @@ class SwappingInfant(ScriptedInfant):
         if 1 <= self.t <= 5:
             contacts[0, 5 * self.group + self.t - 1] = True
         return contacts
+
+
+def same_info(a: dict | None, b: dict | None) -> bool:
+    """Episode infos equal, the evaluator's record (an array, for the run's metrics) by value."""
+    if a is None or b is None:
+        return a is b
+    a, b = dict(a), dict(b)
+    ra, rb = a.pop(EPISODE_RECORD, None), b.pop(EPISODE_RECORD, None)
+    return a == b and np.array_equal(ra, rb) if ra is not None else a == b and rb is None

@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from devlearn_self_touch import SelfTouch, SelfTouchConfig
-from self_touch_fakes import FakeInfant, ScriptedInfant
+from self_touch_fakes import FakeInfant, ScriptedInfant, same_info
 
 from devlearn.behavior import Behavior
 from devlearn.conformance import place_hand_on_body
-from devlearn.env.behavior_env import EPISODE_RECORD, BehaviorEnv, step_batch
+from devlearn.env.behavior_env import BehaviorEnv, step_batch
 from devlearn.env.workers import make_envs
 from devlearn.infant import build_infant
 from devlearn.testing import ConformanceError, check_batched_observations
@@ -139,12 +139,3 @@ def _same_obs(a: dict, b: dict) -> bool:
     return a.keys() == b.keys() and all(
         a[k].dtype == b[k].dtype and a[k].tobytes() == b[k].tobytes() for k in a
     )
-
-
-def same_info(a: dict | None, b: dict | None) -> bool:
-    """Episode infos equal, the evaluator's record (an array, for the run's metrics) by value."""
-    if a is None or b is None:
-        return a is b
-    a, b = dict(a), dict(b)
-    ra, rb = a.pop(EPISODE_RECORD, None), b.pop(EPISODE_RECORD, None)
-    return a == b and np.array_equal(ra, rb) if ra is not None else a == b and rb is None

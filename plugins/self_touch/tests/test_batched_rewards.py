@@ -5,11 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from devlearn_self_touch import SelfTouch, SelfTouchConfig
-from self_touch_fakes import ScriptedInfant
+from self_touch_fakes import ScriptedInfant, same_info
 
 from devlearn import StepContext
 from devlearn.env.behavior_env import (
-    EPISODE_RECORD,
     BehaviorEnv,
     share_batched_terms,
     step_batch,
@@ -126,12 +125,3 @@ def test_worker_batches_share_one_instance_per_term(memory, rows):
         env.reset()
     contexts = [env.advance(np.zeros(4)) for env in envs]
     assert term_values(envs, contexts).shape == (4, 3)
-
-
-def same_info(a: dict | None, b: dict | None) -> bool:
-    """Episode infos equal, the evaluator's record (an array, for the run's metrics) by value."""
-    if a is None or b is None:
-        return a is b
-    a, b = dict(a), dict(b)
-    ra, rb = a.pop(EPISODE_RECORD, None), b.pop(EPISODE_RECORD, None)
-    return a == b and np.array_equal(ra, rb) if ra is not None else a == b and rb is None
