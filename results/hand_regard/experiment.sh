@@ -13,10 +13,16 @@
 # the forward_model curiosity term. Each run is evaluated by the sweep on 10 episodes of 1,000
 # steps from BabyBench's start (eval seed 0), then from random starts (the generalisation row),
 # and the zero, random and held-random baselines under the identical protocols.
+# The paper's CNN policy (`behavior.policy=cnn`: the eyes' images through the paper's network,
+# the paper's reward) trains the same curriculum for seeds 1-2: whether the CPU variant's result
+# carries over to the paper's network (about 100 physics steps/s per core: ~1 h 45 min a run).
 # Two runs at a time, one core each. From the repository root:
 #   bash results/hand_regard/experiment.sh OUT
+#   ARMS=cnn bash results/hand_regard/experiment.sh OUT   # one part: rewards curiosity cnn baselines
 set -euo pipefail
 OUT=${1:?usage: experiment.sh OUT}
+ARMS=${ARMS:-rewards curiosity cnn baselines}
+has() { [[ " $ARMS " == *" $1 "* ]]; }
 STEPS=${STEPS:-614400}
 STAGE=${STAGE:-61440}
 EPISODES=${EPISODES:-10}
@@ -24,19 +30,21 @@ DET=results/hand_regard/detector/babybench_mittens_detector.json
 common=(--steps "$STEPS" --envs 8 --workers 0 --jobs 2 --episodes "$EPISODES" --eval-seed 0
   --set torch_threads=1 --set behavior.detector_file="$DET"
   --set behavior.left_arm_steps="$STAGE" --set behavior.right_arm_steps="$STAGE" --no-report)
-.venv/bin/devlearn sweep hand_regard --out "$OUT/rewards" --grid behavior.reward=paper,bilateral \
-  --seeds 1,2,3 "${common[@]}"
-.venv/bin/devlearn sweep hand_regard --out "$OUT/curiosity" --seeds 1,2,3 \
+! has rewards || .venv/bin/devlearn sweep hand_regard --out "$OUT/rewards" \
+  --grid behavior.reward=paper,bilateral --seeds 1,2,3 "${common[@]}"
+! has curiosity || .venv/bin/devlearn sweep hand_regard --out "$OUT/curiosity" --seeds 1,2,3 \
   --set behavior.reward=paper --set curiosity=forward_model "${common[@]}"
+! has cnn || .venv/bin/devlearn sweep hand_regard --out "$OUT/cnn" --seeds 1,2 \
+  --set behavior.reward=paper --set behavior.policy=cnn "${common[@]}"
 for policy in zero random held_random; do
   for start in babybench random; do
     dir="$OUT/baseline_${policy}_$start"
-    [ -f "$dir/eval.json" ] || .venv/bin/devlearn eval hand_regard --policy "$policy" \
-      --episodes "$EPISODES" --seed 0 --start "$start" --set behavior.detector_file="$DET" \
-      --out "$dir" > /dev/null
+    ! has baselines || [ -f "$dir/eval.json" ] || .venv/bin/devlearn eval hand_regard \
+      --policy "$policy" --episodes "$EPISODES" --seed 0 --start "$start" \
+      --set behavior.detector_file="$DET" --out "$dir" > /dev/null
   done
 done
-for run in "$OUT"/rewards/runs/*/ "$OUT"/curiosity/runs/*/; do
+for run in "$OUT"/*/runs/*/; do
   [ -f "$run/eval_random/eval.json" ] || .venv/bin/devlearn eval hand_regard \
     --checkpoint "$run/checkpoint_latest.pt" --episodes "$EPISODES" --seed 0 --start random \
     --out "$run/eval_random" > /dev/null

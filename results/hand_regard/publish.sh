@@ -6,17 +6,21 @@
 # detector) and a video of one evaluation episode from BabyBench's start.
 #
 #   bash results/hand_regard/publish.sh OUT [RUN_NAME ...]
-#   bash results/hand_regard/publish.sh /work/sweeps/hr29 'reward=paper,seed=2' ...
+#   bash results/hand_regard/publish.sh /work/sweeps/hr29 'reward=paper,seed=2' 'policy=cnn,seed=1' ...
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 sweep=${1:?usage: publish.sh OUT [RUN_NAME ...]}
 shift
 dest=results/hand_regard/i29
 mkdir -p "$dest"
-for run in "$sweep"/rewards/runs/*/ "$sweep"/curiosity/runs/*/; do
+prefix() {  # the published name's prefix of a sweep's arm (its runs are named seed=N)
+  case $1 in curiosity) echo "curiosity=forward_model," ;; cnn) echo "policy=cnn," ;; *) echo "" ;; esac
+}
+for run in "$sweep"/*/runs/*/; do
+  [ -d "$run" ] || continue
   name=$(basename "$run")
   [ -f "$run/eval/eval.json" ] || { echo "$run: not evaluated yet, skipped" >&2; continue; }
-  case $run in */curiosity/runs/*) out="$dest/curiosity=forward_model,$name" ;; *) out="$dest/$name" ;; esac
+  out="$dest/$(prefix "$(basename "$(dirname "$(dirname "$run")")")")$name"
   mkdir -p "$out/eval"
   cp "$run/config.json" "$run/metrics.jsonl" "$out/"
   cp "$run/eval/eval.json" "$out/eval/"
@@ -26,11 +30,16 @@ for run in "$sweep"/rewards/runs/*/ "$sweep"/curiosity/runs/*/; do
   cp "$(dirname "$(dirname "$run")")/records/$name.json" "$out/sweep_record.json"
 done
 for base in "$sweep"/baseline_*/; do
+  [ -d "$base" ] || continue
   mkdir -p "$dest/$(basename "$base")"
   cp "$base/eval.json" "$dest/$(basename "$base")/"
 done
-for name in "$@"; do  # as published: reward=paper,seed=2 or curiosity=forward_model,seed=1
-  run=$(ls -d "$sweep"/*/runs/"${name#curiosity=forward_model,}")
+for name in "$@"; do  # as published: reward=paper,seed=2, curiosity=forward_model,seed=1, policy=cnn,seed=1
+  case $name in
+    curiosity=*) run="$sweep/curiosity/runs/${name#*,}" ;;
+    policy=cnn,*) run="$sweep/cnn/runs/${name#*,}" ;;
+    *) run="$sweep/rewards/runs/$name" ;;
+  esac
   .venv/bin/devlearn slim "$run" --out "$dest/$name/policy.pt"
   .venv/bin/devlearn eval hand_regard --checkpoint "$dest/$name/policy.pt" --episodes 1 \
     --seed 0 --video "$dest/$name/episode.mp4" --out "$(mktemp -d)" > /dev/null

@@ -31,6 +31,7 @@ GROUPS = (
     ("paper reward (the control)", "reward=paper,seed=*"),
     ("ours: paper + bilateral term", "reward=bilateral,seed=*"),
     ("paper + forward_model curiosity", "curiosity=forward_model,seed=*"),
+    ("paper reward, the paper's CNN policy", "policy=cnn,seed=*"),
 )
 """(label, run-folder pattern) of the arms; the folders are found anywhere under the root."""
 BASELINES = (("zero", "zero action"), ("random", "random action"), ("held_random", "held random"))
