@@ -27,7 +27,11 @@ def describe_behavior(behavior: Behavior, infant_factory=None) -> dict[str, Any]
     if infant_factory is None:
         from devlearn.infant import build_infant
 
-        infant = build_infant(behavior.scene, senses=behavior.senses, **behavior.infant_options())
+        # The numpy references of the compiled senses: the same shapes, and describing compiles
+        # nothing (no numba import, no kernel load: `devlearn info` starts in about a second).
+        infant = build_infant(
+            behavior.scene, senses=behavior.senses, compiled=False, **behavior.infant_options()
+        )
     else:
         infant = infant_factory(behavior.scene, behavior.senses, **behavior.infant_options())
     try:

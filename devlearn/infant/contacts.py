@@ -61,9 +61,11 @@ class ContactReader:
     Args:
         model: The compiled model.
         skin: Its skin.
+        compiled: Use the compiled routine where the model allows it (see :attr:`compiled`);
+            False: always the numpy reference (no numba).
     """
 
-    def __init__(self, model: mujoco.MjModel, skin: Skin) -> None:
+    def __init__(self, model: mujoco.MjModel, skin: Skin, compiled: bool = True) -> None:
         self.model = model
         self.skin = skin
         self.geom_body = model.geom_bodyid.astype(np.int64)
@@ -83,8 +85,8 @@ class ContactReader:
         self._kernel = None  # the compiled routine, imported (numba) on first use
         self._views: tuple | None = None  # (data, data.xpos, data.xmat)
         # The kernel needs uniform pyramidal cones and candidate lists no longer than its
-        # pairwise-sum block (touch_kernel.MAX_CANDIDATES = 128; this skin's are 68).
-        self.compiled = self.pyramid is not None and skin._cells.shape[1] <= 128
+        # pairwise-sum block (kernels.MAX_CANDIDATES = 128; this skin's are 68).
+        self.compiled = compiled and self.pyramid is not None and skin._cells.shape[1] <= 128
         """True when :meth:`touch_and_hands` runs as one compiled routine."""
 
     def touch_and_hands(self, data: mujoco.MjData, hand_of_body: np.ndarray):
@@ -106,7 +108,7 @@ class ContactReader:
             sensors, values = sparse_touch_from_contacts(self.skin, sides)
             return sensors, values, hand_contacts(self.skin, sides, hand_of_body)
         if self._kernel is None:
-            from devlearn.infant.touch_kernel import MAX_CANDIDATES, contact_touch
+            from devlearn.infant.kernels import MAX_CANDIDATES, contact_touch
 
             assert self.skin._cells.shape[1] <= MAX_CANDIDATES
             self._kernel = contact_touch

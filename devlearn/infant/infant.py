@@ -59,6 +59,7 @@ class Infant:
         eye_size: int = 64,
         appearance: str = "mittens",
         start: str = "rest",
+        compiled: bool = True,
     ) -> None:
         unknown = sorted(set(senses) - set(SENSES))
         if unknown:
@@ -92,13 +93,13 @@ class Infant:
         }
         self.skin = Skin(self.model)
         self.regions: RegionTable = region_table()
-        self._contacts = contacts.ContactReader(self.model, self.skin)
+        self._contacts = contacts.ContactReader(self.model, self.skin, compiled=compiled)
         self.hand_of_body = np.full(self.model.nbody, -1, dtype=np.int64)
         for h, side in enumerate(("left", "right")):
             for part in ("hand", "fingers"):
                 self.hand_of_body[self.model.body(f"{side}_{part}").id] = h
         self.hand_labels = dict(vision.HAND_LABELS)
-        self._proprio = Proprioception(self.model, self.actuator_names)
+        self._proprio = Proprioception(self.model, self.actuator_names, compiled=compiled)
         joints = [self.model.joint(j) for j in self.actuator_names]
         self._qpos_index = np.array([j.qposadr[0] for j in joints])
         self._ranges = np.array([j.range for j in joints])
@@ -323,6 +324,7 @@ def build_infant(
     eye_size: int = 64,
     appearance: str = "mittens",
     start: str = "rest",
+    compiled: bool = True,
 ) -> Infant:
     """Build the infant in a scene.
 
@@ -338,8 +340,15 @@ def build_infant(
             :data:`devlearn.infant.scenes.APPEARANCES`. Colours only: physics is the same.
         start: How episodes start unless ``reset`` is told (:data:`~.starts.STARTS`):
             ``rest``, ``babybench`` or ``random``.
+        compiled: Touch and proprioception through the compiled routines
+            (:mod:`devlearn.infant.kernels`, numba, loaded on first use); False: their numpy
+            references, the same numbers, slower per step but with no compilation or numba import
+            (what describing an infant needs).
 
     Returns:
         The infant, reset to its rest pose.
     """
-    return Infant(scene, senses=senses, eye_size=eye_size, appearance=appearance, start=start)
+    return Infant(
+        scene, senses=senses, eye_size=eye_size, appearance=appearance, start=start,
+        compiled=compiled,
+    )  # fmt: skip

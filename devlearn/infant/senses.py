@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import mujoco
-import numba
 import numpy as np
 
 LIMIT_ZONE = 0.035  # rad: limit proximity rises from 0 to 1 over the last 0.035 rad (facts 2)
@@ -17,9 +16,17 @@ class Proprioception:
     "torque" is the net torque the joint passes on (motor + passive spring-damper + constraint
     forces such as limits and contacts); "limit" is 0 until within 0.035 rad of a joint limit,
     rising linearly to 1 at the limit; "motor" is the applied motor torque, max_torque * action.
+
+    Args:
+        model: The compiled model.
+        joints: The actuated joints' names, in actuator order.
+        compiled: Gather with the compiled routine (:func:`devlearn.infant.kernels.gather`,
+            imported with numba on first use); False: always :meth:`reference` (numpy only).
     """
 
-    def __init__(self, model: mujoco.MjModel, joints: list[str]) -> None:
+    def __init__(self, model: mujoco.MjModel, joints: list[str], compiled: bool = True) -> None:
+        self.compiled = compiled
+        self._gather = None  # the compiled routine, imported (numba) on first use
         ids = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, j) for j in joints]
         self.qpos = np.array([model.jnt_qposadr[j] for j in ids])
         self.dof = np.array([model.jnt_dofadr[j] for j in ids])
@@ -29,10 +36,14 @@ class Proprioception:
     def __call__(self, data: mujoco.MjData) -> np.ndarray:
         """Returns (6 J,) float32 (one compiled gather; the numbers of :meth:`reference`)."""
         ctrl = data.ctrl
-        if ctrl.shape[0] != len(self.dof):  # actuators other than the joints' motors
+        if not self.compiled or ctrl.shape[0] != len(self.dof):  # or other actuators
             return self.reference(data)
+        if self._gather is None:
+            from devlearn.infant.kernels import gather
+
+            self._gather = gather
         out = np.empty(self.size, dtype=np.float32)
-        _gather(
+        self._gather(
             data.qpos, data.qvel, data.qfrc_actuator, data.qfrc_passive, data.qfrc_constraint,
             ctrl, self.qpos, self.dof, self.lo, self.hi, out,
         )  # fmt: skip
@@ -48,39 +59,6 @@ class Proprioception:
         torque = motor + data.qfrc_passive.take(self.dof) + data.qfrc_constraint.take(self.dof)
         parts = [q, data.qvel.take(self.dof), torque, limit, data.ctrl, motor]
         return np.concatenate(parts).astype(np.float32)
-
-
-@numba.njit(inline="always")
-def _min(a: float, b: float) -> float:
-    """np.minimum of two floats (NaN if either is NaN)."""
-    return a if (a < b or a != a) else b
-
-
-@numba.njit(inline="always")
-def _max(a: float, b: float) -> float:
-    """np.maximum of two floats (NaN if either is NaN)."""
-    return a if (a > b or a != a) else b
-
-
-@numba.njit(cache=True, nogil=True)
-def _gather(
-    qpos, qvel, qfrc_actuator, qfrc_passive, qfrc_constraint, ctrl, qpos_index, dof, lo, hi, out
-):
-    """:meth:`Proprioception.reference` into ``out`` (6 J,) float32, element by element: the
-    same float64 operations in the same order (no fast-math), each rounded once to float32."""
-    n = dof.shape[0]
-    for i in range(n):
-        q = qpos[qpos_index[i]]
-        d = dof[i]
-        to_limit = _min(q - lo[i], hi[i] - q)
-        limit = _min(_max(1.0 - to_limit / LIMIT_ZONE, 0.0), 1.0)
-        motor = qfrc_actuator[d]
-        out[i] = q
-        out[n + i] = qvel[d]
-        out[2 * n + i] = (motor + qfrc_passive[d]) + qfrc_constraint[d]
-        out[3 * n + i] = limit
-        out[4 * n + i] = ctrl[i]
-        out[5 * n + i] = motor
 
 
 def vestibular(data: mujoco.MjData) -> np.ndarray:

@@ -64,6 +64,8 @@ def test_info_needs_the_body_but_not_torch(behavior):
     loaded = heavy_modules("info", behavior)
     assert "mujoco" in loaded  # the command did build the body
     assert "torch" not in loaded and "rsl_rl" not in loaded and "matplotlib" not in loaded
+    # describing compiles nothing: the senses' numpy references give the same shapes
+    assert "numba" not in loaded
 
 
 def test_the_public_api_loads_on_first_use():

@@ -97,3 +97,24 @@ def test_compiled_proprioception_is_the_numpy_reference_bit_for_bit(crib):
         partial_limits += int(np.sum((limit > 0) & (limit < 1)))
     assert partial_limits > 0
     crib.reset(np.random.default_rng(0))
+
+
+def test_an_uncompiled_infant_senses_the_same_numbers(crib):
+    """``build_infant(compiled=False)`` (what ``devlearn info`` builds) reads touch and
+    proprioception through the numpy references: the same numbers as the compiled infant."""
+    plain = build_infant("crib", senses=("touch", "proprioception"), compiled=False)
+    try:
+        assert not plain._contacts.compiled and not plain._proprio.compiled
+        rng_a, rng_b = np.random.default_rng(3), np.random.default_rng(3)
+        crib.reset(rng_a, random_pose=True)
+        plain.reset(rng_b, random_pose=True)
+        for _ in range(50):
+            action = rng_a.uniform(-1, 1, crib.action_dim)
+            crib.step(action)
+            plain.step(action)
+            assert plain.proprioception().tobytes() == crib.proprioception().tobytes()
+            assert plain.touch().tobytes() == crib.touch().tobytes()
+        assert np.abs(plain.touch()).sum() > 0  # the mattress is felt: something was compared
+    finally:
+        plain.close()
+        crib.reset(np.random.default_rng(0))

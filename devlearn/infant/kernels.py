@@ -1,4 +1,10 @@
-"""Touch as one compiled routine (numba): contact decoding, sensor search and force spread."""
+"""The infant's compiled hot path (numba): touch as one routine (contact decoding, sensor search
+and force spread) and the proprioception gather.
+
+Imported on first use only (``ContactReader.touch_and_hands``, ``Proprioception.__call__``):
+whatever only builds or describes an infant (``devlearn info``) never loads numba. Each routine
+computes exactly what its numpy reference does (the equivalence tests compare them bit for bit);
+``build_infant(..., compiled=False)`` runs the references instead."""
 
 from __future__ import annotations
 
@@ -7,6 +13,8 @@ import numpy as np
 from llvmlite import ir
 from numba.core import types
 from numba.extending import intrinsic
+
+from devlearn.infant.senses import LIMIT_ZONE
 
 # Every loop below repeats, operation for operation, what the numpy reference path
 # (ContactReader.sides, Skin.candidates / nearest / spread_sparse, contacts.hand_contacts)
@@ -228,3 +236,37 @@ def contact_touch(
             acc[s, j] = 0.0
         mark[s] = False
     return sensors, values, hands
+
+
+@numba.njit(inline="always")
+def _min(a: float, b: float) -> float:
+    """np.minimum of two floats (NaN if either is NaN)."""
+    return a if (a < b or a != a) else b
+
+
+@numba.njit(inline="always")
+def _max(a: float, b: float) -> float:
+    """np.maximum of two floats (NaN if either is NaN)."""
+    return a if (a > b or a != a) else b
+
+
+@numba.njit(**_JIT)
+def gather(
+    qpos, qvel, qfrc_actuator, qfrc_passive, qfrc_constraint, ctrl, qpos_index, dof, lo, hi, out
+):
+    """``Proprioception.reference`` (:mod:`devlearn.infant.senses`) into ``out`` (6 J,) float32,
+    element by element: the same float64 operations in the same order (no fast-math), each
+    rounded once to float32."""
+    n = dof.shape[0]
+    for i in range(n):
+        q = qpos[qpos_index[i]]
+        d = dof[i]
+        to_limit = _min(q - lo[i], hi[i] - q)
+        limit = _min(_max(1.0 - to_limit / LIMIT_ZONE, 0.0), 1.0)
+        motor = qfrc_actuator[d]
+        out[i] = q
+        out[n + i] = qvel[d]
+        out[2 * n + i] = (motor + qfrc_passive[d]) + qfrc_constraint[d]
+        out[3 * n + i] = limit
+        out[4 * n + i] = ctrl[i]
+        out[5 * n + i] = motor
