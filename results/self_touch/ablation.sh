@@ -26,6 +26,8 @@ if ((STEPS % (2 * PER_ITERATION))); then
   exit 2
 fi
 DEVLEARN=${DEVLEARN:-.venv/bin/devlearn}
+# shellcheck source=results/self_touch/common.sh
+source "$(dirname "$0")/common.sh"
 
 "$DEVLEARN" sweep self_touch --out "$OUT" --seeds "$SEEDS" --steps "$STEPS" \
   --grid behavior.curriculum=fixed_only,random_only,two_stage \
@@ -33,19 +35,9 @@ DEVLEARN=${DEVLEARN:-.venv/bin/devlearn}
   --set torch_threads=1 --set behavior.fixed_pose_steps=$((STEPS / 2)) \
   --set behavior.random_pose_steps=$((STEPS / 2)) "$@"
 
-evaluate() {  # evaluate DIR ARGS...: one evaluation unless DIR/eval.json exists
-  local dir=$1
-  shift
-  [ -f "$dir/eval.json" ] || "$DEVLEARN" eval self_touch "$@" --episodes "$EPISODES" --seed 0 \
-    --json --out "$dir" > /dev/null
-}
-
 shopt -s nullglob
 for run in "$OUT"/runs/curriculum=*/; do
   run=${run%/}
   evaluate "$run/rest" --checkpoint "$run/checkpoint_$STEPS.pt" --start rest
 done
-for policy in zero random; do
-  evaluate "$OUT/baseline_$policy" --policy "$policy"
-  evaluate "$OUT/baseline_${policy}_rest" --policy "$policy" --start rest
-done
+baselines "$OUT"

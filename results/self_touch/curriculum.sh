@@ -33,6 +33,8 @@ if ((EVAL_EVERY % PER_ITERATION || STAGE_STEPS % EVAL_EVERY)); then
 fi
 TOTAL=$((2 * STAGE_STEPS))
 DEVLEARN=${DEVLEARN:-.venv/bin/devlearn}
+# shellcheck source=results/self_touch/common.sh
+source "$(dirname "$0")/common.sh"
 
 # checkpoint_<step>.pt every save_interval iterations (each EVAL_EVERY steps) and before the
 # random-pose stage (STAGE_STEPS, a multiple of EVAL_EVERY)
@@ -42,13 +44,6 @@ DEVLEARN=${DEVLEARN:-.venv/bin/devlearn}
   --set behavior.fixed_pose_steps="$STAGE_STEPS" --set behavior.random_pose_steps="$STAGE_STEPS" \
   --set save_interval=$((EVAL_EVERY / PER_ITERATION)) "$@"
 
-evaluate() {  # evaluate DIR ARGS...: one evaluation unless DIR/eval.json exists
-  local dir=$1
-  shift
-  [ -f "$dir/eval.json" ] || "$DEVLEARN" eval self_touch "$@" --episodes "$EPISODES" --seed 0 \
-    --json --out "$dir" > /dev/null
-}
-
 shopt -s nullglob
 for run in "$OUT"/runs/seed=*/; do
   run=${run%/}
@@ -57,7 +52,4 @@ for run in "$OUT"/runs/seed=*/; do
   done  # the final checkpoint's is the sweep's, in $run/eval
   evaluate "$run/rest" --checkpoint "$run/checkpoint_$TOTAL.pt" --start rest
 done
-for policy in zero random; do
-  evaluate "$OUT/baseline_$policy" --policy "$policy"
-  evaluate "$OUT/baseline_${policy}_rest" --policy "$policy" --start rest
-done
+baselines "$OUT"
