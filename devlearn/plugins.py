@@ -19,13 +19,13 @@ from typing import TYPE_CHECKING, Any
 
 import pluggy
 
-from devlearn import hookspecs
-from devlearn.behavior import Behavior
-from devlearn.errors import UsageError
+from devlearn.api import hookspecs
+from devlearn.api.behavior import Behavior
+from devlearn.api.errors import UsageError
 
 if TYPE_CHECKING:  # torch-based: imported when a plugin registers one (it has loaded torch)
-    from devlearn.learned import LearnedReward
-    from devlearn.sensors import SensorEncoder
+    from devlearn.api.learned import LearnedReward
+    from devlearn.api.sensors import SensorEncoder
 
 ENTRY_POINT_GROUP = "devlearn"
 DISABLE_ENV = "DEVLEARN_DISABLE_PLUGINS"
@@ -197,7 +197,7 @@ class PluginRegistry:
 
     def _register_encoders(self, info: PluginInfo):
         def register(name: str, encoder: type) -> None:
-            from devlearn.sensors import SensorEncoder
+            from devlearn.api.sensors import SensorEncoder
 
             if not (inspect.isclass(encoder) and issubclass(encoder, SensorEncoder)):
                 raise TypeError(f"register_encoders got {encoder!r}, not a SensorEncoder subclass")
@@ -209,7 +209,7 @@ class PluginRegistry:
 
     def _register_learned_rewards(self, info: PluginInfo):
         def register(term: type) -> None:
-            from devlearn.learned import LearnedReward, LearnedRewardConfig
+            from devlearn.api.learned import LearnedReward, LearnedRewardConfig
 
             if not (inspect.isclass(term) and issubclass(term, LearnedReward)):
                 raise TypeError(f"register_learned_rewards got {term!r}, not a LearnedReward")

@@ -6,7 +6,7 @@ Usage (from the repository root, with the set-up .venv)::
 
 (``--quick`` after COMMIT: an eighth of the steps, a smoke test.)
 The commit's tree is extracted with ``git archive`` into a temporary folder and its own
-``devlearn.bench`` functions run there (its folders first on PYTHONPATH, this .venv's packages
+``devlearn.bench.speed`` functions run there (its folders first on PYTHONPATH, this .venv's packages
 otherwise), so that old and new code are timed in one session on one machine. Prints JSON:
 self-touch and hand-regard single-process steps/s and breakdowns, 16 self-touch envs over 1
 and 2 workers, the crib physics ceiling, and self-touch end-to-end training: steps/s and the
@@ -23,8 +23,8 @@ from pathlib import Path
 
 MEASURE = """
 import json, subprocess, sys, tempfile, time
-from devlearn.bench import bench_behavior_env, bench_vec_env
-from devlearn.bench_ceiling import env_breakdown, physics_ceiling
+from devlearn.bench.speed import bench_behavior_env, bench_vec_env
+from devlearn.bench.ceiling import env_breakdown, physics_ceiling
 from devlearn.plugins import PluginRegistry
 
 def training(behavior, steps):

@@ -5,7 +5,7 @@ from __future__ import annotations
 import inspect
 from pathlib import Path
 
-from devlearn import hookspecs
+from devlearn.api import hookspecs
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "writing-a-plugin.md"
 

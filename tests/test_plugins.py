@@ -8,7 +8,7 @@ import types
 import pytest
 
 from devlearn import Behavior, hookimpl
-from devlearn.errors import UsageError
+from devlearn.api.errors import UsageError
 from devlearn.plugins import PluginRegistry, PluginSource, entry_point_sources
 
 

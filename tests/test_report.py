@@ -7,9 +7,9 @@ import json
 import pytest
 from scipy import stats
 
+from devlearn.api.errors import UsageError
 from devlearn.cli import main
-from devlearn.errors import UsageError
-from devlearn.report import write_report
+from devlearn.evaluation.report import write_report
 
 
 def fake_eval(folder, score, seed, behavior="self_touch", policy="checkpoint", max_std=1.0):
@@ -155,8 +155,8 @@ def test_paper_figures_name_real_metrics(behavior, eval_json, config):
     misnamed key would leave its column empty)."""
     from pathlib import Path
 
+    from devlearn.evaluation.report import _metrics
     from devlearn.plugins import PluginRegistry
-    from devlearn.report import _metrics
 
     root = Path(__file__).resolve().parents[1]
     if eval_json is None:  # the self-touch metrics are the same whatever the curriculum

@@ -9,22 +9,22 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
-from devlearn.curriculum import Curriculum, Stage
-from devlearn.rewards import BatchedIntrinsicReward, IntrinsicReward, StepContext
+from devlearn.api.curriculum import Curriculum, Stage
+from devlearn.api.rewards import BatchedIntrinsicReward, IntrinsicReward, StepContext
 
 if TYPE_CHECKING:
+    from devlearn.api.network_spec import NetworkSpec
     from devlearn.infant import Infant
-    from devlearn.network_spec import NetworkSpec
 
 
 def __getattr__(name: str):
-    # ``from devlearn.behavior import NetworkSpec`` (plugins do) loads it, and torch with its
+    # ``from devlearn.api.behavior import NetworkSpec`` (plugins do) loads it, and torch with its
     # encoders, only when asked for: a behaviour's class can be read without torch.
     if name == "NetworkSpec":
-        from devlearn.network_spec import NetworkSpec
+        from devlearn.api.network_spec import NetworkSpec
 
         return NetworkSpec
-    raise AttributeError(f"module 'devlearn.behavior' has no attribute '{name}'")
+    raise AttributeError(f"module 'devlearn.api.behavior' has no attribute '{name}'")
 
 
 class Evaluator:
@@ -218,7 +218,7 @@ class Behavior(ABC):
     def reward_terms(self) -> list[IntrinsicReward | BatchedIntrinsicReward]:
         """Return fresh reward-term instances for one environment.
 
-        A :class:`~devlearn.rewards.BatchedIntrinsicReward` in the list is computed once per
+        A :class:`~devlearn.api.rewards.BatchedIntrinsicReward` in the list is computed once per
         worker over all its environments (one value per environment); plain
         :class:`IntrinsicReward` terms run in each environment. Both kinds may be mixed.
         """

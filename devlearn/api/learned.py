@@ -123,7 +123,7 @@ class LearnedReward(ABC):
         action_dim: int,
         device: str = "cpu",
     ) -> None:
-        from devlearn.learned_update import RunningScale
+        from devlearn.api.learned_update import RunningScale
 
         self.config = config
         self.observation_shapes = {k: tuple(v) for k, v in observation_shapes.items()}
@@ -185,7 +185,7 @@ class LearnedReward(ABC):
         """
         import torch
 
-        from devlearn.learned_update import average_gradients, distributed
+        from devlearn.api.learned_update import average_gradients, distributed
 
         cfg = self.config
         self.model.train()

@@ -1,6 +1,6 @@
 """The torch side of a learned reward's update: the running reward scale, the ranks' gradients.
 
-Kept apart from :mod:`devlearn.learned`, the contract a plugin imports to register a term, so
+Kept apart from :mod:`devlearn.api.learned`, the contract a plugin imports to register a term, so
 that registering one (``devlearn plugins``, ``config``) loads no torch.
 """
 

@@ -1,6 +1,6 @@
 """NetworkSpec: how a behaviour's policy and value networks are assembled from per-sense encoders.
 
-Kept apart from :mod:`devlearn.behavior` (which re-exports it) because the core's network
+Kept apart from :mod:`devlearn.api.behavior` (which re-exports it) because the core's network
 builder and distribution read it, and its one check of the spread settings lives beside it.
 """
 
@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from devlearn.sensors import SensorEncoder
+from devlearn.api.sensors import SensorEncoder
 
 
 @dataclass

@@ -49,7 +49,7 @@ class IntrinsicReward(ABC):
     (lifetime memory that must survive ``devlearn run --resume``).
 
     A reward that is a model trained on batches of transitions (novelty, prediction error) is
-    a :class:`~devlearn.learned.LearnedReward` instead: it lives in the learner, not here.
+    a :class:`~devlearn.api.learned.LearnedReward` instead: it lives in the learner, not here.
     """
 
     name: str = "reward"

@@ -15,7 +15,7 @@ class SensorEncoder(ABC):
     A behaviour maps each observation name to an encoder. The network builder
     (:mod:`devlearn.training.networks`) calls :meth:`build` with the observation's per-sample
     shape, then concatenates the encoders' outputs and applies the behaviour's fusion and
-    trunk layers (see :class:`devlearn.network_spec.NetworkSpec`).
+    trunk layers (see :class:`devlearn.api.network_spec.NetworkSpec`).
 
     Input contract: the built module receives float32 tensors of shape (batch, *obs_shape).
     Observations that the behaviour returns as uint8 (camera images, 0..255) arrive already

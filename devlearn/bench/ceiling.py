@@ -28,7 +28,7 @@ def physics_ceiling(scene: str, steps: int, seed: int = 0) -> float:
     Returns:
         Steps per second (the most any environment on this scene can reach in one process).
     """
-    from devlearn.bench import random_steps_per_s
+    from devlearn.bench.speed import random_steps_per_s
     from devlearn.infant import build_infant
 
     infant = build_infant(scene, senses=("proprioception",))
@@ -49,11 +49,11 @@ def env_breakdown(behavior, steps: int, seed: int = 0) -> dict[str, float]:
     Returns:
         Part -> ms per step, and ``total``.
     """
+    from devlearn.api.rewards import StepContext
     from devlearn.env import BehaviorEnv
     from devlearn.env.batch_advance import overrides
     from devlearn.env.behavior_env import term_values
     from devlearn.env.guards import check_observations
-    from devlearn.rewards import StepContext
 
     env = BehaviorEnv(behavior, seed=seed)
     env.reset()
@@ -115,7 +115,7 @@ def reference_env_steps_per_s(behavior, steps: int) -> float:
     """Steps/s of the same environment on the previous code paths, in the same run: the numpy
     touch routine instead of the compiled one, and per-environment reward terms where the
     behaviour offers them (``per_env_reward_terms()``, as self_touch does)."""
-    from devlearn.bench import bench_behavior_env
+    from devlearn.bench.speed import bench_behavior_env
 
     behavior = copy.deepcopy(behavior)
     if hasattr(behavior, "per_env_reward_terms"):
@@ -128,7 +128,7 @@ def with_per_env_observations(behavior):
     ``batch_observe`` replaced by :class:`~devlearn.Behavior`'s, so every env calls ``facts``
     and ``observe`` (the path before batched observations; in-process use only: the copy's
     class is made here and does not pickle)."""
-    from devlearn.behavior import Behavior
+    from devlearn.api.behavior import Behavior
 
     cls = type(behavior)
     per_env = type(
@@ -188,7 +188,7 @@ def observations_old_and_new(behavior, steps: int, vec_steps: int) -> dict[str, 
     machine does not favour either. Also the per-env path's breakdown
     (``<name>_breakdown_per_env_observations_ms``). Empty for a behaviour that does not batch.
     """
-    from devlearn.bench import bench_behavior_env, bench_vec_env
+    from devlearn.bench.speed import bench_behavior_env, bench_vec_env
     from devlearn.env.batch_advance import overrides
 
     if not (overrides(behavior, "batch_facts") or overrides(behavior, "batch_observe")):

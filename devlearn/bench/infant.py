@@ -1,4 +1,4 @@
-"""Speed of the bare infant: ``python -m devlearn.infant.benchmark`` prints figures (no asserts)."""
+"""Speed of the bare infant: ``python -m devlearn.bench.infant`` prints figures (no asserts)."""
 
 from __future__ import annotations
 

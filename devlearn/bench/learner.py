@@ -3,24 +3,13 @@ per step, on random observations (``devlearn bench``; figures, never asserted)."
 
 from __future__ import annotations
 
-import functools
 import time
-import warnings
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
-
-def without_user_warnings(function):
-    """Run ``function`` with UserWarnings silenced: a speed figure of an unprepared behaviour
-    (hand regard's uncalibrated detector) does not depend on what it would perceive."""
-
-    @functools.wraps(function)
-    def wrapper(*args, **kwargs):
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", UserWarning)
-            return function(*args, **kwargs)
-
-    return wrapper
+from devlearn.bench.speed import bench_training, without_user_warnings
 
 
 def build_learner(behavior, layout: str, num_envs: int, seed: int = 0):
@@ -36,8 +25,8 @@ def build_learner(behavior, layout: str, num_envs: int, seed: int = 0):
     import torch
     from tensordict import TensorDict
 
+    from devlearn.config.run_config import default_config, to_rsl_rl
     from devlearn.env import BehaviorEnv
-    from devlearn.training.config import default_config, to_rsl_rl
     from devlearn.training.ppo import UniqueParamPPO
     from devlearn.training.process import quiet
 
@@ -134,3 +123,47 @@ def bench_update(
         "threads": float(threads),
         "torch_version": torch.__version__,
     }
+
+
+OLD_LEARNER = ["network.layout=separate", "torch_threads=1", "update_threads=1"]
+"""``--set`` options that train as before the shared layout and automatic threads."""
+
+
+def bench_learner(behaviors: dict, quick: bool, progress: Callable[[str], None]) -> dict:
+    """PPO update cost per sample and training steps/s, old learner against new, one session.
+
+    Old: separate actor and critic, one torch thread (the defaults before the shared layout).
+    New: ``devlearn run`` defaults (shared body, automatic threads; the update benchmark uses
+    all cores). Keys ``<behavior>_update_us_per_sample[_old]`` and
+    ``<behavior>_train_steps_per_s[_old]``; hand regard trains with 8 envs and a short
+    babbling (speed does not depend on the detector's quality).
+    """
+    from devlearn.training.process import learner_threads
+
+    result: dict[str, Any] = {}
+    rollouts = {"self_touch": (16, 32 if quick else 128), "hand_regard": (8, 8 if quick else 32)}
+    for name, (envs, steps) in rollouts.items():
+        if name not in behaviors:
+            continue
+        for suffix, layout, threads in (("_old", "separate", 1), ("", "shared", learner_threads())):
+            progress(f"{name}: PPO update, {layout} networks, {threads} thread(s)")
+            behavior, repeats = behaviors[name](), 1 if quick else 2
+            figures = bench_update(behavior, layout, envs, steps, repeats, threads)
+            result[f"{name}_update_us_per_sample{suffix}"] = figures["update_us_per_sample"]
+            result[f"{name}_inference_ms_per_step{suffix}"] = figures["inference_ms_per_step"]
+    old = [arg for kv in OLD_LEARNER for arg in ("--set", kv)]
+    if "self_touch" in behaviors:
+        progress("self_touch: end-to-end training, old learner (separate networks, 1 thread)")
+        result["self_touch_train_steps_per_s_old"] = bench_training(
+            "self_touch", 8192 if quick else 32768, old, progress
+        )
+    if "hand_regard" in behaviors:
+        progress("hand_regard: end-to-end training, old learner (separate networks, 1 thread)")
+        short = ["behavior.babbling_steps=300", "behavior.correlation_threshold=0"]
+        result["hand_regard_train_steps_per_s_old"] = bench_training(
+            "hand_regard",
+            1024 if quick else 4096,
+            ["--envs", "8", *(arg for kv in short for arg in ("--set", kv)), *old],
+            progress,
+        )
+    return result

@@ -1,33 +1,36 @@
-"""Speed measurements: environment steps per second and the cost of each sense.
+"""Speed measurements: the bare infant, environment and training steps per second.
 
-Run through ``devlearn bench``. Figures come from timing real work after a warm-up, with random
-actions; nothing here is a test and nothing is asserted.
+Part of ``devlearn bench`` (:func:`devlearn.bench.run.run_bench`). Figures come from timing real
+work after a warm-up, with random actions; nothing here is a test and nothing is asserted.
 """
 
 from __future__ import annotations
 
+import functools
 import json
-import os
-import platform
-import resource
 import subprocess
 import sys
 import tempfile
 import time
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from devlearn.bench_ceiling import (
-    env_breakdown,
-    observations_old_and_new,
-    physics_ceiling,
-    reference_env_steps_per_s,
-    touch_old_and_new,
-)
-from devlearn.bench_learner import bench_update, without_user_warnings
+
+def without_user_warnings(function):
+    """Run ``function`` with UserWarnings silenced: a speed figure of an unprepared behaviour
+    (hand regard's uncalibrated detector) does not depend on what it would perceive."""
+
+    @functools.wraps(function)
+    def wrapper(*args, **kwargs):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)
+            return function(*args, **kwargs)
+
+    return wrapper
 
 
 def _per_call_ms(
@@ -185,7 +188,7 @@ def decision_rate(
     per policy decision) and, beside ``<behavior>_train_steps_per_s`` measured at it, the same
     training with a decision every physics step (``<behavior>_train_steps_per_s_k1``). Both
     count physics steps per second."""
-    from devlearn.training.config import default_config
+    from devlearn.config.run_config import default_config
 
     repeat = default_config(registry.behavior(behavior)).env.action_repeat
     result: dict[str, Any] = {f"{behavior}_train_action_repeat": repeat}
@@ -194,144 +197,4 @@ def decision_rate(
         result[f"{behavior}_train_steps_per_s_k1"] = bench_training(
             behavior, steps, [*extra, "--set", "env.action_repeat=1"], progress
         )
-    return result
-
-
-OLD_LEARNER = ["network.layout=separate", "torch_threads=1", "update_threads=1"]
-"""``--set`` options that train as before the shared layout and automatic threads."""
-
-
-def bench_learner(behaviors: dict, quick: bool, progress: Callable[[str], None]) -> dict:
-    """PPO update cost per sample and training steps/s, old learner against new, one session.
-
-    Old: separate actor and critic, one torch thread (the defaults before the shared layout).
-    New: ``devlearn run`` defaults (shared body, automatic threads; the update benchmark uses
-    all cores). Keys ``<behavior>_update_us_per_sample[_old]`` and
-    ``<behavior>_train_steps_per_s[_old]``; hand regard trains with 8 envs and a short
-    babbling (speed does not depend on the detector's quality).
-    """
-    from devlearn.training.process import learner_threads
-
-    result: dict[str, Any] = {}
-    rollouts = {"self_touch": (16, 32 if quick else 128), "hand_regard": (8, 8 if quick else 32)}
-    for name, (envs, steps) in rollouts.items():
-        if name not in behaviors:
-            continue
-        for suffix, layout, threads in (("_old", "separate", 1), ("", "shared", learner_threads())):
-            progress(f"{name}: PPO update, {layout} networks, {threads} thread(s)")
-            behavior, repeats = behaviors[name](), 1 if quick else 2
-            figures = bench_update(behavior, layout, envs, steps, repeats, threads)
-            result[f"{name}_update_us_per_sample{suffix}"] = figures["update_us_per_sample"]
-            result[f"{name}_inference_ms_per_step{suffix}"] = figures["inference_ms_per_step"]
-    old = [arg for kv in OLD_LEARNER for arg in ("--set", kv)]
-    if "self_touch" in behaviors:
-        progress("self_touch: end-to-end training, old learner (separate networks, 1 thread)")
-        result["self_touch_train_steps_per_s_old"] = bench_training(
-            "self_touch", 8192 if quick else 32768, old, progress
-        )
-    if "hand_regard" in behaviors:
-        progress("hand_regard: end-to-end training, old learner (separate networks, 1 thread)")
-        short = ["behavior.babbling_steps=300", "behavior.correlation_threshold=0"]
-        result["hand_regard_train_steps_per_s_old"] = bench_training(
-            "hand_regard",
-            1024 if quick else 4096,
-            ["--envs", "8", *(arg for kv in short for arg in ("--set", kv)), *old],
-            progress,
-        )
-    return result
-
-
-STARTUP_COMMANDS = {
-    "help": ["--help"],
-    "plugins": ["plugins"],
-    "config": ["config", "self_touch"],
-    "info": ["info", "self_touch"],
-}
-"""The commands whose start-up ``devlearn bench`` times (``startup_<name>_s``): none trains."""
-
-
-def cli_startup_s(args: list[str], repeats: int = 3) -> float:
-    """Best wall-clock seconds of ``python -m devlearn.cli ARGS`` in a fresh process over
-    ``repeats`` runs: the interpreter, the imports, the plugins and the command itself."""
-    best = float("inf")
-    for _ in range(repeats):
-        start = time.perf_counter()
-        subprocess.run(
-            [sys.executable, "-m", "devlearn.cli", *args],
-            stdout=subprocess.DEVNULL,
-            stderr=subprocess.DEVNULL,
-            check=False,
-        )
-        best = min(best, time.perf_counter() - start)
-    return best
-
-
-def run_bench(registry, quick: bool = False, progress: Callable[[str], None] = print) -> dict:
-    """Run every measurement; return the figures (see ``devlearn bench --help``)."""
-    n = 300 if quick else 2000
-    result_startup = {}
-    for name, args in STARTUP_COMMANDS.items():
-        progress(f"start-up: devlearn {' '.join(args)}")
-        result_startup[f"startup_{name}_s"] = cli_startup_s(args, 1 if quick else 3)
-    progress("infant: physics, touch, proprioception, eye render")
-    result: dict[str, Any] = bench_infant(steps=n, frames=20 if quick else 100)
-    result.update(result_startup)
-    result.update(touch_old_and_new(n))
-    for scene in ("crib", "sitting"):
-        progress(f"{scene}: physics-only steps (the ceiling)")
-        result[f"physics_{scene}_steps_per_s"] = physics_ceiling(scene, 2 * n)
-    behaviors = registry.behaviors()
-    for name in ("self_touch", "hand_regard"):
-        if name not in behaviors:
-            progress(f"{name}: not installed, skipped")
-            continue
-        behavior = behaviors[name]()
-        progress(f"{name}: single-process environment steps, now and on the previous code paths")
-        steps = n if name == "self_touch" else max(n // 10, 50)
-        result[f"{name}_steps_per_s"] = bench_behavior_env(behavior, steps)
-        # a behaviour that batches: both figures again, old and new alternating (best of 2)
-        result.update(observations_old_and_new(behavior, steps, 20 if quick else 200))
-        result[f"{name}_reference_steps_per_s"] = reference_env_steps_per_s(behavior, steps)
-        key = f"physics_{behavior.scene}_steps_per_s"
-        if key not in result:  # a scene other than crib and sitting (hand regard's BabyBench's)
-            result[key] = physics_ceiling(behavior.scene, 2 * n)
-        ceiling = result[key]
-        result[f"{name}_fraction_of_ceiling"] = result[f"{name}_steps_per_s"] / ceiling
-        progress(f"{name}: where a step's time goes")
-        result[f"{name}_breakdown_ms"] = env_breakdown(behavior, steps)
-    if "self_touch" in behaviors:
-        behavior = behaviors["self_touch"]()
-        for workers in (1, 2):
-            progress(f"self_touch: 16 environments over {workers} worker process(es)")
-            result[f"self_touch_vec_steps_per_s_{workers}_workers"] = bench_vec_env(
-                behavior, num_envs=16, workers=workers, steps=20 if quick else 200
-            )
-        # each worker runs on its own core: the ceiling is one crib's physics per worker
-        result["self_touch_vec_2_workers_fraction_of_ceiling"] = result[
-            "self_touch_vec_steps_per_s_2_workers"
-        ] / (2 * result["physics_crib_steps_per_s"])
-        progress("self_touch: end-to-end training (devlearn run defaults)")
-        result["self_touch_train_steps_per_s"] = bench_training(
-            "self_touch", 8192 if quick else 32768, [], progress
-        )
-        result.update(decision_rate(registry, "self_touch", 8192 if quick else 32768, [], progress))
-    if "hand_regard" in behaviors:
-        progress("hand_regard: end-to-end training (short babbling, any correlation accepted)")
-        # prepare() babbles before training (10,000 rendered steps by default); a short babble
-        # finds weaker correlations, so the threshold is dropped: speed does not depend on it.
-        short = ["behavior.babbling_steps=300", "behavior.correlation_threshold=0"]
-        extra = ["--envs", "8", *(arg for kv in short for arg in ("--set", kv))]
-        result["hand_regard_train_steps_per_s"] = bench_training(
-            "hand_regard", 1024 if quick else 4096, extra, progress
-        )
-        result.update(
-            decision_rate(registry, "hand_regard", 1024 if quick else 4096, extra, progress)
-        )
-    result.update(bench_learner(behaviors, quick, progress))
-    usage_self = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    usage_children = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
-    # the largest resident set of any one process (this one, a training run or a worker)
-    result["peak_memory_mb"] = max(usage_self, usage_children) / 1024.0
-    result["machine"] = f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores"
-    result["date"] = time.strftime("%Y-%m-%d")
     return result

@@ -9,7 +9,7 @@ import string
 from importlib import resources
 from pathlib import Path
 
-from devlearn.errors import UsageError
+from devlearn.api.errors import UsageError
 
 # Template file -> where it goes in the new distribution (``{module}``: the import name).
 FILES = {

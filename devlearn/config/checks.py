@@ -8,7 +8,7 @@ import re
 import tempfile
 from pathlib import Path
 
-from devlearn.errors import UsageError
+from devlearn.api.errors import UsageError
 
 SEED_MAX = 2**32 - 1
 """Largest seed (numpy's global generator takes 32-bit seeds)."""

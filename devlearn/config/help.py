@@ -4,22 +4,14 @@ from __future__ import annotations
 
 import ast
 import dataclasses
-import difflib
 import inspect
 import textwrap
-import typing
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from devlearn.training.config import RunConfig
-from devlearn.training.config_values import valid_keys
+from devlearn.config.values import field_types, type_name
 
-
-def type_name(kind: Any) -> str:
-    """A short, readable name of a field's type: ``int``, ``float | None``, ``tuple[int, ...]``."""
-    if isinstance(kind, type) and not typing.get_args(kind):
-        return kind.__name__
-    text = str(kind).replace("typing.", "").replace("NoneType", "None")
-    return text.replace("Optional[", "None | ").rstrip("]") if "Optional[" in text else text
+if TYPE_CHECKING:
+    from devlearn.config.run_config import RunConfig
 
 
 def field_docs(cls: type) -> dict[str, str]:
@@ -39,13 +31,6 @@ def field_docs(cls: type) -> dict[str, str]:
                 text = " ".join(str(after.value.value).split())
             docs[item.target.id] = text
     return docs
-
-
-def _hints(cls: type) -> dict[str, Any]:
-    try:
-        return typing.get_type_hints(cls)
-    except Exception:  # unresolvable annotations: the declared strings will do
-        return {f.name: f.type for f in dataclasses.fields(cls)}
 
 
 def _json_ready(value: Any) -> Any:
@@ -72,7 +57,7 @@ def describe_keys(cfg: RunConfig, core: RunConfig | None = None) -> list[dict[st
     rows: list[dict[str, Any]] = []
 
     def walk(obj: Any, base: Any, prefix: str) -> None:
-        docs, hints = field_docs(type(obj)), _hints(type(obj))
+        docs, hints = field_docs(type(obj)), field_types(obj)
         for f in dataclasses.fields(obj):
             value = getattr(obj, f.name)
             before = getattr(base, f.name, None) if base is not None else None
@@ -91,46 +76,3 @@ def describe_keys(cfg: RunConfig, core: RunConfig | None = None) -> list[dict[st
 
     walk(cfg, core, "")
     return rows
-
-
-def suggest_key(key: str, keys: list[str]) -> str | None:
-    """The valid key closest to a mistyped ``key`` (by its last part, then as a whole)."""
-    leaf = key.rsplit(".", 1)[-1]
-    leaves = {k.rsplit(".", 1)[-1]: k for k in keys}
-    started = [k for name, k in leaves.items() if len(leaf) >= 3 and name.startswith(leaf)]
-    if len(started) == 1:  # an abbreviation: ppo.clip -> ppo.clip_param
-        return started[0]
-    initials = [k for name, k in leaves.items() if "_" in name and leaf == _initials(name)]
-    if len(initials) == 1:  # ppo.lr -> ppo.learning_rate
-        return initials[0]
-    match = difflib.get_close_matches(leaf, list(leaves), n=1, cutoff=0.6)
-    if match:
-        return leaves[match[0]]
-    match = difflib.get_close_matches(key, keys, n=1, cutoff=0.75)
-    return match[0] if match else None
-
-
-def _initials(name: str) -> str:
-    return "".join(word[:1] for word in name.split("_"))
-
-
-def unknown_key_message(key: str, cfg: RunConfig) -> str:
-    """``unknown config key 'ppo.lr'; did you mean 'ppo.learning_rate'? ...`` (one line).
-
-    A key under a section (``ppo.``, ``behavior.``) is matched against that section's keys;
-    a section given alone is told to name one of its keys.
-    """
-    keys = valid_keys(cfg)
-    name = cfg.behavior_name or "BEHAVIOR"
-    where = f"(`devlearn config {name}` lists all {len(keys)})"
-    sections = {k.split(".", 1)[0] for k in keys if "." in k}
-    if key in sections:
-        first = next(k for k in keys if k.startswith(key + "."))
-        return f"config key '{key}' is a section; set one of its keys, e.g. {first} {where}"
-    section = key.split(".", 1)[0] if "." in key else ""
-    candidates = [k for k in keys if k.startswith(section + ".")] if section in sections else keys
-    guess = suggest_key(key, candidates)
-    if guess is None and candidates is not keys and len(candidates) <= 12:
-        return f"unknown config key '{key}'; {section} keys: {', '.join(candidates)}"
-    hint = f"; did you mean '{guess}'?" if guess else ""
-    return f"unknown config key '{key}'{hint} {where}"

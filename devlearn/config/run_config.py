@@ -1,5 +1,5 @@
 """Run configuration: nested dataclasses, presets, saved configs, rsl-rl's train_cfg (``--set``
-overrides: :mod:`devlearn.training.config_values`)."""
+overrides: :mod:`devlearn.config.values`)."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ import json
 from dataclasses import dataclass, field
 from typing import Any
 
-from devlearn.errors import UsageError
-from devlearn.training.config_values import apply_overrides, convert, field_types
+from devlearn.api.errors import UsageError
+from devlearn.config.values import apply_overrides, convert, field_types
 
 
 @dataclass
@@ -155,7 +155,7 @@ class RunConfig:
     curiosity: list[str] = field(default_factory=list)
     """Learned intrinsic rewards added to the behaviour's reward, by registered name
     (``--set curiosity=rnd,forward_model``; ``devlearn plugins --json`` lists them). Each is a
-    model trained on every rollout (devlearn/learned.py); none by default."""
+    model trained on every rollout (devlearn/api/learned.py); none by default."""
     learned: dict[str, Any] = field(default_factory=dict)
     """Options of the learned rewards, name -> {option: value}, e.g. ``--set
     learned.rnd.weight=0.5`` (the fields of the term's ``config_class``; unset ones keep their
@@ -186,7 +186,7 @@ def default_config(
         top: Top-level RunConfig fields (e.g. ``total_steps=...``); None values are skipped.
     Raises:
         UsageError: An unknown preset (the valid ones named), a bad override, or values the
-            behaviour's :class:`~devlearn.network_spec.NetworkSpec` rejects.
+            behaviour's :class:`~devlearn.api.network_spec.NetworkSpec` rejects.
     """
     cfg = RunConfig(behavior_name=behavior_cls.name, behavior=behavior_cls.config_class())
     apply_overrides(cfg, behavior_cls(cfg.behavior).train_defaults())
@@ -316,8 +316,8 @@ def to_rsl_rl(cfg: RunConfig, behavior: Any, observation_names: list[str] | None
     """Return rsl-rl 5.5.1's ``train_cfg`` for this run.
 
     Actor and critic are :class:`~devlearn.training.networks.MultiSenseModel`s built from the
-    behaviour's :class:`~devlearn.network_spec.NetworkSpec` (passed as an object; rsl-rl deep-copies
-    it). In the ``shared`` layout rsl-rl's ``share_cnn_encoders`` hands the actor's encoders,
+    behaviour's :class:`~devlearn.api.network_spec.NetworkSpec` (passed as an object; rsl-rl
+    deep-copies it). In the ``shared`` layout rsl-rl's ``share_cnn_encoders`` hands the actor's encoders,
     fusion and trunk to the critic, which adds only its value head; in the ``separate`` layout
     each network builds its own. The algorithm is :class:`~devlearn.training.ppo.UniqueParamPPO`.
 

@@ -1,16 +1,18 @@
 """Config values: a command-line string or JSON value converted to a config field's declared
 type, with errors that say what the field expects, and set by dotted key (``--set a.b=value``)
-on a :class:`~devlearn.training.config.RunConfig`."""
+on a :class:`~devlearn.config.run_config.RunConfig`; an unknown key is answered with the closest
+valid one."""
 
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import json
 import types
 import typing
 from typing import Any
 
-from devlearn.errors import UsageError
+from devlearn.api.errors import UsageError
 
 
 def convert(value: Any, kind: Any, key: str) -> Any:
@@ -67,8 +69,6 @@ def convert(value: Any, kind: Any, key: str) -> Any:
 
 def _expected(kind: Any) -> str:
     """``int (a whole number, e.g. 16 or 2e6)``: a field's type, for error messages."""
-    from devlearn.training.config_help import type_name
-
     origin = typing.get_origin(kind) or kind
     examples = {
         int: "a whole number, e.g. 16 or 2e6",
@@ -84,6 +84,14 @@ def _expected(kind: Any) -> str:
         return "none"
     example = examples.get(origin)
     return f"{type_name(kind)} ({example})" if example else type_name(kind)
+
+
+def type_name(kind: Any) -> str:
+    """A short, readable name of a field's type: ``int``, ``float | None``, ``tuple[int, ...]``."""
+    if isinstance(kind, type) and not typing.get_args(kind):
+        return kind.__name__
+    text = str(kind).replace("typing.", "").replace("NoneType", "None")
+    return text.replace("Optional[", "None | ").rstrip("]") if "Optional[" in text else text
 
 
 def field_types(obj: Any) -> dict[str, Any]:
@@ -144,8 +152,6 @@ def set_value(cfg: Any, key: str, value: Any) -> None:
         obj = getattr(obj, part, None) if dataclasses.is_dataclass(obj) else None
     names = {f.name for f in dataclasses.fields(obj)} if dataclasses.is_dataclass(obj) else set()
     if leaf not in names or dataclasses.is_dataclass(getattr(obj, leaf)):
-        from devlearn.training.config_help import unknown_key_message
-
         raise UsageError(unknown_key_message(key, cfg))
     setattr(obj, leaf, convert(value, field_types(obj).get(leaf, Any), key))
 
@@ -169,3 +175,46 @@ def apply_overrides(cfg: Any, overrides: list[str] | dict[str, Any]) -> Any:
     for key, value in items:
         set_value(cfg, key, value)
     return cfg
+
+
+def suggest_key(key: str, keys: list[str]) -> str | None:
+    """The valid key closest to a mistyped ``key`` (by its last part, then as a whole)."""
+    leaf = key.rsplit(".", 1)[-1]
+    leaves = {k.rsplit(".", 1)[-1]: k for k in keys}
+    started = [k for name, k in leaves.items() if len(leaf) >= 3 and name.startswith(leaf)]
+    if len(started) == 1:  # an abbreviation: ppo.clip -> ppo.clip_param
+        return started[0]
+    initials = [k for name, k in leaves.items() if "_" in name and leaf == _initials(name)]
+    if len(initials) == 1:  # ppo.lr -> ppo.learning_rate
+        return initials[0]
+    match = difflib.get_close_matches(leaf, list(leaves), n=1, cutoff=0.6)
+    if match:
+        return leaves[match[0]]
+    match = difflib.get_close_matches(key, keys, n=1, cutoff=0.75)
+    return match[0] if match else None
+
+
+def _initials(name: str) -> str:
+    return "".join(word[:1] for word in name.split("_"))
+
+
+def unknown_key_message(key: str, cfg: Any) -> str:
+    """``unknown config key 'ppo.lr'; did you mean 'ppo.learning_rate'? ...`` (one line).
+
+    A key under a section (``ppo.``, ``behavior.``) is matched against that section's keys;
+    a section given alone is told to name one of its keys.
+    """
+    keys = valid_keys(cfg)
+    name = cfg.behavior_name or "BEHAVIOR"
+    where = f"(`devlearn config {name}` lists all {len(keys)})"
+    sections = {k.split(".", 1)[0] for k in keys if "." in k}
+    if key in sections:
+        first = next(k for k in keys if k.startswith(key + "."))
+        return f"config key '{key}' is a section; set one of its keys, e.g. {first} {where}"
+    section = key.split(".", 1)[0] if "." in key else ""
+    candidates = [k for k in keys if k.startswith(section + ".")] if section in sections else keys
+    guess = suggest_key(key, candidates)
+    if guess is None and candidates is not keys and len(candidates) <= 12:
+        return f"unknown config key '{key}'; {section} keys: {', '.join(candidates)}"
+    hint = f"; did you mean '{guess}'?" if guess else ""
+    return f"unknown config key '{key}'{hint} {where}"

@@ -7,7 +7,7 @@ from collections.abc import Mapping, Sequence
 import numba
 import numpy as np
 
-from devlearn.errors import UsageError
+from devlearn.api.errors import UsageError
 
 REWARD_BOUND = 1e6
 """Largest allowed magnitude of one reward term's (unweighted) value per step."""

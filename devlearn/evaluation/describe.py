@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from devlearn.behavior import Behavior
+from devlearn.api.behavior import Behavior
 
 
 def describe_behavior(behavior: Behavior, infant_factory=None) -> dict[str, Any]:

@@ -16,10 +16,8 @@ from rsl_rl.utils import resolve_class, resolve_obs_groups
 from tensordict import TensorDict
 from tqdm import tqdm
 
-from devlearn.env.behavior_env import BehaviorEnv
-from devlearn.errors import UsageError
-from devlearn.training.checkpoint import LATEST, check_behavior, check_fits, load_checkpoint
-from devlearn.training.config import (
+from devlearn.api.errors import UsageError
+from devlearn.config.run_config import (
     RunConfig,
     apply_overrides,
     default_config,
@@ -27,7 +25,9 @@ from devlearn.training.config import (
     to_dict,
     to_rsl_rl,
 )
-from devlearn.training.runner import quiet
+from devlearn.env.behavior_env import BehaviorEnv
+from devlearn.training.checkpoint import LATEST, check_behavior, check_fits, load_checkpoint
+from devlearn.training.process import quiet
 
 VIDEO_FPS = 25
 """Frame rate of evaluation videos (every k-th control step is rendered to match it)."""

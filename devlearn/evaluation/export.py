@@ -12,7 +12,7 @@ import numpy as np
 import torch
 import torch.nn as nn
 
-from devlearn.errors import UsageError
+from devlearn.api.errors import UsageError
 
 FORMATS = ("onnx", "torchscript")
 """Formats ``devlearn export`` writes."""
@@ -56,10 +56,10 @@ def load_policy(
         UsageError: Missing, corrupt or foreign checkpoint, or an environment that cannot be
             built from the checkpoint's config.
     """
+    from devlearn.config.run_config import from_dict
     from devlearn.env import BehaviorEnv
+    from devlearn.evaluation.evaluate import load_actor
     from devlearn.training.checkpoint import check_behavior, load_checkpoint
-    from devlearn.training.config import from_dict
-    from devlearn.training.evaluate import load_actor
 
     state = load_checkpoint(checkpoint)
     check_behavior(state, checkpoint, behavior_name)

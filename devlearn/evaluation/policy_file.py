@@ -5,8 +5,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from devlearn.config.run_config import from_dict
 from devlearn.training.checkpoint import FORMAT, load_checkpoint, save_atomic
-from devlearn.training.config import from_dict
 
 KEPT = ("behavior", "config", "iteration", "env_steps", "actor_state_dict")
 """Training-checkpoint keys a policy file keeps; the critic, optimiser, curriculum, env and rng
@@ -29,7 +29,7 @@ def slim_checkpoint(source: str | Path, target: str | Path, registry) -> dict[st
     Raises:
         UsageError: Unreadable checkpoint, or something its evaluation needs is missing.
     """
-    from devlearn.errors import UsageError
+    from devlearn.api.errors import UsageError
 
     source, target = Path(source), Path(target)
     if target.resolve() == source.resolve():

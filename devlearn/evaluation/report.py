@@ -7,9 +7,9 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
-from devlearn.errors import UsageError
-from devlearn.report_markdown import markdown, shown
-from devlearn.stats import mean_ci
+from devlearn.api.errors import UsageError
+from devlearn.api.stats import mean_ci
+from devlearn.evaluation.report_markdown import markdown, shown
 
 PaperResults = Callable[[str, dict[str, Any]], "tuple[str, dict[str, float]] | None"]
 """(behaviour name, a run's config) -> (column label, the paper's figures) or None: the named
@@ -290,7 +290,7 @@ def write_report(
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     (out / "report.md").write_text(markdown(result, evaluations))
-    from devlearn.report_plot import draw_report
+    from devlearn.evaluation.report_plot import draw_report
 
     draw_report(result, out / "report.png")
     return result

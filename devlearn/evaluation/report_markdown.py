@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from devlearn.stats import CONFIDENCE
+from devlearn.api.stats import CONFIDENCE
 
 
 def shown(path: Path) -> str:

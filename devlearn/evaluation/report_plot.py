@@ -15,7 +15,7 @@ def draw_report(result: dict[str, Any], path: Path) -> Path:
     """Draw ``write_report``'s table as bars (deterministic: no timestamps in the PNG).
 
     Args:
-        result: What :func:`devlearn.report.write_report` returns.
+        result: What :func:`devlearn.evaluation.report.write_report` returns.
         path: PNG to write.
     Returns:
         ``path``.

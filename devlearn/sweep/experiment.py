@@ -9,7 +9,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from devlearn.errors import UsageError
+from devlearn.api.errors import UsageError
 from devlearn.sweep.bookkeeping import SweepFolder, check_folder
 from devlearn.sweep.executors import make_executor
 from devlearn.sweep.job import RunJob
@@ -21,7 +21,7 @@ POLL_S = 1.0
 
 
 class ReportUnavailable(Exception):
-    """This devlearn has no ``devlearn.report`` (the report step cannot run)."""
+    """This devlearn has no ``devlearn.evaluation.report`` (the report step cannot run)."""
 
 
 @dataclass
@@ -43,9 +43,9 @@ def plan_sweep(spec: SweepSpec, registry, global_args: list[str] | None = None) 
         UsageError: An unknown behaviour, grid key or value, a value the behaviour rejects (the
             run is named), or a launcher that is not installed.
     """
-    from devlearn.cli.run import check_config
-    from devlearn.training.config import default_config
-    from devlearn.training.config_values import in_table, valid_keys
+    from devlearn.config.checks import check_config
+    from devlearn.config.run_config import default_config
+    from devlearn.config.values import in_table, valid_keys
     from devlearn.training.learned_rewards import LearnedRewards
 
     behavior_cls = registry.behavior(spec.behavior)
@@ -104,15 +104,15 @@ def write_sweep_report(run_dirs: list[Path], out_dir: Path) -> dict[str, Any]:
     """``devlearn report`` over the evaluated runs, into ``out_dir`` (report.md, report.png).
 
     Raises:
-        ReportUnavailable: This devlearn has no ``devlearn.report``.
+        ReportUnavailable: This devlearn has no ``devlearn.evaluation.report``.
     """
     try:
-        from devlearn.report import write_report
+        from devlearn.evaluation.report import write_report
     except ModuleNotFoundError as exc:
-        if exc.name != "devlearn.report":
+        if exc.name != "devlearn.evaluation.report":
             raise
         raise ReportUnavailable(
-            "report step needs devlearn.report, which this devlearn does not have"
+            "report step needs devlearn.evaluation.report, which this devlearn does not have"
         ) from None
     return write_report(run_dirs, out_dir)
 

@@ -9,8 +9,8 @@ import io
 import numpy as np
 import torch
 
-from devlearn.conformance_values import require as _require
-from devlearn.learned import LearnedReward, LearnedRewardConfig, Transitions
+from devlearn.api.learned import LearnedReward, LearnedRewardConfig, Transitions
+from devlearn.testing.values import require
 
 
 def random_transitions(
@@ -19,7 +19,7 @@ def random_transitions(
     """Random transitions: uint8 images for (H, W, C) shapes, normal floats otherwise.
 
     Returns:
-        :class:`~devlearn.learned.Transitions` of ``size`` rows: observations (size, *shape)
+        :class:`~devlearn.api.learned.Transitions` of ``size`` rows: observations (size, *shape)
         per name, actions (size, action_dim) uniform in [-1, 1], next observations likewise.
     """
     gen = torch.Generator().manual_seed(seed)
@@ -59,11 +59,11 @@ def check_learned_reward(
     from devlearn.plugins import _NAME
 
     shapes = observation_shapes or {"proprioception": (6,), "eyes": (8, 8, 3)}
-    _require(bool(term_cls.__doc__), f"{term_cls.__name__} needs a docstring")
+    require(bool(term_cls.__doc__), f"{term_cls.__name__} needs a docstring")
     name = getattr(term_cls, "name", None)
-    _require(isinstance(name, str) and bool(_NAME.match(name)), "name: lower_snake_case")
+    require(isinstance(name, str) and bool(_NAME.match(name)), "name: lower_snake_case")
     config_cls = term_cls.config_class
-    _require(
+    require(
         dataclasses.is_dataclass(config_cls) and issubclass(config_cls, LearnedRewardConfig),
         "config_class must be a dataclass subclassing LearnedRewardConfig",
     )
@@ -73,19 +73,19 @@ def check_learned_reward(
     term.observe(batch)
     with torch.no_grad():
         first, second = term.compute_reward(batch), term.compute_reward(batch)
-    _require(
+    require(
         tuple(first.shape) == (batch_size,),
         f"compute_reward gave {tuple(first.shape)}, expected ({batch_size},)",
     )
-    _require(bool(torch.isfinite(first).all()), "compute_reward gave NaN or inf")
-    _require(torch.equal(first, second), "compute_reward changed on the same batch")
+    require(bool(torch.isfinite(first).all()), "compute_reward gave NaN or inf")
+    require(torch.equal(first, second), "compute_reward changed on the same batch")
     before = [p.detach().clone() for p in term.model.parameters() if p.requires_grad]
     reward, log = term.update(batch, env_steps=0)
-    _require(tuple(reward.shape) == (batch_size,), "update must return a (B,) reward")
-    _require(set(log) >= {"raw", "loss", "weight"}, f"update log lacks raw/loss/weight: {log}")
-    _require(all(np.isfinite(v) for v in log.values()), f"non-finite update log {log}")
+    require(tuple(reward.shape) == (batch_size,), "update must return a (B,) reward")
+    require(set(log) >= {"raw", "loss", "weight"}, f"update log lacks raw/loss/weight: {log}")
+    require(all(np.isfinite(v) for v in log.values()), f"non-finite update log {log}")
     after = [p.detach() for p in term.model.parameters() if p.requires_grad]
-    _require(any(not torch.equal(a, b) for a, b in zip(before, after)), "update trained nothing")
+    require(any(not torch.equal(a, b) for a, b in zip(before, after)), "update trained nothing")
     buffer = io.BytesIO()
     torch.save(term.state_dict(), buffer)
     buffer.seek(0)
@@ -97,7 +97,7 @@ def check_learned_reward(
         torch.manual_seed(seed + 2)  # the same mini-batch order for both
         reward, _ = copy.update(later, env_steps=batch_size)
         results.append((reward, [p.detach().clone() for p in copy.model.parameters()]))
-    _require(torch.equal(results[0][0], results[1][0]), "restored term rewards differently")
+    require(torch.equal(results[0][0], results[1][0]), "restored term rewards differently")
     for a, b in zip(results[0][1], results[1][1]):
-        _require(torch.equal(a, b), "restored term trains differently (optimiser state lost?)")
+        require(torch.equal(a, b), "restored term trains differently (optimiser state lost?)")
     return term

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-from devlearn.bench import bench_infant
+from devlearn.bench.speed import bench_infant
 from devlearn.cli.bench import ROWS, format_table
 
 
@@ -41,7 +41,7 @@ def test_table_lists_known_figures_and_failures():
 def test_ceiling_and_breakdown_of_a_step():
     from devlearn_self_touch import SelfTouch
 
-    from devlearn.bench_ceiling import BREAKDOWN_PARTS, env_breakdown, physics_ceiling
+    from devlearn.bench.ceiling import BREAKDOWN_PARTS, env_breakdown, physics_ceiling
 
     assert physics_ceiling("crib", 30) > 0
     parts = env_breakdown(SelfTouch(), steps=30)
@@ -65,7 +65,7 @@ def test_table_shows_fractions_and_breakdowns():
 def test_batched_and_per_env_observation_paths_are_measured_in_one_run():
     from devlearn_self_touch import SelfTouch
 
-    from devlearn.bench_ceiling import observations_old_and_new, with_per_env_observations
+    from devlearn.bench.ceiling import observations_old_and_new, with_per_env_observations
     from devlearn.env.batch_advance import overrides
 
     behavior = SelfTouch()
@@ -86,7 +86,7 @@ def test_batched_and_per_env_observation_paths_are_measured_in_one_run():
 
 
 def test_bench_reports_cli_start_up():
-    from devlearn.bench import STARTUP_COMMANDS, cli_startup_s
+    from devlearn.bench.run import STARTUP_COMMANDS, cli_startup_s
 
     assert set(STARTUP_COMMANDS) == {"help", "plugins", "config", "info"}
     assert cli_startup_s(["--help"], repeats=1) > 0

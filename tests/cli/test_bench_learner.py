@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-from devlearn.bench_learner import bench_update
+from devlearn.bench.learner import bench_update
 from devlearn.plugins import PluginRegistry
 
 

@@ -18,9 +18,9 @@ from fake_infant import OtherBehavior, TinyBehavior, fake_infant_factory  # noqa
 
 import devlearn.plugins  # noqa: E402
 from devlearn.cli import main  # noqa: E402
+from devlearn.config import checks  # noqa: E402
 from devlearn.testing import registry_for  # noqa: E402
 from devlearn.training import checkpoint as checkpoint_module  # noqa: E402
-from devlearn.training import checks  # noqa: E402
 
 SMALL = ["--envs", "2", "--seed", "1", "--workers", "0", "--set", "save_interval=1"]
 

@@ -15,10 +15,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "env"))
 from fake_infant import FakeInfant, TinyBehavior  # noqa: E402
 
 import devlearn.plugins  # noqa: E402
+from devlearn.api.errors import UsageError  # noqa: E402
 from devlearn.cli import main  # noqa: E402
-from devlearn.errors import UsageError  # noqa: E402
+from devlearn.evaluation.evaluate import evaluate  # noqa: E402
 from devlearn.testing import registry_for  # noqa: E402
-from devlearn.training.evaluate import evaluate  # noqa: E402
 
 
 class RecordingInfant(FakeInfant):

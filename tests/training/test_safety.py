@@ -15,9 +15,9 @@ import torch
 from fake_infant import TinyBehavior, TinyConfig, fake_infant_factory
 
 import devlearn
-import devlearn.training
+from devlearn.api.errors import RunStopped, UsageError
+from devlearn.config.run_config import default_config
 from devlearn.env.guards import GuardError, check_observation_batch, check_reward_batch
-from devlearn.errors import RunStopped, UsageError
 from devlearn.testing import registry_for
 from devlearn.training import train
 from devlearn.training.checkpoint import (
@@ -170,7 +170,7 @@ class BadTiny(TinyBehavior):
 def bad_config(out: Path, *overrides: str, **top):
     """The bad behaviour's config: 4 envs x 8 steps per iteration, in process by default."""
     top = {"num_envs": 4, "workers": 0, "save_interval": 1, **top}
-    return devlearn.training.default_config(
+    return default_config(
         BadTiny, list(overrides), out_dir=str(out), total_steps=100_000, **top
     )
 

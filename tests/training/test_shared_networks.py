@@ -13,8 +13,8 @@ from fake_infant import TinyBehavior
 from rsl_rl.algorithms import PPO
 from tensordict import TensorDict
 
-from devlearn.errors import UsageError
-from devlearn.training.config import from_dict, to_dict, to_rsl_rl
+from devlearn.api.errors import UsageError
+from devlearn.config.run_config import from_dict, to_dict, to_rsl_rl
 from devlearn.training.ppo import UniqueParamPPO, unique_parameters
 from devlearn.training.process import quiet
 

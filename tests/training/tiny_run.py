@@ -27,7 +27,7 @@ def registry():
 
 def config(out_dir, total_steps: int = 256, *overrides: str, **top):
     """The tiny behaviour's config: 4 envs x 8 steps per iteration (32 env steps)."""
-    from devlearn.training import default_config
+    from devlearn.config.run_config import default_config
 
     top = {"num_envs": 4, "workers": 0, "save_interval": 1, **top}
     return default_config(

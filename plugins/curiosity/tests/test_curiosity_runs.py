@@ -10,8 +10,9 @@ import pytest
 from devlearn_curiosity import RND, ForwardModel
 
 from devlearn.cli import main
+from devlearn.config.run_config import default_config
 from devlearn.testing import registry_for
-from devlearn.training import default_config, train
+from devlearn.training import train
 from devlearn.training.checkpoint import load_checkpoint
 
 CORE_TESTS = Path(__file__).resolve().parents[3] / "tests" / "env"

@@ -8,11 +8,11 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from devlearn.behavior import Behavior, Evaluator, NetworkSpec
-from devlearn.curriculum import Curriculum, Stage
-from devlearn.errors import UsageError
-from devlearn.rewards import IntrinsicReward
-from devlearn.sensors import MLPEncoder
+from devlearn.api.behavior import Behavior, Evaluator, NetworkSpec
+from devlearn.api.curriculum import Curriculum, Stage
+from devlearn.api.errors import UsageError
+from devlearn.api.rewards import IntrinsicReward
+from devlearn.api.sensors import MLPEncoder
 from devlearn_hand_regard import detector_store
 from devlearn_hand_regard.config import (
     APPEARANCE_CHOICES,

@@ -8,7 +8,7 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-from devlearn.errors import UsageError
+from devlearn.api.errors import UsageError
 from devlearn_hand_regard.config import HandRegardConfig
 from devlearn_hand_regard.detector import FORMAT_VERSION, DetectorParams
 
