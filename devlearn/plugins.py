@@ -25,7 +25,6 @@ from devlearn.api.errors import UsageError
 
 if TYPE_CHECKING:  # torch-based: imported when a plugin registers one (it has loaded torch)
     from devlearn.api.learned import LearnedReward
-    from devlearn.api.sensors import SensorEncoder
 
 ENTRY_POINT_GROUP = "devlearn"
 DISABLE_ENV = "DEVLEARN_DISABLE_PLUGINS"
@@ -73,7 +72,6 @@ class PluginInfo:
     distribution: str
     version: str
     behaviors: list[str] = field(default_factory=list)
-    encoders: list[str] = field(default_factory=list)
     learned_rewards: list[str] = field(default_factory=list)
     hooks: list[str] = field(default_factory=list)
     disabled: bool = False
@@ -128,7 +126,6 @@ class PluginRegistry:
         self.plugins: dict[str, PluginInfo] = {}
         self.errors: list[str] = []
         self._behaviors: dict[str, type[Behavior]] = {}
-        self._encoders: dict[str, type[SensorEncoder]] = {}
         self._learned: dict[str, type[LearnedReward]] = {}
         self._owner: dict[tuple[str, str], str] = {}
         self._pm = pluggy.PluginManager("devlearn")
@@ -195,18 +192,6 @@ class PluginRegistry:
 
         return register
 
-    def _register_encoders(self, info: PluginInfo):
-        def register(name: str, encoder: type) -> None:
-            from devlearn.api.sensors import SensorEncoder
-
-            if not (inspect.isclass(encoder) and issubclass(encoder, SensorEncoder)):
-                raise TypeError(f"register_encoders got {encoder!r}, not a SensorEncoder subclass")
-            if self._claim("encoder", name, info):
-                self._encoders[name] = encoder
-                info.encoders.append(name)
-
-        return register
-
     def _register_learned_rewards(self, info: PluginInfo):
         def register(term: type) -> None:
             from devlearn.api.learned import LearnedReward, LearnedRewardConfig
@@ -248,12 +233,6 @@ class PluginRegistry:
             return cls(config if config is not None else cls.config_class())
         except (ValueError, TypeError) as exc:
             raise UsageError(f"invalid config for behavior '{name}': {exc}") from exc
-
-    def encoder(self, name: str) -> type[SensorEncoder]:
-        """Return the encoder class registered as ``name``."""
-        if name not in self._encoders:
-            raise UsageError(f"unknown encoder '{name}'; registered: {', '.join(self._encoders)}")
-        return self._encoders[name]
 
     def learned_rewards(self) -> dict[str, type[LearnedReward]]:
         """Return every registered learned reward, name -> class, sorted by name."""

@@ -19,7 +19,7 @@ def _hooks():
 
 
 def test_there_are_hooks():
-    assert {name for name, _ in _hooks()} >= {"register_behaviors", "register_encoders"}
+    assert {name for name, _ in _hooks()} >= {"register_behaviors", "register_learned_rewards"}
 
 
 def test_every_hook_has_a_docstring_with_args():

@@ -13,7 +13,3 @@ class UsageError(Exception):
 class RunStopped(UsageError):
     """Training stopped on a fault it names (a non-finite reward, a dead env worker...); the
     message says where the checkpoint of the last good state was written."""
-
-
-class PluginError(Exception):
-    """A plugin failed to load or registered something invalid."""

@@ -38,19 +38,6 @@ def register_behaviors(register: Callable[[type], None]) -> None:
 
 
 @hookspec
-def register_encoders(register: Callable[[str, type], None]) -> None:
-    """Register sensor encoders that other behaviours may reuse by name.
-
-    Call ``register(name, EncoderClass)`` where ``EncoderClass`` subclasses
-    :class:`devlearn.SensorEncoder`. ``devlearn plugins`` lists them; behaviours can look
-    them up with :func:`devlearn.plugins.PluginRegistry.encoder`.
-
-    Args:
-        register: Callable taking a unique name and a SensorEncoder subclass.
-    """
-
-
-@hookspec
 def register_learned_rewards(register: Callable[[type], None]) -> None:
     """Register learned intrinsic rewards (subclasses of :class:`devlearn.LearnedReward`).
 

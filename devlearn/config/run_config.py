@@ -317,9 +317,10 @@ def to_rsl_rl(cfg: RunConfig, behavior: Any, observation_names: list[str] | None
 
     Actor and critic are :class:`~devlearn.training.networks.MultiSenseModel`s built from the
     behaviour's :class:`~devlearn.api.network_spec.NetworkSpec` (passed as an object; rsl-rl
-    deep-copies it). In the ``shared`` layout rsl-rl's ``share_cnn_encoders`` hands the actor's encoders,
-    fusion and trunk to the critic, which adds only its value head; in the ``separate`` layout
-    each network builds its own. The algorithm is :class:`~devlearn.training.ppo.UniqueParamPPO`.
+    deep-copies it). In the ``shared`` layout rsl-rl's ``share_cnn_encoders`` hands the actor's
+    encoders, fusion and trunk to the critic, which adds only its value head; in the ``separate``
+    layout each network builds its own. The algorithm is
+    :class:`~devlearn.training.ppo.UniqueParamPPO`.
 
     Args:
         cfg: The run config.

@@ -1,4 +1,6 @@
-"""write_report(): evaluations grouped by variant, mean and 95% interval over seeds, baselines."""
+"""``devlearn report``: evaluations grouped by variant, mean and 95% interval over seeds beside the
+baselines and the paper's figures, written as a Markdown table (report.md) and a bar chart
+(report.png)."""
 
 from __future__ import annotations
 
@@ -7,9 +9,10 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from devlearn.api.errors import UsageError
-from devlearn.api.stats import mean_ci
-from devlearn.evaluation.report_markdown import markdown, shown
+from devlearn.api.stats import CONFIDENCE, mean_ci
 
 PaperResults = Callable[[str, dict[str, Any]], "tuple[str, dict[str, float]] | None"]
 """(behaviour name, a run's config) -> (column label, the paper's figures) or None: the named
@@ -290,7 +293,121 @@ def write_report(
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     (out / "report.md").write_text(markdown(result, evaluations))
-    from devlearn.evaluation.report_plot import draw_report
-
     draw_report(result, out / "report.png")
     return result
+
+
+# --- report.md ------------------------------------------------------------------------------
+def shown(path: Path) -> str:
+    """``path`` relative to the working directory when inside it (reports get committed)."""
+    try:
+        return str(path.relative_to(Path.cwd().resolve()))
+    except ValueError:
+        return str(path)
+
+
+def cell(stat: dict[str, Any]) -> str:
+    """``mean [low, high]``, the mean alone without an interval, ``-`` without a value."""
+    if stat["mean"] is None:
+        return "-"
+    if stat["ci_low"] is None:
+        return f"{stat['mean']:.3g}"
+    return f"{stat['mean']:.3g} [{stat['ci_low']:.3g}, {stat['ci_high']:.3g}]"
+
+
+def column_title(name: str, info: dict[str, Any]) -> str:
+    """A column's heading: its name and, for our runs and baselines, how many there are."""
+    return name if info["kind"] == "paper" else f"{name} (n={len(info['seeds'])})"
+
+
+def _runs(info: dict[str, Any]) -> str:
+    """``seeds [1, 2, 3]`` for trained runs; baselines have no training seed: their count."""
+    seeds = [s for s in info["seeds"] if s is not None]
+    if not seeds:
+        count = len(info["seeds"])
+        return f"{count} evaluation{'s' if count != 1 else ''} of an untrained policy (no seed)"
+    return f"seeds {seeds}"
+
+
+def markdown(result: dict[str, Any], evaluations: list[tuple[Path, dict]]) -> str:
+    cols = list(result["columns"])
+    protocol = evaluations[0][1]["protocol"]
+    lines = [
+        f"# {result['behavior']}: evaluation report",
+        "",
+        f"Mean and {CONFIDENCE:.0%} t-interval over seeds (baselines: over their "
+        f"evaluations). Protocol: {protocol.get('episodes')} episodes, eval seed "
+        f"{protocol.get('seed')}, settle {protocol.get('settle_steps')} steps, headline "
+        f"`{protocol.get('headline')}`.",
+        "",
+    ]
+    header = ["metric"] + [column_title(c, result["columns"][c]) for c in cols]
+    lines += ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    for metric, row in result["table"].items():
+        lines.append("| " + " | ".join([f"`{metric}`"] + [cell(row[c]) for c in cols]) + " |")
+    lines += ["", "Columns:"]
+    for c, info in result["columns"].items():
+        if info["kind"] == "paper":
+            lines.append(f"- **{c}**: the paper's published figures (- where it gives none)")
+        else:
+            lines.append(f"- **{c}**: {_runs(info)} from {', '.join(info['paths'])}")
+    if result["notes"]:
+        lines += ["", "Notes:"] + [f"- {n}" for n in result["notes"]]
+    return "\n".join(lines) + "\n"
+
+
+# --- report.png -----------------------------------------------------------------------------
+MAX_PANELS = 4
+"""Metrics drawn (the headline first, in the report's order)."""
+
+
+def draw_report(result: dict[str, Any], path: Path) -> Path:
+    """Draw ``write_report``'s table as bars (deterministic: no timestamps in the PNG).
+
+    Args:
+        result: What :func:`write_report` returns.
+        path: PNG to write.
+    Returns:
+        ``path``.
+    """
+    from matplotlib.figure import Figure  # no pyplot: no global backend state
+
+    metrics = result["metrics"][:MAX_PANELS]
+    columns = list(result["columns"])
+    fig = Figure(figsize=(3.2 * max(len(metrics), 1), 3.6), constrained_layout=True)
+    axes = np.atleast_1d(fig.subplots(1, max(len(metrics), 1)))
+    colours = [f"C{i}" for i in range(len(columns))]
+    kinds = {c: info["kind"] for c, info in result["columns"].items()}
+    for ax, metric in zip(axes, metrics):
+        row = result["table"][metric]
+        means = [row[c]["mean"] if row[c]["mean"] is not None else np.nan for c in columns]
+        low = [
+            m - row[c]["ci_low"] if row[c]["ci_low"] is not None else 0.0
+            for m, c in zip(means, columns)
+        ]
+        high = [
+            row[c]["ci_high"] - m if row[c]["ci_high"] is not None else 0.0
+            for m, c in zip(means, columns)
+        ]
+        x = np.arange(len(columns))
+        ax.bar(x, means, color=colours)
+        # an interval only where there is one (several runs): a single run's bar has no caps
+        spread = [i for i, c in enumerate(columns) if row[c]["ci_low"] is not None]
+        if spread:
+            ax.errorbar(
+                x[spread],
+                np.array(means)[spread],
+                yerr=[np.array(low)[spread], np.array(high)[spread]],
+                fmt="none",
+                ecolor="k",
+                capsize=4,
+            )
+        for i, c in enumerate(columns):  # the seeds themselves
+            values = row[c]["values"]
+            ax.plot(np.full(len(values), i), values, "k.", markersize=4)
+        ticks = [c if kinds[c] == "paper" else f"{c}\n(n={row[c]['n']})" for c in columns]
+        ax.set_xticks(x, ticks, fontsize=7, rotation=20)
+        ax.set_title(metric, fontsize=9)
+    fig.suptitle(f"{result['behavior']}: mean and 95% interval over seeds", fontsize=10)
+    fig.savefig(path, dpi=110, metadata={"Software": None})
+    return path

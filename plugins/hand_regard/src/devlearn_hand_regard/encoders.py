@@ -5,7 +5,7 @@ from __future__ import annotations
 import torch
 import torch.nn as nn
 
-from devlearn.api.sensors import SensorEncoder
+from devlearn import SensorEncoder
 
 EYE_FEATURES = 256
 """Features per eye (paper sec. II-B3)."""

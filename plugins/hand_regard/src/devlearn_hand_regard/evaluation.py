@@ -12,9 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from devlearn.api.behavior import Evaluator
-from devlearn.api.rewards import StepContext
-from devlearn.api.stats import episode_stats
+from devlearn import Evaluator, StepContext, episode_stats
 from devlearn_hand_regard.visibility import CRITERIA, DETECTOR_TRUTH, HEADLINE, criteria_protocol
 
 EYES = ("left", "right")
