@@ -6,7 +6,6 @@ import json
 
 import pytest
 import tiny_run
-from fake_infant import TinyBehavior, TinyConfig
 
 from devlearn.api.errors import UsageError
 from devlearn.config.run_config import (
@@ -17,6 +16,7 @@ from devlearn.config.run_config import (
     to_rsl_rl,
 )
 from devlearn.config.values import apply_overrides, valid_keys
+from devlearn.testing.fake_infant import TinyBehavior, TinyConfig
 
 
 def test_every_field_is_documented():

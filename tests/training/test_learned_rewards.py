@@ -9,8 +9,9 @@ from pathlib import Path
 import pytest
 import tiny_run
 import torch
-from fake_infant import TinyBehavior
 from tensordict import TensorDict
+
+from devlearn.testing.fake_infant import TinyBehavior
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from learned_terms import LinearPredictor  # noqa: E402

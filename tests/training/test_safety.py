@@ -12,13 +12,13 @@ import numpy as np
 import pytest
 import tiny_run
 import torch
-from fake_infant import TinyBehavior, TinyConfig, fake_infant_factory
 
 import devlearn
 from devlearn.api.errors import RunStopped, UsageError
 from devlearn.config.run_config import default_config
 from devlearn.env.guards import GuardError
 from devlearn.testing import registry_for
+from devlearn.testing.fake_infant import TinyBehavior, TinyConfig, fake_infant_factory
 from devlearn.training import train
 from devlearn.training.checkpoint import (
     FORMAT,

@@ -12,9 +12,10 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "env"))
 
-from fake_infant import OtherBehavior, TinyBehavior, fake_infant_factory  # noqa: E402
+from tiny_behaviors import OtherBehavior  # noqa: E402
 
 from devlearn.testing import registry_for  # noqa: E402
+from devlearn.testing.fake_infant import TinyBehavior, fake_infant_factory  # noqa: E402
 
 EPISODE_STEPS = 10
 factory = functools.partial(fake_infant_factory, episode_steps=EPISODE_STEPS)

@@ -1,4 +1,12 @@
-"""A tiny stand-in for devlearn.infant's Infant, and a tiny behaviour, for core tests."""
+"""A stand-in infant and a tiny behaviour: a real training or evaluation in seconds, no MuJoCo.
+
+rsl-rl's dummy environment idea: :class:`FakeInfant` is a point that moves by its actions
+(proprioception is its position), with faults on demand (a raised error, a Ctrl-C, a killed
+worker) to test how a run handles them; :func:`fake_infant_factory` builds it where
+``devlearn.training.train`` or :class:`devlearn.env.BehaviorEnv` take an ``infant_factory``.
+:class:`TinyBehavior` learns to move every joint to a target. devlearn's own tests and the
+curiosity plugin's train with them; a plugin's learned reward or evaluator can too.
+"""
 
 from __future__ import annotations
 
@@ -195,56 +203,3 @@ class TinyBehavior(devlearn.Behavior):
 
     def train_defaults(self) -> dict[str, Any]:
         return {"ppo.num_steps_per_env": 8, "ppo.num_mini_batches": 2, "ppo.num_learning_epochs": 2}
-
-
-class OtherBehavior(TinyBehavior):
-    """Same as tiny, under another name (for checkpoint-mismatch tests)."""
-
-    name = "other"
-
-
-class StepNovelty(devlearn.BatchedIntrinsicReward):
-    """A third-party batched term with run-wide memory (the core mechanism, no self_touch):
-    pays 1 the first time the run reaches episode step t (a bool per step index) and keeps
-    the largest batch it has seen (an int, merged by maximum)."""
-
-    name = "step_novelty"
-
-    def __init__(self, episode_steps: int = 10) -> None:
-        super().__init__(1.0)
-        self.seen = np.zeros(episode_steps, dtype=bool)
-        self.widest = np.zeros(1, dtype=np.int64)
-
-    def __call__(self, batch: devlearn.BatchContext) -> np.ndarray:
-        pay = np.zeros(len(batch))
-        for i, t in enumerate(batch.step.tolist()):  # the first env in batch order is paid
-            if not self.seen[t]:
-                self.seen[t] = True
-                pay[i] = 1.0
-        self.widest[0] = max(self.widest[0], len(batch))
-        return pay
-
-    def state_dict(self, env: int) -> dict[str, Any]:
-        return {"seen": self.seen.copy(), "widest": self.widest.copy()}
-
-    def load_state_dict(self, env: int, state: dict[str, Any]) -> None:
-        memory = {"seen": state["seen"], "widest": state["widest"]}
-        if env > 0:
-            memory = self.merge_run_memory([self.run_memory(), memory])
-        self.load_run_memory(memory)
-
-    def run_memory(self) -> dict[str, np.ndarray]:
-        return {"seen": self.seen, "widest": self.widest}
-
-    def load_run_memory(self, memory: dict[str, np.ndarray]) -> None:
-        self.seen = np.array(memory["seen"], dtype=bool)
-        self.widest = np.array(memory["widest"], dtype=np.int64)
-
-
-class NoveltyBehavior(TinyBehavior):
-    """The tiny behaviour with :class:`StepNovelty` as its only reward term."""
-
-    name = "novelty"
-
-    def reward_terms(self) -> list:
-        return [StepNovelty()]

@@ -1,14 +1,20 @@
-"""A behaviour that counts and orders its episode-hook calls (dm_control's hook tracker idea)."""
+"""A behaviour that counts and orders its episode-hook calls (dm_control's hook tracker idea).
+
+:class:`HookTracker` runs on the fake infant (:mod:`devlearn.testing.fake_infant`) and reports,
+as episode metrics, the order in which devlearn called ``on_episode_start``, ``before_step``,
+``process_action`` and ``facts``: what docs/writing-a-plugin.md ("Episode hooks") promises a
+behaviour, in one env, a batch or worker processes.
+"""
 
 from __future__ import annotations
 
 from typing import Any
 
 import numpy as np
-from fake_infant import TinyBehavior
 
 import devlearn
 from devlearn import StepContext
+from devlearn.testing.fake_infant import TinyBehavior
 
 
 class HookTracker(TinyBehavior):
