@@ -22,10 +22,10 @@ from devlearn.bench.ceiling import (
     reference_env_steps_per_s,
     touch_old_and_new,
 )
+from devlearn.bench.infant import bench_infant
 from devlearn.bench.learner import bench_learner
 from devlearn.bench.speed import (
     bench_behavior_env,
-    bench_infant,
     bench_training,
     bench_vec_env,
     decision_rate,

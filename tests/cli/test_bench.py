@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-from devlearn.bench.speed import bench_infant
+from devlearn.bench.infant import bench_infant
 from devlearn.cli.bench import ROWS, format_table
 
 
