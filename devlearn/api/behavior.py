@@ -17,16 +17,6 @@ if TYPE_CHECKING:
     from devlearn.infant import Infant
 
 
-def __getattr__(name: str):
-    # ``from devlearn.api.behavior import NetworkSpec`` (plugins do) loads it, and torch with its
-    # encoders, only when asked for: a behaviour's class can be read without torch.
-    if name == "NetworkSpec":
-        from devlearn.api.network_spec import NetworkSpec
-
-        return NetworkSpec
-    raise AttributeError(f"module 'devlearn.api.behavior' has no attribute '{name}'")
-
-
 class Evaluator:
     """Collects a behaviour's metrics over steps and episodes.
 

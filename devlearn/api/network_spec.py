@@ -1,7 +1,8 @@
 """NetworkSpec: how a behaviour's policy and value networks are assembled from per-sense encoders.
 
-Kept apart from :mod:`devlearn.api.behavior` (which re-exports it) because the core's network
-builder and distribution read it, and its one check of the spread settings lives beside it.
+Kept apart from :mod:`devlearn.api.behavior` because the core's network builder and distribution
+read it, and its one check of the spread settings lives beside it. Plugins import it from
+``devlearn``.
 """
 
 from __future__ import annotations

@@ -12,8 +12,9 @@ import mujoco
 import numpy as np
 import torch
 
-from devlearn.api.behavior import Behavior, NetworkSpec
+from devlearn.api.behavior import Behavior
 from devlearn.api.curriculum import Curriculum
+from devlearn.api.network_spec import NetworkSpec
 from devlearn.api.rewards import BatchedIntrinsicReward, IntrinsicReward
 from devlearn.env.guards import TermError
 from devlearn.testing.values import (
@@ -216,6 +217,8 @@ def _scripted_contacts(env: Any, rng: np.random.Generator, count: int, step) -> 
             return
     raise RuntimeError(f"devlearn.testing could not script a hand contact in {infant.scene}")
 
+
+# --- the checks run on every step, and the instrumented terms and evaluator -------------------
 
 OBS_DTYPES = (np.float32, np.uint8)
 """Observation dtypes the networks accept (float32 features, uint8 images)."""
