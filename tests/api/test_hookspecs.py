@@ -7,7 +7,7 @@ from pathlib import Path
 
 from devlearn.api import hookspecs
 
-DOC = Path(__file__).resolve().parents[1] / "docs" / "writing-a-plugin.md"
+DOC = Path(__file__).resolve().parents[2] / "docs" / "writing-a-plugin.md"
 
 
 def _hooks():

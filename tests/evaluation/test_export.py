@@ -18,7 +18,7 @@ from devlearn.plugins import PluginRegistry
 from devlearn.training.checkpoint import FORMAT, load_checkpoint, save_atomic
 from devlearn.training.process import quiet
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 PUBLISHED = {  # separate actor and critic; hand regard's with the old double image scaling
     "self_touch": ROOT / "results/self_touch/run/policy.pt",
     "hand_regard": ROOT / "results/hand_regard/run/policy.pt",
