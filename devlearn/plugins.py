@@ -28,7 +28,8 @@ if TYPE_CHECKING:  # torch-based: imported when a plugin registers one (it has l
 
 ENTRY_POINT_GROUP = "devlearn"
 DISABLE_ENV = "DEVLEARN_DISABLE_PLUGINS"
-_NAME = re.compile(r"^[a-z][a-z0-9_]*$")
+PLUGIN_NAME = re.compile(r"^[a-z][a-z0-9_]*$")
+"""What a registered behaviour's or learned reward's ``name`` must match (lower_snake_case)."""
 
 
 def settings_path() -> Path:
@@ -182,7 +183,7 @@ class PluginRegistry:
             if not (inspect.isclass(behavior) and issubclass(behavior, Behavior)):
                 raise TypeError(f"register_behaviors got {behavior!r}, not a Behavior subclass")
             name = getattr(behavior, "name", None)
-            if not isinstance(name, str) or not _NAME.match(name):
+            if not isinstance(name, str) or not PLUGIN_NAME.match(name):
                 raise TypeError(f"{behavior.__name__}.name must be a lower_snake_case string")
             if not dataclasses.is_dataclass(getattr(behavior, "config_class", None)):
                 raise TypeError(f"{behavior.__name__}.config_class must be a dataclass")
@@ -199,7 +200,7 @@ class PluginRegistry:
             if not (inspect.isclass(term) and issubclass(term, LearnedReward)):
                 raise TypeError(f"register_learned_rewards got {term!r}, not a LearnedReward")
             name = getattr(term, "name", None)
-            if not isinstance(name, str) or not _NAME.match(name):
+            if not isinstance(name, str) or not PLUGIN_NAME.match(name):
                 raise TypeError(f"{term.__name__}.name must be a lower_snake_case string")
             config = getattr(term, "config_class", None)
             if not (inspect.isclass(config) and issubclass(config, LearnedRewardConfig)):

@@ -56,12 +56,12 @@ def check_learned_reward(
     Returns:
         The trained term.
     """
-    from devlearn.plugins import _NAME
+    from devlearn.plugins import PLUGIN_NAME
 
     shapes = observation_shapes or {"proprioception": (6,), "eyes": (8, 8, 3)}
     require(bool(term_cls.__doc__), f"{term_cls.__name__} needs a docstring")
     name = getattr(term_cls, "name", None)
-    require(isinstance(name, str) and bool(_NAME.match(name)), "name: lower_snake_case")
+    require(isinstance(name, str) and bool(PLUGIN_NAME.match(name)), "name: lower_snake_case")
     config_cls = term_cls.config_class
     require(
         dataclasses.is_dataclass(config_cls) and issubclass(config_cls, LearnedRewardConfig),
