@@ -20,10 +20,6 @@ POLL_S = 1.0
 """Seconds between two looks at the running runs."""
 
 
-class ReportUnavailable(Exception):
-    """This devlearn has no ``devlearn.evaluation.report`` (the report step cannot run)."""
-
-
 @dataclass
 class PlannedRun:
     """A run of the sweep with its checked config."""
@@ -101,19 +97,9 @@ def plan_sweep(spec: SweepSpec, registry, global_args: list[str] | None = None) 
 
 
 def write_sweep_report(run_dirs: list[Path], out_dir: Path) -> dict[str, Any]:
-    """``devlearn report`` over the evaluated runs, into ``out_dir`` (report.md, report.png).
+    """``devlearn report`` over the evaluated runs, into ``out_dir`` (report.md, report.png)."""
+    from devlearn.evaluation.report import write_report
 
-    Raises:
-        ReportUnavailable: This devlearn has no ``devlearn.evaluation.report``.
-    """
-    try:
-        from devlearn.evaluation.report import write_report
-    except ModuleNotFoundError as exc:
-        if exc.name != "devlearn.evaluation.report":
-            raise
-        raise ReportUnavailable(
-            "report step needs devlearn.evaluation.report, which this devlearn does not have"
-        ) from None
     return write_report(run_dirs, out_dir)
 
 
@@ -220,12 +206,6 @@ def _finish(spec: SweepSpec, runs: list[PlannedRun], records: dict, stream) -> i
         return 1
     try:
         write_sweep_report([r.job.run_dir for r in done], spec.out / "report")
-    except ReportUnavailable as exc:
-        print(
-            f"devlearn: error: {exc}; the evaluated runs are in {spec.out / 'runs'}",
-            file=sys.stderr,
-        )
-        return 1
     except UsageError as exc:
         print(f"devlearn: error: report step failed: {exc}", file=sys.stderr)
         return 1
