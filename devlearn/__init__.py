@@ -1,9 +1,11 @@
 """devlearn: developmental reinforcement learning with a simulated infant.
 
-The public API for behaviour plugins: the four interfaces (:class:`Behavior`,
-:class:`SensorEncoder`, :class:`IntrinsicReward`, :class:`Curriculum`), the learned-reward kind
-(:class:`LearnedReward`) and the hook marker
-:data:`hookimpl`. See ``docs/writing-a-plugin.md``.
+The public API for behaviour plugins, defined in :mod:`devlearn.api` and re-exported here: the
+four interfaces (:class:`Behavior`, :class:`SensorEncoder`, :class:`IntrinsicReward`,
+:class:`Curriculum`), the learned-reward kind (:class:`LearnedReward`), the hook marker
+:data:`hookimpl`, and the infant a behaviour reads (:class:`Infant`, :func:`build_infant`).
+Plugins import only ``devlearn``, ``devlearn.api`` and ``devlearn.testing`` (checked by
+``lint-imports``, docs/architecture.md). See ``docs/writing-a-plugin.md``.
 """
 
 from __future__ import annotations
@@ -23,21 +25,26 @@ os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 # that neither train nor evaluate (``devlearn --help``, ``plugins``, ``config``) do not pay for
 # torch; a plugin that imports only Behavior, IntrinsicReward, Curriculum... stays light too.
 _PUBLIC = {
-    "BatchContext": "devlearn.rewards",
-    "BatchedIntrinsicReward": "devlearn.rewards",
-    "Behavior": "devlearn.behavior",
-    "Curriculum": "devlearn.curriculum",
-    "Evaluator": "devlearn.behavior",
-    "IntrinsicReward": "devlearn.rewards",
-    "LearnedReward": "devlearn.learned",
-    "LearnedRewardConfig": "devlearn.learned",
-    "MLPEncoder": "devlearn.sensors",
-    "NetworkSpec": "devlearn.network_spec",
-    "SensorEncoder": "devlearn.sensors",
-    "Stage": "devlearn.curriculum",
-    "StepContext": "devlearn.rewards",
-    "Transitions": "devlearn.learned",
-    "hookimpl": "devlearn.hookspecs",
+    "BatchContext": "devlearn.api.rewards",
+    "BatchedIntrinsicReward": "devlearn.api.rewards",
+    "Behavior": "devlearn.api.behavior",
+    "Curriculum": "devlearn.api.curriculum",
+    "Evaluator": "devlearn.api.behavior",
+    "Infant": "devlearn.infant",
+    "IntrinsicReward": "devlearn.api.rewards",
+    "LearnedReward": "devlearn.api.learned",
+    "LearnedRewardConfig": "devlearn.api.learned",
+    "MLPEncoder": "devlearn.api.sensors",
+    "NetworkSpec": "devlearn.api.network_spec",
+    "RunMetrics": "devlearn.api.behavior",
+    "SensorEncoder": "devlearn.api.sensors",
+    "Stage": "devlearn.api.curriculum",
+    "StepContext": "devlearn.api.rewards",
+    "Transitions": "devlearn.api.learned",
+    "UsageError": "devlearn.api.errors",
+    "build_infant": "devlearn.infant",
+    "episode_stats": "devlearn.api.stats",
+    "hookimpl": "devlearn.api.hookspecs",
 }
 
 
@@ -56,14 +63,19 @@ __all__ = [
     "Behavior",
     "Curriculum",
     "Evaluator",
+    "Infant",
     "IntrinsicReward",
     "LearnedReward",
     "LearnedRewardConfig",
     "MLPEncoder",
     "NetworkSpec",
+    "RunMetrics",
     "SensorEncoder",
     "Stage",
     "StepContext",
     "Transitions",
+    "UsageError",
+    "build_infant",
+    "episode_stats",
     "hookimpl",
 ]

@@ -19,17 +19,17 @@ from typing import TYPE_CHECKING, Any
 
 import pluggy
 
-from devlearn import hookspecs
-from devlearn.behavior import Behavior
-from devlearn.errors import UsageError
+from devlearn.api import hookspecs
+from devlearn.api.behavior import Behavior
+from devlearn.api.errors import UsageError
 
 if TYPE_CHECKING:  # torch-based: imported when a plugin registers one (it has loaded torch)
-    from devlearn.learned import LearnedReward
-    from devlearn.sensors import SensorEncoder
+    from devlearn.api.learned import LearnedReward
 
 ENTRY_POINT_GROUP = "devlearn"
 DISABLE_ENV = "DEVLEARN_DISABLE_PLUGINS"
-_NAME = re.compile(r"^[a-z][a-z0-9_]*$")
+PLUGIN_NAME = re.compile(r"^[a-z][a-z0-9_]*$")
+"""What a registered behaviour's or learned reward's ``name`` must match (lower_snake_case)."""
 
 
 def settings_path() -> Path:
@@ -73,7 +73,6 @@ class PluginInfo:
     distribution: str
     version: str
     behaviors: list[str] = field(default_factory=list)
-    encoders: list[str] = field(default_factory=list)
     learned_rewards: list[str] = field(default_factory=list)
     hooks: list[str] = field(default_factory=list)
     disabled: bool = False
@@ -128,7 +127,6 @@ class PluginRegistry:
         self.plugins: dict[str, PluginInfo] = {}
         self.errors: list[str] = []
         self._behaviors: dict[str, type[Behavior]] = {}
-        self._encoders: dict[str, type[SensorEncoder]] = {}
         self._learned: dict[str, type[LearnedReward]] = {}
         self._owner: dict[tuple[str, str], str] = {}
         self._pm = pluggy.PluginManager("devlearn")
@@ -185,7 +183,7 @@ class PluginRegistry:
             if not (inspect.isclass(behavior) and issubclass(behavior, Behavior)):
                 raise TypeError(f"register_behaviors got {behavior!r}, not a Behavior subclass")
             name = getattr(behavior, "name", None)
-            if not isinstance(name, str) or not _NAME.match(name):
+            if not isinstance(name, str) or not PLUGIN_NAME.match(name):
                 raise TypeError(f"{behavior.__name__}.name must be a lower_snake_case string")
             if not dataclasses.is_dataclass(getattr(behavior, "config_class", None)):
                 raise TypeError(f"{behavior.__name__}.config_class must be a dataclass")
@@ -195,26 +193,14 @@ class PluginRegistry:
 
         return register
 
-    def _register_encoders(self, info: PluginInfo):
-        def register(name: str, encoder: type) -> None:
-            from devlearn.sensors import SensorEncoder
-
-            if not (inspect.isclass(encoder) and issubclass(encoder, SensorEncoder)):
-                raise TypeError(f"register_encoders got {encoder!r}, not a SensorEncoder subclass")
-            if self._claim("encoder", name, info):
-                self._encoders[name] = encoder
-                info.encoders.append(name)
-
-        return register
-
     def _register_learned_rewards(self, info: PluginInfo):
         def register(term: type) -> None:
-            from devlearn.learned import LearnedReward, LearnedRewardConfig
+            from devlearn.api.learned import LearnedReward, LearnedRewardConfig
 
             if not (inspect.isclass(term) and issubclass(term, LearnedReward)):
                 raise TypeError(f"register_learned_rewards got {term!r}, not a LearnedReward")
             name = getattr(term, "name", None)
-            if not isinstance(name, str) or not _NAME.match(name):
+            if not isinstance(name, str) or not PLUGIN_NAME.match(name):
                 raise TypeError(f"{term.__name__}.name must be a lower_snake_case string")
             config = getattr(term, "config_class", None)
             if not (inspect.isclass(config) and issubclass(config, LearnedRewardConfig)):
@@ -248,12 +234,6 @@ class PluginRegistry:
             return cls(config if config is not None else cls.config_class())
         except (ValueError, TypeError) as exc:
             raise UsageError(f"invalid config for behavior '{name}': {exc}") from exc
-
-    def encoder(self, name: str) -> type[SensorEncoder]:
-        """Return the encoder class registered as ``name``."""
-        if name not in self._encoders:
-            raise UsageError(f"unknown encoder '{name}'; registered: {', '.join(self._encoders)}")
-        return self._encoders[name]
 
     def learned_rewards(self) -> dict[str, type[LearnedReward]]:
         """Return every registered learned reward, name -> class, sorted by name."""

@@ -6,11 +6,12 @@ Usage (from the repository root, with the set-up .venv)::
 
 (``--quick`` after COMMIT: an eighth of the steps, a smoke test.)
 The commit's tree is extracted with ``git archive`` into a temporary folder and its own
-``devlearn.bench`` functions run there (its folders first on PYTHONPATH, this .venv's packages
-otherwise), so that old and new code are timed in one session on one machine. Prints JSON:
-self-touch and hand-regard single-process steps/s and breakdowns, 16 self-touch envs over 1
-and 2 workers, the crib physics ceiling, and self-touch end-to-end training: steps/s and the
-seconds of collection and of the PPO update per iteration.
+bench functions run there (its folders first on PYTHONPATH, this .venv's packages otherwise;
+``devlearn.bench.speed`` and ``.ceiling``, or before #31's folders ``devlearn.bench`` and
+``devlearn.bench_ceiling``), so that old and new code are timed in one session on one machine.
+Prints JSON: self-touch and hand-regard single-process steps/s and breakdowns, 16 self-touch envs
+over 1 and 2 workers, the crib physics ceiling, and self-touch end-to-end training: steps/s and
+the seconds of collection and of the PPO update per iteration.
 """
 
 from __future__ import annotations
@@ -23,8 +24,12 @@ from pathlib import Path
 
 MEASURE = """
 import json, subprocess, sys, tempfile, time
-from devlearn.bench import bench_behavior_env, bench_vec_env
-from devlearn.bench_ceiling import env_breakdown, physics_ceiling
+try:
+    from devlearn.bench.speed import bench_behavior_env, bench_vec_env
+    from devlearn.bench.ceiling import env_breakdown, physics_ceiling
+except ImportError:  # a commit before the folders by concept (#31)
+    from devlearn.bench import bench_behavior_env, bench_vec_env
+    from devlearn.bench_ceiling import env_breakdown, physics_ceiling
 from devlearn.plugins import PluginRegistry
 
 def training(behavior, steps):

@@ -7,8 +7,8 @@ PY=${PYTHON:-python3}
 if [ ! -x .venv/bin/python ]; then
   "$PY" -m venv .venv
 fi
-# The test extra brings the pinned ruff (.ci/run) and the wandb extra W&B logging, so CI tests
-# `--logger wandb` (offline). Install the pinned torch first so nothing else pulls a CUDA build.
+# The test extra brings the pinned ruff and import-linter (.ci/run) and the wandb extra W&B
+# logging, so CI tests `--logger wandb` (offline). Install the pinned torch first so nothing else pulls a CUDA build.
 .venv/bin/python -m pip install -q --disable-pip-version-check -c constraints.txt torch
 .venv/bin/python -m pip install -q --disable-pip-version-check -c constraints.txt \
   -e ".[test,wandb,export,ray]" -e plugins/self_touch -e plugins/hand_regard -e plugins/curiosity \

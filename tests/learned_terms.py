@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import torch
 import torch.nn as nn
 
-from devlearn.learned import LearnedReward, LearnedRewardConfig, Transitions
+from devlearn.api.learned import LearnedReward, LearnedRewardConfig, Transitions
 
 
 @dataclass

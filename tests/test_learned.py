@@ -10,9 +10,9 @@ import torch
 from learned_terms import ForgetfulPredictor, LinearConfig, LinearPredictor
 
 from devlearn import hookimpl
-from devlearn.errors import UsageError
-from devlearn.learned import LearnedReward
-from devlearn.learned_update import RunningScale
+from devlearn.api.errors import UsageError
+from devlearn.api.learned import LearnedReward
+from devlearn.api.learned_update import RunningScale
 from devlearn.plugins import PluginRegistry, PluginSource
 from devlearn.testing import ConformanceError, check_learned_reward
 
@@ -52,7 +52,7 @@ def test_update_normalises_and_weights_the_reward():
     t = term(weight=0.5, final_weight=None)
     check = check_learned_reward(LinearPredictor, SHAPES)  # also a conformance pass
     assert isinstance(check, LearnedReward)
-    from devlearn.learned_conformance import random_transitions as _random_transitions
+    from devlearn.testing.learned import random_transitions as _random_transitions
 
     batch = _random_transitions(SHAPES, 3, 64, seed=0)
     with torch.no_grad():

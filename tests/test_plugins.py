@@ -8,7 +8,7 @@ import types
 import pytest
 
 from devlearn import Behavior, hookimpl
-from devlearn.errors import UsageError
+from devlearn.api.errors import UsageError
 from devlearn.plugins import PluginRegistry, PluginSource, entry_point_sources
 
 
@@ -144,25 +144,3 @@ def test_create_turns_config_errors_into_usage_errors():
     registry = PluginRegistry([_plugin("p", Picky)])
     with pytest.raises(UsageError, match=r"invalid config for behavior 'picky': unknown curr"):
         registry.create("picky")
-
-
-def test_encoders_register_and_clash():
-    from devlearn import MLPEncoder
-
-    def source(name):
-        module = types.ModuleType(name)
-
-        @hookimpl
-        def register_encoders(register):
-            register("flat_mlp", MLPEncoder)
-
-        module.register_encoders = register_encoders
-        return PluginSource(name, module, f"dist-{name}")
-
-    registry = PluginRegistry([source("one"), source("two")])
-    assert registry.encoder("flat_mlp") is MLPEncoder
-    assert registry.plugins["one"].encoders == ["flat_mlp"]
-    assert registry.plugins["two"].encoders == []
-    assert any("encoder 'flat_mlp'" in e and "'one'" in e for e in registry.errors)
-    with pytest.raises(UsageError, match="unknown encoder 'cnn'"):
-        registry.encoder("cnn")

@@ -57,11 +57,11 @@ def test_published_checkpoint_loads_and_acts(path, tmp_path):
     """Each published checkpoint, copied alone to a fresh folder, builds its policy and acts."""
     import torch
 
+    from devlearn.config.run_config import from_dict
     from devlearn.env.behavior_env import BehaviorEnv
+    from devlearn.evaluation.evaluate import load_actor
     from devlearn.plugins import PluginRegistry
     from devlearn.training.checkpoint import load_checkpoint
-    from devlearn.training.config import from_dict
-    from devlearn.training.evaluate import load_actor
 
     copy = tmp_path / path.name
     shutil.copy(path, copy)
@@ -88,7 +88,7 @@ def test_published_checkpoint_loads_and_acts(path, tmp_path):
         env.set_stage(behavior.eval_stage())
         obs = env.reset()
         actor = load_actor(cfg, state, behavior, obs, env.action_dim)
-        from devlearn.training.evaluate import _batch
+        from devlearn.evaluation.evaluate import _batch
 
         with torch.inference_mode():
             action = actor(_batch(obs))[0].numpy()

@@ -6,8 +6,9 @@ import warnings
 
 import pytest
 
-from devlearn.bench import bench_behavior_env, bench_update
-from devlearn.describe import describe_behavior
+from devlearn.bench.learner import bench_update
+from devlearn.bench.speed import bench_behavior_env
+from devlearn.evaluation.describe import describe_behavior
 
 hand_regard = pytest.importorskip("devlearn_hand_regard")
 

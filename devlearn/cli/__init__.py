@@ -6,7 +6,7 @@ import argparse
 import importlib
 import sys
 
-from devlearn.errors import UsageError
+from devlearn.api.errors import UsageError
 
 # Sub-command modules, each with add_parser(subparsers) and run(args, registry) -> int.
 COMMANDS = (

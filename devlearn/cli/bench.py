@@ -143,7 +143,7 @@ def format_table(result: dict) -> str:
 
 def run(args: argparse.Namespace, registry) -> int:
     """Run the measurements with progress on stderr; print a table or JSON."""
-    from devlearn.bench import run_bench
+    from devlearn.bench.run import run_bench
 
     result = run_bench(
         registry, quick=args.quick, progress=lambda m: print(f"bench: {m}", file=sys.stderr)

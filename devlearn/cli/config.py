@@ -6,9 +6,9 @@ import argparse
 import json
 import textwrap
 
-from devlearn.training.config import RunConfig, apply_preset, default_config
-from devlearn.training.config_help import describe_keys
-from devlearn.training.config_values import apply_overrides
+from devlearn.config.help import describe_keys
+from devlearn.config.run_config import RunConfig, apply_preset, default_config
+from devlearn.config.values import apply_overrides
 
 
 def add_parser(subparsers) -> list[str]:

@@ -15,7 +15,7 @@ import json
 import os
 from pathlib import Path
 
-from devlearn.errors import UsageError
+from devlearn.api.errors import UsageError
 
 SMOOTH_MAX = 100_000
 """Largest ``--smooth`` window (iterations)."""

@@ -7,8 +7,8 @@ import json
 import sys
 from pathlib import Path
 
+from devlearn.api.errors import UsageError
 from devlearn.cli.folders import removed_on_failure
-from devlearn.errors import UsageError
 
 
 def add_parser(subparsers) -> list[str]:
@@ -97,10 +97,10 @@ def run(args: argparse.Namespace, registry) -> int:
 
     The summary is printed even when writing the files failed (then exit code 2).
     """
-    from devlearn.training.evaluate import EvalWriteError, evaluate, resolve_checkpoint
+    from devlearn.evaluation.evaluate import EvalWriteError, evaluate, resolve_checkpoint
 
     registry.behavior(args.behavior)  # unknown behaviour: one clear line
-    from devlearn.training.checks import SEED_MAX
+    from devlearn.config.checks import SEED_MAX
 
     episodes = _count(args.episodes, "--episodes", 1, EPISODES_MAX)
     seed = _count(args.seed, "--seed", 0, SEED_MAX)

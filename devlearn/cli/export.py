@@ -26,8 +26,8 @@ def add_parser(subparsers) -> list[str]:
 
 def run(args: argparse.Namespace, registry) -> int:
     """Export and print what was written and its inputs."""
-    from devlearn.errors import UsageError
-    from devlearn.export import FORMATS, export_policy, load_policy
+    from devlearn.api.errors import UsageError
+    from devlearn.evaluation.export import FORMATS, export_policy, load_policy
 
     if args.format not in FORMATS:
         raise UsageError(f"unknown export format '{args.format}'; valid: {', '.join(FORMATS)}")

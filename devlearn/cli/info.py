@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 
-from devlearn.describe import describe_behavior
+from devlearn.evaluation.describe import describe_behavior
 
 
 def add_parser(subparsers) -> list[str]:

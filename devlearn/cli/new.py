@@ -4,12 +4,11 @@ from __future__ import annotations
 
 import argparse
 import keyword
-import re
 import string
 from importlib import resources
 from pathlib import Path
 
-from devlearn.errors import UsageError
+from devlearn.api.errors import UsageError
 
 # Template file -> where it goes in the new distribution (``{module}``: the import name).
 FILES = {
@@ -20,7 +19,6 @@ FILES = {
     "behavior.py.tmpl": "src/{module}/behavior.py",
     "test_plugin.py.tmpl": "tests/test_{name}.py",
 }
-_NAME = re.compile(r"^[a-z][a-z0-9_]*$")
 
 
 def add_parser(subparsers) -> list[str]:
@@ -39,7 +37,9 @@ def add_parser(subparsers) -> list[str]:
 
 def names_for(name: str) -> dict[str, str]:
     """The template's substitutions for behaviour ``name`` (``my_reach``)."""
-    if not _NAME.match(name) or keyword.iskeyword(name):
+    from devlearn.plugins import PLUGIN_NAME  # the registry's own rule for a behaviour's name
+
+    if not PLUGIN_NAME.match(name) or keyword.iskeyword(name):
         raise UsageError(f"plugin name '{name}' must be lower_snake_case (e.g. my_reach)")
     return {
         "name": name,

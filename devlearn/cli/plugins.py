@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 
-from devlearn.errors import UsageError
+from devlearn.api.errors import UsageError
 from devlearn.plugins import set_plugin_disabled
 
 

@@ -25,7 +25,7 @@ def run(args: argparse.Namespace, registry) -> int:
     """Write the report and print its table."""
     from pathlib import Path
 
-    from devlearn.report import write_report
+    from devlearn.evaluation.report import write_report
 
     def paper_results(behavior: str, config: dict):
         if behavior not in registry.behaviors():

@@ -8,8 +8,8 @@ import signal
 import sys
 from pathlib import Path
 
-from devlearn.errors import UsageError
-from devlearn.training.checks import check_config  # noqa: F401  (also re-exported here)
+from devlearn.api.errors import UsageError
+from devlearn.config.checks import check_config
 
 
 def add_parser(subparsers) -> list[str]:
@@ -69,8 +69,8 @@ def add_parser(subparsers) -> list[str]:
 def run(args: argparse.Namespace, registry) -> int:
     """Build the config, train, print the run directory and a final summary."""
     from devlearn.cli.summary import finished_message, paper_budget, run_summary
-    from devlearn.training.config import default_config
-    from devlearn.training.config_values import apply_overrides
+    from devlearn.config.run_config import default_config
+    from devlearn.config.values import apply_overrides
     from devlearn.training.train import load_run_config, train
 
     behavior_cls = registry.behavior(args.behavior)

@@ -23,8 +23,8 @@ def add_parser(subparsers) -> list[str]:
 
 def run(args: argparse.Namespace, registry) -> int:
     """Write the policy file and say where, and how much smaller it is."""
-    from devlearn.training.evaluate import POLICY_FILE, resolve_checkpoint
-    from devlearn.training.policy_file import slim_checkpoint
+    from devlearn.evaluation.evaluate import POLICY_FILE, resolve_checkpoint
+    from devlearn.evaluation.policy_file import slim_checkpoint
 
     source = resolve_checkpoint(args.checkpoint)
     target = Path(args.out) if args.out else source.parent / POLICY_FILE

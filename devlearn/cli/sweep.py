@@ -6,7 +6,7 @@ import argparse
 import shlex
 import sys
 
-from devlearn.errors import UsageError
+from devlearn.api.errors import UsageError
 
 
 def add_parser(subparsers) -> list[str]:

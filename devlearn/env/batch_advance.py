@@ -11,11 +11,11 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from devlearn.api.rewards import StepContext
 from devlearn.env.guards import check_observations, observation_within_bound
-from devlearn.rewards import StepContext
 
 if TYPE_CHECKING:
-    from devlearn.behavior import Behavior
+    from devlearn.api.behavior import Behavior
     from devlearn.env.behavior_env import BehaviorEnv
 
 _OVERRIDES: dict[tuple[type, str], bool] = {}
@@ -25,7 +25,7 @@ def overrides(behavior: Behavior, method: str) -> bool:
     """True when ``behavior``'s class overrides :class:`~devlearn.Behavior`'s ``method``."""
     key = (type(behavior), method)
     if key not in _OVERRIDES:
-        from devlearn.behavior import Behavior  # torch comes with it: not at import time
+        from devlearn.api.behavior import Behavior  # torch comes with it: not at import time
 
         _OVERRIDES[key] = getattr(key[0], method) is not getattr(Behavior, method)
     return _OVERRIDES[key]
@@ -52,7 +52,7 @@ def advance_batch(
         envs: The envs of one batch (one behaviour class), in batch order.
         actions: (num_envs, action_dim) array, or one (action_dim,) action per env.
     Returns:
-        ``(contexts, batch)``: one :class:`~devlearn.rewards.StepContext` per env (no rewards
+        ``(contexts, batch)``: one :class:`~devlearn.api.rewards.StepContext` per env (no rewards
         yet), and the observations as name -> (num_envs, *shape) arrays when the behaviour
         batched them (each context's observations are row views of these), else None.
     """

@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from devlearn.api.rewards import BatchContext, BatchedIntrinsicReward, StepContext
 from devlearn.env.batch_advance import advance_batch, clipped_actions
 from devlearn.env.guards import (
     REWARD_BOUND,
@@ -14,14 +15,13 @@ from devlearn.env.guards import (
     check_reward,
     reward_within_bound,
 )
-from devlearn.rewards import BatchContext, BatchedIntrinsicReward, StepContext
 
 if TYPE_CHECKING:
-    from devlearn.behavior import Behavior
+    from devlearn.api.behavior import Behavior
 
 EPISODE_RECORD = "episode_record"
-"""Key of an episode summary holding :meth:`~devlearn.behavior.Evaluator.episode_record`
-(not a float: the runner hands it to the behaviour's :class:`~devlearn.behavior.RunMetrics`)."""
+"""Key of an episode summary holding :meth:`~devlearn.api.behavior.Evaluator.episode_record`
+(not a float: the runner hands it to the behaviour's :class:`~devlearn.api.behavior.RunMetrics`)."""
 
 InfantFactory = Callable[..., Any]
 """``factory(scene, senses=..., **behavior.infant_options()) -> Infant``; defaults to
@@ -31,7 +31,7 @@ InfantFactory = Callable[..., Any]
 def build_default_infant(scene: str, senses: tuple[str, ...], **options: Any) -> Any:
     """Build the real infant (imported lazily so this module imports without it).
 
-    ``options`` are the behaviour's :meth:`~devlearn.behavior.Behavior.infant_options`.
+    ``options`` are the behaviour's :meth:`~devlearn.api.behavior.Behavior.infant_options`.
     """
     from devlearn.infant import build_infant
 
@@ -45,7 +45,7 @@ class BehaviorEnv:
     its summary is returned as ``episode_info`` and a new episode begins (random initial pose
     when the stage options say ``random_pose``).
 
-    Batched reward terms (:class:`~devlearn.rewards.BatchedIntrinsicReward`) are bound to this
+    Batched reward terms (:class:`~devlearn.api.rewards.BatchedIntrinsicReward`) are bound to this
     env alone, unless :func:`share_batched_terms` makes several envs share them (a worker's
     envs, stepped together by :func:`step_batch`).
 
@@ -205,7 +205,7 @@ def share_batched_terms(envs: list[BehaviorEnv]) -> None:
 
 def run_memories(envs: list[BehaviorEnv]) -> dict[str, dict[str, np.ndarray]]:
     """The run-wide memory of the batched terms ``envs`` share, term name -> memory (terms
-    keeping none are left out; see :class:`~devlearn.rewards.BatchedIntrinsicReward`)."""
+    keeping none are left out; see :class:`~devlearn.api.rewards.BatchedIntrinsicReward`)."""
     return {
         term.name: memory
         for term in envs[0].terms

@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 
 import numba
 import numpy as np
 
-from devlearn.errors import UsageError
+from devlearn.api.errors import UsageError
 
 REWARD_BOUND = 1e6
 """Largest allowed magnitude of one reward term's (unweighted) value per step."""
@@ -98,19 +98,6 @@ def reward_within_bound(values: np.ndarray) -> bool:
     )
 
 
-def check_reward_batch(
-    names: Sequence[str], values: np.ndarray, env_offset: int, step: int | np.ndarray
-) -> None:
-    """Batched :func:`check_reward`: ``values`` (num_envs, num_terms), row i is env
-    ``env_offset + i``; ``step`` is one episode step for all rows or (num_envs,) per row.
-    The first offence (lowest env, then term order) is raised."""
-    bad = ~(np.abs(values) <= REWARD_BOUND)
-    if bad.any():
-        i, t = np.argwhere(bad)[0]
-        at = int(np.asarray(step).reshape(-1)[i] if np.ndim(step) else step)
-        raise GuardError("reward term", names[t], values[i, t], env_offset + int(i), at)
-
-
 def check_observations(obs: Mapping[str, np.ndarray], env_index: int, step: int) -> None:
     """Check one env's floating-point observations elementwise (finite, ``<= OBSERVATION_BOUND``).
 
@@ -140,20 +127,3 @@ def _all_within(flat: np.ndarray, bound: float) -> bool:
         if not abs(x) <= bound:
             return False
     return True
-
-
-def check_observation_batch(
-    obs: Mapping[str, np.ndarray], env_offset: int, step: int | np.ndarray
-) -> None:
-    """Batched :func:`check_observations`: every array is (num_envs, *shape), row i is env
-    ``env_offset + i``; ``step`` as in :func:`check_reward_batch`."""
-    for name, value in obs.items():
-        array = np.asarray(value)
-        if array.dtype.kind in "fc" and not observation_within_bound(array):
-            bad = ~(np.abs(array) <= OBSERVATION_BOUND)
-            if bad.any():
-                i = int(np.argwhere(bad.reshape(len(array), -1).any(axis=1))[0][0])
-                at = int(np.asarray(step).reshape(-1)[i] if np.ndim(step) else step)
-                raise GuardError(
-                    "observation", name, array[i][bad[i]].flat[0].real, env_offset + i, at
-                )

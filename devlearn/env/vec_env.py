@@ -12,6 +12,7 @@ import torch
 from rsl_rl.env import VecEnv
 from tensordict import TensorDict
 
+from devlearn.api.rewards import BatchedIntrinsicReward
 from devlearn.env.behavior_env import (
     EPISODE_RECORD,
     InfantFactory,
@@ -21,7 +22,6 @@ from devlearn.env.behavior_env import (
 )
 from devlearn.env.buffers import EnvBuffers, env_spec, write_obs
 from devlearn.env.workers import EpisodeInfos, WorkerPool, make_envs, step_envs
-from devlearn.rewards import BatchedIntrinsicReward
 
 
 class DevVecEnv(VecEnv):
@@ -148,7 +148,7 @@ class DevVecEnv(VecEnv):
 
         The runner calls this at every PPO iteration boundary (before it snapshots the state
         for checkpoints): each worker's batched terms report their
-        :meth:`~devlearn.rewards.BatchedIntrinsicReward.run_memory`, the copies are merged in
+        :meth:`~devlearn.api.rewards.BatchedIntrinsicReward.run_memory`, the copies are merged in
         worker order (``merge_run_memory``) and sent back. With ``gather`` (the runner's
         all-gather over torchrun ranks: this rank's merged memory -> every rank's, in rank
         order) the ranks' memories are merged too, so every rank holds the same. Nothing is

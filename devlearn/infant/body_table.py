@@ -206,14 +206,6 @@ def spec_by_name(name: str) -> BodySpec:
     raise KeyError(f"unknown body part '{name}'; known: {[s.name for s in BODY_TABLE]}")
 
 
-def body_names() -> list[str]:
-    """All body names in model order: midline as-is, paired as left_/right_ copies."""
-    names: list[str] = []
-    for spec in BODY_TABLE:
-        names += [f"{side}_{spec.name}" for side in SIDES] if spec.paired else [spec.name]
-    return names
-
-
 def table_hash() -> str:
     """A short hash of the whole table (keys caches of anything derived from it)."""
     text = repr([astuple(spec) for spec in BODY_TABLE]) + repr(EXCLUDED_PAIRS)

@@ -17,7 +17,7 @@ import fcntl
 import os
 from typing import Any
 
-from devlearn.errors import UsageError
+from devlearn.api.errors import UsageError
 from devlearn.sweep.job import RunJob, read_json, write_json
 from devlearn.sweep.spec import SweepSpec
 

@@ -13,7 +13,7 @@ import socket
 import threading
 from typing import Any
 
-from devlearn.errors import UsageError
+from devlearn.api.errors import UsageError
 from devlearn.sweep.job import STOP_TIMEOUT_S, RunJob, execute_job, read_json
 
 

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from devlearn.errors import UsageError
+from devlearn.api.errors import UsageError
 from devlearn.sweep.bookkeeping import SweepFolder, check_folder
 from devlearn.sweep.executors import make_executor
 from devlearn.sweep.job import RunJob
@@ -18,10 +18,6 @@ from devlearn.sweep.spec import SweepSpec, Variant, variants
 
 POLL_S = 1.0
 """Seconds between two looks at the running runs."""
-
-
-class ReportUnavailable(Exception):
-    """This devlearn has no ``devlearn.report`` (the report step cannot run)."""
 
 
 @dataclass
@@ -43,9 +39,9 @@ def plan_sweep(spec: SweepSpec, registry, global_args: list[str] | None = None) 
         UsageError: An unknown behaviour, grid key or value, a value the behaviour rejects (the
             run is named), or a launcher that is not installed.
     """
-    from devlearn.cli.run import check_config
-    from devlearn.training.config import default_config
-    from devlearn.training.config_values import in_table, valid_keys
+    from devlearn.config.checks import check_config
+    from devlearn.config.run_config import default_config
+    from devlearn.config.values import in_table, valid_keys
     from devlearn.training.learned_rewards import LearnedRewards
 
     behavior_cls = registry.behavior(spec.behavior)
@@ -101,19 +97,9 @@ def plan_sweep(spec: SweepSpec, registry, global_args: list[str] | None = None) 
 
 
 def write_sweep_report(run_dirs: list[Path], out_dir: Path) -> dict[str, Any]:
-    """``devlearn report`` over the evaluated runs, into ``out_dir`` (report.md, report.png).
+    """``devlearn report`` over the evaluated runs, into ``out_dir`` (report.md, report.png)."""
+    from devlearn.evaluation.report import write_report
 
-    Raises:
-        ReportUnavailable: This devlearn has no ``devlearn.report``.
-    """
-    try:
-        from devlearn.report import write_report
-    except ModuleNotFoundError as exc:
-        if exc.name != "devlearn.report":
-            raise
-        raise ReportUnavailable(
-            "report step needs devlearn.report, which this devlearn does not have"
-        ) from None
     return write_report(run_dirs, out_dir)
 
 
@@ -220,12 +206,6 @@ def _finish(spec: SweepSpec, runs: list[PlannedRun], records: dict, stream) -> i
         return 1
     try:
         write_sweep_report([r.job.run_dir for r in done], spec.out / "report")
-    except ReportUnavailable as exc:
-        print(
-            f"devlearn: error: {exc}; the evaluated runs are in {spec.out / 'runs'}",
-            file=sys.stderr,
-        )
-        return 1
     except UsageError as exc:
         print(f"devlearn: error: report step failed: {exc}", file=sys.stderr)
         return 1

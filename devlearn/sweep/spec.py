@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from devlearn.errors import UsageError
+from devlearn.api.errors import UsageError
 
 RESERVED_KEYS = {
     "seed": "--seeds",

@@ -31,7 +31,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from devlearn.errors import UsageError
+from devlearn.api.errors import UsageError
+from devlearn.config.checks import ENVS_MAX, SEED_MAX, STEPS_MAX
 from devlearn.sweep.spec import (
     EvalSpec,
     SweepSpec,
@@ -41,7 +42,6 @@ from devlearn.sweep.spec import (
     parse_seeds,
     value_text,
 )
-from devlearn.training.checks import ENVS_MAX, SEED_MAX, STEPS_MAX
 
 SECTIONS = {
     "": {"behavior", "out", "seeds", "grid", "train", "eval", "executor", "report"},

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 import torch
 
-from devlearn.errors import UsageError
+from devlearn.api.errors import UsageError
 
 FORMAT = "devlearn-checkpoint-1"
 """Value of the ``format`` key every devlearn checkpoint holds."""

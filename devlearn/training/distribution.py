@@ -10,7 +10,7 @@ import torch.nn.functional as F
 from rsl_rl.modules.distribution import Distribution
 from torch.distributions import Normal
 
-from devlearn.network_spec import check_spread
+from devlearn.api.network_spec import check_spread
 
 
 def inverse_softplus(y: float) -> float:

@@ -7,11 +7,11 @@ from typing import Any
 
 import torch
 
+from devlearn.api.errors import UsageError
+from devlearn.api.learned import LearnedReward, Transitions
+from devlearn.config.run_config import RunConfig
+from devlearn.config.values import convert, field_types
 from devlearn.env.guards import GuardError
-from devlearn.errors import UsageError
-from devlearn.learned import LearnedReward, Transitions
-from devlearn.training.config import RunConfig
-from devlearn.training.config_values import convert, field_types
 
 
 class LearnedRewards:

@@ -8,7 +8,7 @@ from typing import Any
 
 from rsl_rl.utils.wandb_log_writer import WandbLogWriter  # imports without wandb installed
 
-from devlearn.errors import UsageError
+from devlearn.api.errors import UsageError
 
 LOGGERS = ("tensorboard", "wandb")
 """Values of ``RunConfig.logger``."""

@@ -11,7 +11,7 @@ from rsl_rl.modules import EmpiricalNormalization
 from rsl_rl.utils import resolve_nn_activation
 from tensordict import TensorDict
 
-from devlearn.network_spec import NetworkSpec
+from devlearn.api.network_spec import NetworkSpec
 from devlearn.training.distribution import TanhSoftplusGaussian, inverse_softplus
 
 __all__ = ["MultiSenseModel", "SharedBody", "TanhSoftplusGaussian", "as_float", "inverse_softplus"]
@@ -271,7 +271,11 @@ class MultiSenseModel(MLPModel):
             normalizer.update(as_float(obs[group], self.legacy_uint8_scale))  # type: ignore
 
     def as_jit(self) -> nn.Module:
-        raise NotImplementedError("use devlearn.export (devlearn export) for MultiSenseModel")
+        raise NotImplementedError(
+            "use devlearn.evaluation.export (devlearn export) for MultiSenseModel"
+        )
 
     def as_onnx(self, verbose: bool) -> nn.Module:
-        raise NotImplementedError("use devlearn.export (devlearn export) for MultiSenseModel")
+        raise NotImplementedError(
+            "use devlearn.evaluation.export (devlearn export) for MultiSenseModel"
+        )

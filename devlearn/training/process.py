@@ -14,7 +14,7 @@ import numpy as np
 import torch
 import torch.distributed as dist
 
-from devlearn.errors import UsageError
+from devlearn.api.errors import UsageError
 
 
 def init_distributed(device: str) -> None:

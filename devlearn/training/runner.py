@@ -18,14 +18,14 @@ from rsl_rl.runners import OnPolicyRunner
 from rsl_rl.utils import check_nan
 from tqdm import tqdm
 
-from devlearn.behavior import RunMetrics
-from devlearn.curriculum import Curriculum
+from devlearn.api.behavior import RunMetrics
+from devlearn.api.curriculum import Curriculum
+from devlearn.api.errors import RunStopped
+from devlearn.config.run_config import RunConfig
 from devlearn.env.behavior_env import EPISODE_RECORD
 from devlearn.env.guards import GuardError
 from devlearn.env.workers import EnvWorkerError
-from devlearn.errors import RunStopped
 from devlearn.training.checkpoint import LATEST
-from devlearn.training.config import RunConfig
 from devlearn.training.health import HealthWatch, rollout_health
 from devlearn.training.learned_rewards import LearnedRewards
 from devlearn.training.process import (
@@ -34,13 +34,10 @@ from devlearn.training.process import (
     interrupts_deferred,
     quiet,
     set_threads,
-    update_threads,
 )
 from devlearn.training.reward_norm import RewardNormalizer
 from devlearn.training.runner_checkpoints import RunnerCheckpoints
 from devlearn.training.runner_metrics import RunnerMetrics, purge_tensorboard_from
-
-__all__ = ["DevRunner", "init_distributed", "quiet", "update_threads"]
 
 
 class DevRunner(RunnerCheckpoints, RunnerMetrics, OnPolicyRunner):
@@ -71,7 +68,7 @@ class DevRunner(RunnerCheckpoints, RunnerMetrics, OnPolicyRunner):
 
     Args:
         env: The DevVecEnv.
-        train_cfg: From :func:`~devlearn.training.config.to_rsl_rl`.
+        train_cfg: From :func:`~devlearn.config.run_config.to_rsl_rl`.
         cfg: The run config (saved in checkpoints).
         run_dir: Where logs and checkpoints go.
         curriculum: The behaviour's curriculum.
@@ -82,7 +79,7 @@ class DevRunner(RunnerCheckpoints, RunnerMetrics, OnPolicyRunner):
             initial parameters do not depend on them); see
             :class:`~devlearn.training.learned_rewards.LearnedRewards`.
         run_metrics: The behaviour's metrics over all finished training episodes
-            (:meth:`~devlearn.behavior.Behavior.run_metrics`), fed every iteration's episode
+            (:meth:`~devlearn.api.behavior.Behavior.run_metrics`), fed every iteration's episode
             records (all ranks'), logged as ``metrics/<name>`` and saved in checkpoints.
     """
 

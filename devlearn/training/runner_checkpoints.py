@@ -12,13 +12,13 @@ import numpy as np
 import torch
 import torch.distributed as dist
 
+from devlearn.config.run_config import to_dict
 from devlearn.training.checkpoint import (
     FORMAT,
     LATEST,
     link_atomic,
     save_atomic,
 )
-from devlearn.training.config import to_dict
 from devlearn.training.run_folder import forget_metrics_after
 
 

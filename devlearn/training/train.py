@@ -13,8 +13,10 @@ from typing import Any
 
 import torch
 
+from devlearn.api.errors import UsageError
+from devlearn.config.checks import check_config, check_memory, check_out_dir, holds_run
+from devlearn.config.run_config import RunConfig, apply_preset, from_dict, to_dict, to_rsl_rl
 from devlearn.env import DevVecEnv
-from devlearn.errors import UsageError
 from devlearn.training.checkpoint import (
     LATEST,
     RESUME_KEYS,
@@ -25,13 +27,17 @@ from devlearn.training.checkpoint import (
     remove_temporaries,
     resume_checkpoint,
 )
-from devlearn.training.checks import check_config, check_memory, check_out_dir, holds_run
-from devlearn.training.config import RunConfig, apply_preset, from_dict, to_dict, to_rsl_rl
 from devlearn.training.learned_rewards import LearnedRewards
 from devlearn.training.loggers import logger_config
-from devlearn.training.process import rank_seed, resolve_device, resolve_workers, seed_everything
+from devlearn.training.process import (
+    init_distributed,
+    rank_seed,
+    resolve_device,
+    resolve_workers,
+    seed_everything,
+)
 from devlearn.training.run_folder import copy_metrics, start_up
-from devlearn.training.runner import DevRunner, init_distributed
+from devlearn.training.runner import DevRunner
 
 CONFIG_FILE = "config.json"
 
@@ -140,7 +146,7 @@ def train(
     cannot be built) leaves the run folder as it was.
 
     Raises:
-        UsageError: Bad input, named; :class:`~devlearn.errors.RunStopped` when a reward or
+        UsageError: Bad input, named; :class:`~devlearn.api.errors.RunStopped` when a reward or
             observation guard or a dead env worker stopped training (a checkpoint of the
             last good state is written first).
     """

@@ -10,7 +10,7 @@ Run from the repository root::
 Every number is read from an ``eval.json`` written by ``devlearn eval`` (10 episodes of 1,000
 steps, eval seed 0): ``eval/`` from BabyBench's start (the paper-comparable protocol),
 ``eval_random/`` from random starts (the generalisation row). A group's cell is the mean over
-its runs (seeds) with the 95% t-interval over them (``devlearn.stats.mean_ci``); the
+its runs (seeds) with the 95% t-interval over them (``devlearn.api.stats.mean_ci``); the
 baselines' cells are single evaluations with the interval over their episodes (``ep``).
 Nothing is computed here but means, intervals and the layout.
 """
@@ -22,7 +22,7 @@ import json
 import sys
 from pathlib import Path
 
-from devlearn.stats import mean_ci
+from devlearn.api.stats import mean_ci
 
 HERE = Path(__file__).resolve().parent
 PAIRS = ("left_eye_left_hand", "right_eye_left_hand", "left_eye_right_hand", "right_eye_right_hand")

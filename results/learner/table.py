@@ -15,7 +15,7 @@ import statistics
 import sys
 from pathlib import Path
 
-from devlearn.stats import mean_ci
+from devlearn.api.stats import mean_ci
 
 
 def _ci(values: list[float], digits: int = 3) -> str:

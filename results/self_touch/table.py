@@ -31,7 +31,7 @@ from typing import Any
 
 from devlearn_self_touch.evaluation import PAPER_RESULTS, union_score, union_score_interval
 
-from devlearn.stats import mean_ci
+from devlearn.api.stats import mean_ci
 
 PAPER_TRAINING_SCORE = {"two_stage": 0.88, "fixed_only": 0.85, "random_only": 0.75}
 """The paper's training scores (Table I: 0.88; Table II "Train")."""

@@ -7,9 +7,9 @@ import json
 import pytest
 
 from devlearn.cli import main
-from devlearn.training.config import RunConfig
-from devlearn.training.config_help import describe_keys, field_docs, suggest_key
-from devlearn.training.config_values import valid_keys
+from devlearn.config.help import describe_keys, field_docs
+from devlearn.config.run_config import RunConfig
+from devlearn.config.values import suggest_key, valid_keys
 
 
 def config_json(capsys, *args: str) -> list[dict]:

@@ -7,8 +7,8 @@ import json
 
 import pytest
 
+from devlearn.api.errors import UsageError
 from devlearn.cli import curve
-from devlearn.errors import UsageError
 
 
 def _args(run_dir, **kw):

@@ -11,9 +11,9 @@ from pathlib import Path
 import doc_commands
 import pytest
 
+from devlearn.api.errors import UsageError
 from devlearn.cli import main
 from devlearn.cli.new import write_plugin
-from devlearn.errors import UsageError
 
 GUIDE = Path(__file__).resolve().parents[2] / "docs" / "writing-a-plugin.md"
 

@@ -7,7 +7,7 @@ hand-regard run a short motor babbling: ``doc_commands.TINY_SETTINGS``); ``.venv
 prefixes are dropped (the test runs the installed ``devlearn`` of this interpreter); globs
 expand in the test's folder. Skipped, by rule:
 the set-up script and ``python -m pytest`` (CI runs them around this very test), ``source``, and
-``devlearn bench`` (minutes of measurement; tests/cli/test_bench.py covers it). Any other
+``devlearn bench`` (minutes of measurement; tests/bench/test_bench.py covers it). Any other
 non-devlearn command fails the test, so a new kind of README command is noticed.
 """
 
@@ -25,7 +25,7 @@ SKIPPED = {
     ("bash", "scripts/setup.sh"): "set-up: CI's .ci/run runs it before the tests",
     ("python", "-m", "pytest"): "the test suite itself",
     ("source",): "activating the venv: the test already runs in it",
-    ("devlearn", "bench"): "minutes of timing; tests/cli/test_bench.py covers bench",
+    ("devlearn", "bench"): "minutes of timing; tests/bench/test_bench.py covers bench",
 }
 
 

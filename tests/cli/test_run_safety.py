@@ -14,13 +14,14 @@ import torch
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "env"))
 
-from fake_infant import OtherBehavior, TinyBehavior, fake_infant_factory  # noqa: E402
+from tiny_behaviors import OtherBehavior  # noqa: E402
 
 import devlearn.plugins  # noqa: E402
 from devlearn.cli import main  # noqa: E402
+from devlearn.config import checks  # noqa: E402
 from devlearn.testing import registry_for  # noqa: E402
+from devlearn.testing.fake_infant import TinyBehavior, fake_infant_factory  # noqa: E402
 from devlearn.training import checkpoint as checkpoint_module  # noqa: E402
-from devlearn.training import checks  # noqa: E402
 
 SMALL = ["--envs", "2", "--seed", "1", "--workers", "0", "--set", "save_interval=1"]
 

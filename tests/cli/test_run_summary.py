@@ -11,12 +11,11 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "env"))
 
-from fake_infant import TinyBehavior, fake_infant_factory  # noqa: E402
-
 import devlearn.plugins  # noqa: E402
 from devlearn.cli import main  # noqa: E402
 from devlearn.cli.summary import headline  # noqa: E402
 from devlearn.testing import registry_for  # noqa: E402
+from devlearn.testing.fake_infant import TinyBehavior, fake_infant_factory  # noqa: E402
 
 SMALL = ["--envs", "2", "--seed", "1", "--workers", "0", "--set", "save_interval=1"]
 

@@ -74,9 +74,10 @@ def test_the_public_api_loads_on_first_use():
             sys.executable,
             "-c",
             "import sys, devlearn; from devlearn import Behavior, IntrinsicReward, hookimpl; "
-            "import devlearn.training.config, devlearn.training.checks; "
+            "import devlearn.config.run_config, devlearn.config.checks; "
             "light = 'torch' not in sys.modules; "
-            "from devlearn import MLPEncoder; from devlearn.training import train, evaluate; "
+            "from devlearn import MLPEncoder; from devlearn.training import train; "
+            "from devlearn.evaluation.evaluate import evaluate; "
             "print(light, 'torch' in sys.modules, callable(train), callable(evaluate))",
         ],
         capture_output=True,

@@ -6,11 +6,11 @@ import functools
 
 import numpy as np
 import pytest
-from fake_infant import FakeInfant, TinyBehavior, TinyConfig, fake_infant_factory
 
 from devlearn.env.behavior_env import BehaviorEnv, step_batch
 from devlearn.env.guards import GuardError
 from devlearn.env.workers import make_envs, step_envs
+from devlearn.testing.fake_infant import FakeInfant, TinyBehavior, TinyConfig, fake_infant_factory
 
 factory = functools.partial(fake_infant_factory, episode_steps=5)
 

@@ -6,9 +6,9 @@ import functools
 
 import numpy as np
 import pytest
-from fake_infant import TinyBehavior, TinyConfig, fake_infant_factory
 
 from devlearn.env import BehaviorEnv
+from devlearn.testing.fake_infant import TinyBehavior, TinyConfig, fake_infant_factory
 
 factory = functools.partial(fake_infant_factory, episode_steps=5)
 

@@ -8,10 +8,10 @@ import functools
 import numpy as np
 import pytest
 import torch
-from fake_infant import TinyConfig, fake_infant_factory
-from hook_tracker import HookTracker
 
 from devlearn.env import BehaviorEnv, DevVecEnv
+from devlearn.testing.fake_infant import TinyConfig, fake_infant_factory
+from devlearn.testing.hook_tracker import HookTracker
 
 STEPS = 5
 factory = functools.partial(fake_infant_factory, episode_steps=STEPS)

@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import torch
-from fake_infant import NoveltyBehavior, StepNovelty, fake_infant_factory
+from tiny_behaviors import NoveltyBehavior, StepNovelty
 
 from devlearn.env import DevVecEnv
+from devlearn.testing.fake_infant import fake_infant_factory
 
 STEPS = 10  # the fake infant's episode
 

@@ -12,10 +12,10 @@ from pathlib import Path
 
 import pytest
 import torch
-from fake_infant import TinyBehavior, TinyConfig, fake_infant_factory
 from rsl_rl.env import VecEnv
 
 from devlearn.env import DevVecEnv, EnvWorkerError
+from devlearn.testing.fake_infant import TinyBehavior, TinyConfig, fake_infant_factory
 
 factory = functools.partial(fake_infant_factory, episode_steps=5)
 
@@ -129,7 +129,7 @@ def test_worker_error_is_reraised_with_traceback():
 PARENT = """
 import functools, sys, time
 sys.path.insert(0, {env_dir!r})
-from fake_infant import TinyBehavior, fake_infant_factory
+from devlearn.testing.fake_infant import TinyBehavior, fake_infant_factory
 if __name__ == "__main__":  # workers re-import this file: keep their imports light
     from devlearn.env.vec_env import DevVecEnv
     env = DevVecEnv(TinyBehavior(), 2, 0, workers=2,

@@ -7,8 +7,8 @@ import sys
 import pytest
 import tiny_devlearn
 
+from devlearn.api.errors import UsageError
 from devlearn.cli import main
-from devlearn.errors import UsageError
 from devlearn.sweep import build_spec, plan_sweep, variants
 from devlearn.sweep.bookkeeping import SweepFolder
 from devlearn.sweep.executors import LocalExecutor, available_cores

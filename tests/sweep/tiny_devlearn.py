@@ -15,15 +15,15 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "env"))
 
-from fake_infant import (  # noqa: E402
-    OtherBehavior,
+from tiny_behaviors import OtherBehavior  # noqa: E402
+
+from devlearn.testing import registry_for  # noqa: E402
+from devlearn.testing.fake_infant import (  # noqa: E402
     Reach,
     TinyBehavior,
     TinyConfig,
-    fake_infant_factory,  # noqa: E402
+    fake_infant_factory,
 )
-
-from devlearn.testing import registry_for  # noqa: E402
 
 EPISODE_STEPS = 10
 

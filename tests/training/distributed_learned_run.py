@@ -17,10 +17,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import tiny_run  # noqa: E402
-from fake_infant import TinyBehavior  # noqa: E402
 from learned_terms import LinearPredictor  # noqa: E402
 
 from devlearn.testing import registry_for  # noqa: E402
+from devlearn.testing.fake_infant import TinyBehavior  # noqa: E402
 from devlearn.training.runner import DevRunner  # noqa: E402
 
 train_module = importlib.import_module("devlearn.training.train")

@@ -12,10 +12,12 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "env"))
 
-from fake_infant import NoveltyBehavior, StepNovelty, fake_infant_factory  # noqa: E402
+from tiny_behaviors import NoveltyBehavior, StepNovelty  # noqa: E402
 
+from devlearn.config.run_config import default_config  # noqa: E402
 from devlearn.testing import registry_for  # noqa: E402
-from devlearn.training import default_config, train  # noqa: E402
+from devlearn.testing.fake_infant import fake_infant_factory  # noqa: E402
+from devlearn.training import train  # noqa: E402
 
 
 class RankNovelty(StepNovelty):

@@ -6,24 +6,24 @@ import json
 
 import pytest
 import tiny_run
-from fake_infant import TinyBehavior, TinyConfig
 
-from devlearn.errors import UsageError
-from devlearn.training.config import (
+from devlearn.api.errors import UsageError
+from devlearn.config.run_config import (
     RunConfig,
     default_config,
     from_dict,
     to_dict,
     to_rsl_rl,
 )
-from devlearn.training.config_values import apply_overrides, valid_keys
+from devlearn.config.values import apply_overrides, valid_keys
+from devlearn.testing.fake_infant import TinyBehavior, TinyConfig
 
 
 def test_every_field_is_documented():
     import ast
     import inspect
 
-    from devlearn.training import config
+    from devlearn.config import run_config as config
 
     tree = ast.parse(inspect.getsource(config))
     for node in (n for n in tree.body if isinstance(n, ast.ClassDef)):

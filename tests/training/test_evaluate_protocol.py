@@ -12,13 +12,12 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "env"))
 
-from fake_infant import FakeInfant, TinyBehavior  # noqa: E402
-
 import devlearn.plugins  # noqa: E402
+from devlearn.api.errors import UsageError  # noqa: E402
 from devlearn.cli import main  # noqa: E402
-from devlearn.errors import UsageError  # noqa: E402
+from devlearn.evaluation.evaluate import evaluate  # noqa: E402
 from devlearn.testing import registry_for  # noqa: E402
-from devlearn.training.evaluate import evaluate  # noqa: E402
+from devlearn.testing.fake_infant import FakeInfant, TinyBehavior  # noqa: E402
 
 
 class RecordingInfant(FakeInfant):
@@ -134,7 +133,9 @@ def test_summary_is_printed_when_writing_fails(registry, run_dir, tmp_path, caps
     def full_disk(self, out_dir):
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr("fake_infant.CloseEvaluator.write_artifacts", full_disk)
+    monkeypatch.setattr(
+        "devlearn.testing.fake_infant.CloseEvaluator.write_artifacts", full_disk
+    )
     code = main(["eval", "tiny", "--checkpoint", str(run_dir), "--episodes", "1", "--json",
                  "--out", str(tmp_path / "eval")])
     captured = capsys.readouterr()

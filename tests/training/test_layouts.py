@@ -10,11 +10,11 @@ import torch
 import torch.nn as nn
 from rsl_rl.utils import resolve_class, resolve_obs_groups
 
+from devlearn.config.run_config import default_config, from_dict, to_rsl_rl
 from devlearn.env import BehaviorEnv
+from devlearn.evaluation.evaluate import _batch, load_actor
 from devlearn.plugins import PluginRegistry
 from devlearn.training.checkpoint import load_checkpoint
-from devlearn.training.config import default_config, from_dict, to_rsl_rl
-from devlearn.training.evaluate import _batch, load_actor
 from devlearn.training.process import quiet
 
 ROOT = Path(__file__).resolve().parents[2]

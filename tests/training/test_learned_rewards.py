@@ -9,13 +9,14 @@ from pathlib import Path
 import pytest
 import tiny_run
 import torch
-from fake_infant import TinyBehavior
 from tensordict import TensorDict
+
+from devlearn.testing.fake_infant import TinyBehavior
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from learned_terms import LinearPredictor  # noqa: E402
 
-from devlearn.errors import UsageError  # noqa: E402
+from devlearn.api.errors import UsageError  # noqa: E402
 from devlearn.testing import registry_for  # noqa: E402
 from devlearn.training import train  # noqa: E402
 from devlearn.training.checkpoint import load_checkpoint  # noqa: E402
@@ -166,7 +167,7 @@ def test_torchrun_ranks_share_one_learned_model(tmp_path):
 
 
 def test_a_non_finite_learned_reward_stops_the_run_at_the_last_good_state(tmp_path, monkeypatch):
-    from devlearn.errors import RunStopped
+    from devlearn.api.errors import RunStopped
 
     def broken(self, batch):
         errors = self.errors(batch)

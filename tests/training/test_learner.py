@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 import tiny_run
 import torch
-from fake_infant import TinyBehavior
 
-from devlearn.errors import UsageError
-from devlearn.training.config import default_config, from_dict, to_dict
+from devlearn.api.errors import UsageError
+from devlearn.config.run_config import default_config, from_dict, to_dict
+from devlearn.testing.fake_infant import TinyBehavior
 from devlearn.training.distribution import BoundedGaussian, TanhSoftplusGaussian, inverse_softplus
 from devlearn.training.health import PATIENCE, HealthWatch, rollout_health
 from devlearn.training.reward_norm import RewardNormalizer

@@ -7,7 +7,8 @@ import json
 import pytest
 import tiny_run
 
-from devlearn.training import evaluate, train
+from devlearn.evaluation.evaluate import evaluate
+from devlearn.training import train
 
 pytest.importorskip("devlearn.infant")
 

@@ -12,13 +12,13 @@ import numpy as np
 import pytest
 import tiny_run
 import torch
-from fake_infant import TinyBehavior, TinyConfig, fake_infant_factory
 
 import devlearn
-import devlearn.training
-from devlearn.env.guards import GuardError, check_observation_batch, check_reward_batch
-from devlearn.errors import RunStopped, UsageError
+from devlearn.api.errors import RunStopped, UsageError
+from devlearn.config.run_config import default_config
+from devlearn.env.guards import GuardError
 from devlearn.testing import registry_for
+from devlearn.testing.fake_infant import TinyBehavior, TinyConfig, fake_infant_factory
 from devlearn.training import train
 from devlearn.training.checkpoint import (
     FORMAT,
@@ -170,7 +170,7 @@ class BadTiny(TinyBehavior):
 def bad_config(out: Path, *overrides: str, **top):
     """The bad behaviour's config: 4 envs x 8 steps per iteration, in process by default."""
     top = {"num_envs": 4, "workers": 0, "save_interval": 1, **top}
-    return devlearn.training.default_config(
+    return default_config(
         BadTiny, list(overrides), out_dir=str(out), total_steps=100_000, **top
     )
 
@@ -218,17 +218,8 @@ def test_a_bad_observation_stops_training_named(tmp_path):
     assert load_checkpoint(out / "checkpoint_latest.pt")["env_steps"] == 2 * PER_ITERATION
 
 
-def test_batched_guards_name_the_first_offence():
-    values = np.zeros((3, 2))
-    check_reward_batch(["a", "b"], values, 4, 7)
-    values[2, 1], values[1, 0] = 1e7, math.nan
-    with pytest.raises(GuardError, match="reward term 'a' returned nan in env 5 at episode step 7"):
-        check_reward_batch(["a", "b"], values, 4, 7)
-    obs = {"eyes": np.zeros((3, 2, 2), np.uint8), "touch": np.zeros((3, 4), np.float32)}
-    check_observation_batch(obs, 0, np.array([1, 2, 3]))
-    obs["touch"][2, 3] = -np.inf
-    with pytest.raises(GuardError, match="observation 'touch' holds -inf in env 2 at episode step"):
-        check_observation_batch(obs, 0, np.array([1, 2, 3]))
+def test_a_guard_error_survives_pickling():
+    """A GuardError travels back from a worker process with its message."""
     error = GuardError("reward term", "x", 1e30, 1, 2)
     import pickle
 

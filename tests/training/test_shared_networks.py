@@ -9,12 +9,12 @@ from types import SimpleNamespace
 import pytest
 import tiny_run
 import torch
-from fake_infant import TinyBehavior
 from rsl_rl.algorithms import PPO
 from tensordict import TensorDict
 
-from devlearn.errors import UsageError
-from devlearn.training.config import from_dict, to_dict, to_rsl_rl
+from devlearn.api.errors import UsageError
+from devlearn.config.run_config import from_dict, to_dict, to_rsl_rl
+from devlearn.testing.fake_infant import TinyBehavior
 from devlearn.training.ppo import UniqueParamPPO, unique_parameters
 from devlearn.training.process import quiet
 

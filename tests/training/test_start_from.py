@@ -10,10 +10,10 @@ import pytest
 import tiny_run
 import torch
 
-from devlearn.errors import UsageError
+from devlearn.api.errors import UsageError
+from devlearn.config.values import apply_overrides
 from devlearn.training import train
 from devlearn.training.checkpoint import load_checkpoint
-from devlearn.training.config_values import apply_overrides
 from devlearn.training.train import config_from_checkpoint, load_run_config
 
 

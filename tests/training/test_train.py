@@ -13,9 +13,9 @@ from pathlib import Path
 import pytest
 import tiny_run
 import torch
-from fake_infant import fake_infant_factory
 
-from devlearn.errors import UsageError
+from devlearn.api.errors import UsageError
+from devlearn.testing.fake_infant import fake_infant_factory
 from devlearn.training import train
 from devlearn.training.checkpoint import load_checkpoint, resume_checkpoint, save_atomic
 

@@ -11,13 +11,12 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "env"))
 
-from fake_infant import TinyBehavior, fake_infant_factory  # noqa: E402
-
 import devlearn.plugins  # noqa: E402
+from devlearn.api.errors import UsageError  # noqa: E402
 from devlearn.cli import main  # noqa: E402
-from devlearn.errors import UsageError  # noqa: E402
+from devlearn.config.run_config import RunConfig  # noqa: E402
 from devlearn.testing import registry_for  # noqa: E402
-from devlearn.training.config import RunConfig  # noqa: E402
+from devlearn.testing.fake_infant import TinyBehavior, fake_infant_factory  # noqa: E402
 from devlearn.training.loggers import logger_config  # noqa: E402
 
 

@@ -12,9 +12,10 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "env"))
 
-from fake_infant import OtherBehavior, TinyBehavior, fake_infant_factory  # noqa: E402
+from tiny_behaviors import OtherBehavior  # noqa: E402
 
 from devlearn.testing import registry_for  # noqa: E402
+from devlearn.testing.fake_infant import TinyBehavior, fake_infant_factory  # noqa: E402
 
 EPISODE_STEPS = 10
 factory = functools.partial(fake_infant_factory, episode_steps=EPISODE_STEPS)
@@ -27,7 +28,7 @@ def registry():
 
 def config(out_dir, total_steps: int = 256, *overrides: str, **top):
     """The tiny behaviour's config: 4 envs x 8 steps per iteration (32 env steps)."""
-    from devlearn.training import default_config
+    from devlearn.config.run_config import default_config
 
     top = {"num_envs": 4, "workers": 0, "save_interval": 1, **top}
     return default_config(

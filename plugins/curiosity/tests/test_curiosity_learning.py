@@ -5,7 +5,7 @@ from __future__ import annotations
 import torch
 from devlearn_curiosity import RND, ForwardModel, ForwardModelConfig, RNDConfig
 
-from devlearn.learned import Transitions
+from devlearn.api.learned import Transitions
 
 
 def states(x: torch.Tensor) -> Transitions:

@@ -3,19 +3,17 @@
 from __future__ import annotations
 
 import json
-import sys
 from pathlib import Path
 
 import pytest
 from devlearn_curiosity import RND, ForwardModel
 
 from devlearn.cli import main
+from devlearn.config.run_config import default_config
 from devlearn.testing import registry_for
-from devlearn.training import default_config, train
+from devlearn.testing.fake_infant import TinyBehavior, fake_infant_factory
+from devlearn.training import train
 from devlearn.training.checkpoint import load_checkpoint
-
-CORE_TESTS = Path(__file__).resolve().parents[3] / "tests" / "env"
-HAS_FAKE = (CORE_TESTS / "fake_infant.py").exists()
 
 
 def rows(run_dir: Path) -> list[dict]:
@@ -23,11 +21,7 @@ def rows(run_dir: Path) -> list[dict]:
 
 
 @pytest.mark.slow  # about 20 s: worker processes start
-@pytest.mark.skipif(not HAS_FAKE, reason="needs devlearn's repository (tests/env/fake_infant.py)")
 def test_both_terms_train_and_resume_with_worker_processes(tmp_path):
-    sys.path.insert(0, str(CORE_TESTS))
-    from fake_infant import TinyBehavior, fake_infant_factory
-
     registry = registry_for(TinyBehavior, learned_rewards=(RND, ForwardModel))
     out = tmp_path / "run"
     sets = ["curiosity=rnd,forward_model", "behavior.use_eyes=true", "learned.rnd.weight=0.5"]

@@ -12,8 +12,8 @@ from devlearn_hand_regard.behavior import DETECTOR_FILE
 from devlearn_hand_regard.detector import DetectorParams
 from fake_sitting import LEFT_ARM, RIGHT_ARM, FakeSittingInfant
 
+from devlearn.api.errors import UsageError
 from devlearn.env import BehaviorEnv
-from devlearn.errors import UsageError
 
 
 @pytest.fixture()
@@ -197,7 +197,7 @@ def test_proprio_policy_sees_the_detector_output(behavior):
 
 
 def test_scene_start_and_policy_defaults_and_legacy():
-    from devlearn.training.config import from_dict
+    from devlearn.config.run_config import from_dict
 
     behavior = HandRegard()
     assert behavior.scene == "sitting_babybench" and HandRegard.scene == "sitting_babybench"
@@ -215,7 +215,7 @@ def test_scene_start_and_policy_defaults_and_legacy():
 
 
 def test_demonstration_by_default_and_the_paper_preset():
-    from devlearn.training.config import default_config
+    from devlearn.config.run_config import default_config
 
     demo = default_config(HandRegard)
     assert demo.total_steps == 30_000 and demo.behavior.policy == "proprio"

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from devlearn_hand_regard import HandRegard, HandRegardConfig
 
+from devlearn.api.errors import UsageError
 from devlearn.env.behavior_env import BehaviorEnv
-from devlearn.errors import UsageError
 from devlearn.infant import build_infant
 
 
@@ -117,9 +117,9 @@ def test_relocated_run_folder_evaluates(tmp_path):
     """A run whose config names its detector by an absolute path, moved after training."""
     import torch
 
+    from devlearn.evaluation.evaluate import evaluate
     from devlearn.plugins import PluginRegistry
     from devlearn.training.checkpoint import save_atomic
-    from devlearn.training.evaluate import evaluate
 
     published = Path(__file__).resolve().parents[3] / "results" / "hand_regard" / "run"
     state = torch.load(published / "policy.pt", weights_only=True)
@@ -157,8 +157,8 @@ def test_relocated_run_folder_evaluates(tmp_path):
 
 def test_published_policy_evaluates_from_babybench_start(tmp_path):
     """`devlearn eval hand_regard --start babybench` on a published policy file (old scene)."""
+    from devlearn.evaluation.evaluate import evaluate
     from devlearn.plugins import PluginRegistry
-    from devlearn.training.evaluate import evaluate
 
     published = Path(__file__).resolve().parents[3] / "results" / "hand_regard" / "run"
     scenes = []
@@ -187,8 +187,8 @@ def test_published_policy_evaluates_from_babybench_start(tmp_path):
 
 def test_eval_start_differs_from_the_training_start(tmp_path):
     """Trained from rest, evaluated (``--start stage``) from its ``eval_start``, babybench."""
+    from devlearn.evaluation.evaluate import evaluate
     from devlearn.plugins import PluginRegistry
-    from devlearn.training.evaluate import evaluate
 
     built = []
 

@@ -9,7 +9,7 @@ import pytest
 from devlearn_hand_regard import HandRegard
 from devlearn_hand_regard.evaluation import HandRegardEvaluator
 
-from devlearn.rewards import StepContext
+from devlearn.api.rewards import StepContext
 
 
 class Truth:

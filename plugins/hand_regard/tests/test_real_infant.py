@@ -86,8 +86,8 @@ def short_infant(scene, **kwargs):
 
 
 def test_tiny_training_run_and_eval(tmp_path, real):
+    from devlearn.evaluation.evaluate import evaluate
     from devlearn.plugins import PluginRegistry
-    from devlearn.training.evaluate import evaluate
 
     out = tmp_path / "run"
     out.mkdir()

@@ -14,7 +14,7 @@ from devlearn_hand_regard.rewards import (
     motion_reward,
 )
 
-from devlearn.rewards import StepContext
+from devlearn.api.rewards import StepContext
 
 BOTH = {"active_arms": ["left", "right"]}
 LEFT = {"active_arms": ["left"]}

@@ -10,9 +10,9 @@ import pytest
 from devlearn_hand_regard import HandRegard, HandRegardConfig
 from fake_sitting import FakeSittingInfant
 
+from devlearn.api.errors import UsageError
+from devlearn.config.run_config import default_config, from_dict, to_dict
 from devlearn.env.behavior_env import BehaviorEnv
-from devlearn.errors import UsageError
-from devlearn.training.config import default_config, from_dict, to_dict
 
 ROOT = Path(__file__).resolve().parents[3]
 PAPER_TERMS = ["hand_count", "motion", "living_penalty"]

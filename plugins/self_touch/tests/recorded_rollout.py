@@ -41,9 +41,9 @@ def record_rollout() -> dict[str, np.ndarray]:
     """
     from devlearn_self_touch import SelfTouch
 
-    from devlearn.conformance import place_hand_on_body
     from devlearn.env.behavior_env import step_batch
     from devlearn.env.workers import make_envs
+    from devlearn.testing import place_hand_on_body
 
     behavior = SelfTouch()
     # the memory f17ca1c had (each env its own); an unknown attribute there, so harmless

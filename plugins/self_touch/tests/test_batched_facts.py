@@ -7,12 +7,11 @@ import pytest
 from devlearn_self_touch import SelfTouch, SelfTouchConfig
 from self_touch_fakes import FakeInfant, ScriptedInfant, same_info
 
-from devlearn.behavior import Behavior
-from devlearn.conformance import place_hand_on_body
+from devlearn.api.behavior import Behavior
 from devlearn.env.behavior_env import BehaviorEnv, step_batch
 from devlearn.env.workers import make_envs
 from devlearn.infant import build_infant
-from devlearn.testing import ConformanceError, check_batched_observations
+from devlearn.testing import ConformanceError, check_batched_observations, place_hand_on_body
 
 SOURCES = ("hands", "threshold", "hands_or_threshold")
 

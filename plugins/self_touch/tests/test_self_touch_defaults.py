@@ -8,12 +8,12 @@ from pathlib import Path
 import pytest
 from devlearn_self_touch import SelfTouch
 
+from devlearn.api.errors import UsageError
+from devlearn.config.run_config import RunConfig, default_config, from_dict, to_dict
 from devlearn.env import BehaviorEnv
-from devlearn.errors import UsageError
+from devlearn.evaluation.evaluate import load_actor
 from devlearn.plugins import PluginRegistry
 from devlearn.training.checkpoint import load_checkpoint
-from devlearn.training.config import RunConfig, default_config, from_dict, to_dict
-from devlearn.training.evaluate import load_actor
 from devlearn.training.train import load_run_config
 
 ROOT = Path(__file__).resolve().parents[3]

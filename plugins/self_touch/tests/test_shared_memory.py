@@ -12,9 +12,10 @@ from devlearn_self_touch.batched_rewards import BatchedContactNovelty, BatchedTo
 from self_touch_fakes import SwappingInfant, make_ctx
 
 from devlearn import BatchContext
+from devlearn.config.run_config import default_config
 from devlearn.env import DevVecEnv
 from devlearn.testing import registry_for
-from devlearn.training import default_config, train
+from devlearn.training import train
 from devlearn.training.checkpoint import load_checkpoint
 from devlearn.training.train import load_run_config
 

@@ -12,8 +12,9 @@ from devlearn_self_touch import SelfTouch, SelfTouchConfig
 from devlearn_self_touch.evaluation import TrainingScore
 from self_touch_fakes import SwappingInfant, make_ctx
 
+from devlearn.config.run_config import default_config
 from devlearn.testing import registry_for
-from devlearn.training import default_config, train
+from devlearn.training import train
 from devlearn.training.checkpoint import load_checkpoint
 from devlearn.training.train import load_run_config
 

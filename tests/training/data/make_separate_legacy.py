@@ -14,10 +14,10 @@ import torch
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # tests/training
 from test_layouts import raw_head, rebuild, untrained_actor
 
+from devlearn.config.run_config import default_config, to_dict
 from devlearn.env import BehaviorEnv
 from devlearn.plugins import PluginRegistry
 from devlearn.training.checkpoint import FORMAT, save_atomic
-from devlearn.training.config import default_config, to_dict
 
 registry = PluginRegistry()
 cfg = default_config(

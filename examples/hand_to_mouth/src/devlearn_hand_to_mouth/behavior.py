@@ -1,6 +1,6 @@
 """hand_to_mouth: reward the infant for touching its face's target parts with either hand.
 
-Written only against devlearn's public API (``devlearn`` and ``devlearn.infant``'s Infant).
+Written only against devlearn's public API (``devlearn``, with its Infant).
 """
 
 from __future__ import annotations

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-from devlearn.learned import LearnedReward, LearnedRewardConfig, Transitions
+from devlearn import LearnedReward, LearnedRewardConfig, Transitions
 
 if TYPE_CHECKING:  # torch and rsl-rl load when a run builds the term, not when it registers
     import torch

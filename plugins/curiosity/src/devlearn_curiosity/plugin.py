@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from devlearn.hookspecs import hookimpl
+from devlearn import hookimpl
 from devlearn_curiosity.forward_model import ForwardModel
 from devlearn_curiosity.rnd import RND
 

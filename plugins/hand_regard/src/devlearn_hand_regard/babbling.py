@@ -128,7 +128,7 @@ def babble(
         raise ValueError(f"babbling arms must be one of {', '.join(ARMS)}, got {arms!r}")
     own = infant is None
     if own:
-        from devlearn.infant import build_infant
+        from devlearn import build_infant
 
         infant = build_infant(scene, senses=("proprioception", "eyes"), appearance=appearance)
     try:

@@ -8,11 +8,16 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from devlearn.behavior import Behavior, Evaluator, NetworkSpec
-from devlearn.curriculum import Curriculum, Stage
-from devlearn.errors import UsageError
-from devlearn.rewards import IntrinsicReward
-from devlearn.sensors import MLPEncoder
+from devlearn import (
+    Behavior,
+    Curriculum,
+    Evaluator,
+    IntrinsicReward,
+    MLPEncoder,
+    NetworkSpec,
+    Stage,
+    UsageError,
+)
 from devlearn_hand_regard import detector_store
 from devlearn_hand_regard.config import (
     APPEARANCE_CHOICES,
@@ -35,7 +40,7 @@ from devlearn_hand_regard.rewards import (
 )
 
 if TYPE_CHECKING:
-    from devlearn.infant import Infant
+    from devlearn import Infant
 
 DETECTOR_FILE = "hand_detector.json"
 """Name of the calibrated detector in a run directory."""

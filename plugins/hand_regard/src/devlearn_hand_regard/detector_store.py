@@ -8,7 +8,7 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-from devlearn.errors import UsageError
+from devlearn import UsageError
 from devlearn_hand_regard.config import HandRegardConfig
 from devlearn_hand_regard.detector import FORMAT_VERSION, DetectorParams
 
@@ -34,7 +34,7 @@ def calibrate_by_babbling(
     """
     import sys
 
-    from devlearn.infant import build_infant
+    from devlearn import build_infant
     from devlearn_hand_regard.babbling import babble
     from devlearn_hand_regard.calibration import calibrate
     from devlearn_hand_regard.detector import HandDetector

@@ -5,7 +5,7 @@ from __future__ import annotations
 import torch
 import torch.nn as nn
 
-from devlearn.sensors import SensorEncoder
+from devlearn import SensorEncoder
 
 EYE_FEATURES = 256
 """Features per eye (paper sec. II-B3)."""
@@ -15,7 +15,7 @@ class EyeCNN(nn.Module):
     """(batch, H, W, 3) images, float values in [0, 1] -> (batch, 256) features.
 
     The network builder hands uint8 images over already divided by 255 (the
-    :class:`~devlearn.sensors.SensorEncoder` input contract); dividing again here made every
+    :class:`~devlearn.api.sensors.SensorEncoder` input contract); dividing again here made every
     hand-regard run before the fix learn from near-black images (white became 1/255).
 
     Conv(3->32, k5 s2 p2), Conv(32->64, k3 s2 p1), Conv(64->128, k3 s2 p1),

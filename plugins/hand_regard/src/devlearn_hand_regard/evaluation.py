@@ -12,9 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from devlearn.behavior import Evaluator
-from devlearn.rewards import StepContext
-from devlearn.stats import episode_stats
+from devlearn import Evaluator, StepContext, episode_stats
 from devlearn_hand_regard.visibility import CRITERIA, DETECTOR_TRUTH, HEADLINE, criteria_protocol
 
 EYES = ("left", "right")

@@ -262,7 +262,7 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--out", help="write the JSON result here too")
     parser.add_argument("--picture", help="draw test frames with detections and truth (PNG)")
     args = parser.parse_args(argv)
-    from devlearn.infant import build_infant
+    from devlearn import build_infant
 
     infant = build_infant(args.scene, senses=("proprioception", "eyes"), appearance=args.appearance)
     result: dict = {

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from devlearn.hookspecs import hookimpl
+from devlearn import hookimpl
 from devlearn_hand_regard.behavior import HandRegard
 
 

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from devlearn.rewards import IntrinsicReward, StepContext
+from devlearn import IntrinsicReward, StepContext
 
 HANDS = ("left", "right")
 """Hand order used in every (eye, hand) array."""

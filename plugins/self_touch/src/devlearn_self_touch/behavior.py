@@ -33,7 +33,7 @@ from devlearn_self_touch.evaluation import PAPER_RESULTS, SelfTouchEvaluator, Tr
 from devlearn_self_touch.rewards import Balance, ContactNovelty, DiversityMilestones, TouchNovelty
 
 if TYPE_CHECKING:
-    from devlearn.infant import Infant
+    from devlearn import Infant
 
 
 class SelfTouch(Behavior):

@@ -90,7 +90,7 @@ def measure(
         (``still_self``, ``babbling_self``) and by a hand (``babbling_hand``); the regions
         resting on the mattress when still; ``reset_transient_max``.
     """
-    from devlearn.infant import build_infant
+    from devlearn import build_infant
 
     rng = np.random.default_rng(seed)
     infant = build_infant("crib", senses=("touch", "proprioception"))

@@ -33,7 +33,7 @@ class SelfTouchConfig:
     }
     """Values a saved config (config.json, a checkpoint's config) that lacks the field was
     trained with: runs from before these fields existed, or before their defaults changed
-    (issue #20), load and resume as trained (read by ``devlearn.training.config.from_dict``)."""
+    (issue #20), load and resume as trained (read by ``devlearn.config.run_config.from_dict``)."""
 
     # --- what counts as "touched" (sec. II-A2/A3) ----------------------------------------
     touch_source: str = "hands"

@@ -8,9 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from devlearn import Evaluator, StepContext
-from devlearn.behavior import RunMetrics
-from devlearn.stats import episode_stats
+from devlearn import Evaluator, RunMetrics, StepContext, episode_stats
 from devlearn_self_touch.body_map import HANDS, NUM_PARTS, NUM_REGIONS
 
 SETTLE_STEPS = 10

@@ -1,0 +1,307 @@
+"""The Behavior interface: what the infant should learn, independent of PPO and of the body."""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from collections.abc import Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, ClassVar
+
+import numpy as np
+
+from devlearn.api.curriculum import Curriculum, Stage
+from devlearn.api.rewards import BatchedIntrinsicReward, IntrinsicReward, StepContext
+
+if TYPE_CHECKING:
+    from devlearn.api.network_spec import NetworkSpec
+    from devlearn.infant import Infant
+
+
+class Evaluator:
+    """Collects a behaviour's metrics over steps and episodes.
+
+    The environment keeps one per sub-environment during training (each episode's
+    :meth:`end_episode` metrics are logged under ``metrics/<key>``); ``devlearn eval`` keeps one
+    over all evaluation episodes and prints :meth:`summary`.
+    """
+
+    def record(self, ctx: StepContext) -> None:
+        """Take note of one step."""
+
+    def end_episode(self) -> dict[str, float]:
+        """Close the current episode; return its metrics (name -> float)."""
+        return {}
+
+    def summary(self) -> dict[str, Any]:
+        """Return the metrics over every episode recorded so far (JSON-serialisable)."""
+        return {}
+
+    def write_artifacts(self, out_dir: Path) -> list[Path]:
+        """Write pictures or files that explain the summary; return their paths."""
+        return []
+
+    def protocol(self) -> dict[str, Any]:
+        """How episodes are scored, recorded in every eval JSON under ``protocol``.
+
+        Returns:
+            JSON-serialisable, e.g. ``{"settle_steps": 10, "criteria": {...}, "headline": ...}``.
+        """
+        return {}
+
+    def episode_record(self) -> Any:
+        """What :class:`RunMetrics` need of the episode :meth:`end_episode` just closed, or
+        None (then nothing travels): small and picklable (it crosses from env workers to the
+        runner with the episode's metrics); never logged itself."""
+        return None
+
+
+class RunMetrics:
+    """Metrics over all of a run's finished training episodes (every env, worker and rank),
+    kept by the runner: one instance per run, from :meth:`Behavior.run_metrics`.
+
+    After each PPO iteration the runner passes the :meth:`Evaluator.episode_record` of every
+    episode that ended in it (all ranks', in rank order) to :meth:`add`, and logs
+    :meth:`values` as ``metrics/<name>`` in metrics.jsonl and TensorBoard. Its state is saved
+    in checkpoints, so ``--resume`` and ``--from`` continue it.
+    """
+
+    def add(self, records: list[Any]) -> None:
+        """Take note of finished episodes' records, oldest first."""
+
+    def values(self) -> dict[str, float]:
+        """The metrics now (name -> float); empty before any episode ended."""
+        return {}
+
+    def state_dict(self) -> dict[str, Any]:
+        """The state a checkpoint keeps (picklable)."""
+        return {}
+
+    def load_state_dict(self, state: dict[str, Any]) -> None:
+        """Restore :meth:`state_dict`'s output."""
+
+
+class Behavior(ABC):
+    """What the infant should learn: scene, senses, observations, rewards, curriculum, metrics.
+
+    A behaviour knows nothing of rsl-rl. It is constructed from its config dataclass
+    (``config_class``) in every environment process, so it must be picklable and cheap.
+    Plugins register Behavior subclasses through the ``register_behaviors`` hook.
+
+    Each environment owns its own copy of the behaviour and calls, per episode and step::
+
+        reset:  infant.reset(rng) -> on_episode_start(infant, rng) -> facts -> observe
+        step:   before_step(infant, action) -> process_action -> physics step -> facts
+                -> observe -> reward terms -> evaluator.record
+
+    A behaviour may compute facts and observations of all of a worker's environments at once
+    (:meth:`batch_facts`, :meth:`batch_observe`, once per worker in place of the per-env pair).
+    """
+
+    name: ClassVar[str]
+    """Unique name used on the command line (``devlearn run NAME``)."""
+    description: ClassVar[str] = ""
+    """One line shown by ``devlearn plugins`` and ``devlearn info``."""
+    scene: ClassVar[str]
+    """Infant scene to build: ``"crib"``, ``"sitting"`` or ``"sitting_babybench"``
+    (:func:`devlearn.infant.build_infant`); an instance may set its own from its config."""
+    senses: ClassVar[tuple[str, ...]] = ("touch", "proprioception", "vestibular")
+    """Infant senses read: ``touch``, ``proprioception``, ``vestibular``, ``eyes``."""
+    config_class: ClassVar[type]
+    """Dataclass of the behaviour's own options; every field documented. Overridable on the CLI
+    as ``--set behavior.FIELD=VALUE``."""
+    headline_metric: ClassVar[str] = ""
+    """Key of :meth:`Evaluator.end_episode` shown on the progress bar."""
+    facts_every_physics_step: ClassVar[bool] = True
+    """With a decision rate (``env.action_repeat=K``, one action held for K physics steps):
+    True (cheap facts, e.g. touch): facts, reward terms and the evaluator run at every physics
+    step and the decision's reward is their sum, exactly an env stepped K times with the same
+    action. False (facts that need renders, e.g. eye images and a detector): physics runs K
+    times, then facts, observations, reward terms and the evaluator run once, on the state the
+    decision reached, and the reward terms are paid K times (held over the decision)."""
+
+    def __init__(self, config: Any | None = None) -> None:
+        self.config = config if config is not None else self.config_class()
+
+    def infant_options(self) -> dict[str, Any]:
+        """Keyword arguments for :func:`devlearn.infant.build_infant` beyond the scene and
+        senses, e.g. ``{"appearance": "skin"}``: how the infant looks, without building it."""
+        return {}
+
+    # --- episode hooks ------------------------------------------------------------------
+    def on_episode_start(self, infant: Infant, rng: np.random.Generator) -> None:
+        """Called at the start of every episode, after the infant's reset, before its first
+        :meth:`facts` (also in worker processes, and for the first episode of a new env).
+
+        Use it to reset per-episode state kept on the behaviour (e.g. the previous eye frame of
+        an optical-flow fact) and to read things from the infant once (actuator groups).
+
+        Args:
+            infant: The infant, already in the episode's initial pose.
+            rng: The environment's generator (the one that drew the initial pose); draw from it
+                for per-episode randomness so runs stay reproducible from the seed.
+        """
+
+    def before_step(self, infant: Infant, action: np.ndarray) -> None:
+        """Called before every control step, with the policy's action clipped to [-1, 1],
+        before :meth:`process_action` and the physics step.
+
+        Args:
+            infant: The infant before the step.
+            action: (action_dim,) float64, read-only use (e.g. an action-cost fact).
+        """
+
+    # --- observations -------------------------------------------------------------------
+    def facts(self, infant: Infant) -> dict[str, Any]:
+        """Compute per-step facts shared by observations, rewards and metrics (once a step)."""
+        return {}
+
+    @abstractmethod
+    def observe(self, infant: Infant, facts: dict[str, Any]) -> dict[str, np.ndarray]:
+        """Return this step's observations, name -> float32 array of a fixed shape."""
+
+    # --- batched observations (optional) ------------------------------------------------
+    def batch_facts(self, infants: Sequence[Infant]) -> list[dict[str, Any]]:
+        """:meth:`facts` of several environments at once, in their order.
+
+        Override it (and :meth:`batch_observe`) when per-step Python cost matters: a worker
+        then calls it once per step, on its first environment's behaviour, with all its
+        infants. An override must return, for every infant, exactly what :meth:`facts` would
+        (:func:`devlearn.testing.check_batched_observations` compares them), so it suits
+        behaviours whose facts keep no per-environment state on ``self``. Without an
+        override every environment calls its own behaviour's :meth:`facts`, as before.
+
+        Args:
+            infants: The environments' infants after this step's physics, (num_envs,).
+        Returns:
+            One facts dict per infant (default: ``[self.facts(i) for i in infants]``).
+        """
+        return [self.facts(infant) for infant in infants]
+
+    def batch_observe(
+        self, infants: Sequence[Infant], facts: Sequence[dict[str, Any]]
+    ) -> dict[str, np.ndarray]:
+        """:meth:`observe` of several environments at once, as arrays over them.
+
+        Called like :meth:`batch_facts` (once per worker step, when overridden) with its
+        result. Row ``i`` of every array must equal ``observe(infants[i], facts[i])``.
+
+        Args:
+            infants: The environments' infants, (num_envs,).
+            facts: Their facts, as :meth:`batch_facts` returned them.
+        Returns:
+            Observation name -> (num_envs, *shape) array (default: :meth:`observe` per
+            environment, stacked).
+        """
+        rows = [self.observe(infant, f) for infant, f in zip(infants, facts)]
+        return {name: np.stack([row[name] for row in rows]) for name in rows[0]}
+
+    def obs_groups(self, observation_names: list[str]) -> dict[str, list[str]]:
+        """Map rsl-rl's observation sets (``actor``, ``critic``) to observation names."""
+        return {"actor": list(observation_names), "critic": list(observation_names)}
+
+    @abstractmethod
+    def network(self) -> NetworkSpec:
+        """Return how to build the policy and value networks."""
+
+    # --- rewards, actions, curriculum ----------------------------------------------------
+    @abstractmethod
+    def reward_terms(self) -> list[IntrinsicReward | BatchedIntrinsicReward]:
+        """Return fresh reward-term instances for one environment.
+
+        A :class:`~devlearn.api.rewards.BatchedIntrinsicReward` in the list is computed once per
+        worker over all its environments (one value per environment); plain
+        :class:`IntrinsicReward` terms run in each environment. Both kinds may be mixed.
+        """
+
+    def curriculum(self) -> Curriculum:
+        """Return the training curriculum (default: one stage, fixed initial pose)."""
+        return Curriculum([Stage("main", None, {})])
+
+    def eval_stage(self) -> dict[str, Any]:
+        """Stage options used by ``devlearn eval`` (default: the curriculum's last stage)."""
+        return dict(self.curriculum().stages[-1].options)
+
+    def process_action(self, action: np.ndarray, stage: dict[str, Any]) -> np.ndarray:
+        """Adjust a policy action before it reaches the body (e.g. zero an inactive arm).
+
+        Args:
+            action: (action_dim,) in [-1, 1].
+            stage: The active stage's options.
+        Returns:
+            (action_dim,) array.
+        """
+        return action
+
+    # --- metrics and set-up --------------------------------------------------------------
+    def evaluator(self, training: bool) -> Evaluator:
+        """Return a fresh metrics collector (``training=False`` for ``devlearn eval``)."""
+        return Evaluator()
+
+    def run_metrics(self) -> RunMetrics | None:
+        """Return the run-wide metrics over finished training episodes (:class:`RunMetrics`),
+        or None (the default) when the behaviour keeps none."""
+        return None
+
+    def train_defaults(self) -> dict[str, Any]:
+        """Run-config overrides this behaviour prefers, as dotted keys (``{"total_steps": 8e6}``).
+
+        Returns:
+            Mapping of dotted RunConfig keys to values.
+        """
+        return {}
+
+    def presets(self) -> dict[str, dict[str, Any]]:
+        """Named sets of run-config overrides, chosen with ``devlearn run NAME --preset P``
+        (e.g. ``{"paper": {"behavior.max_std": 0.0}}``: the paper's values one switch away
+        from a default that differs). Applied over :meth:`train_defaults` and under the
+        command line's options and ``--set``; ``devlearn config NAME`` lists them.
+
+        Returns:
+            Preset name -> mapping of dotted RunConfig keys to values.
+        """
+        return {}
+
+    @classmethod
+    def paper_results(cls, config: dict[str, Any]) -> tuple[str, dict[str, float]] | None:
+        """The paper's figures a run with ``config`` (a saved config dict, as in an eval JSON)
+        is compared with: a column of ``devlearn report`` beside ours and the baselines.
+
+        Returns:
+            ``(column label, {metric: value})`` with metric names as the eval JSON's keys
+            (nested ones dotted, e.g. ``visibility.left_eye_left_hand``), or None.
+        """
+        return None
+
+    def prepare(self, run_dir: Path) -> None:
+        """One-off work before training (e.g. motor babbling); may update ``self.config``.
+
+        Called in the main process once per run, before environments are built; on resume
+        it is called again and should reuse what it saved in ``run_dir``.
+        """
+
+    def policy_artifacts(self) -> dict[str, Any]:
+        """Data evaluation needs besides the policy weights (e.g. a calibrated detector).
+
+        Stored in policy files (``devlearn slim``) so that they evaluate anywhere; plain
+        dicts, lists, numbers and strings only (checkpoints load with ``weights_only``).
+        """
+        return {}
+
+    def load_policy_artifacts(self, artifacts: dict[str, Any], folder: Path) -> None:
+        """Get ready to evaluate a checkpoint: restore :meth:`policy_artifacts`' output.
+
+        Args:
+            artifacts: What the checkpoint stored (empty for a training checkpoint).
+            folder: The checkpoint's folder; files the config names resolve against it when
+                they are not where the config says (a copied or relocated run folder).
+        Raises:
+            UsageError: Something evaluation needs is neither stored nor found.
+        """
+
+    def render_frame(self, infant: Infant) -> np.ndarray:
+        """One frame of ``devlearn eval --video``, (H, W, 3) uint8.
+
+        Default: the scene's third-person view (``infant.render_view()``); override to add
+        what this behaviour attends to (hand regard puts both eyes' views beside it).
+        """
+        return infant.render_view()

@@ -1,0 +1,169 @@
+"""The learner's speed: the PPO update's cost per rollout sample and the rollout inference's
+per step, on random observations (``devlearn bench``; figures, never asserted)."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from devlearn.bench.speed import bench_training, without_user_warnings
+
+
+def build_learner(behavior, layout: str, num_envs: int, seed: int = 0):
+    """The PPO algorithm a run of ``behavior`` would train, on random observations.
+
+    Observation shapes and dtypes come from one real environment reset; the networks, optimiser
+    and rollout storage are built exactly as ``devlearn run`` builds them, with the run
+    config's defaults and ``network.layout=layout``. Returns ``(alg, observations)``: the
+    algorithm and a function that draws a fresh (num_envs, *shape) observation batch.
+    """
+    from types import SimpleNamespace
+
+    import torch
+    from tensordict import TensorDict
+
+    from devlearn.config.run_config import default_config, to_rsl_rl
+    from devlearn.env import BehaviorEnv
+    from devlearn.training.ppo import UniqueParamPPO
+    from devlearn.training.process import quiet
+
+    env = BehaviorEnv(behavior, seed=seed)
+    first = env.reset()
+    dt = SimpleNamespace(step_dt=env.step_dt)
+    fake_env = SimpleNamespace(num_envs=num_envs, num_actions=env.action_dim, unwrapped=dt)
+    env.close()
+    cfg = default_config(type(behavior), [f"network.layout={layout}"])
+    train_cfg = to_rsl_rl(cfg, behavior, list(first))
+    train_cfg["multi_gpu"] = None
+    gen = torch.Generator().manual_seed(seed)
+
+    def observations() -> TensorDict:
+        groups = {}
+        for name, value in first.items():
+            shape = (num_envs, *np.shape(value))
+            if np.asarray(value).dtype == np.uint8:
+                groups[name] = torch.randint(0, 256, shape, generator=gen, dtype=torch.uint8)
+            else:
+                groups[name] = torch.randn(shape, generator=gen)
+        return TensorDict(groups, batch_size=[num_envs])
+
+    torch.manual_seed(seed)
+    with quiet():
+        alg = UniqueParamPPO.construct_algorithm(observations(), fake_env, train_cfg, "cpu")
+    alg.train_mode()
+    return alg, observations
+
+
+def collect_random(alg, observations, num_steps: int) -> float:
+    """Fill the rollout storage with ``num_steps`` random steps; return ms of inference/step."""
+    import torch
+
+    spent = 0.0
+    with torch.inference_mode():
+        obs = observations()
+        n = obs.batch_size[0]
+        for _ in range(num_steps):
+            start = time.perf_counter()
+            alg.act(obs)
+            spent += time.perf_counter() - start
+            obs = observations()
+            extras = {"time_outs": torch.zeros(n)}
+            alg.process_env_step(obs, torch.randn(n), torch.zeros(n, dtype=torch.long), extras)
+        alg.compute_returns(obs)
+    return 1000.0 * spent / num_steps
+
+
+@without_user_warnings
+def bench_update(
+    behavior, layout: str, num_envs: int, num_steps: int, repeats: int = 2, threads: int = 0
+) -> dict[str, float]:
+    """The PPO update's cost per rollout sample, and the rollout inference's per step.
+
+    One update is ``ppo.num_learning_epochs`` passes of ``ppo.num_mini_batches`` mini-batches
+    over a rollout of ``num_envs x num_steps`` samples (here random ones), as in training.
+
+    Args:
+        behavior: The behaviour whose networks are measured.
+        layout: ``shared`` or ``separate`` (``network.layout``).
+        num_envs: Environments of the rollout.
+        num_steps: Steps per environment.
+        repeats: Timed updates after one warm-up; the best is kept (least disturbed).
+        threads: torch threads during the update and inference (0: the training default, all
+            cores this process may use, see :func:`devlearn.training.process.learner_threads`).
+
+    Returns:
+        ``update_us_per_sample`` (seconds of one update / rollout samples, in microseconds),
+        ``inference_ms_per_step`` (actor and critic forward on ``num_envs`` observations),
+        ``parameters`` (unique trainable parameters) and ``threads``.
+    """
+    import torch
+
+    from devlearn.training.ppo import unique_parameters
+    from devlearn.training.process import learner_threads, update_threads
+
+    threads = threads or learner_threads()
+    alg, observations = build_learner(behavior, layout, num_envs)
+    best, inference = float("inf"), float("inf")
+    with update_threads(threads):
+        for k in range(repeats + 1):
+            ms = collect_random(alg, observations, num_steps)
+            start = time.perf_counter()
+            alg.update()
+            took = time.perf_counter() - start
+            if k > 0:  # the first is a warm-up
+                best, inference = min(best, took), min(inference, ms)
+    params = sum(p.numel() for p in unique_parameters(alg.actor, alg.critic))
+    return {
+        "update_us_per_sample": 1e6 * best / (num_envs * num_steps),
+        "inference_ms_per_step": inference,
+        "parameters": float(params),
+        "threads": float(threads),
+        "torch_version": torch.__version__,
+    }
+
+
+OLD_LEARNER = ["network.layout=separate", "torch_threads=1", "update_threads=1"]
+"""``--set`` options that train as before the shared layout and automatic threads."""
+
+
+def bench_learner(behaviors: dict, quick: bool, progress: Callable[[str], None]) -> dict:
+    """PPO update cost per sample and training steps/s, old learner against new, one session.
+
+    Old: separate actor and critic, one torch thread (the defaults before the shared layout).
+    New: ``devlearn run`` defaults (shared body, automatic threads; the update benchmark uses
+    all cores). Keys ``<behavior>_update_us_per_sample[_old]`` and
+    ``<behavior>_train_steps_per_s[_old]``; hand regard trains with 8 envs and a short
+    babbling (speed does not depend on the detector's quality).
+    """
+    from devlearn.training.process import learner_threads
+
+    result: dict[str, Any] = {}
+    rollouts = {"self_touch": (16, 32 if quick else 128), "hand_regard": (8, 8 if quick else 32)}
+    for name, (envs, steps) in rollouts.items():
+        if name not in behaviors:
+            continue
+        for suffix, layout, threads in (("_old", "separate", 1), ("", "shared", learner_threads())):
+            progress(f"{name}: PPO update, {layout} networks, {threads} thread(s)")
+            behavior, repeats = behaviors[name](), 1 if quick else 2
+            figures = bench_update(behavior, layout, envs, steps, repeats, threads)
+            result[f"{name}_update_us_per_sample{suffix}"] = figures["update_us_per_sample"]
+            result[f"{name}_inference_ms_per_step{suffix}"] = figures["inference_ms_per_step"]
+    old = [arg for kv in OLD_LEARNER for arg in ("--set", kv)]
+    if "self_touch" in behaviors:
+        progress("self_touch: end-to-end training, old learner (separate networks, 1 thread)")
+        result["self_touch_train_steps_per_s_old"] = bench_training(
+            "self_touch", 8192 if quick else 32768, old, progress
+        )
+    if "hand_regard" in behaviors:
+        progress("hand_regard: end-to-end training, old learner (separate networks, 1 thread)")
+        short = ["behavior.babbling_steps=300", "behavior.correlation_threshold=0"]
+        result["hand_regard_train_steps_per_s_old"] = bench_training(
+            "hand_regard",
+            1024 if quick else 4096,
+            ["--envs", "8", *(arg for kv in short for arg in ("--set", kv)), *old],
+            progress,
+        )
+    return result

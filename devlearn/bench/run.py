@@ -1,0 +1,127 @@
+"""``devlearn bench``: every speed measurement in one session, and the commands' start-up.
+
+Figures come from timing real work after a warm-up, with random actions; nothing here is a test
+and nothing is asserted.
+"""
+
+from __future__ import annotations
+
+import os
+import platform
+import resource
+import subprocess
+import sys
+import time
+from collections.abc import Callable
+from typing import Any
+
+from devlearn.bench.ceiling import (
+    env_breakdown,
+    observations_old_and_new,
+    physics_ceiling,
+    reference_env_steps_per_s,
+    touch_old_and_new,
+)
+from devlearn.bench.infant import bench_infant
+from devlearn.bench.learner import bench_learner
+from devlearn.bench.speed import (
+    bench_behavior_env,
+    bench_training,
+    bench_vec_env,
+    decision_rate,
+)
+
+STARTUP_COMMANDS = {
+    "help": ["--help"],
+    "plugins": ["plugins"],
+    "config": ["config", "self_touch"],
+    "info": ["info", "self_touch"],
+}
+"""The commands whose start-up ``devlearn bench`` times (``startup_<name>_s``): none trains."""
+
+
+def cli_startup_s(args: list[str], repeats: int = 3) -> float:
+    """Best wall-clock seconds of ``python -m devlearn.cli ARGS`` in a fresh process over
+    ``repeats`` runs: the interpreter, the imports, the plugins and the command itself."""
+    best = float("inf")
+    for _ in range(repeats):
+        start = time.perf_counter()
+        subprocess.run(
+            [sys.executable, "-m", "devlearn.cli", *args],
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+            check=False,
+        )
+        best = min(best, time.perf_counter() - start)
+    return best
+
+
+def run_bench(registry, quick: bool = False, progress: Callable[[str], None] = print) -> dict:
+    """Run every measurement; return the figures (see ``devlearn bench --help``)."""
+    n = 300 if quick else 2000
+    result_startup = {}
+    for name, args in STARTUP_COMMANDS.items():
+        progress(f"start-up: devlearn {' '.join(args)}")
+        result_startup[f"startup_{name}_s"] = cli_startup_s(args, 1 if quick else 3)
+    progress("infant: physics, touch, proprioception, eye render")
+    result: dict[str, Any] = bench_infant(steps=n, frames=20 if quick else 100)
+    result.update(result_startup)
+    result.update(touch_old_and_new(n))
+    for scene in ("crib", "sitting"):
+        progress(f"{scene}: physics-only steps (the ceiling)")
+        result[f"physics_{scene}_steps_per_s"] = physics_ceiling(scene, 2 * n)
+    behaviors = registry.behaviors()
+    for name in ("self_touch", "hand_regard"):
+        if name not in behaviors:
+            progress(f"{name}: not installed, skipped")
+            continue
+        behavior = behaviors[name]()
+        progress(f"{name}: single-process environment steps, now and on the previous code paths")
+        steps = n if name == "self_touch" else max(n // 10, 50)
+        result[f"{name}_steps_per_s"] = bench_behavior_env(behavior, steps)
+        # a behaviour that batches: both figures again, old and new alternating (best of 2)
+        result.update(observations_old_and_new(behavior, steps, 20 if quick else 200))
+        result[f"{name}_reference_steps_per_s"] = reference_env_steps_per_s(behavior, steps)
+        key = f"physics_{behavior.scene}_steps_per_s"
+        if key not in result:  # a scene other than crib and sitting (hand regard's BabyBench's)
+            result[key] = physics_ceiling(behavior.scene, 2 * n)
+        ceiling = result[key]
+        result[f"{name}_fraction_of_ceiling"] = result[f"{name}_steps_per_s"] / ceiling
+        progress(f"{name}: where a step's time goes")
+        result[f"{name}_breakdown_ms"] = env_breakdown(behavior, steps)
+    if "self_touch" in behaviors:
+        behavior = behaviors["self_touch"]()
+        for workers in (1, 2):
+            progress(f"self_touch: 16 environments over {workers} worker process(es)")
+            result[f"self_touch_vec_steps_per_s_{workers}_workers"] = bench_vec_env(
+                behavior, num_envs=16, workers=workers, steps=20 if quick else 200
+            )
+        # each worker runs on its own core: the ceiling is one crib's physics per worker
+        result["self_touch_vec_2_workers_fraction_of_ceiling"] = result[
+            "self_touch_vec_steps_per_s_2_workers"
+        ] / (2 * result["physics_crib_steps_per_s"])
+        progress("self_touch: end-to-end training (devlearn run defaults)")
+        result["self_touch_train_steps_per_s"] = bench_training(
+            "self_touch", 8192 if quick else 32768, [], progress
+        )
+        result.update(decision_rate(registry, "self_touch", 8192 if quick else 32768, [], progress))
+    if "hand_regard" in behaviors:
+        progress("hand_regard: end-to-end training (short babbling, any correlation accepted)")
+        # prepare() babbles before training (10,000 rendered steps by default); a short babble
+        # finds weaker correlations, so the threshold is dropped: speed does not depend on it.
+        short = ["behavior.babbling_steps=300", "behavior.correlation_threshold=0"]
+        extra = ["--envs", "8", *(arg for kv in short for arg in ("--set", kv))]
+        result["hand_regard_train_steps_per_s"] = bench_training(
+            "hand_regard", 1024 if quick else 4096, extra, progress
+        )
+        result.update(
+            decision_rate(registry, "hand_regard", 1024 if quick else 4096, extra, progress)
+        )
+    result.update(bench_learner(behaviors, quick, progress))
+    usage_self = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    usage_children = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    # the largest resident set of any one process (this one, a training run or a worker)
+    result["peak_memory_mb"] = max(usage_self, usage_children) / 1024.0
+    result["machine"] = f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores"
+    result["date"] = time.strftime("%Y-%m-%d")
+    return result

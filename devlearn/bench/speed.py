@@ -1,0 +1,129 @@
+"""Speed measurements: environment and training steps per second.
+
+Part of ``devlearn bench`` (:func:`devlearn.bench.run.run_bench`). Figures come from timing real
+work after a warm-up, with random actions; nothing here is a test and nothing is asserted.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import subprocess
+import sys
+import tempfile
+import time
+import warnings
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+
+def without_user_warnings(function):
+    """Run ``function`` with UserWarnings silenced: a speed figure of an unprepared behaviour
+    (hand regard's uncalibrated detector) does not depend on what it would perceive."""
+
+    @functools.wraps(function)
+    def wrapper(*args, **kwargs):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)
+            return function(*args, **kwargs)
+
+    return wrapper
+
+
+@without_user_warnings
+def bench_behavior_env(behavior, steps: int, reference_touch: bool = False) -> float:
+    """Single-process environment steps per second of one BehaviorEnv (random actions);
+    ``reference_touch``: with the numpy touch routine instead of the compiled one."""
+    from devlearn.env import BehaviorEnv
+
+    env = BehaviorEnv(behavior, seed=0)
+    if reference_touch and hasattr(env.infant, "_contacts"):
+        env.infant._contacts.compiled = False
+    env.reset()
+    rng = np.random.default_rng(0)
+    rate = random_steps_per_s(env.step, rng, env.action_dim, steps, warmup=50)
+    env.close()
+    return rate
+
+
+def random_steps_per_s(
+    step, rng: np.random.Generator, action_dim: int, steps: int, warmup: int
+) -> float:
+    """Steps per second of ``step(action)`` on uniform random actions in [-1, 1]: ``warmup``
+    untimed steps, then ``steps`` timed ones (actions drawn beforehand, outside the timing)."""
+    actions = rng.uniform(-1, 1, (steps + warmup, action_dim))
+    for a in actions[:warmup]:
+        step(a)
+    start = time.perf_counter()
+    for a in actions[warmup:]:
+        step(a)
+    return steps / (time.perf_counter() - start)
+
+
+def bench_vec_env(behavior, num_envs: int, workers: int, steps: int) -> float:
+    """Environment steps per second (summed over envs) of a DevVecEnv with ``workers`` processes."""
+    import torch
+
+    from devlearn.env import DevVecEnv
+
+    env = DevVecEnv(behavior, num_envs=num_envs, seed=0, workers=workers)
+    try:
+        gen = torch.Generator().manual_seed(0)
+        for _ in range(10):
+            env.step(torch.rand(num_envs, env.num_actions, generator=gen) * 2 - 1)
+        start = time.perf_counter()
+        for _ in range(steps):
+            env.step(torch.rand(num_envs, env.num_actions, generator=gen) * 2 - 1)
+        return steps * num_envs / (time.perf_counter() - start)
+    finally:
+        env.close()
+
+
+def bench_training(
+    behavior: str, steps: int, extra: list[str], progress: Callable[[str], None]
+) -> float | None:
+    """End-to-end training steps per second (collection plus PPO update) of ``devlearn run``
+    with its default environments and workers.
+
+    Reads the steps-per-second the run itself logged for its iterations after the first (which
+    includes start-up costs). Returns None, after reporting the run's error through
+    ``progress``, when the run fails.
+    """
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "run"
+        cmd = [sys.executable, "-m", "devlearn.cli", "run", behavior, "--steps", str(steps)]
+        cmd += ["--seed", "0", "--out", str(out), *extra]
+        done = subprocess.run(cmd, capture_output=True, text=True, timeout=1800)
+        if done.returncode != 0:
+            lines = (done.stderr or done.stdout).strip().splitlines()
+            progress(f"{behavior} training failed: {lines[-1] if lines else done.returncode}")
+            return None
+        rows = [json.loads(line) for line in (out / "metrics.jsonl").read_text().splitlines()]
+    rows = rows[1:] or rows
+    return float(np.mean([r["steps_per_s"] for r in rows]))
+
+
+def decision_rate(
+    registry,
+    behavior: str,
+    steps: int,
+    extra: list[str],
+    progress: Callable[[str], None],
+) -> dict[str, Any]:
+    """The behaviour's default decision rate (``<behavior>_train_action_repeat``: physics steps
+    per policy decision) and, beside ``<behavior>_train_steps_per_s`` measured at it, the same
+    training with a decision every physics step (``<behavior>_train_steps_per_s_k1``). Both
+    count physics steps per second."""
+    from devlearn.config.run_config import default_config
+
+    repeat = default_config(registry.behavior(behavior)).env.action_repeat
+    result: dict[str, Any] = {f"{behavior}_train_action_repeat": repeat}
+    if repeat > 1:
+        progress(f"{behavior}: end-to-end training, a decision every physics step (K=1)")
+        result[f"{behavior}_train_steps_per_s_k1"] = bench_training(
+            behavior, steps, [*extra, "--set", "env.action_repeat=1"], progress
+        )
+    return result

@@ -1,0 +1,146 @@
+"""Start-up checks of a run: config values, seed, memory for the envs, the output folder."""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+import tempfile
+from pathlib import Path
+
+from devlearn.api.errors import UsageError
+
+SEED_MAX = 2**32 - 1
+"""Largest seed (numpy's global generator takes 32-bit seeds)."""
+ENV_MEMORY_MB = 10
+"""Memory one environment needs at least, in MB (a floor: measured 14 MB for self_touch and 46
+MB for hand_regard, which renders the eyes); ``--envs`` beyond what is available is refused."""
+WORKER_MEMORY_MB = 200
+"""Memory one env worker process needs at least, in MB (Python, MuJoCo, numpy)."""
+RUN_FILES = ("config.json", "metrics.jsonl", "checkpoint_latest.pt")
+"""Files whose presence marks a folder as holding a run."""
+_DEVICE = re.compile(r"^(cpu|cuda(:\d+)?)$")
+
+
+def _positive(cfg, name: str, low: float = 0.0, high: float = math.inf, closed: bool = False):
+    value = getattr(cfg.ppo, name)
+    inside = low <= value <= high if closed else low < value <= high
+    if not (isinstance(value, (int, float)) and math.isfinite(value) and inside):
+        lo = "[" if closed else "("
+        hi = f"{high:g}]" if math.isfinite(high) else "inf)"
+        raise UsageError(f"ppo.{name} must be a finite number in {lo}{low:g}, {hi}, got {value}")
+
+
+STEPS_MAX = 10**12
+"""Largest ``--steps`` (a million times the paper's 8M-step runs; beyond it counters and the
+progress bar overflow)."""
+ENVS_MAX = 1_000_000
+"""Largest ``--envs`` per rank."""
+WORKERS_MAX = 4_096
+"""Largest ``--workers`` per rank."""
+THREADS_MAX = 4_096
+"""Largest ``torch_threads`` / ``update_threads``."""
+INTERVAL_MAX = 10**9
+"""Largest ``save_interval`` (iterations)."""
+PPO_COUNT_MAX = 10**6
+"""Largest rollout length, epochs and mini-batches per iteration."""
+
+
+def _whole(value, option: str, low: int, high: int, low_note: str = "") -> None:
+    """Raise UsageError unless ``value`` is an integer in ``[low, high]``."""
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise UsageError(f"{option} must be an integer, got {value!r}")
+    if value < low:
+        note = f" ({low_note})" if low_note else ""
+        raise UsageError(f"{option} must be at least {low}{note}, got {value}")
+    if value > high:
+        raise UsageError(f"{option} must be at most {high:g}, got {value:g}")
+
+
+def check_config(cfg) -> None:
+    """Reject values that would fail later (or train on garbage) with a less clear error: every
+    number within bounds (each message one line naming the option and its valid range), checked
+    before anything is written."""
+    _whole(cfg.total_steps, "--steps", 1, STEPS_MAX)
+    _whole(cfg.num_envs, "--envs", 1, ENVS_MAX)
+    _whole(cfg.workers, "--workers", -1, WORKERS_MAX, "-1: one per core, 0: in process")
+    if not 0 <= cfg.seed <= SEED_MAX:
+        raise UsageError(f"--seed must be an integer from 0 to {SEED_MAX}, got {cfg.seed:g}")
+    _whole(cfg.torch_threads, "torch_threads", 0, THREADS_MAX, "0: automatic")
+    _whole(cfg.update_threads, "update_threads", 0, THREADS_MAX, "0: automatic")
+    _whole(cfg.save_interval, "save_interval", 1, INTERVAL_MAX)
+    if not _DEVICE.match(cfg.device):
+        raise UsageError(f"--device must be cpu, cuda or cuda:N, got '{cfg.device}'")
+    if cfg.ppo.schedule not in ("adaptive", "fixed"):
+        raise UsageError(f"ppo.schedule must be adaptive or fixed, got '{cfg.ppo.schedule}'")
+    for name in ("num_steps_per_env", "num_learning_epochs", "num_mini_batches"):
+        _whole(getattr(cfg.ppo, name), f"ppo.{name}", 1, PPO_COUNT_MAX)
+    _positive(cfg, "learning_rate", high=1.0)
+    _positive(cfg, "clip_param", high=1.0)
+    _positive(cfg, "gamma", high=1.0)
+    _positive(cfg, "lam", high=1.0, closed=True)
+    _positive(cfg, "max_grad_norm")
+    _positive(cfg, "entropy_coef", closed=True)
+    _positive(cfg, "value_loss_coef", closed=True)
+    if cfg.ppo.desired_kl is not None:
+        _positive(cfg, "desired_kl")
+
+
+def available_memory_mb() -> float | None:
+    """``MemAvailable`` of /proc/meminfo in MB (None where unknown)."""
+    try:
+        for line in Path("/proc/meminfo").read_text().splitlines():
+            if line.startswith("MemAvailable:"):
+                return int(line.split()[1]) / 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    return None
+
+
+def check_memory(num_envs: int, workers: int, available_mb: float | None = None) -> None:
+    """Refuse ``num_envs`` environments (and ``workers`` processes) per rank that cannot fit in
+    the available memory, by the floors :data:`ENV_MEMORY_MB` and :data:`WORKER_MEMORY_MB`."""
+    available = available_memory_mb() if available_mb is None else available_mb
+    if available is None:
+        return
+    ranks = max(int(os.environ.get("LOCAL_WORLD_SIZE", "1")), 1)
+    need = ranks * (num_envs * ENV_MEMORY_MB + max(workers, 0) * WORKER_MEMORY_MB)
+    if need > available:
+        fit = max(int((available / ranks - max(workers, 0) * WORKER_MEMORY_MB) / ENV_MEMORY_MB), 0)
+        raise UsageError(
+            f"--envs {num_envs} needs at least {need / 1024:.1f} GB of memory "
+            f"({ENV_MEMORY_MB} MB per environment), but {available / 1024:.1f} GB is available; "
+            f"use --envs {fit} or fewer"
+        )
+
+
+def check_out_dir(out_dir: str | Path) -> None:
+    """Refuse an output folder that is a file, lies under a file or cannot be written to
+    (tried by creating and deleting a file in the nearest existing folder)."""
+    path = Path(out_dir)
+    if path.exists() and not path.is_dir():
+        raise UsageError(f"--out {path} is a file, not a folder")
+    existing = path
+    while not existing.exists():
+        if existing.parent == existing:
+            break
+        existing = existing.parent
+    if existing.exists() and not existing.is_dir():
+        raise UsageError(f"--out {path} lies under {existing}, which is a file, not a folder")
+    try:
+        fd, probe = tempfile.mkstemp(prefix=".devlearn-probe-", dir=existing)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        raise UsageError(
+            f"--out {path} is not writable: cannot create files in {existing} "
+            f"({exc.strerror or exc})"
+        ) from None
+
+
+def holds_run(run_dir: Path) -> bool:
+    """True if ``run_dir`` holds (part of) a devlearn run: a config, metrics or checkpoint."""
+    run_dir = Path(run_dir)
+    if not run_dir.is_dir():
+        return False
+    return any((run_dir / n).exists() for n in RUN_FILES) or any(run_dir.glob("checkpoint_*.pt"))

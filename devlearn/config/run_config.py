@@ -1,0 +1,370 @@
+"""Run configuration: nested dataclasses, presets, saved configs, rsl-rl's train_cfg (``--set``
+overrides: :mod:`devlearn.config.values`)."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from dataclasses import dataclass, field
+from typing import Any
+
+from devlearn.api.errors import UsageError
+from devlearn.config.values import apply_overrides, convert, field_types
+
+
+@dataclass
+class PPOConfig:
+    """PPO hyper-parameters (rsl-rl's ``PPO`` keyword arguments plus the rollout length)."""
+
+    learning_rate: float = 3e-4
+    """Adam step size (the starting value when ``schedule`` is ``adaptive``)."""
+    num_steps_per_env: int = 64
+    """Steps each environment collects per iteration (rollout length)."""
+    num_learning_epochs: int = 5
+    """Passes over each rollout."""
+    num_mini_batches: int = 4
+    """Mini-batches per pass."""
+    clip_param: float = 0.2
+    """PPO ratio clip epsilon (paper, sec. II-A5: 0.2); also clips the value loss."""
+    gamma: float = 0.99
+    """Discount factor."""
+    lam: float = 0.95
+    """GAE lambda."""
+    entropy_coef: float = 0.005
+    """Weight of the entropy bonus."""
+    value_loss_coef: float = 1.0
+    """Weight of the value loss."""
+    max_grad_norm: float = 1.0
+    """Gradient-norm clip (actor and critic separately)."""
+    desired_kl: float | None = 0.01
+    """Target KL for the adaptive schedule (None disables adaptation)."""
+    schedule: str = "adaptive"
+    """Learning-rate schedule: ``adaptive`` (KL-driven) or ``fixed``."""
+    normalize_rewards: bool = True
+    """Divide every reward by a running standard deviation of the discounted return (as
+    gymnasium's ``NormalizeReward`` and SB3's ``VecNormalize``), then clip it to
+    +-``reward_clip``, before PPO sees it (:mod:`devlearn.training.reward_norm`). Raw per-term
+    rewards are still what metrics.jsonl logs. Unnormalised returns (value loss 5 to 440)
+    swamped the policy gradient of every shared-trunk run (issue #28,
+    ``results/learner/README.md``). A saved config without this field means False."""
+    reward_clip: float = 10.0
+    """Bound on a normalised reward (with ``normalize_rewards``)."""
+
+
+@dataclass
+class NetworkConfig:
+    """How the networks are laid out; recorded so that older checkpoints rebuild as trained."""
+
+    layout: str = ""
+    """``shared``: one set of encoders, fusion and trunk feeds separate policy and value heads
+    (the paper); ``separate``: actor and critic each have their own; empty: the behaviour's
+    ``NetworkSpec.share``. A saved config without a ``network`` section (runs from before the
+    shared layout) means ``separate``."""
+    legacy_uint8_scale: bool = False
+    """Divide uint8 observations (eye images) by 255 twice, as every run before the input-scale
+    fix did (the eye CNN divided its already-scaled input again). A saved config without a
+    ``network`` section means True, so those checkpoints see the input they were trained on;
+    new runs use [0, 1] images."""
+    head: str = "gaussian"
+    """The policy's action distribution. ``gaussian``: a mean that is a plain linear output and
+    one state-independent spread per action, bounded to [``min_std``, the behaviour's
+    ``max_std`` (1.0 where it sets none)] by a sigmoid; actions are clipped by the env, and a
+    mean past a bound stops being pushed once no sample falls inside (it cannot saturate).
+    ``paper``: the paper's ``tanh`` mean with a state-dependent softplus spread (sec. II-A4),
+    whose pre-activation grows without limit when the best action lies at a bound, since the
+    env clips the samples, not the mean (issue #28). A saved config without this field means
+    ``paper``."""
+    min_std: float = 0.05
+    """Lower bound of the ``gaussian`` head's spread (exploration never vanishes)."""
+
+
+LEGACY_NETWORK = NetworkConfig(layout="separate", legacy_uint8_scale=True, head="paper")
+"""What a saved config without a ``network`` section was trained with."""
+
+HEADS = ("gaussian", "paper")
+"""Valid values of :attr:`NetworkConfig.head`."""
+
+LEGACY_FIELDS: dict[str, Any] = {
+    "ppo.normalize_rewards": False,
+    "network.head": "paper",
+}
+"""Core fields a saved config may lack, and the value its run was trained with (the default
+changed when the field was added, issue #28): such a config loads as trained."""
+
+
+@dataclass
+class EnvConfig:
+    """How the policy meets the environment."""
+
+    action_repeat: int = 1
+    """Physics steps per policy decision: one action is held for this many physics steps and
+    their rewards summed (``env.action_repeat=K``; how facts and rewards are computed within
+    a decision: ``Behavior.facts_every_physics_step``). Episode lengths, curriculum stages,
+    ``--steps`` and evaluation counts stay in physics steps. 1: a decision every physics step
+    (the paper's 200 Hz). Behaviours set their own in ``train_defaults`` (self-touch and hand
+    regard: 5, a decision every 25 ms): at 200 Hz independent noise held for 5 ms barely moves
+    an arm, so random exploration goes nowhere (issue #28, ``results/learner/README.md``).
+    Must divide the episode length."""
+
+
+@dataclass
+class RunConfig:
+    """Everything one ``devlearn run`` needs; saved as ``config.json`` in the run directory."""
+
+    behavior_name: str = ""
+    """Registered behaviour to train (``devlearn plugins`` lists them)."""
+    total_steps: int = 150_000
+    """Environment steps to train for, summed over all environments and ranks. The default is a
+    demonstration (a few minutes on a 2-core CPU, docs/scaling.md); the paper's runs are
+    millions (``--steps 8e6``)."""
+    num_envs: int = 16
+    """Environments per rank. 16 amortises the policy's per-step forward pass (about 2 ms on
+    one core whatever the batch up to ~16) and gives 2,048-sample rollouts at 128 steps."""
+    workers: int = -1
+    """Environment worker processes per rank (0: step environments in the training process;
+    -1: automatic, one per CPU core but at most ``num_envs // 4``, so small batches stay in
+    process where a worker's start-up and per-step round trip would cost more than it gains)."""
+    seed: int = 0
+    """Seed of torch, numpy, random and (plus the env index) every environment."""
+    device: str = "cpu"
+    """Torch device of the networks (``cpu`` or ``cuda``; ``cuda:LOCAL_RANK`` when distributed)."""
+    out_dir: str = ""
+    """Run directory (config, checkpoints, metrics.jsonl, TensorBoard); default runs/NAME-TIME."""
+    save_interval: int = 50
+    """Iterations between periodic ``checkpoint_<step>.pt`` files; ``checkpoint_latest.pt`` is
+    also written every ``save_interval // 10`` iterations (at least every iteration)."""
+    torch_threads: int = 0
+    """Torch threads of the training process while collecting and updating (0: automatic, all
+    cores this process may use while the env workers wait, falling back to one thread while
+    another program makes multi-threaded work slower; see ``ThreadPlan`` in
+    ``devlearn/training/process.py``). Results repeat bit for bit only for a fixed count."""
+    update_threads: int = 0
+    """Threads of the PPO update (0: the same as ``torch_threads``)."""
+    logger: str = "tensorboard"
+    """Where metrics go besides metrics.jsonl: ``tensorboard``, or ``wandb`` (Weights & Biases
+    through rsl-rl's writer, which also writes TensorBoard; needs ``devlearn[wandb]``;
+    ``WANDB_MODE=offline`` keeps it local)."""
+    wandb_project: str = "devlearn"
+    """W&B project of the run (with ``logger=wandb``); the run is named after its directory."""
+    ppo: PPOConfig = field(default_factory=PPOConfig)
+    """PPO hyper-parameters."""
+    network: NetworkConfig = field(default_factory=NetworkConfig)
+    """Network layout, policy head and input scale."""
+    env: EnvConfig = field(default_factory=EnvConfig)
+    """The decision rate."""
+    curiosity: list[str] = field(default_factory=list)
+    """Learned intrinsic rewards added to the behaviour's reward, by registered name
+    (``--set curiosity=rnd,forward_model``; ``devlearn plugins --json`` lists them). Each is a
+    model trained on every rollout (devlearn/api/learned.py); none by default."""
+    learned: dict[str, Any] = field(default_factory=dict)
+    """Options of the learned rewards, name -> {option: value}, e.g. ``--set
+    learned.rnd.weight=0.5`` (the fields of the term's ``config_class``; unset ones keep their
+    defaults, and config.json records every resolved value)."""
+    preset: str = ""
+    """The behaviour preset this run started from (``devlearn run --preset NAME``; recorded
+    only: config.json holds every resolved value). Empty: none."""
+    start_from: str = ""
+    """The checkpoint this run started from (``devlearn run --from CHECKPOINT``; recorded
+    only). Empty: a fresh start."""
+    behavior: Any = None
+    """The behaviour's own options (an instance of its ``config_class``)."""
+
+
+def default_config(
+    behavior_cls: type,
+    overrides: list[str] | None = None,
+    preset: str | None = None,
+    **top: Any,
+) -> RunConfig:
+    """Build a run's config: defaults < the behaviour's ``train_defaults()`` < its preset
+    ``preset`` < ``top`` < overrides.
+
+    Args:
+        behavior_cls: The behaviour class.
+        overrides: ``key=value`` strings (``--set``).
+        preset: A name from the behaviour's ``presets()`` (``--preset``); None or empty: none.
+        top: Top-level RunConfig fields (e.g. ``total_steps=...``); None values are skipped.
+    Raises:
+        UsageError: An unknown preset (the valid ones named), a bad override, or values the
+            behaviour's :class:`~devlearn.api.network_spec.NetworkSpec` rejects.
+    """
+    cfg = RunConfig(behavior_name=behavior_cls.name, behavior=behavior_cls.config_class())
+    apply_overrides(cfg, behavior_cls(cfg.behavior).train_defaults())
+    if preset:
+        apply_preset(cfg, behavior_cls, preset)
+    apply_overrides(cfg, {k: v for k, v in top.items() if v is not None})
+    apply_overrides(cfg, overrides or [])
+    try:  # the spec checks its own values (e.g. the spread): say so before any env starts
+        spec = behavior_cls(cfg.behavior).network()
+    except ValueError as err:
+        raise UsageError(
+            f"{behavior_cls.name}: its network() rejects the config: {err} "
+            "(set through --set behavior.FIELD=VALUE, e.g. behavior.max_std)"
+        ) from err
+    if not cfg.network.layout:  # record the behaviour's choice, so config.json says it
+        cfg.network.layout = "shared" if spec.share else "separate"
+    check_learner(cfg, spec)
+    return cfg
+
+
+def check_learner(cfg: RunConfig, spec: Any) -> None:
+    """Check the head, spread bounds and decision rate of a run config.
+
+    Raises:
+        UsageError: naming the ``--set`` key and what is valid.
+    """
+    net = cfg.network
+    if net.head not in HEADS:
+        raise UsageError(f"unknown network.head '{net.head}'; valid: {', '.join(HEADS)}")
+    if net.head == "gaussian" and not 0 < net.min_std < min(spec.init_std, head_max_std(spec)):
+        raise UsageError(
+            f"network.min_std must be above 0 and below the initial spread {spec.init_std} "
+            f"and the bound {head_max_std(spec)}; got {net.min_std}"
+        )
+    if cfg.env.action_repeat < 1:
+        raise UsageError(f"env.action_repeat must be at least 1, got {cfg.env.action_repeat}")
+    if cfg.ppo.normalize_rewards and not cfg.ppo.reward_clip > 0:
+        raise UsageError(f"ppo.reward_clip must be above 0, got {cfg.ppo.reward_clip}")
+
+
+def head_max_std(spec: Any) -> float:
+    """Upper bound of the ``gaussian`` head's spread: the behaviour's ``max_std``, or 1.0 (the
+    widest useful spread for actions clipped to [-1, 1]) where it sets none."""
+    return float(spec.max_std) if spec.max_std else 1.0
+
+
+def apply_preset(cfg: RunConfig, behavior_cls: type, preset: str) -> RunConfig:
+    """Apply the behaviour's preset ``preset`` (its ``presets()``) to ``cfg`` in place and
+    record its name in ``cfg.preset``.
+
+    Raises:
+        UsageError: The behaviour has no such preset (the valid ones are named).
+    """
+    presets = behavior_cls(cfg.behavior).presets()
+    if preset not in presets:
+        raise UsageError(
+            f"unknown preset '{preset}' for {behavior_cls.name}; "
+            f"valid: {', '.join(presets) or 'none (it defines no presets)'}"
+        )
+    apply_overrides(cfg, presets[preset])
+    cfg.preset = preset
+    return cfg
+
+
+def to_dict(cfg: RunConfig) -> dict[str, Any]:
+    """Return a JSON-ready dict of ``cfg`` (tuples become lists)."""
+    return json.loads(json.dumps(dataclasses.asdict(cfg)))
+
+
+def _fill(obj: Any, data: dict[str, Any], prefix: str) -> None:
+    hints = field_types(obj)
+    for name, value in data.items():
+        current = getattr(obj, name, None)
+        if dataclasses.is_dataclass(current):
+            if not isinstance(value, dict):
+                shown = repr(value) if len(repr(value)) <= 40 else repr(value)[:37] + "..."
+                raise UsageError(
+                    f"saved config is damaged: '{prefix}{name}' holds {shown}, "
+                    "not a table of its fields"
+                )
+            _fill(current, value, f"{prefix}{name}.")
+        elif name in {f.name for f in dataclasses.fields(obj)}:
+            setattr(obj, name, convert(value, hints.get(name, Any), prefix + name))
+        else:
+            raise UsageError(f"unknown config key '{prefix}{name}' in saved config")
+
+
+def from_dict(data: dict[str, Any], behavior_cls: type) -> RunConfig:
+    """Rebuild a RunConfig saved by :func:`to_dict` for the behaviour class ``behavior_cls``.
+
+    A key the saved config lacks takes its default, except where the old runs were trained
+    otherwise: a missing ``network`` section means :data:`LEGACY_NETWORK`, and a behaviour
+    field named in its config class's ``LEGACY_DEFAULTS`` (field -> value) that the saved
+    ``behavior`` section lacks takes that value (a default changed after those runs).
+    """
+    cfg = RunConfig(behavior_name=behavior_cls.name, behavior=behavior_cls.config_class())
+    if "network" not in data:
+        cfg.network = dataclasses.replace(LEGACY_NETWORK)
+    for key, value in LEGACY_FIELDS.items():
+        section, name = key.split(".")
+        if name not in (data.get(section) or {}):
+            setattr(getattr(cfg, section), name, value)
+    saved = data.get("behavior")
+    if isinstance(saved, dict) and cfg.behavior is not None:
+        legacy = getattr(type(cfg.behavior), "LEGACY_DEFAULTS", {})
+        _fill(cfg.behavior, {k: v for k, v in legacy.items() if k not in saved}, "behavior.")
+    _fill(cfg, data, "")
+    return cfg
+
+
+def shared_layout(cfg: RunConfig, spec: Any) -> bool:
+    """Whether this run shares encoders, fusion and trunk between policy and value.
+
+    Raises:
+        UsageError: ``network.layout`` is neither ``shared``, ``separate`` nor empty.
+    """
+    layouts = {"shared": True, "separate": False, "": bool(spec.share)}
+    if cfg.network.layout not in layouts:
+        raise UsageError(
+            f"unknown network.layout '{cfg.network.layout}'; valid: shared, separate "
+            "(or empty: the behaviour's NetworkSpec.share)"
+        )
+    return layouts[cfg.network.layout]
+
+
+def to_rsl_rl(cfg: RunConfig, behavior: Any, observation_names: list[str] | None = None) -> dict:
+    """Return rsl-rl 5.5.1's ``train_cfg`` for this run.
+
+    Actor and critic are :class:`~devlearn.training.networks.MultiSenseModel`s built from the
+    behaviour's :class:`~devlearn.api.network_spec.NetworkSpec` (passed as an object; rsl-rl
+    deep-copies it). In the ``shared`` layout rsl-rl's ``share_cnn_encoders`` hands the actor's
+    encoders, fusion and trunk to the critic, which adds only its value head; in the ``separate``
+    layout each network builds its own. The algorithm is
+    :class:`~devlearn.training.ppo.UniqueParamPPO`.
+
+    Args:
+        cfg: The run config.
+        behavior: The behaviour instance.
+        observation_names: Observation names (default: the spec's encoder names).
+    """
+    spec = behavior.network()
+    names = list(observation_names or spec.encoders)
+    ppo = dataclasses.asdict(cfg.ppo)
+    num_steps = ppo.pop("num_steps_per_env")
+    for ours in ("normalize_rewards", "reward_clip"):  # devlearn's, not rsl-rl's PPO's
+        ppo.pop(ours)
+    shared = shared_layout(cfg, spec)
+    model = {
+        "class_name": "devlearn.training.networks:MultiSenseModel",
+        "spec": spec,
+        "shared": shared,
+        "legacy_uint8_scale": cfg.network.legacy_uint8_scale,
+    }
+    if cfg.network.head == "paper":
+        distribution = {
+            "class_name": "devlearn.training.networks:TanhSoftplusGaussian",
+            "init_std": spec.init_std,
+            "max_std": spec.max_std,
+        }
+    else:
+        distribution = {
+            "class_name": "devlearn.training.distribution:BoundedGaussian",
+            "init_std": spec.init_std,
+            "min_std": cfg.network.min_std,
+            "max_std": head_max_std(spec),
+        }
+    return {
+        "algorithm": {
+            "class_name": "devlearn.training.ppo:UniqueParamPPO",
+            "share_cnn_encoders": shared,
+            **ppo,
+        },
+        "actor": {**model, "distribution_cfg": distribution},
+        "critic": dict(model),
+        "obs_groups": behavior.obs_groups(names),
+        "num_steps_per_env": num_steps,
+        "save_interval": cfg.save_interval,
+        "run_name": cfg.behavior_name,
+        "logger": "tensorboard",
+        "check_for_nan": True,
+    }

@@ -1,0 +1,355 @@
+"""evaluate(): run a policy (checkpoint or baseline) under the behaviour's evaluation protocol."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+from rsl_rl.utils import resolve_class, resolve_obs_groups
+from tensordict import TensorDict
+from tqdm import tqdm
+
+from devlearn.api.errors import UsageError
+from devlearn.config.run_config import (
+    RunConfig,
+    apply_overrides,
+    default_config,
+    from_dict,
+    to_dict,
+    to_rsl_rl,
+)
+from devlearn.env.behavior_env import BehaviorEnv
+from devlearn.training.checkpoint import LATEST, check_behavior, check_fits, load_checkpoint
+from devlearn.training.process import quiet
+
+VIDEO_FPS = 25
+"""Frame rate of evaluation videos (every k-th control step is rendered to match it)."""
+POLICY_FILE = "policy.pt"
+"""Name of a slimmed policy file (``devlearn slim``) in a published run folder."""
+POLICIES = ("checkpoint", "zero", "random", "held_random")
+"""What ``evaluate`` can run: a checkpoint's mean action, or a baseline: zero action, actions
+uniform in [-1, 1] drawn afresh every step (i.i.d.), or ``held_random``: uniform actions each
+held for :data:`HOLD_STEPS` physics steps on average (each actuator redraws with probability
+1 / HOLD_STEPS per physics step, as motor babbling does; with a decision rate K, K / HOLD_STEPS
+per decision), which moves the damped limbs much further
+than i.i.d. noise. All seeded by the evaluation seed."""
+HOLD_STEPS = 8
+"""Mean steps a ``held_random`` baseline action is held (40 ms at 200 Hz)."""
+STARTS = ("stage", "babybench", "rest", "random")
+"""Where episodes start: ``stage``, as the behaviour's evaluation stage says (self-touch:
+seeded random poses; hand regard: its ``eval_start``, BabyBench's start); ``babybench``, the
+scene's initial state (settled, in scenes that settle) then 10 physics steps of seeded
+uniform-random actions, as every BabyBench episode starts; ``rest``, that initial state
+alone, every episode (a deterministic policy then repeats one episode, so one episode is
+enough: a diagnostic that asks whether a policy has the skill where it trained); ``random``,
+joint angles uniform in their ranges (and toys placed at random), a generalisation test.
+``devlearn.infant.starts.STARTS`` are the infant's."""
+
+
+class EvalWriteError(UsageError):
+    """Evaluating worked but writing its files failed; ``summary`` holds the results."""
+
+    def __init__(self, message: str, summary: dict[str, Any]) -> None:
+        super().__init__(message)
+        self.summary = summary
+
+
+def resolve_checkpoint(path: str | Path) -> Path:
+    """The checkpoint file ``path`` names: the file itself, or a run folder's newest.
+
+    Raises:
+        UsageError: A folder holding neither ``checkpoint_latest.pt`` nor ``policy.pt``.
+    """
+    path = Path(path)
+    if not path.is_dir():
+        return path
+    for name in (LATEST, POLICY_FILE):
+        if (path / name).is_file():
+            return path / name
+    raise UsageError(
+        f"--checkpoint {path} is a folder without {LATEST} or {POLICY_FILE}; "
+        "a checkpoint file (.pt) is expected"
+    )
+
+
+def prepare_out_dir(out_dir: str | Path) -> Path:
+    """Create ``out_dir`` and check that files can be written there (before any episode runs).
+
+    Raises:
+        UsageError: It cannot be created or written.
+    """
+    out = Path(out_dir)
+    probe = out / f".devlearn-write-test-{os.getpid()}"
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        probe.write_text("")
+        probe.unlink()
+    except OSError as exc:
+        raise UsageError(f"cannot write to output folder {out}: {exc.strerror or exc}") from None
+    return out
+
+
+def code_version() -> dict[str, Any]:
+    """The git commit of the devlearn code that runs (``commit`` None outside a git checkout).
+
+    Returns:
+        ``{"commit": sha or None, "dirty": bool or None}``; dirty: tracked Python files
+        differ from the commit (so the code that ran is not exactly the commit's).
+    """
+    root = Path(__file__).resolve().parents[2]
+    try:
+        sha = subprocess.run(
+            ["git", "rev-parse", "HEAD"],
+            cwd=root,
+            capture_output=True,
+            text=True,
+            timeout=10,
+            check=True,
+        ).stdout.strip()
+        status = subprocess.run(
+            ["git", "status", "--porcelain", "--untracked-files=no", "--", "*.py"],
+            cwd=root,
+            capture_output=True,
+            text=True,
+            timeout=10,
+            check=True,
+        ).stdout
+    except (OSError, subprocess.SubprocessError):
+        return {"commit": None, "dirty": None}
+    return {"commit": sha, "dirty": bool(status.strip())}
+
+
+def _batch(obs: dict[str, np.ndarray]) -> TensorDict:
+    """One env's observations as a batch of one (copied): groups (1, *shape)."""
+    return TensorDict({k: torch.from_numpy(np.array(v)[None]) for k, v in obs.items()}, [1])
+
+
+def load_actor(
+    cfg: RunConfig,
+    checkpoint: dict[str, Any],
+    behavior,
+    obs: dict[str, np.ndarray],
+    action_dim: int,
+):
+    """Rebuild the checkpoint's policy network for ``behavior`` (eval mode, CPU)."""
+    train_cfg = to_rsl_rl(cfg, behavior, list(obs))
+    batch = _batch(obs)
+    with quiet():  # rsl-rl prints the resolved sets
+        groups = resolve_obs_groups(batch, train_cfg["obs_groups"], ["actor", "critic"])
+    actor_class, actor_kwargs = resolve_class(train_cfg["actor"])
+    actor = actor_class(batch, groups, "actor", action_dim, **actor_kwargs)
+    source = f"the {behavior.name} checkpoint"
+    check_fits(actor.state_dict(), checkpoint["actor_state_dict"], source, "actor_state_dict")
+    actor.load_state_dict(checkpoint["actor_state_dict"])
+    return actor.eval()
+
+
+def _policy(
+    policy: str, actor, action_dim: int, seed: int, repeat: int = 1
+) -> Callable[[dict[str, np.ndarray]], np.ndarray]:
+    """``act(obs) -> (action_dim,)``: the actor's mean action, zeros, or seeded uniform noise."""
+    if policy == "zero":
+        return lambda obs: np.zeros(action_dim)
+    if policy == "random":
+        rng = np.random.default_rng([seed, 1])  # a stream apart from the env's (seed)
+        return lambda obs: rng.uniform(-1.0, 1.0, action_dim)
+    if policy == "held_random":
+        rng = np.random.default_rng([seed, 2])
+        held = rng.uniform(-1.0, 1.0, action_dim)
+
+        def hold(obs: dict[str, np.ndarray]) -> np.ndarray:
+            redraw = rng.random(action_dim) < min(1.0, repeat / HOLD_STEPS)
+            held[redraw] = rng.uniform(-1.0, 1.0, int(redraw.sum()))
+            return held.copy()
+
+        return hold
+
+    def act(obs: dict[str, np.ndarray]) -> np.ndarray:
+        with torch.inference_mode():
+            return actor(_batch(obs))[0].numpy()
+
+    return act
+
+
+def _set_infant_start(infant: Any, start: str) -> None:
+    """Make the env's infant start its episodes with ``start`` (babybench or rest).
+
+    Raises:
+        UsageError: The infant has no starts (a stand-in) and ``start`` is not its rest.
+    """
+    if hasattr(infant, "start"):
+        infant.start = start
+    elif start != "rest":
+        raise UsageError(f"--start {start}: this infant has no such start (it has only rest)")
+
+
+def evaluate(
+    behavior_name: str,
+    checkpoint: str | Path | None,
+    episodes: int,
+    registry,
+    video: str | Path | None = None,
+    seed: int = 0,
+    out_dir: str | Path | None = None,
+    infant_factory=None,
+    progress: bool = True,
+    policy: str = "checkpoint",
+    start: str = "stage",
+    overrides: list[str] | None = None,
+) -> dict[str, Any]:
+    """Run ``episodes`` episodes of a policy and summarise them under the evaluation protocol.
+
+    The env uses ``behavior.eval_stage()`` options and ``behavior.evaluator(training=False)``.
+    A checkpoint acts with its mean action (deterministic); the baselines ``zero`` and
+    ``random`` run through exactly the same loop with the behaviour's default config.
+
+    Args:
+        behavior_name: The behaviour the checkpoint must belong to.
+        checkpoint: Path of a devlearn checkpoint or policy file, or a run folder (its
+            ``checkpoint_latest.pt`` or ``policy.pt``); None for a baseline.
+        episodes: Number of full episodes.
+        registry: Plugin registry.
+        video: Write an MP4 of the first episode here (needs imageio-ffmpeg).
+        seed: Seed of the env's initial poses (and of the ``random`` baseline's actions).
+        out_dir: Write ``eval.json`` and the evaluator's artifacts here (checked to be
+            writable before any episode runs).
+        infant_factory: Infant builder (tests); default the real infant.
+        progress: Show a progress bar (steps, episodes) on stderr.
+        policy: One of :data:`POLICIES`.
+        start: One of :data:`STARTS`; other than ``stage`` it overrides the stage's
+            ``random_pose`` and the infant's start.
+        overrides: ``key=value`` settings of a baseline's config (``--set``), e.g. a
+            calibrated detector for hand regard's baselines
+            (``behavior.detector_file=runs/hr/hand_detector.json``); not with a checkpoint,
+            whose config is its own.
+    Returns:
+        ``evaluator.summary()`` plus ``behavior``, ``policy``, ``checkpoint``,
+        ``checkpoint_env_steps`` (x axis of ``devlearn curve``), ``training_seed``, ``config``
+        (the checkpoint's, for ``devlearn report``'s grouping), ``start`` (the start episodes
+        took: babybench, rest or random) and ``protocol`` (episodes, seed, start, settle
+        steps, criteria, training steps, code commit). When files were written,
+        ``written`` lists them (not part of eval.json).
+    Raises:
+        UsageError: Missing, corrupt or foreign checkpoint; bad policy; unwritable out_dir.
+        EvalWriteError: The episodes ran but writing files failed (carries the summary).
+    """
+    if policy not in POLICIES:
+        raise UsageError(f"unknown policy '{policy}'; valid: {', '.join(POLICIES)}")
+    if start not in STARTS:
+        raise UsageError(f"unknown start '{start}'; valid: {', '.join(STARTS)}")
+    if (checkpoint is None) != (policy != "checkpoint"):
+        raise UsageError(
+            "give a checkpoint, or a baseline policy (zero, random, held_random), not both"
+        )
+    if overrides and checkpoint is not None:
+        raise UsageError("--set applies to baselines only: a checkpoint evaluates with its config")
+    out = prepare_out_dir(out_dir) if out_dir is not None else None
+    behavior_cls = registry.behavior(behavior_name)
+    if checkpoint is not None:
+        checkpoint = resolve_checkpoint(checkpoint)
+        state = load_checkpoint(checkpoint)
+        check_behavior(state, checkpoint, behavior_name)
+        cfg = from_dict(state["config"], behavior_cls)
+    else:  # a baseline acts at the decision rate a new run of the behaviour would use
+        state = {}
+        cfg = from_dict({}, behavior_cls)
+        cfg.env.action_repeat = default_config(behavior_cls).env.action_repeat
+        apply_overrides(cfg, list(overrides or []))
+    behavior = registry.create(behavior_name, cfg.behavior)
+    if checkpoint is not None:
+        behavior.load_policy_artifacts(dict(state.get("artifacts") or {}), checkpoint.parent)
+    torch.manual_seed(seed)
+    threads = torch.get_num_threads()
+    # A batch of one gains nothing from more threads, and several threads on a core that
+    # another program uses are many times slower (measured: a 64x64 eye CNN 85 ms vs 11 ms).
+    torch.set_num_threads(1)
+    repeat = cfg.env.action_repeat
+    env = BehaviorEnv(behavior, seed, infant_factory, training=False, action_repeat=repeat)
+    writer = None
+    try:
+        stage = behavior.eval_stage()
+        if start != "stage":
+            stage = {**stage, "random_pose": start == "random"}
+            if start != "random":
+                _set_infant_start(env.infant, start)
+        elif not stage.get("random_pose") and hasattr(behavior, "eval_start"):
+            # a behaviour may evaluate from another start than it trains from (hand regard's
+            # eval_start); the infant was built with the training start
+            _set_infant_start(env.infant, behavior.eval_start())
+        env.set_stage(stage)
+        started = "random" if stage.get("random_pose") else getattr(env.infant, "start", "rest")
+        obs = env.reset()
+        actor = None
+        if checkpoint is not None:
+            actor = load_actor(cfg, state, behavior, obs, env.action_dim)
+        act = _policy(policy, actor, env.action_dim, seed, repeat)
+        if video is not None:
+            import imageio.v2 as imageio
+
+            Path(video).parent.mkdir(parents=True, exist_ok=True)
+            writer = imageio.get_writer(str(video), fps=VIDEO_FPS, macro_block_size=1)
+            stride = max(1, round(1.0 / (env.step_dt * repeat * VIDEO_FPS)))
+        bar = tqdm(
+            total=episodes * env.episode_steps,
+            unit="step",
+            disable=not progress,
+            desc=f"eval {behavior_name}",
+            file=sys.stderr,
+            dynamic_ncols=True,
+        )
+        for episode in range(episodes):
+            bar.set_postfix(episode=f"{episode + 1}/{episodes}")
+            for t in range(env.episode_steps // repeat):  # decisions; bar and counts: physics
+                bar.update(repeat)
+                if writer is not None and episode == 0 and t % stride == 0:
+                    writer.append_data(env.behavior.render_frame(env.infant))
+                obs, _, _, _, _ = env.step(act(obs))
+        bar.close()
+        summary = env.evaluator.summary()
+        steps = int(state.get("env_steps", 0))
+        summary.update(
+            behavior=behavior_name,
+            policy=policy,
+            checkpoint=str(checkpoint) if checkpoint is not None else None,
+            checkpoint_env_steps=steps,
+            training_seed=int(cfg.seed) if checkpoint is not None else None,
+            config=state["config"] if checkpoint is not None else to_dict(cfg),
+            start=started,
+            protocol={
+                "episodes": episodes,
+                "seed": seed,
+                "policy": policy,
+                "action": "mean" if policy == "checkpoint" else policy,
+                "stage": json.loads(json.dumps(stage, default=str)),
+                "start": started,
+                "start_option": start,
+                "settle_steps": 0,
+                "action_repeat": repeat,
+                **env.evaluator.protocol(),
+                "checkpoint_env_steps": steps,
+                "code": code_version(),
+            },
+        )
+        if out is not None:
+            written = []
+            try:
+                (out / "eval.json").write_text(json.dumps(summary, indent=2, default=float) + "\n")
+                written = [out / "eval.json", *env.evaluator.write_artifacts(out)]
+            except OSError as exc:
+                raise EvalWriteError(
+                    f"evaluated, but writing to {out} failed: {exc.strerror or exc}", summary
+                ) from None
+            summary["written"] = [str(p) for p in written]
+        return summary
+    finally:
+        if writer is not None:
+            writer.close()
+        env.close()
+        torch.set_num_threads(threads)

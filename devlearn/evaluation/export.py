@@ -1,0 +1,168 @@
+"""Export a trained policy (observations to mean action) as ONNX or TorchScript."""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import warnings
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+import torch.nn as nn
+
+from devlearn.api.errors import UsageError
+
+FORMATS = ("onnx", "torchscript")
+"""Formats ``devlearn export`` writes."""
+ACTION = "action"
+"""Name of the exported graph's output."""
+
+
+class DeterministicPolicy(nn.Module):
+    """The policy at test time: the Gaussian's mean as the env applies it (paper: a_t = mu_t).
+
+    ``forward(*observations)`` takes one tensor per observation, in :attr:`names` order, each
+    (N, *shape) in the dtype the behaviour observes (uint8 images, float32 otherwise), and
+    returns (N, action_dim) actions in [-1, 1]. Normalisers and the input scale are inside.
+
+    Args:
+        actor: A trained :class:`~devlearn.training.networks.MultiSenseModel` actor.
+    """
+
+    def __init__(self, actor: nn.Module) -> None:
+        super().__init__()
+        self.actor = actor
+        self.names = list(actor.obs_groups)
+        self.eval()
+
+    def forward(self, *observations: torch.Tensor) -> torch.Tensor:
+        latent = self.actor.encode(dict(zip(self.names, observations)))
+        return self.actor.distribution.deterministic_output(self.actor.mlp(latent))
+
+
+def load_policy(
+    behavior_name: str, checkpoint: str | Path, registry
+) -> tuple[DeterministicPolicy, dict[str, np.ndarray]]:
+    """Rebuild a checkpoint's deterministic policy and one observation of its behaviour.
+
+    The behaviour's environment is built once (and reset) to learn the observations' names,
+    shapes and dtypes.
+
+    Returns:
+        ``(policy, observation)``: observation name -> array of one step, unbatched.
+    Raises:
+        UsageError: Missing, corrupt or foreign checkpoint, or an environment that cannot be
+            built from the checkpoint's config.
+    """
+    from devlearn.config.run_config import from_dict
+    from devlearn.env import BehaviorEnv
+    from devlearn.evaluation.evaluate import load_actor
+    from devlearn.training.checkpoint import check_behavior, load_checkpoint
+
+    state = load_checkpoint(checkpoint)
+    check_behavior(state, checkpoint, behavior_name)
+    cfg = from_dict(state["config"], registry.behavior(behavior_name))
+    behavior = registry.create(behavior_name, cfg.behavior)
+    try:
+        env = BehaviorEnv(behavior, 0, training=False)
+    except OSError as exc:
+        raise UsageError(
+            f"cannot build the '{behavior_name}' environment of checkpoint {checkpoint} "
+            f"(needed for its observation shapes): {exc}"
+        ) from None
+    try:
+        obs = env.reset()
+        actor = load_actor(cfg, state, behavior, obs, env.action_dim)
+    finally:
+        env.close()
+    return DeterministicPolicy(actor), obs
+
+
+def example_inputs(
+    policy: DeterministicPolicy, obs: dict[str, Any], batch: int = 4
+) -> tuple[torch.Tensor, ...]:
+    """``obs`` repeated into a batch, in the policy's input order: tensors (batch, *shape).
+
+    More than one sample, so that the exporter keeps the batch axis dynamic (torch.export
+    specialises axes of size 1).
+    """
+    return tuple(
+        torch.from_numpy(np.repeat(np.array(obs[name])[None], batch, axis=0))
+        for name in policy.names
+    )
+
+
+def export_policy(policy: DeterministicPolicy, obs: dict[str, Any], fmt: str, out: Path) -> Path:
+    """Write ``policy`` to ``out`` as ONNX (inputs named after the observations, batch axis
+    dynamic, output ``action``) or TorchScript (``torch.jit.load(out)(*observations)``).
+
+    Raises:
+        UsageError: Unknown format, missing ONNX packages, or an unwritable ``out``.
+    """
+    if fmt not in FORMATS:
+        raise UsageError(f"unknown export format '{fmt}'; valid: {', '.join(FORMATS)}")
+    out = Path(out)
+    if not out.parent.is_dir():
+        raise UsageError(f"cannot write {out}: directory {out.parent} does not exist")
+    inputs = example_inputs(policy, obs)
+    try:
+        with torch.no_grad(), _known_exporter_noise_silenced():
+            if fmt == "torchscript":
+                torch.jit.trace(policy, inputs, check_trace=False).save(str(out))
+            else:
+                _export_onnx(policy, inputs, out)
+    except PermissionError as exc:
+        raise UsageError(f"cannot write {out}: {exc.strerror}") from None
+    return out
+
+
+HARMLESS_WARNINGS = (
+    r".*isinstance\(treespec, LeafSpec\)` is deprecated",  # torch's own pytree use
+    r"# The axis name: .* will not be used",  # one dynamic batch axis named for all inputs
+)
+"""Messages torch's exporters print on every successful export that say nothing about it."""
+HARMLESS_LOGGERS = ("torch.onnx._internal.exporter._registration",)
+"""Loggers whose warnings (torchvision's operators not registered: a policy uses none) are
+hidden during an export; errors still show."""
+
+
+@contextlib.contextmanager
+def _known_exporter_noise_silenced():
+    """Within the block, the known harmless exporter warnings are hidden; any other shows."""
+    loggers = [logging.getLogger(name) for name in HARMLESS_LOGGERS]
+    levels = [logger.level for logger in loggers]
+    with warnings.catch_warnings():
+        for message in HARMLESS_WARNINGS:
+            warnings.filterwarnings("ignore", message=message)
+        for logger in loggers:
+            logger.setLevel(logging.ERROR)
+        try:
+            yield
+        finally:
+            for logger, level in zip(loggers, levels):
+                logger.setLevel(level)
+
+
+def _export_onnx(policy: DeterministicPolicy, inputs: tuple[torch.Tensor, ...], out: Path) -> None:
+    try:
+        import onnx  # noqa: F401
+        import onnxscript  # noqa: F401
+    except ImportError:
+        raise UsageError(
+            "ONNX export needs the onnx and onnxscript packages: pip install 'devlearn[export]'"
+        ) from None
+    with open(out, "wb"):  # fail early and clearly on an unwritable path
+        pass
+    batch = torch.export.Dim("batch", min=1)
+    program = torch.onnx.export(
+        policy,
+        inputs,
+        dynamo=True,
+        input_names=policy.names,
+        output_names=[ACTION],
+        dynamic_shapes={"observations": tuple({0: batch} for _ in inputs)},
+        verbose=False,
+    )
+    program.save(str(out))

@@ -1,0 +1,463 @@
+"""The behaviour conformance check (:func:`check_behavior`): the class contract, reward terms,
+curriculum, network, then the behaviour's real environment stepped with every term, observation
+and evaluator checked (the instrumented wrappers are at the end of this module)."""
+
+from __future__ import annotations
+
+import dataclasses
+import pickle
+from typing import Any
+
+import mujoco
+import numpy as np
+import torch
+
+from devlearn.api.behavior import Behavior
+from devlearn.api.curriculum import Curriculum
+from devlearn.api.network_spec import NetworkSpec
+from devlearn.api.rewards import BatchedIntrinsicReward, IntrinsicReward
+from devlearn.env.guards import TermError
+from devlearn.testing.values import (
+    ConformanceError,
+    check_number,
+    check_picklable,
+    json_problem,
+    pickle_problem,
+    require,
+)
+
+
+def check_behavior_class(behavior_cls: type[Behavior]) -> None:
+    """Check the class-level contract: name, scene, senses, config dataclass, docstrings."""
+    name = getattr(behavior_cls, "name", None)
+    require(isinstance(name, str) and name.isidentifier(), "Behavior.name must be an identifier")
+    require(
+        behavior_cls.scene in ("crib", "sitting", "sitting_babybench"),
+        "Behavior.scene must be crib, sitting or sitting_babybench",
+    )
+    valid = {"touch", "proprioception", "vestibular", "eyes"}
+    require(set(behavior_cls.senses) <= valid, f"Behavior.senses must be within {sorted(valid)}")
+    require(dataclasses.is_dataclass(behavior_cls.config_class), "config_class: a dataclass")
+    require(bool(behavior_cls.__doc__), f"{behavior_cls.__name__} needs a docstring")
+    config = behavior_cls.config_class()
+    check_picklable(behavior_cls(config), f"behavior '{name}'")  # travels to worker processes
+
+
+def check_reward_terms(terms: list[IntrinsicReward | BatchedIntrinsicReward]) -> None:
+    """Check reward terms: unique names, a docstring each, picklable state."""
+    names = [t.name for t in terms]
+    require(len(names) == len(set(names)), f"reward term names must be unique: {names}")
+    for term in terms:
+        batched = isinstance(term, BatchedIntrinsicReward)
+        require(
+            batched or isinstance(term, IntrinsicReward),
+            f"{term!r} is not an IntrinsicReward or BatchedIntrinsicReward",
+        )
+        require(bool(type(term).__doc__), f"reward term '{term.name}' needs a docstring")
+        if batched:
+            term.bind(1)
+            state = term.state_dict(0)
+        else:
+            state = term.state_dict()
+        require(isinstance(state, dict), f"reward term '{term.name}': state_dict() -> a dict")
+        check_picklable(state, f"reward term '{term.name}' state_dict()", "state")
+        if batched:
+            term.load_state_dict(0, pickle.loads(pickle.dumps(state)))
+        else:
+            term.load_state_dict(pickle.loads(pickle.dumps(state)))
+
+
+def check_curriculum(curriculum: Curriculum) -> None:
+    """Check that a curriculum's state survives a save/restore."""
+    total = sum(s.steps or 0 for s in curriculum.stages)
+    curriculum.update(total + 1)
+    state = pickle.loads(pickle.dumps(curriculum.state_dict()))
+    fresh = type(curriculum)(curriculum.stages)
+    fresh.load_state_dict(state)
+    require(fresh.index == curriculum.index, "curriculum stage lost on load_state_dict")
+
+
+def check_network(spec: NetworkSpec, observations: dict[str, np.ndarray], groups: dict) -> None:
+    """Check that every observation in the actor/critic groups has an encoder that runs."""
+    for group in ("actor", "critic"):
+        require(group in groups, f"obs_groups must have '{group}'")
+        for name in groups[group]:
+            require(name in spec.encoders, f"observation '{name}' has no encoder in network()")
+    for name, encoder in spec.encoders.items():
+        require(name in observations, f"encoder for unknown observation '{name}'")
+        shape = tuple(observations[name].shape)
+        module = encoder.build(shape)
+        batch = torch.as_tensor(np.stack([observations[name]] * 2)).float()
+        out = module(batch)
+        require(
+            tuple(out.shape) == (2, encoder.out_dim(shape)),
+            f"encoder '{name}' returned {tuple(out.shape)}, expected (2, {encoder.out_dim(shape)})",
+        )
+
+
+def check_behavior(
+    behavior_cls: type[Behavior],
+    steps: int = 20,
+    seed: int = 0,
+    *,
+    episodes: int = 2,
+    episode_steps: int = 200,
+    contact_steps: int = 3,
+    config: Any | None = None,
+) -> dict[str, tuple[int, ...]]:
+    """Run the full conformance check: what training and ``devlearn eval`` will exercise.
+
+    In order: the class contract (name, scene, senses, documented config, picklable instance,
+    naming the attribute that is not); reward terms (unique names, docstrings, picklable state);
+    the curriculum's save/restore; then the behaviour's real environment:
+
+    1. ``steps`` random actions from the first stage's initial pose;
+    2. ``episodes`` episodes from random poses (cycling through the curriculum's stages, each
+       cut to ``episode_steps`` steps so it ends quickly), so episode ends run too;
+    3. ``contact_steps`` steps with a hand placed on the body (a scripted contact), so facts,
+       observations and terms that depend on contacts run.
+
+    On every step observations must keep their names and shapes and be finite float32 (or
+    uint8) arrays; every reward term must return a finite Python float (the message names the
+    term). A training and an evaluation evaluator (``evaluator(training=...)``) record every
+    step; their ``end_episode()`` metrics must be finite numbers and their ``summary()``
+    JSON-serialisable, and ``write_artifacts`` must return files that exist. A behaviour that
+    batches its facts or observations (``batch_facts``, ``batch_observe``) must give on every
+    step exactly what ``facts`` and ``observe`` give (:func:`check_batched_observations`).
+
+    Args:
+        behavior_cls: The Behavior subclass.
+        steps: Random-action steps of phase 1.
+        seed: Seed of the environment and of the random actions.
+        episodes: Random-pose episodes of phase 2 (at least 1).
+        episode_steps: Length of each of those episodes (at most the infant's own).
+        contact_steps: Steps with a hand on the body in phase 3.
+        config: The behaviour's config (default ``config_class()``).
+    Returns:
+        The observations' shapes, name -> tuple.
+    Raises:
+        ConformanceError: The first broken part of the contract, by name.
+    """
+    import tempfile
+    from pathlib import Path
+
+    from devlearn.env import BehaviorEnv
+    from devlearn.env.batch_advance import overrides
+
+    check_behavior_class(behavior_cls)
+    behavior = behavior_cls(config if config is not None else behavior_cls.config_class())
+    check_reward_terms(behavior.reward_terms())
+    curriculum = behavior.curriculum()
+    check_curriculum(curriculum)
+    phase = ["after reset"]  # where the check is, for messages (CheckedTerm reads it)
+    env = BehaviorEnv(behavior, seed=seed)
+    try:
+        env.terms = checked_terms(env.terms, phase)
+        checked = CheckedEvaluator(env.evaluator, behavior.evaluator(training=False), phase)
+        env.evaluator = checked
+        env.episode_steps = max(1, min(env.episode_steps, episode_steps))
+        first = env.reset()
+        shapes = check_observations(first, None, "after reset")
+        check_network(behavior.network(), first, behavior.obs_groups(list(shapes)))
+        rng = np.random.default_rng(seed)
+
+        batches = overrides(behavior, "batch_facts") or overrides(behavior, "batch_observe")
+
+        def step(action: np.ndarray, where: str) -> bool:
+            phase[0] = where
+            try:
+                obs, reward, done, _, info = env.step(action)
+            except TermError as exc:  # a checked term's own finding: report it as such
+                if isinstance(exc.__cause__, ConformanceError):
+                    raise exc.__cause__ from None
+                raise
+            check_number(reward, "the summed reward", where)
+            check_observations(obs, shapes, where)
+            if batches:
+                check_batched_observations(env.behavior, [env.infant], where)
+            return done
+
+        for _ in range(steps):
+            step(rng.uniform(-1, 1, env.action_dim), "on random actions from the initial pose")
+        for i in range(max(1, episodes)):
+            stage = curriculum.stages[i % len(curriculum.stages)]
+            env.set_stage({**stage.options, "random_pose": True})
+            env.reset()
+            where = f"in random-pose episode {i + 1} (stage '{stage.name}')"
+            while not step(rng.uniform(-1, 1, env.action_dim), where):
+                pass
+        require(checked.episodes >= 1, "no episode ended: the evaluator was never closed")
+        env.set_stage(behavior.eval_stage())
+        _scripted_contacts(env, rng, contact_steps, step)
+        check_summaries(checked)
+        with tempfile.TemporaryDirectory() as tmp:
+            paths = checked.evaluation.write_artifacts(Path(tmp))
+            require(isinstance(paths, list), "write_artifacts() must return a list of paths")
+            missing = [str(p) for p in paths if not Path(p).exists()]
+            require(not missing, f"write_artifacts() returned files that do not exist: {missing}")
+    finally:
+        env.close()
+    return shapes
+
+
+def _scripted_contacts(env: Any, rng: np.random.Generator, count: int, step) -> None:
+    """Take ``count`` steps on which a hand touches the body (placed there before each step)."""
+    infant = env.infant
+    if count <= 0 or not hasattr(infant, "_qpos_index"):  # a fake infant: nothing to place
+        return
+    done = 0
+    for _ in range(20 * count):
+        if env.episode_step >= env.episode_steps - 1:
+            env.reset()  # keep the placed pose clear of an automatic reset
+        if not place_hand_on_body(infant, rng):
+            continue
+        step(np.zeros(env.action_dim), "on a step with a hand placed on the body")
+        done += bool(infant.hand_contacts().any())
+        if done >= count:
+            return
+    raise RuntimeError(f"devlearn.testing could not script a hand contact in {infant.scene}")
+
+
+# --- the checks run on every step, and the instrumented terms and evaluator -------------------
+
+OBS_DTYPES = (np.float32, np.uint8)
+"""Observation dtypes the networks accept (float32 features, uint8 images)."""
+
+
+def check_observations(
+    obs: Any, shapes: dict[str, tuple] | None, where: str
+) -> dict[str, tuple[int, ...]]:
+    """Check one step's observations: a dict of fixed-shape, finite float32/uint8 arrays.
+
+    Args:
+        obs: What ``Behavior.observe`` returned.
+        shapes: The first step's shapes (None on the first step: they are recorded).
+        where: Which phase of the check this is, for messages.
+    Returns:
+        Name -> shape.
+    """
+    require(isinstance(obs, dict), f"observe() must return a dict, got {type(obs).__name__}")
+    if shapes is not None:
+        require(
+            set(obs) == set(shapes),
+            f"observation names changed {where}: {sorted(shapes)} -> {sorted(obs)}",
+        )
+    out = {}
+    for key, value in obs.items():
+        require(
+            isinstance(value, np.ndarray),
+            f"observation '{key}' is a {type(value).__name__}, not a numpy array {where}",
+        )
+        require(
+            value.dtype in OBS_DTYPES,
+            f"observation '{key}' has dtype {value.dtype}; use float32 (or uint8 images) {where}",
+        )
+        if shapes is not None:
+            require(
+                value.shape == shapes[key],
+                f"observation '{key}' changed shape from {shapes[key]} to {value.shape} {where}",
+            )
+        require(bool(np.all(np.isfinite(value))), f"observation '{key}' has NaN or inf {where}")
+        out[key] = tuple(value.shape)
+    return out
+
+
+def check_batched_observations(behavior: Any, infants: list[Any], where: str = "") -> None:
+    """Require ``batch_facts`` / ``batch_observe`` to give, for every infant, exactly (bit for
+    bit) what ``facts`` / ``observe`` give for it alone.
+
+    Args:
+        behavior: The behaviour (one instance serves every infant, as in a worker).
+        infants: Infants in the states to compare (after a step or a reset).
+        where: Which phase of the check this is, for messages.
+    """
+    n = len(infants)
+    per_env = [behavior.facts(infant) for infant in infants]
+    batched = behavior.batch_facts(infants)
+    require(
+        isinstance(batched, list) and len(batched) == n,
+        f"batch_facts() must return a list of {n} facts dicts, one per infant {where}",
+    )
+    for i, (got, want) in enumerate(zip(batched, per_env)):
+        require(
+            set(got) == set(want),
+            f"batch_facts()[{i}] has facts {sorted(got)}, facts() {sorted(want)} {where}",
+        )
+        for key, value in want.items():
+            require(
+                _identical(got[key], value),
+                f"batch_facts()[{i}]['{key}'] differs from facts()['{key}'] {where}",
+            )
+    observed = behavior.batch_observe(infants, batched)
+    for i, (infant, facts) in enumerate(zip(infants, per_env)):
+        want = behavior.observe(infant, facts)
+        require(
+            set(observed) == set(want),
+            f"batch_observe() gives {sorted(observed)}, observe() {sorted(want)} {where}",
+        )
+        for key, value in want.items():
+            require(
+                np.shape(observed[key]) == (n, *np.shape(value))
+                and _identical(np.asarray(observed[key])[i], np.asarray(value)),
+                f"batch_observe()['{key}'][{i}] differs from observe()['{key}'] {where}",
+            )
+
+
+def _identical(a: Any, b: Any) -> bool:
+    """Equal values; arrays of the same dtype and shape with the same bytes."""
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        a, b = np.asarray(a), np.asarray(b)
+        return a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes()
+    return bool(a == b)
+
+
+class CheckedTerm:
+    """A reward term whose every value is checked (finite Python float), naming the term."""
+
+    def __init__(self, term: Any, phase: list[str]) -> None:
+        self.term = term
+        self.phase = phase
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.term, name)
+
+    def __call__(self, ctx: Any) -> float:
+        value = self.term(ctx)
+        return check_number(value, f"reward term '{self.term.name}'", self.phase[0])
+
+
+class CheckedBatchedTerm(BatchedIntrinsicReward):
+    """A batched reward term whose every step is checked: a (num_envs,) array of finite real
+    numbers, naming the term."""
+
+    def __init__(self, term: BatchedIntrinsicReward, phase: list[str]) -> None:
+        self.term = term
+        self.phase = phase
+        self.name = term.name
+        self.weight = term.weight
+        self.num_envs = term.num_envs
+
+    def bind(self, num_envs: int) -> None:
+        self.term.bind(num_envs)
+        self.num_envs = self.term.num_envs
+
+    def __call__(self, batch: Any) -> np.ndarray:
+        values = self.term(batch)
+        what = f"batched reward term '{self.term.name}'"
+        shape = np.shape(values)
+        require(
+            shape == (len(batch.contexts),),
+            f"{what} returned shape {shape} {self.phase[0]}; "
+            f"it must return ({len(batch.contexts)},), one value per environment",
+        )
+        array = np.asarray(values)
+        require(
+            array.dtype.kind in "fiu" and bool(np.isfinite(array).all()),
+            f"{what} returned {' '.join(repr(values).split())[:60]} {self.phase[0]}; "
+            "it must return finite real numbers",
+        )
+        return array
+
+    def reset(self, env: int) -> None:
+        self.term.reset(env)
+
+    def state_dict(self, env: int) -> dict[str, Any]:
+        return self.term.state_dict(env)
+
+    def load_state_dict(self, env: int, state: dict[str, Any]) -> None:
+        self.term.load_state_dict(env, state)
+
+    def run_memory(self) -> dict[str, np.ndarray]:
+        return self.term.run_memory()
+
+    def merge_run_memory(self, copies: list[dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
+        return self.term.merge_run_memory(copies)
+
+    def load_run_memory(self, memory: dict[str, np.ndarray]) -> None:
+        self.term.load_run_memory(memory)
+
+
+def checked_terms(terms: list[Any], phase: list[str]) -> list[Any]:
+    """Wrap every term (per-env or batched) so each value it returns is checked."""
+    return [
+        CheckedBatchedTerm(t, phase)
+        if isinstance(t, BatchedIntrinsicReward)
+        else CheckedTerm(t, phase)
+        for t in terms
+    ]
+
+
+class CheckedEvaluator:
+    """Feeds a training and an evaluation evaluator the same steps; checks what they return."""
+
+    def __init__(self, training: Any, evaluation: Any, phase: list[str]) -> None:
+        self.training = training
+        self.evaluation = evaluation
+        self.phase = phase
+        self.episodes = 0
+
+    def record(self, ctx: Any) -> None:
+        self.training.record(ctx)
+        self.evaluation.record(ctx)
+
+    def end_episode(self) -> dict[str, float]:
+        self.episodes += 1
+        out = {}
+        for label, evaluator in (("training", self.training), ("evaluation", self.evaluation)):
+            metrics = evaluator.end_episode()
+            what = f"{label} evaluator's end_episode()"
+            require(isinstance(metrics, dict), f"{what} must return a dict, got {metrics!r}")
+            for key, value in metrics.items():
+                require(isinstance(key, str), f"{what} has a non-string key {key!r}")
+                value = check_number(value, f"{what} metric '{key}'", self.phase[0])
+                if label == "training":
+                    out[key] = value
+        return out
+
+    def episode_record(self) -> Any:
+        """The training evaluator's record of the episode just ended (checked to pickle: it
+        crosses from env workers to the runner)."""
+        record = getattr(self.training, "episode_record", lambda: None)()
+        if record is not None:
+            problem = pickle_problem(record, "training evaluator's episode_record()")
+            require(problem is None, f"{problem} (it crosses from env workers to the runner)")
+        return record
+
+    def summary(self) -> dict[str, Any]:
+        return self.training.summary()
+
+
+def check_summaries(checked: CheckedEvaluator) -> dict[str, Any]:
+    """Check both evaluators' ``summary()`` is a JSON-serialisable dict; return the eval one."""
+    result: dict[str, Any] = {}
+    for label, evaluator in (("training", checked.training), ("evaluation", checked.evaluation)):
+        summary = evaluator.summary()
+        what = f"{label} evaluator's summary()"
+        require(isinstance(summary, dict), f"{what} must return a dict, got {type(summary)}")
+        problem = json_problem(summary, "summary()")
+        require(problem is None, f"{what} is not JSON-serialisable: {problem}")
+        result = summary
+    return result
+
+
+def place_hand_on_body(infant: Any, rng: np.random.Generator, tries: int = 200) -> bool:
+    """Put the infant in a random pose where a hand touches its body (a scripted contact).
+
+    Joint angles are drawn uniformly within their ranges until a hand (palm or fingers) is in
+    contact with a body-map region and nothing penetrates deeper than 1 cm (so the next physics
+    step does not fling the limbs apart).
+
+    Returns:
+        True if such a pose was found (the infant is left in it), else False.
+    """
+    index, ranges = infant._qpos_index, infant._ranges
+    for _ in range(tries):
+        infant.data.qpos[index] = rng.uniform(ranges[:, 0], ranges[:, 1])
+        infant.data.qvel[:] = 0.0
+        mujoco.mj_forward(infant.model, infant.data)
+        infant._cache.clear()
+        ncon = infant.data.ncon
+        depth = float(-infant.data.contact.dist[:ncon].min()) if ncon else 0.0
+        if depth < 0.01 and infant.hand_contacts().any():
+            return True
+    return False

@@ -1,0 +1,205 @@
+"""A stand-in infant and a tiny behaviour: a real training or evaluation in seconds, no MuJoCo.
+
+rsl-rl's dummy environment idea: :class:`FakeInfant` is a point that moves by its actions
+(proprioception is its position), with faults on demand (a raised error, a Ctrl-C, a killed
+worker) to test how a run handles them; :func:`fake_infant_factory` builds it where
+``devlearn.training.train`` or :class:`devlearn.env.BehaviorEnv` take an ``infant_factory``.
+:class:`TinyBehavior` learns to move every joint to a target. devlearn's own tests and the
+curiosity plugin's train with them; a plugin's learned reward or evaluator can too.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+import devlearn
+from devlearn import StepContext
+
+
+class FakeInfant:
+    """A point that moves by its actions: proprioception is its position, (action_dim,)."""
+
+    physics_timestep = 0.005
+    control_timestep = 0.005
+
+    def __init__(
+        self,
+        scene: str,
+        senses=("proprioception",),
+        eye_size: int = 8,
+        episode_steps: int = 10,
+        action_dim: int = 3,
+        fail_after: int | None = None,
+        interrupt_after: int | None = None,
+        die_after: int | None = None,
+    ):
+        self.scene = scene
+        self.senses = tuple(senses)
+        self.eye_size = eye_size
+        self.episode_steps = episode_steps
+        self.action_dim = action_dim
+        self.actuator_names = [f"joint{i}" for i in range(action_dim)]
+        self.fail_after = fail_after
+        self.interrupt_after = interrupt_after
+        self.die_after = die_after  # SIGKILL this process (use only in env worker processes)
+        self.steps_taken = 0
+        self.position = np.zeros(action_dim)
+
+    def reset(self, rng: np.random.Generator, random_pose: bool = False) -> None:
+        self.position = (
+            rng.uniform(-1, 1, self.action_dim) if random_pose else np.zeros(self.action_dim)
+        )
+
+    def step(self, action: np.ndarray) -> None:
+        self.steps_taken += 1
+        if self.fail_after is not None and self.steps_taken > self.fail_after:
+            raise RuntimeError("fake infant broke on purpose")
+        if self.interrupt_after is not None and self.steps_taken > self.interrupt_after:
+            raise KeyboardInterrupt  # as if Ctrl-C arrived mid-rollout
+        if self.die_after is not None and self.steps_taken > self.die_after:
+            import os
+            import signal
+
+            os.kill(os.getpid(), signal.SIGKILL)  # as if the OOM killer struck
+        self.position = np.clip(self.position + 0.1 * np.clip(action, -1, 1), -2, 2)
+
+    def proprioception(self) -> np.ndarray:
+        return self.position.astype(np.float32)
+
+    def eyes(self) -> np.ndarray:
+        level = np.uint8(int(127 + 60 * np.tanh(self.position[0])))
+        return np.full((2, self.eye_size, self.eye_size, 3), level, dtype=np.uint8)
+
+    def render_view(self, width: int = 320, height: int = 240) -> np.ndarray:
+        frame = np.zeros((height, width, 3), dtype=np.uint8)
+        x = int((np.tanh(self.position[0]) + 1) / 2 * (width - 1))
+        frame[:, max(x - 2, 0) : x + 2] = 255
+        return frame
+
+    def close(self) -> None:
+        pass
+
+
+def fake_infant_factory(scene: str, senses=("proprioception",), eye_size: int = 8, **kwargs):
+    """Build a FakeInfant; extra kwargs (episode_steps, action_dim, fail_after...) pass through."""
+    return FakeInfant(scene, senses, eye_size, **kwargs)
+
+
+@dataclass
+class TinyConfig:
+    """Options of the tiny test behaviour."""
+
+    target: float = 0.5
+    """Position every joint should reach."""
+    stage_steps: int = 1000
+    """Steps of the fixed-pose stage before random poses."""
+    use_eyes: bool = False
+    """Also observe a (2, 8, 8, 3) uint8 image (exercises multi-dimensional observations)."""
+    reach_weight: float = 1.0
+    """Weight of the reach term."""
+
+
+class Reach(devlearn.IntrinsicReward):
+    """Minus the mean distance of the joints from the target."""
+
+    name = "reach"
+
+    def __init__(self, target: float, weight: float = 1.0) -> None:
+        super().__init__(weight)
+        self.target = target
+
+    def __call__(self, ctx: StepContext) -> float:
+        return -float(np.mean(np.abs(ctx.observations["proprioception"] - self.target)))
+
+
+class StepCounter(devlearn.IntrinsicReward):
+    """Pays 0; counts every step of the environment's lifetime (state survives resume)."""
+
+    name = "counter"
+
+    def __init__(self) -> None:
+        super().__init__(0.0)
+        self.count = 0
+
+    def __call__(self, ctx: StepContext) -> float:
+        self.count += 1
+        return 1.0
+
+    def state_dict(self) -> dict[str, Any]:
+        return {"count": self.count}
+
+    def load_state_dict(self, state: dict[str, Any]) -> None:
+        self.count = int(state["count"])
+
+
+class CloseEvaluator(devlearn.Evaluator):
+    """Share of steps with every joint within 0.2 of the target."""
+
+    def __init__(self, target: float) -> None:
+        self.target = target
+        self.close_steps = self.steps = self.episodes = 0
+        self.episode_close = self.episode_steps = 0
+
+    def record(self, ctx: StepContext) -> None:
+        close = bool(np.all(np.abs(ctx.observations["proprioception"] - self.target) < 0.2))
+        self.episode_close += int(close)
+        self.episode_steps += 1
+
+    def end_episode(self) -> dict[str, float]:
+        result = {"close": self.episode_close / max(self.episode_steps, 1)}
+        self.episodes += 1
+        self.close_steps += self.episode_close
+        self.steps += self.episode_steps
+        self.episode_close = self.episode_steps = 0
+        return result
+
+    def summary(self) -> dict[str, Any]:
+        return {"episodes": self.episodes, "close": self.close_steps / max(self.steps, 1)}
+
+    def write_artifacts(self, out_dir):
+        path = out_dir / "close.txt"
+        path.write_text(f"{self.close_steps}/{self.steps}\n")
+        return [path]
+
+
+class TinyBehavior(devlearn.Behavior):
+    """Move every joint of a tiny body to a target position."""
+
+    name = "tiny"
+    description = "test behaviour: reach a target position"
+    scene = "crib"
+    senses = ("proprioception",)
+    config_class = TinyConfig
+    headline_metric = "close"
+
+    def observe(self, infant, facts: dict[str, Any]) -> dict[str, np.ndarray]:
+        obs = {"proprioception": infant.proprioception()}
+        if self.config.use_eyes:
+            obs["eyes"] = infant.eyes()
+        return obs
+
+    def network(self) -> devlearn.NetworkSpec:
+        encoders = {"proprioception": devlearn.MLPEncoder((16,))}
+        if self.config.use_eyes:
+            encoders["eyes"] = devlearn.MLPEncoder((8,))
+        return devlearn.NetworkSpec(encoders, fusion_dims=(16,), trunk_dims=(16,), init_std=0.5)
+
+    def reward_terms(self) -> list[devlearn.IntrinsicReward]:
+        return [Reach(self.config.target, self.config.reach_weight), StepCounter()]
+
+    def curriculum(self) -> devlearn.Curriculum:
+        return devlearn.Curriculum(
+            [
+                devlearn.Stage("fixed", self.config.stage_steps, {"random_pose": False}),
+                devlearn.Stage("random", None, {"random_pose": True}),
+            ]
+        )
+
+    def evaluator(self, training: bool) -> devlearn.Evaluator:
+        return CloseEvaluator(self.config.target)
+
+    def train_defaults(self) -> dict[str, Any]:
+        return {"ppo.num_steps_per_env": 8, "ppo.num_mini_batches": 2, "ppo.num_learning_epochs": 2}

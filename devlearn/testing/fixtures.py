@@ -1,0 +1,57 @@
+"""Fixtures for plugin tests: a registry built from classes, and module-scoped infants."""
+
+from __future__ import annotations
+
+import types
+
+import numpy as np
+
+from devlearn.api.behavior import Behavior
+from devlearn.plugins import PluginRegistry, PluginSource
+
+
+def registry_for(
+    *behaviors: type[Behavior], name: str = "test_plugin", learned_rewards: tuple[type, ...] = ()
+) -> PluginRegistry:
+    """Build a registry holding the given behaviour classes (and learned rewards), as if one
+    plugin registered them."""
+    from devlearn.api.hookspecs import hookimpl
+
+    module = types.ModuleType(name)
+
+    @hookimpl
+    def register_behaviors(register):
+        for behavior in behaviors:
+            register(behavior)
+
+    module.register_behaviors = register_behaviors
+    if learned_rewards:
+
+        @hookimpl
+        def register_learned_rewards(register):
+            for term in learned_rewards:
+                register(term)
+
+        module.register_learned_rewards = register_learned_rewards
+    return PluginRegistry([PluginSource(name, module, "test-dist", "0")], disabled=())
+
+
+def _infant_fixture(scene: str, senses: tuple[str, ...]):
+    import pytest
+
+    @pytest.fixture(scope="module")
+    def fixture():
+        from devlearn.infant import build_infant
+
+        infant = build_infant(scene, senses=senses)
+        infant.reset(np.random.default_rng(0))
+        yield infant
+        infant.close()
+
+    return fixture
+
+
+crib_infant = _infant_fixture("crib", ("touch", "proprioception", "vestibular"))
+"""A crib-scene infant with touch, proprioception and vestibular senses (module-scoped)."""
+sitting_infant = _infant_fixture("sitting", ("proprioception", "eyes"))
+"""A sitting-scene infant with proprioception and eyes (module-scoped)."""

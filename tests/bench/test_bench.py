@@ -1,0 +1,94 @@
+"""``devlearn bench``: the figures it reports and their table (no speed is asserted here)."""
+
+from __future__ import annotations
+
+import math
+
+from devlearn.bench.infant import bench_infant
+from devlearn.cli.bench import ROWS, format_table
+
+
+def test_bench_infant_reports_every_sense_cost():
+    result = bench_infant(steps=40, frames=3)
+    for key in (
+        "build_s",
+        "physics_ms_per_step",
+        "touch_ms_per_step",
+        "touch_sparse_ms_per_step",
+        "proprioception_ms_per_step",
+        "render_ms_per_frame",
+    ):
+        assert math.isfinite(result[key]) and result[key] > 0, key
+    assert result["touch_sensors"] > 4500
+
+
+def test_table_lists_known_figures_and_failures():
+    result = {
+        "date": "2026-11-23",
+        "machine": "x86_64, 2 cores",
+        "self_touch_steps_per_s": 1234.5,
+        "touch_ms_per_step": 0.123,
+        "hand_regard_train_steps_per_s": None,
+    }
+    table = format_table(result)
+    assert "| self-touch env steps/s (1 process) | 1,234 /s | 283 | >= 4000 |" in table
+    assert "| touch per step (dense N x 3 vector) | 0.123 ms | 3 | - |" in table
+    assert "failed (see stderr)" in table
+    assert len(table.splitlines()) == 4 + 3  # title, blank, header, rule, three rows
+    assert len({key for key, *_ in ROWS}) == len(ROWS)
+
+
+def test_ceiling_and_breakdown_of_a_step():
+    from devlearn_self_touch import SelfTouch
+
+    from devlearn.bench.ceiling import BREAKDOWN_PARTS, env_breakdown, physics_ceiling
+
+    assert physics_ceiling("crib", 30) > 0
+    parts = env_breakdown(SelfTouch(), steps=30)
+    assert set(parts) == {*BREAKDOWN_PARTS, "total"}
+    assert all(parts[p] >= 0 for p in BREAKDOWN_PARTS)
+    assert parts["physics"] > 0 and parts["touch"] > 0 and parts["rewards"] > 0
+    assert parts["eyes"] == 0.0  # self_touch reads no eyes
+    assert math.isclose(parts["total"], sum(parts[p] for p in BREAKDOWN_PARTS))
+
+
+def test_table_shows_fractions_and_breakdowns():
+    result = {
+        "self_touch_fraction_of_ceiling": 0.2345,
+        "self_touch_breakdown_ms": {"physics": 0.05, "touch": 0.01, "total": 0.06},
+    }
+    table = format_table(result)
+    assert "| self-touch env / crib physics | 23% | 8% | >= 20% |" in table
+    assert "self_touch, ms per step (0.060 in all): physics 0.050, touch 0.010" in table
+
+
+def test_batched_and_per_env_observation_paths_are_measured_in_one_run():
+    from devlearn_self_touch import SelfTouch
+
+    from devlearn.bench.ceiling import observations_old_and_new, with_per_env_observations
+    from devlearn.env.batch_advance import overrides
+
+    behavior = SelfTouch()
+    old = with_per_env_observations(behavior)
+    assert overrides(behavior, "batch_observe") and not overrides(old, "batch_observe")
+    assert old.config == behavior.config and old.name == "self_touch"
+    figures = observations_old_and_new(behavior, steps=20, vec_steps=2)
+    rates = {
+        f"self_touch_{key}{suffix}"
+        for key in ("steps_per_s", "vec_steps_per_s_in_process")
+        for suffix in ("", "_per_env_observations")
+    }
+    assert set(figures) == rates | {"self_touch_breakdown_per_env_observations_ms"}
+    assert all(figures[key] > 0 for key in rates)
+    assert observations_old_and_new(old, steps=20, vec_steps=2) == {}  # nothing batched
+    table = format_table(figures)
+    assert "self_touch_per_env_observations, ms per step" in table
+
+
+def test_bench_reports_cli_start_up():
+    from devlearn.bench.run import STARTUP_COMMANDS, cli_startup_s
+
+    assert set(STARTUP_COMMANDS) == {"help", "plugins", "config", "info"}
+    assert cli_startup_s(["--help"], repeats=1) > 0
+    table = format_table({"startup_help_s": 0.84})
+    assert "| start-up: devlearn --help | 0.84 s | - | < 1.5 |" in table

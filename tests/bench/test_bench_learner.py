@@ -1,0 +1,19 @@
+"""``devlearn bench``: the PPO update cost of both layouts (no speed is asserted)."""
+
+from __future__ import annotations
+
+import math
+
+from devlearn.bench.learner import bench_update
+from devlearn.plugins import PluginRegistry
+
+
+def test_update_benchmark_reports_both_layouts():
+    behavior = PluginRegistry().create("hand_to_mouth")
+    shared = bench_update(behavior, "shared", num_envs=4, num_steps=8, repeats=1, threads=1)
+    separate = bench_update(behavior, "separate", num_envs=4, num_steps=8, repeats=1, threads=1)
+    for figures in (shared, separate):
+        assert math.isfinite(figures["update_us_per_sample"]) and figures["threads"] == 1
+        assert figures["inference_ms_per_step"] > 0
+    # one body instead of two: fewer than the separate networks' parameters
+    assert shared["parameters"] < separate["parameters"]

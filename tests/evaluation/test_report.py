@@ -1,0 +1,199 @@
+"""``devlearn report``: variants grouped by config, t-intervals over seeds, baselines, errors."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from scipy import stats
+
+from devlearn.api.errors import UsageError
+from devlearn.cli import main
+from devlearn.evaluation.report import write_report
+
+
+def fake_eval(folder, score, seed, behavior="self_touch", policy="checkpoint", max_std=1.0):
+    folder.mkdir(parents=True)
+    config = {
+        "seed": seed,
+        "total_steps": 100,
+        "out_dir": f"runs/{folder.name}",
+        "behavior": {"max_std": max_std, "touch_threshold": 0.1},
+    }
+    summary = {
+        "episodes": 100,
+        "score": score,
+        "coverage_total": 30 * score,
+        "episode_score_mean": score / 2,
+        "episode_score_std": 0.1,
+        "part_touch_steps": {"left": {"head": 3}},
+        "behavior": behavior,
+        "policy": policy,
+        "checkpoint_env_steps": 100,
+        "training_seed": seed if policy == "checkpoint" else None,
+        "config": config,
+        "protocol": {
+            "episodes": 100,
+            "seed": 0,
+            "settle_steps": 10,
+            "headline": "score",
+            "criteria": {"hand_touch": "..."},
+        },
+    }
+    (folder / "eval.json").write_text(json.dumps(summary))
+    return folder
+
+
+@pytest.fixture
+def three_seeds(tmp_path):
+    runs = [
+        fake_eval(tmp_path / f"seed{s}" / "eval", v, s)
+        for s, v in ((1, 0.90), (2, 0.96), (3, 0.81))
+    ]
+    fake_eval(tmp_path / "baseline_zero", 0.2, 0, policy="zero")
+    fake_eval(tmp_path / "baseline_random", 0.3, 0, policy="random")
+    return [r.parent for r in runs]  # run folders holding evaluation folders
+
+
+def test_three_seeds_give_scipys_interval(three_seeds, tmp_path):
+    result = write_report(three_seeds, tmp_path / "report")
+    scores = [0.90, 0.96, 0.81]
+    low, high = stats.t.interval(0.95, 2, loc=sum(scores) / 3, scale=stats.sem(scores))
+    cell = result["table"]["score"]["trained"]
+    assert cell["n"] == 3 and cell["mean"] == pytest.approx(sum(scores) / 3)
+    assert (cell["ci_low"], cell["ci_high"]) == (pytest.approx(low), pytest.approx(high))
+    assert result["metrics"][0] == "score"  # the headline first
+    assert "episode_score_std" not in result["table"]  # per-episode spread is not a metric
+    assert "part_touch_steps.left.head" not in result["table"]
+    # Baselines found beside the run folders, under the same metrics.
+    assert result["table"]["score"]["zero baseline"]["mean"] == 0.2
+    assert result["columns"]["random baseline"]["kind"] == "baseline"
+    markdown = (tmp_path / "report" / "report.md").read_text()
+    assert f"{sum(scores) / 3:.3g} [{low:.3g}, {high:.3g}]" in markdown
+    assert "zero baseline (n=1)" in markdown
+    png = (tmp_path / "report" / "report.png").read_bytes()
+    assert png[:4] == b"\x89PNG"
+    write_report(three_seeds, tmp_path / "again")
+    assert (tmp_path / "again" / "report.png").read_bytes() == png  # deterministic
+
+
+def test_variants_are_the_config_keys_that_differ(tmp_path):
+    paths = [fake_eval(tmp_path / f"a{s}", 0.5 + s / 10, s, max_std=0.0) for s in (1, 2)]
+    paths += [fake_eval(tmp_path / f"b{s}", 0.9, s, max_std=1.0) for s in (1,)]
+    result = write_report(paths, tmp_path / "report")
+    assert set(result["columns"]) == {"behavior.max_std=0.0", "behavior.max_std=1.0"}
+    assert result["table"]["score"]["behavior.max_std=0.0"]["n"] == 2
+    assert any("single seed" in n for n in result["notes"])
+    assert "single seed" in (tmp_path / "report" / "report.md").read_text()
+
+
+def test_bad_input(tmp_path, three_seeds, capsys):
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    with pytest.raises(UsageError, match="no eval.json"):
+        write_report([empty], tmp_path / "r")
+    other = fake_eval(tmp_path / "hr" / "eval", 0.5, 1, behavior="hand_regard")
+    with pytest.raises(UsageError, match="different behaviours mixed"):
+        write_report([*three_seeds, other], tmp_path / "r")
+    assert main(["report", str(empty), "--out", str(tmp_path / "r")]) == 2
+    errors = [line for line in capsys.readouterr().err.splitlines() if "error" in line]
+    assert len(errors) == 1 and errors[0].startswith("devlearn: error: ")  # one line
+    assert main(["report", *map(str, three_seeds), "--out", str(tmp_path / "r")]) == 0
+    assert "| `score` |" in capsys.readouterr().out
+
+
+def test_paper_columns_beside_ours(tmp_path):
+    """The paper's figures come per variant config; metrics it gives no figure for show -."""
+    paths = [fake_eval(tmp_path / f"a{s}", 0.5 + s / 10, s, max_std=0.0) for s in (1, 2)]
+    paths += [fake_eval(tmp_path / f"b{s}", 0.9, s, max_std=1.0) for s in (1, 2)]
+
+    def paper(behavior, config):
+        assert behavior == "self_touch"
+        if config["behavior"]["max_std"] == 0.0:
+            return "paper: A", {"score": 0.85, "coverage_total": 32}
+        return "paper: B", {"score": 0.72}
+
+    result = write_report(paths, tmp_path / "report", paper)
+    assert result["columns"]["paper: A"] == {"kind": "paper", "seeds": [], "paths": []}
+    assert result["table"]["score"]["paper: A"]["mean"] == 0.85
+    assert result["table"]["score"]["paper: B"]["mean"] == 0.72
+    assert result["table"]["coverage_total"]["paper: B"]["mean"] is None
+    md = (tmp_path / "report" / "report.md").read_text()
+    header = next(line for line in md.splitlines() if line.startswith("| metric"))
+    assert header.endswith("| paper: A | paper: B |")  # after the baselines, without n=
+    score_row = next(line for line in md.splitlines() if line.startswith("| `score`"))
+    assert score_row.endswith("| 0.85 | 0.72 |")
+    coverage_row = next(line for line in md.splitlines() if line.startswith("| `coverage_total`"))
+    assert coverage_row.endswith("| 32 | - |")
+    assert (tmp_path / "report" / "report.png").read_bytes()[:4] == b"\x89PNG"
+    # Without a source of paper figures (or a behaviour that has none): no paper column.
+    assert not any(c.startswith("paper") for c in write_report(paths, tmp_path / "r2")["columns"])
+    no_figures = write_report(paths, tmp_path / "r3", lambda behavior, config: None)
+    assert not any(c.startswith("paper") for c in no_figures["columns"])
+
+
+def test_cli_report_shows_the_behaviours_paper_figures(three_seeds, tmp_path, capsys):
+    """`devlearn report` asks the installed behaviour (self_touch: Table I for two-stage)."""
+    assert main(["report", *map(str, three_seeds), "--out", str(tmp_path / "r")]) == 0
+    out = capsys.readouterr().out
+    assert "paper: two-stage, 8M (Tables I-II)" in out
+    score_row = next(line for line in out.splitlines() if line.startswith("| `score`"))
+    assert score_row.endswith("| 0.85 |")
+
+
+@pytest.mark.parametrize(
+    ("behavior", "eval_json", "config"),
+    [
+        ("self_touch", "results/self_touch/i20/two_stage_s1/at_8001536/eval.json", {}),
+        ("self_touch", None, {"behavior": {"curriculum": "fixed_only"}}),
+        ("self_touch", None, {"behavior": {"curriculum": "random_only"}}),
+        ("hand_regard", "results/hand_regard/eval/eval.json", {}),
+    ],
+)
+def test_paper_figures_name_real_metrics(behavior, eval_json, config):
+    """Every figure a behaviour gives for the paper is a metric its evaluations report (a
+    misnamed key would leave its column empty)."""
+    from pathlib import Path
+
+    from devlearn.evaluation.report import _metrics
+    from devlearn.plugins import PluginRegistry
+
+    root = Path(__file__).resolve().parents[2]
+    if eval_json is None:  # the self-touch metrics are the same whatever the curriculum
+        eval_json = "results/self_touch/i20/two_stage_s1/at_8001536/eval.json"
+    label, figures = PluginRegistry(disabled=()).behavior(behavior).paper_results(config)
+    metrics = _metrics(json.loads((root / eval_json).read_text()))
+    assert label.startswith("paper") and figures
+    assert set(figures) <= set(metrics)
+
+
+def test_baselines_are_counted_not_seeded_and_single_runs_get_no_caps(
+    three_seeds, tmp_path, monkeypatch
+):
+    from matplotlib.figure import Figure
+
+    drawn = []
+    monkeypatch.setattr(Figure, "savefig", lambda self, *a, **k: drawn.append(self))
+    result = write_report(three_seeds, tmp_path / "report")
+    markdown = (tmp_path / "report" / "report.md").read_text()
+    assert "None" not in markdown
+    assert "- **zero baseline**: 1 evaluation of an untrained policy (no seed) from" in markdown
+    assert "- **trained**: seeds [1, 2, 3] from" in markdown
+    (fig,) = drawn
+    columns = list(result["columns"])
+    for ax in fig.axes:
+        bars = [c for c in ax.containers if type(c).__name__ == "BarContainer"]
+        errors = [c for c in ax.containers if type(c).__name__ == "ErrorbarContainer"]
+        assert len(bars) == 1 and len(bars[0]) == len(columns)
+        # one interval: the three seeds; the single baseline evaluations have none
+        assert len(errors) == 1 and len(errors[0].lines[2][0].get_segments()) == 1
+
+
+def test_baselines_beside_an_evaluation_are_taken_only_of_its_behaviour(tmp_path):
+    """A runs/ folder holding another behaviour's baseline (the README's hand-regard
+    held_random) beside a self-touch evaluation: the report takes self-touch's only."""
+    run = fake_eval(tmp_path / "runs" / "st" / "eval", 0.5, 1)
+    fake_eval(tmp_path / "runs" / "st_zero", 0.2, 0, policy="zero")
+    fake_eval(tmp_path / "runs" / "hr_held", 0.0, 0, behavior="hand_regard", policy="random")
+    result = write_report([run, tmp_path / "runs" / "st_zero"], tmp_path / "report")
+    assert set(result["columns"]) == {"trained", "zero baseline"}
