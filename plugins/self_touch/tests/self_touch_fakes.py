@@ -9,6 +9,9 @@ import numpy as np
 from devlearn import StepContext
 from devlearn.env.behavior_env import EPISODE_RECORD
 
+TINY_RUN = ["env.action_repeat=1", "ppo.num_steps_per_env=20", "ppo.num_mini_batches=2"]
+"""One iteration is one 20-step episode per env (SwappingInfant's script), two minibatches."""
+
 
 def make_ctx(
     touched=(),
@@ -153,3 +156,19 @@ def same_info(a: dict | None, b: dict | None) -> bool:
     a, b = dict(a), dict(b)
     ra, rb = a.pop(EPISODE_RECORD, None), b.pop(EPISODE_RECORD, None)
     return a == b and np.array_equal(ra, rb) if ra is not None else a == b and rb is None
+
+
+def train_swapping(out, overrides=(), steps: int = 40, workers: int = 2) -> None:
+    """Train self-touch on two :class:`SwappingInfant` envs, ``steps`` physics steps (40: one
+    iteration, one episode per env) in ``workers`` worker processes, into ``out``."""
+    from devlearn_self_touch import SelfTouch
+
+    from devlearn.config.run_config import default_config
+    from devlearn.testing import registry_for
+    from devlearn.training import train
+
+    cfg = default_config(
+        SelfTouch, [*TINY_RUN, *overrides], out_dir=str(out), num_envs=2, workers=workers
+    )
+    cfg.total_steps = steps
+    train(cfg, registry_for(SelfTouch), infant_factory=SwappingInfant, progress=False)

@@ -9,7 +9,7 @@ import pytest
 import torch
 from devlearn_self_touch import SelfTouch, SelfTouchConfig
 from devlearn_self_touch.batched_rewards import BatchedContactNovelty, BatchedTouchNovelty
-from self_touch_fakes import SwappingInfant, make_ctx
+from self_touch_fakes import SwappingInfant, make_ctx, train_swapping
 
 from devlearn import BatchContext
 from devlearn.config.run_config import default_config
@@ -95,15 +95,7 @@ def test_shared_memory_survives_resume_with_another_worker_count(tmp_path):
     the other env's discoveries as known (5 x 1.0), not as new (5 x 5.0)."""
     registry = registry_for(SelfTouch)
     out = tmp_path / "run"
-    overrides = [
-        "env.action_repeat=1",
-        "ppo.num_steps_per_env=20",
-        "ppo.num_mini_batches=2",
-        "save_interval=1",
-    ]
-    cfg = default_config(SelfTouch, overrides, out_dir=str(out), num_envs=2, workers=2)
-    cfg.total_steps = 40
-    train(cfg, registry, infant_factory=SwappingInfant, progress=False)
+    train_swapping(out, ["save_interval=1"])
     state = load_checkpoint(out / "checkpoint_latest.pt")
     for env in state["env"]["ranks"][0]["envs"]:
         assert np.array_equal(env["terms"]["touch_novelty"]["ever"], GROUPS)

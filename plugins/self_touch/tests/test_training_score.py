@@ -10,9 +10,8 @@ import numpy as np
 import pytest
 from devlearn_self_touch import SelfTouch, SelfTouchConfig
 from devlearn_self_touch.evaluation import TrainingScore
-from self_touch_fakes import SwappingInfant, make_ctx
+from self_touch_fakes import SwappingInfant, make_ctx, train_swapping
 
-from devlearn.config.run_config import default_config
 from devlearn.testing import registry_for
 from devlearn.training import train
 from devlearn.training.checkpoint import load_checkpoint
@@ -93,15 +92,7 @@ def test_run_logs_the_window_over_all_workers_and_resumes_it(tmp_path):
     the run's window 10; resumed in process, the window still holds the first episodes."""
     registry = registry_for(SelfTouch)
     out = tmp_path / "run"
-    overrides = [
-        "env.action_repeat=1",
-        "ppo.num_steps_per_env=20",
-        "ppo.num_mini_batches=2",
-        "behavior.training_score_episodes=3",
-    ]
-    cfg = default_config(SelfTouch, overrides, out_dir=str(out), num_envs=2, workers=2)
-    cfg.total_steps = 40
-    train(cfg, registry, infant_factory=SwappingInfant, progress=False)
+    train_swapping(out, ["behavior.training_score_episodes=3"])
     row = json.loads((out / "metrics.jsonl").read_text().splitlines()[-1])
     assert row["metrics/coverage_left"] == 5.0
     assert row["metrics/training_coverage_left"] == 10.0
