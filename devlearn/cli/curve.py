@@ -16,12 +16,16 @@ import os
 from pathlib import Path
 
 from devlearn.api.errors import UsageError
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from devlearn.plugins import PluginRegistry
 
 SMOOTH_MAX = 100_000
 """Largest ``--smooth`` window (iterations)."""
 
 
-def add_parser(subparsers) -> list[str]:
+def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> list[str]:
     """Register the ``curve`` sub-command."""
     p = subparsers.add_parser("curve", help="plot metrics of a run against environment steps")
     p.add_argument(
@@ -169,7 +173,7 @@ def _load(groups: list[list[Path]]) -> tuple[list[tuple[Path, list[dict]]], bool
     return [(Path(os.path.relpath(c)), read_evaluations(g)) for c, g in zip(common, groups)], True
 
 
-def run(args: argparse.Namespace, registry) -> int:
+def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     """Plot the chosen metrics (moving average) against steps and write a PNG."""
     import matplotlib
 

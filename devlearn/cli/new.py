@@ -9,6 +9,10 @@ from importlib import resources
 from pathlib import Path
 
 from devlearn.api.errors import UsageError
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from devlearn.plugins import PluginRegistry
 
 # Template file -> where it goes in the new distribution (``{module}``: the import name).
 FILES = {
@@ -21,7 +25,7 @@ FILES = {
 }
 
 
-def add_parser(subparsers) -> list[str]:
+def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> list[str]:
     """Register the ``new`` sub-command."""
     p = subparsers.add_parser(
         "new",
@@ -76,7 +80,7 @@ def write_plugin(name: str, out: str | Path | None = None, registry=None) -> lis
     return written
 
 
-def run(args: argparse.Namespace, registry) -> int:
+def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     """Write the plugin and print the next commands."""
     files = write_plugin(args.name, args.out, registry)
     root = files[0].parent
