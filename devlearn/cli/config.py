@@ -5,11 +5,11 @@ from __future__ import annotations
 import argparse
 import json
 import textwrap
+from typing import TYPE_CHECKING
 
 from devlearn.config.help import describe_keys
 from devlearn.config.run_config import RunConfig, apply_preset, default_config
 from devlearn.config.values import apply_overrides
-from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from devlearn.plugins import PluginRegistry

@@ -14,9 +14,9 @@ import argparse
 import json
 import os
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from devlearn.api.errors import UsageError
-from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from devlearn.plugins import PluginRegistry

@@ -6,10 +6,10 @@ import argparse
 import json
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from devlearn.api.errors import UsageError
 from devlearn.cli.folders import removed_on_failure
-from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from devlearn.plugins import PluginRegistry

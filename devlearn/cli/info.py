@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import argparse
 import json
+from typing import TYPE_CHECKING
 
 from devlearn.evaluation.describe import describe_behavior
-from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from devlearn.plugins import PluginRegistry

@@ -7,9 +7,9 @@ import keyword
 import string
 from importlib import resources
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from devlearn.api.errors import UsageError
-from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from devlearn.plugins import PluginRegistry
@@ -53,7 +53,9 @@ def names_for(name: str) -> dict[str, str]:
     }
 
 
-def write_plugin(name: str, out: str | Path | None = None, registry=None) -> list[Path]:
+def write_plugin(
+    name: str, out: str | Path | None = None, registry: PluginRegistry | None = None
+) -> list[Path]:
     """Write the plugin distribution for ``name`` into ``out``; return the files written.
 
     Raises:

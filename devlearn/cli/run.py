@@ -7,10 +7,10 @@ import contextlib
 import signal
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from devlearn.api.errors import UsageError
 from devlearn.config.checks import check_config
-from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from devlearn.plugins import PluginRegistry

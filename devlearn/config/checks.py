@@ -7,8 +7,12 @@ import os
 import re
 import tempfile
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from devlearn.api.errors import UsageError
+
+if TYPE_CHECKING:
+    from devlearn.config.run_config import RunConfig
 
 SEED_MAX = 2**32 - 1
 """Largest seed (numpy's global generator takes 32-bit seeds)."""
@@ -57,7 +61,7 @@ def _whole(value, option: str, low: int, high: int, low_note: str = "") -> None:
         raise UsageError(f"{option} must be at most {high:g}, got {value:g}")
 
 
-def check_config(cfg) -> None:
+def check_config(cfg: RunConfig) -> None:
     """Reject values that would fail later (or train on garbage) with a less clear error: every
     number within bounds (each message one line naming the option and its valid range), checked
     before anything is written."""

@@ -285,7 +285,7 @@ def term_values(envs: list[BehaviorEnv], contexts: list[StepContext]) -> np.ndar
 
 
 def step_batch(
-    envs: list[BehaviorEnv], actions, obs_out: dict[str, np.ndarray] | None = None
+    envs: list[BehaviorEnv], actions: np.ndarray, obs_out: dict[str, np.ndarray] | None = None
 ) -> list[tuple]:
     """One decision of ``envs``: ``action_repeat`` physics steps with ``actions[i]`` held.
 
@@ -318,7 +318,7 @@ def step_batch(
 
 def step_physics(
     envs: list[BehaviorEnv],
-    actions,
+    actions: np.ndarray,
     obs_out: dict[str, np.ndarray] | None = None,
     paid: int = 1,
 ) -> list[tuple]:

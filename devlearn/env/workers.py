@@ -10,7 +10,7 @@ import os
 import signal
 import sys
 import traceback
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -24,6 +24,11 @@ from devlearn.env.behavior_env import (
 )
 from devlearn.env.buffers import attach, env_spec, write_obs
 from devlearn.env.guards import GuardError
+
+if TYPE_CHECKING:
+    from multiprocessing.connection import Connection
+
+    from devlearn.api.behavior import Behavior
 
 EpisodeInfos = list[tuple[int, dict[str, float]]]
 """(global env index, episode_info) for every episode that ended this step."""
@@ -59,7 +64,7 @@ def step_envs(envs: list[BehaviorEnv], offset: int, arrays: dict[str, np.ndarray
 
 
 def make_envs(
-    behavior,
+    behavior: Behavior,
     seeds: list[int],
     infant_factory: InfantFactory | None,
     offset: int = 0,
@@ -92,7 +97,12 @@ def _die_with_parent() -> None:
 
 
 def worker_main(
-    conn, behavior, seeds: list[int], offset: int, infant_factory, action_repeat: int = 1
+    conn: Connection,
+    behavior: Behavior,
+    seeds: list[int],
+    offset: int,
+    infant_factory: InfantFactory | None,
+    action_repeat: int = 1,
 ) -> None:
     """Entry point of one worker process: serve commands from the parent until told to close.
 
@@ -197,10 +207,10 @@ class WorkerPool:
 
     def __init__(
         self,
-        behavior,
+        behavior: Behavior,
         seeds: list[int],
         workers: int,
-        infant_factory=None,
+        infant_factory: InfantFactory | None = None,
         action_repeat: int = 1,
         context: str = "spawn",
     ) -> None:

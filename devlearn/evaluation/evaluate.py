@@ -8,7 +8,7 @@ import subprocess
 import sys
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import torch
@@ -28,6 +28,10 @@ from devlearn.config.run_config import (
 from devlearn.env.behavior_env import BehaviorEnv
 from devlearn.training.checkpoint import LATEST, check_behavior, check_fits, load_checkpoint
 from devlearn.training.process import quiet
+
+if TYPE_CHECKING:
+    from devlearn.api.behavior import Behavior
+    from devlearn.plugins import PluginRegistry
 
 VIDEO_FPS = 25
 """Frame rate of evaluation videos (every k-th control step is rendered to match it)."""
@@ -134,7 +138,7 @@ def _batch(obs: dict[str, np.ndarray]) -> TensorDict:
 def load_actor(
     cfg: RunConfig,
     checkpoint: dict[str, Any],
-    behavior,
+    behavior: Behavior,
     obs: dict[str, np.ndarray],
     action_dim: int,
 ):
@@ -194,7 +198,7 @@ def evaluate(
     behavior_name: str,
     checkpoint: str | Path | None,
     episodes: int,
-    registry,
+    registry: PluginRegistry,
     video: str | Path | None = None,
     seed: int = 0,
     out_dir: str | Path | None = None,

@@ -6,13 +6,16 @@ import contextlib
 import logging
 import warnings
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import torch
 import torch.nn as nn
 
 from devlearn.api.errors import UsageError
+
+if TYPE_CHECKING:
+    from devlearn.plugins import PluginRegistry
 
 FORMATS = ("onnx", "torchscript")
 """Formats ``devlearn export`` writes."""
@@ -43,7 +46,7 @@ class DeterministicPolicy(nn.Module):
 
 
 def load_policy(
-    behavior_name: str, checkpoint: str | Path, registry
+    behavior_name: str, checkpoint: str | Path, registry: PluginRegistry
 ) -> tuple[DeterministicPolicy, dict[str, np.ndarray]]:
     """Rebuild a checkpoint's deterministic policy and one observation of its behaviour.
 

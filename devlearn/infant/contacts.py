@@ -24,12 +24,20 @@ class ContactSides:
 
     __slots__ = ("body", "other_body", "point", "force", "cand", "dist")
 
-    def __init__(self, body, other_body, point, force, cand, dist) -> None:
+    def __init__(
+        self,
+        body: np.ndarray,
+        other_body: np.ndarray,
+        point: np.ndarray,
+        force: np.ndarray,
+        cand: np.ndarray,
+        dist: np.ndarray,
+    ) -> None:
         self.body, self.other_body, self.point = body, other_body, point
         self.force, self.cand, self.dist = force, cand, dist
 
 
-def contact_forces_world(model: mujoco.MjModel, data: mujoco.MjData, ids: np.ndarray):
+def contact_forces_world(model: mujoco.MjModel, data: mujoco.MjData, ids: np.ndarray) -> np.ndarray:
     """World-frame force that geom1 exerts on geom2, (len(ids), 3) float64.
 
     Vectorised equivalent of ``mj_contactForce`` followed by the rotation out of the contact
@@ -89,7 +97,9 @@ class ContactReader:
         self.compiled = compiled and self.pyramid is not None and skin._cells.shape[1] <= 128
         """True when :meth:`touch_and_hands` runs as one compiled routine."""
 
-    def touch_and_hands(self, data: mujoco.MjData, hand_of_body: np.ndarray):
+    def touch_and_hands(
+        self, data: mujoco.MjData, hand_of_body: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Sparse touch and hand contacts of this step in one compiled call (the hot path).
 
         Equal to :func:`sparse_touch_from_contacts` and :func:`hand_contacts` of :meth:`sides`
@@ -178,7 +188,9 @@ def touch_from_contacts(skin: Skin, sides: ContactSides | None) -> np.ndarray:
     return skin.spread(sides.body, sides.point, sides.force, sides.cand, sides.dist)
 
 
-def sparse_touch_from_contacts(skin: Skin, sides: ContactSides | None):
+def sparse_touch_from_contacts(
+    skin: Skin, sides: ContactSides | None
+) -> tuple[np.ndarray, np.ndarray]:
     """The sensors that feel a force, (M,) int64 sorted, and those forces, (M, 3) float32."""
     if sides is None:
         return np.zeros(0, dtype=np.int64), np.zeros((0, 3), dtype=np.float32)

@@ -133,7 +133,7 @@ def _now() -> str:
 class _Run:
     """Executes one job; keeps its record on disk as it goes."""
 
-    def __init__(self, job: RunJob, cores: list[int] | None, stop: threading.Event | None):
+    def __init__(self, job: RunJob, cores: list[int] | None, stop: threading.Event | None) -> None:
         self.job, self.cores, self.stop = job, cores, stop
         self.record = read_json(job.record_path) or {}
         self.record.update(

@@ -46,7 +46,9 @@ class DiagonalNormal(Distribution):
     def log_prob(self, outputs: torch.Tensor) -> torch.Tensor:
         return self._distribution.log_prob(outputs).sum(dim=-1)  # type: ignore[union-attr]
 
-    def kl_divergence(self, old_params, new_params) -> torch.Tensor:
+    def kl_divergence(
+        self, old_params: tuple[torch.Tensor, ...], new_params: tuple[torch.Tensor, ...]
+    ) -> torch.Tensor:
         return torch.distributions.kl_divergence(Normal(*old_params), Normal(*new_params)).sum(-1)
 
 

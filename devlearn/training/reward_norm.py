@@ -27,7 +27,7 @@ class RewardNormalizer(nn.Module):
         eps: Added to the variance before the square root.
     """
 
-    def __init__(self, num_envs: int, gamma: float, clip: float = 10.0, eps: float = 1e-8):
+    def __init__(self, num_envs: int, gamma: float, clip: float = 10.0, eps: float = 1e-8) -> None:
         super().__init__()
         self.gamma, self.clip, self.eps = float(gamma), float(clip), float(eps)
         self.moments = EmpiricalNormalization(1, eps=0.0)

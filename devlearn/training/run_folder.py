@@ -8,6 +8,7 @@ import contextlib
 import json
 import os
 import shutil
+from collections.abc import Iterator
 from pathlib import Path
 
 
@@ -40,7 +41,7 @@ _SMALL_FILE = 1 << 20  # files up to this size are restored byte for byte after 
 
 
 @contextlib.contextmanager
-def start_up(run_dir: Path, replace: bool, owner: bool):
+def start_up(run_dir: Path, replace: bool, owner: bool) -> Iterator[None]:
     """Within the block, a failure puts ``run_dir`` back as it was: new entries are deleted
     (and the folder itself, if it was new), small files rewritten (config.json...) are restored.
     With ``replace`` the folder's entries are set aside first and deleted once the block

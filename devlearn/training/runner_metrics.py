@@ -5,10 +5,13 @@ TensorBoard told what a resumed run redoes (a mixin of
 from __future__ import annotations
 
 import json
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from tqdm import tqdm
+
+if TYPE_CHECKING:
+    from torch.utils.tensorboard import SummaryWriter
 
 
 class RunnerMetrics:
@@ -89,7 +92,7 @@ class RunnerMetrics:
             bar.update(self.env_steps - bar.n)
 
 
-def purge_tensorboard_from(writer, step: int) -> None:
+def purge_tensorboard_from(writer: SummaryWriter | None, step: int) -> None:
     """Tell TensorBoard to hide earlier event files' points at ``step`` and later (a resumed
     run redoes the iterations a killed run logged after its last checkpoint): the
     ``SessionLog.START`` event that ``SummaryWriter(purge_step=...)`` writes."""
