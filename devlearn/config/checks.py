@@ -7,7 +7,7 @@ import os
 import re
 import tempfile
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from devlearn.api.errors import UsageError
 
@@ -26,7 +26,9 @@ RUN_FILES = ("config.json", "metrics.jsonl", "checkpoint_latest.pt")
 _DEVICE = re.compile(r"^(cpu|cuda(:\d+)?)$")
 
 
-def _positive(cfg, name: str, low: float = 0.0, high: float = math.inf, closed: bool = False):
+def _positive(
+    cfg: RunConfig, name: str, low: float = 0.0, high: float = math.inf, closed: bool = False
+) -> None:
     value = getattr(cfg.ppo, name)
     inside = low <= value <= high if closed else low < value <= high
     if not (isinstance(value, (int, float)) and math.isfinite(value) and inside):
@@ -50,7 +52,7 @@ PPO_COUNT_MAX = 10**6
 """Largest rollout length, epochs and mini-batches per iteration."""
 
 
-def _whole(value, option: str, low: int, high: int, low_note: str = "") -> None:
+def _whole(value: Any, option: str, low: int, high: int, low_note: str = "") -> None:
     """Raise UsageError unless ``value`` is an integer in ``[low, high]``."""
     if isinstance(value, bool) or not isinstance(value, int):
         raise UsageError(f"{option} must be an integer, got {value!r}")

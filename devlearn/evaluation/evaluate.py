@@ -31,6 +31,7 @@ from devlearn.training.process import quiet
 
 if TYPE_CHECKING:
     from devlearn.api.behavior import Behavior
+    from devlearn.env.behavior_env import InfantFactory
     from devlearn.plugins import PluginRegistry
 
 VIDEO_FPS = 25
@@ -141,7 +142,7 @@ def load_actor(
     behavior: Behavior,
     obs: dict[str, np.ndarray],
     action_dim: int,
-):
+) -> torch.nn.Module:
     """Rebuild the checkpoint's policy network for ``behavior`` (eval mode, CPU)."""
     train_cfg = to_rsl_rl(cfg, behavior, list(obs))
     batch = _batch(obs)
@@ -156,7 +157,7 @@ def load_actor(
 
 
 def _policy(
-    policy: str, actor, action_dim: int, seed: int, repeat: int = 1
+    policy: str, actor: torch.nn.Module, action_dim: int, seed: int, repeat: int = 1
 ) -> Callable[[dict[str, np.ndarray]], np.ndarray]:
     """``act(obs) -> (action_dim,)``: the actor's mean action, zeros, or seeded uniform noise."""
     if policy == "zero":
@@ -202,7 +203,7 @@ def evaluate(
     video: str | Path | None = None,
     seed: int = 0,
     out_dir: str | Path | None = None,
-    infant_factory=None,
+    infant_factory: InfantFactory | None = None,
     progress: bool = True,
     policy: str = "checkpoint",
     start: str = "stage",

@@ -180,7 +180,9 @@ def add_infant(
     return actuated
 
 
-def _colour(spec, hand_rgba) -> tuple[float, float, float, float]:
+def _colour(
+    spec: BodySpec, hand_rgba: tuple[float, float, float, float]
+) -> tuple[float, float, float, float]:
     """RGBA of a body's geoms: eyes dark, hands (and fingers) ``hand_rgba``, the rest skin."""
     if not spec.collides:
         return EYE_RGBA

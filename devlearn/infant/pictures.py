@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import cv2
 import mujoco
@@ -11,6 +12,9 @@ import numpy as np
 from devlearn.infant.infant import build_infant
 from devlearn.infant.regions import NUM_PARTS, PART_NAMES
 from devlearn.infant.scenes import SCENE_GROUP
+
+if TYPE_CHECKING:
+    from devlearn.infant.infant import Infant
 
 # Looking down at both hands held in front, toys on the floor beyond.
 EYES_POSE = {"head_tilt": 0.95, "shoulder_flexion": 0.6, "elbow": 1.0, "shoulder_abduction": -0.3}
@@ -30,7 +34,7 @@ def region_colours() -> np.ndarray:
     return np.concatenate([part, 0.75 * part])
 
 
-def _sensor_view(infant, camera: mujoco.MjvCamera, size: tuple[int, int]) -> np.ndarray:
+def _sensor_view(infant: Infant, camera: mujoco.MjvCamera, size: tuple[int, int]) -> np.ndarray:
     """Render the infant without its surroundings, each sensor a dot in its region's colour."""
     model, data, skin = infant.model, infant.data, infant.skin
     option = mujoco.MjvOption()
@@ -158,7 +162,7 @@ def eyes_picture(
     return _write_png(path, picture)
 
 
-def _write_png(path, picture: np.ndarray) -> Path:
+def _write_png(path: str | Path, picture: np.ndarray) -> Path:
     """Write a BGR uint8 picture to ``path`` (parent folders made); return the path."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)

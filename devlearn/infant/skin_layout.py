@@ -114,7 +114,9 @@ def _geom_frame(model: mujoco.MjModel, g: int) -> tuple[np.ndarray, np.ndarray]:
     return mat.reshape(3, 3), model.geom_pos[g].copy()
 
 
-def _half_body(model: mujoco.MjModel, body: str, side_free: str, spacing: float, midline: bool):
+def _half_body(
+    model: mujoco.MjModel, body: str, side_free: str, spacing: float, midline: bool
+) -> list[tuple[str, np.ndarray, np.ndarray]]:
     """Sensors of one left or midline body (midline: the y > 0 half only)."""
     bid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, body)
     geoms = [

@@ -193,7 +193,7 @@ def run_sweep(
         folder.close()
 
 
-def _finish(spec: SweepSpec, runs: list[PlannedRun], records: dict, stream) -> int:
+def _finish(spec: SweepSpec, runs: list[PlannedRun], records: dict, stream: TextIO) -> int:
     """Summary line, then the report over the evaluated runs."""
     done = [r for r in runs if records.get(r.job.name, {}).get("status") == "done"]
     failed = [r.job.name for r in runs if records.get(r.job.name, {}).get("status") != "done"]

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import pickle
+from collections.abc import Callable
 from typing import Any
 
 import mujoco
@@ -200,7 +201,9 @@ def check_behavior(
     return shapes
 
 
-def _scripted_contacts(env: Any, rng: np.random.Generator, count: int, step) -> None:
+def _scripted_contacts(
+    env: Any, rng: np.random.Generator, count: int, step: Callable[[np.ndarray], Any]
+) -> None:
     """Take ``count`` steps on which a hand touches the body (placed there before each step)."""
     infant = env.infant
     if count <= 0 or not hasattr(infant, "_qpos_index"):  # a fake infant: nothing to place

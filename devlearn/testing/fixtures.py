@@ -3,11 +3,16 @@
 from __future__ import annotations
 
 import types
+from collections.abc import Callable, Iterator
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from devlearn.api.behavior import Behavior
 from devlearn.plugins import PluginRegistry, PluginSource
+
+if TYPE_CHECKING:
+    from devlearn.infant import Infant
 
 
 def registry_for(
@@ -20,7 +25,7 @@ def registry_for(
     module = types.ModuleType(name)
 
     @hookimpl
-    def register_behaviors(register):
+    def register_behaviors(register: Callable[[type], None]) -> None:
         for behavior in behaviors:
             register(behavior)
 
@@ -28,7 +33,7 @@ def registry_for(
     if learned_rewards:
 
         @hookimpl
-        def register_learned_rewards(register):
+        def register_learned_rewards(register: Callable[[type], None]) -> None:
             for term in learned_rewards:
                 register(term)
 
@@ -36,11 +41,11 @@ def registry_for(
     return PluginRegistry([PluginSource(name, module, "test-dist", "0")], disabled=())
 
 
-def _infant_fixture(scene: str, senses: tuple[str, ...]):
+def _infant_fixture(scene: str, senses: tuple[str, ...]) -> Callable[[], Iterator[Infant]]:
     import pytest
 
     @pytest.fixture(scope="module")
-    def fixture():
+    def fixture() -> Iterator[Infant]:
         from devlearn.infant import build_infant
 
         infant = build_infant(scene, senses=senses)

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
+from typing import Any
 
 import torch
 import torch.nn as nn
@@ -13,6 +15,9 @@ from tensordict import TensorDict
 
 from devlearn.api.network_spec import NetworkSpec
 from devlearn.training.distribution import TanhSoftplusGaussian, inverse_softplus
+
+Observations = TensorDict | Mapping[str, torch.Tensor]
+"""A batch of observation groups, each (N, *shape): rsl-rl's TensorDict or a plain dict."""
 
 __all__ = ["MultiSenseModel", "SharedBody", "TanhSoftplusGaussian", "as_float", "inverse_softplus"]
 
@@ -76,7 +81,7 @@ class SharedBody(nn.Module):
         self.out_dim = hidden[-1]
         self._last: tuple | None = None
 
-    def forward(self, obs, caller: int = 0) -> torch.Tensor:
+    def forward(self, obs: Observations, caller: int = 0) -> torch.Tensor:
         """Features of a batch (``obs[group]`` of shape (N, *shape)); returns (N, out_dim).
 
         ``caller`` identifies the model asking. Without gradients a result is reused by
@@ -99,7 +104,7 @@ class SharedBody(nn.Module):
         self._last = (obs, key, features, caller)
         return features
 
-    def encode(self, obs) -> torch.Tensor:
+    def encode(self, obs: Observations) -> torch.Tensor:
         """:meth:`forward` without reuse (for export): (N, out_dim) features."""
         parts = []
         for g in self.groups:
@@ -245,7 +250,9 @@ class MultiSenseModel(MLPModel):
         x = as_float(obs[group], self.legacy_uint8_scale)
         return self.normalizers[group](x) if group in self.normalizers else x
 
-    def get_latent(self, obs: TensorDict, masks=None, hidden_state=None) -> torch.Tensor:
+    def get_latent(
+        self, obs: TensorDict, masks: torch.Tensor | None = None, hidden_state: Any = None
+    ) -> torch.Tensor:
         """Normalise the groups named in ``spec.normalize``, encode every group, concatenate
         (separate layout), or the shared body's features (shared layout).
 
@@ -256,7 +263,7 @@ class MultiSenseModel(MLPModel):
             return self._body()(obs, id(self))
         return torch.cat([self.encoders[g](self._input(obs, g)) for g in self.obs_groups], dim=-1)
 
-    def encode(self, obs) -> torch.Tensor:
+    def encode(self, obs: Observations) -> torch.Tensor:
         """:meth:`get_latent` without the shared body's reuse of results (for export)."""
         return self._body().encode(obs) if self.shared else self.get_latent(obs)
 

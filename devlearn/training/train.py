@@ -309,7 +309,7 @@ def _build(
     return env, runner
 
 
-def _restore(runner, checkpoint: dict[str, Any], curriculum: bool, source: str) -> None:
+def _restore(runner: DevRunner, checkpoint: dict[str, Any], curriculum: bool, source: str) -> None:
     """``runner.restore`` after checking that the checkpoint's weights fit the networks this
     config builds; a value that still does not load is one line naming the checkpoint."""
     fresh = runner.alg.save()

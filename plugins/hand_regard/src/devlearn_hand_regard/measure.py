@@ -19,6 +19,7 @@ import json
 import sys
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -27,6 +28,9 @@ from devlearn_hand_regard.calibration import calibrate
 from devlearn_hand_regard.detector import DetectorParams, HandDetector
 from devlearn_hand_regard.evaluation import PAIRS, pair_name
 
+if TYPE_CHECKING:
+    from devlearn import Infant
+
 LABELS = ("background", "left_hand", "right_hand", "body", "scene")
 """Segmentation labels (``devlearn.infant.vision``): 0..4."""
 
@@ -34,20 +38,21 @@ LABELS = ("background", "left_hand", "right_hand", "body", "scene")
 class SegmentationRecorder:
     """Wraps an infant; records the segmentation render whenever the eyes are read."""
 
-    def __init__(self, infant) -> None:
-        self.infant, self.segmentation = infant, []
+    def __init__(self, infant: Infant) -> None:
+        self.infant = infant
+        self.segmentation: list[np.ndarray] = []
 
-    def __getattr__(self, name):
+    def __getattr__(self, name: str) -> Any:
         return getattr(self.infant, name)
 
-    def eyes(self):
+    def eyes(self) -> np.ndarray:
         """The eye images; their segmentation is kept in ``self.segmentation``."""
         self.segmentation.append(self.infant.eyes_segmentation().copy())
         return self.infant.eyes()
 
 
 def held_out(
-    infant,
+    infant: Infant,
     steps: int,
     seed: int,
     episode_steps: int | None = None,
