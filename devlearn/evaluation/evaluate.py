@@ -33,6 +33,7 @@ if TYPE_CHECKING:
     from devlearn.api.behavior import Behavior
     from devlearn.env.behavior_env import InfantFactory
     from devlearn.plugins import PluginRegistry
+    from devlearn.training.networks import MultiSenseModel
 
 VIDEO_FPS = 25
 """Frame rate of evaluation videos (every k-th control step is rendered to match it)."""
@@ -142,7 +143,7 @@ def load_actor(
     behavior: Behavior,
     obs: dict[str, np.ndarray],
     action_dim: int,
-) -> torch.nn.Module:
+) -> MultiSenseModel:
     """Rebuild the checkpoint's policy network for ``behavior`` (eval mode, CPU)."""
     train_cfg = to_rsl_rl(cfg, behavior, list(obs))
     batch = _batch(obs)
@@ -157,7 +158,7 @@ def load_actor(
 
 
 def _policy(
-    policy: str, actor: torch.nn.Module, action_dim: int, seed: int, repeat: int = 1
+    policy: str, actor: MultiSenseModel | None, action_dim: int, seed: int, repeat: int = 1
 ) -> Callable[[dict[str, np.ndarray]], np.ndarray]:
     """``act(obs) -> (action_dim,)``: the actor's mean action, zeros, or seeded uniform noise."""
     if policy == "zero":
@@ -175,6 +176,7 @@ def _policy(
             return held.copy()
 
         return hold
+    assert actor is not None, "the checkpoint policy needs a checkpoint's actor"
 
     def act(obs: dict[str, np.ndarray]) -> np.ndarray:
         with torch.inference_mode():

@@ -16,6 +16,7 @@ from devlearn.api.errors import UsageError
 
 if TYPE_CHECKING:
     from devlearn.plugins import PluginRegistry
+    from devlearn.training.networks import MultiSenseModel
 
 FORMATS = ("onnx", "torchscript")
 """Formats ``devlearn export`` writes."""
@@ -34,7 +35,7 @@ class DeterministicPolicy(nn.Module):
         actor: A trained :class:`~devlearn.training.networks.MultiSenseModel` actor.
     """
 
-    def __init__(self, actor: nn.Module) -> None:
+    def __init__(self, actor: MultiSenseModel) -> None:
         super().__init__()
         self.actor = actor
         self.names = list(actor.obs_groups)
@@ -168,4 +169,5 @@ def _export_onnx(policy: DeterministicPolicy, inputs: tuple[torch.Tensor, ...], 
         dynamic_shapes={"observations": tuple({0: batch} for _ in inputs)},
         verbose=False,
     )
+    assert program is not None  # dynamo=True always returns the program
     program.save(str(out))
