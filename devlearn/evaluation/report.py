@@ -203,7 +203,9 @@ def paper_columns(
     """The paper's figures for the variants: ``{column label: {metric: value}}``, one column
     per label (variants that share the paper's figures share its column)."""
     out: dict[str, dict[str, float]] = {}
-    for c in variants if paper_results else []:
+    if paper_results is None:
+        return out
+    for c in variants:
         data = columns[c][0][1]
         found = paper_results(data.get("behavior", "?"), data.get("config") or {})
         if found is not None:

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import Any
+
 import mujoco
 import numpy as np
 
@@ -29,7 +32,7 @@ class ContactSides:
         body: np.ndarray,
         other_body: np.ndarray,
         point: np.ndarray,
-        force: np.ndarray,
+        force: np.ndarray | None,
         cand: np.ndarray,
         dist: np.ndarray,
     ) -> None:
@@ -90,7 +93,9 @@ class ContactReader:
             self.pyramid = np.array([[1, mu, 0], [1, -mu, 0], [1, 0, mu], [1, 0, -mu]], float)
         self._acc = np.zeros((skin.num_sensors, 3))
         self._mark = np.zeros(skin.num_sensors, dtype=bool)
-        self._kernel = None  # the compiled routine, imported (numba) on first use
+        self._kernel: Callable[..., Any] | None = (
+            None  # the compiled routine, imported (numba) on first use
+        )
         self._views: tuple | None = None  # (data, data.xpos, data.xmat)
         # The kernel needs uniform pyramidal cones and candidate lists no longer than its
         # pairwise-sum block (kernels.MAX_CANDIDATES = 128; this skin's are 68).

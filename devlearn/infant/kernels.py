@@ -8,6 +8,8 @@ computes exactly what its numpy reference does (the equivalence tests compare th
 
 from __future__ import annotations
 
+from typing import Any
+
 import numba
 import numpy as np
 from llvmlite import ir
@@ -26,7 +28,10 @@ from devlearn.infant.senses import LIMIT_ZONE
 # Haswell-and-later kernels); those two are repeated here with fma, in BLAS's k order. The
 # (Q, 1, 3) @ (Q, 3, 3) product is numpy's own loop: plain multiply, then add.
 
-_JIT = {"cache": True, "nogil": True}  # cache: compiled once per machine, not per process
+_JIT: dict[str, Any] = {
+    "cache": True,
+    "nogil": True,
+}  # cache: compiled once per machine, not per process
 
 
 @intrinsic

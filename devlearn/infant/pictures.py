@@ -24,7 +24,8 @@ def part_colours() -> np.ndarray:
     """(34, 3) RGB in [0, 1]: 34 distinct colours (matplotlib's tab20, then tab20b)."""
     from matplotlib import colormaps
 
-    palette = list(colormaps["tab20"].colors) + list(colormaps["tab20b"].colors)
+    # both are ListedColormaps (with .colors); the registry's stubs say Colormap
+    palette = list(colormaps["tab20"].colors) + list(colormaps["tab20b"].colors)  # type: ignore[attr-defined]
     return np.array(palette[:NUM_PARTS])[:, :3]
 
 

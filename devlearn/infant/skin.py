@@ -132,7 +132,7 @@ class Skin:
 
         ``cand``/``dist`` from :meth:`candidates` may be passed to avoid recomputing them.
         """
-        if cand is None:
+        if cand is None or dist is None:
             cand, dist = self.candidates(bodies, points)
         best = cand[np.arange(len(cand)), np.argmin(dist, axis=1)]
         for q in np.flatnonzero(best == self.num_sensors):  # no sensor near the point: rare
@@ -181,7 +181,7 @@ class Skin:
         """
         if len(bodies) == 0:
             return np.zeros(0, dtype=np.int64), np.zeros((0, 3), dtype=np.float32)
-        if cand is None:
+        if cand is None or dist is None:
             cand, dist = self.candidates(bodies, points)
         weight = 1.0 - dist * self._inv_radius.take(bodies)[:, None]
         np.maximum(weight, 0.0, out=weight)

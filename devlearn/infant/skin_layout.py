@@ -116,7 +116,7 @@ def _geom_frame(model: mujoco.MjModel, g: int) -> tuple[np.ndarray, np.ndarray]:
 
 def _half_body(
     model: mujoco.MjModel, body: str, side_free: str, spacing: float, midline: bool
-) -> list[tuple[str, np.ndarray, np.ndarray]]:
+) -> tuple[np.ndarray, np.ndarray]:
     """Sensors of one left or midline body (midline: the y > 0 half only)."""
     bid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, body)
     geoms = [

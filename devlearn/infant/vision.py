@@ -38,7 +38,7 @@ def fast_renderer(model: mujoco.MjModel, height: int, width: int) -> mujoco.Rend
 
 
 _LIVE: weakref.WeakSet = weakref.WeakSet()
-_EXIT_HOOK = []
+_EXIT_HOOK: list[bool] = []
 
 
 def _track(renderer: mujoco.Renderer) -> None:

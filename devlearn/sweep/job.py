@@ -158,7 +158,12 @@ class _Run:
         """Run one command with its output appended to the log; return its exit code."""
         job = self.job
         version = code_version()
-        attempt = {"phase": phase, "argv": argv, "host": socket.gethostname(), "started": _now()}
+        attempt: dict[str, Any] = {
+            "phase": phase,
+            "argv": argv,
+            "host": socket.gethostname(),
+            "started": _now(),
+        }
         attempt.update(commit=version["commit"], dirty=version["dirty"], cores=self.cores)
         self.record["attempts"].append(attempt)
         self.record["commit"] = version

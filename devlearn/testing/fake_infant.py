@@ -189,7 +189,7 @@ class TinyBehavior(devlearn.Behavior):
         return obs
 
     def network(self) -> devlearn.NetworkSpec:
-        encoders = {"proprioception": devlearn.MLPEncoder((16,))}
+        encoders: dict[str, devlearn.SensorEncoder] = {"proprioception": devlearn.MLPEncoder((16,))}
         if self.config.use_eyes:
             encoders["eyes"] = devlearn.MLPEncoder((8,))
         return devlearn.NetworkSpec(encoders, fusion_dims=(16,), trunk_dims=(16,), init_std=0.5)

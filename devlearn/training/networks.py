@@ -96,7 +96,7 @@ class SharedBody(nn.Module):
         key = (versions, grad, torch.is_inference_mode_enabled())
         last = self._last
         reusable = last is not None and last[0] is obs and last[1] == key
-        if reusable and not (grad and last[3] == caller):
+        if last is not None and reusable and not (grad and last[3] == caller):
             if grad:
                 self._last = None
             return last[2]

@@ -6,6 +6,7 @@ import warnings
 from itertools import chain
 from typing import TYPE_CHECKING, Any
 
+import torch
 import torch.nn as nn
 from rsl_rl.algorithms import PPO
 from rsl_rl.utils import reduce_gradients_in_buckets
@@ -39,6 +40,8 @@ class UniqueParamPPO(PPO):
     Gradient clipping stays rsl-rl's, per network: the shared body is clipped with the
     policy head (its gradient holds both losses), the value head on its own.
     """
+
+    optimizer: torch.optim.Optimizer
 
     def __init__(
         self,

@@ -140,8 +140,8 @@ def interrupts_deferred() -> Iterator[None]:
     finally:
         for signum, handler in saved.items():
             signal.signal(signum, signal.SIG_DFL if handler is None else handler)
-        for signum in dict.fromkeys(held):
-            signal.raise_signal(signum)
+        for held_signum in dict.fromkeys(held):
+            signal.raise_signal(held_signum)
 
 
 _DEFERRED = (signal.SIGINT, signal.SIGTERM)

@@ -72,9 +72,9 @@ def start_up(run_dir: Path, replace: bool, owner: bool) -> Iterator[None]:
         for p in run_dir.iterdir():
             if p != aside and (replace or p.name not in before):
                 shutil.rmtree(p) if p.is_dir() and not p.is_symlink() else p.unlink()
-            elif before.get(p.name) is not None and p.is_file():
-                if p.read_bytes() != before[p.name]:
-                    p.write_bytes(before[p.name])
+            elif (saved := before.get(p.name)) is not None and p.is_file():
+                if p.read_bytes() != saved:
+                    p.write_bytes(saved)
         if replace:
             for name in before:
                 os.replace(aside / name, run_dir / name)
