@@ -93,9 +93,8 @@ class ContactReader:
             self.pyramid = np.array([[1, mu, 0], [1, -mu, 0], [1, 0, mu], [1, 0, -mu]], float)
         self._acc = np.zeros((skin.num_sensors, 3))
         self._mark = np.zeros(skin.num_sensors, dtype=bool)
-        self._kernel: Callable[..., Any] | None = (
-            None  # the compiled routine, imported (numba) on first use
-        )
+        # the compiled routine, imported (numba) on first use
+        self._kernel: Callable[..., Any] | None = None
         self._views: tuple | None = None  # (data, data.xpos, data.xmat)
         # The kernel needs uniform pyramidal cones and candidate lists no longer than its
         # pairwise-sum block (kernels.MAX_CANDIDATES = 128; this skin's are 68).

@@ -28,10 +28,8 @@ from devlearn.infant.senses import LIMIT_ZONE
 # Haswell-and-later kernels); those two are repeated here with fma, in BLAS's k order. The
 # (Q, 1, 3) @ (Q, 3, 3) product is numpy's own loop: plain multiply, then add.
 
-_JIT: dict[str, Any] = {
-    "cache": True,
-    "nogil": True,
-}  # cache: compiled once per machine, not per process
+# cache: compiled once per machine, not per process
+_JIT: dict[str, Any] = {"cache": True, "nogil": True}
 
 
 @intrinsic
