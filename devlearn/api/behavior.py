@@ -205,7 +205,7 @@ class Behavior(ABC):
 
     # --- rewards, actions, curriculum ----------------------------------------------------
     @abstractmethod
-    def reward_terms(self) -> list[IntrinsicReward | BatchedIntrinsicReward]:
+    def reward_terms(self) -> Sequence[IntrinsicReward | BatchedIntrinsicReward]:
         """Return fresh reward-term instances for one environment.
 
         A :class:`~devlearn.api.rewards.BatchedIntrinsicReward` in the list is computed once per

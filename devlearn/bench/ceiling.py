@@ -122,7 +122,7 @@ def reference_env_steps_per_s(behavior: Behavior, steps: int) -> float:
 
     behavior = copy.deepcopy(behavior)
     if hasattr(behavior, "per_env_reward_terms"):
-        behavior.reward_terms = behavior.per_env_reward_terms
+        behavior.reward_terms = behavior.per_env_reward_terms  # type: ignore[method-assign]
     return bench_behavior_env(behavior, steps, reference_touch=True)
 
 

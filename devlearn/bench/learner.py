@@ -94,7 +94,7 @@ def bench_update(
     num_steps: int,
     repeats: int = 2,
     threads: int = 0,
-) -> dict[str, float]:
+) -> dict[str, Any]:
     """The PPO update's cost per rollout sample, and the rollout inference's per step.
 
     One update is ``ppo.num_learning_epochs`` passes of ``ppo.num_mini_batches`` mini-batches

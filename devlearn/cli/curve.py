@@ -111,7 +111,9 @@ def start_label(protocol: dict) -> str:
     rest``), ``random starts`` (the stage's seeded random poses) or ``stage starts``."""
     if protocol.get("start") == "rest":
         return "rest start"
-    stage = protocol.get("stage") if isinstance(protocol.get("stage"), dict) else {}
+    stage = protocol.get("stage")
+    if not isinstance(stage, dict):
+        stage = {}
     return "random starts" if stage.get("random_pose", True) else "stage starts"
 
 
@@ -216,7 +218,7 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
             smooth = np.convolve(values, np.ones(window) / window, mode="valid")
             if len(runs) == 1:
                 ax.plot(steps, values, color="0.8", lw=0.8)
-            ax.plot(steps[window - 1 :], smooth, lw=1.6, label=run_dir.name)
+            ax.plot(steps[window - 1 :], smooth, lw=1.6, label=Path(run_dir).name)
         ax.set_ylabel(key.split("/")[-1])
         ax.grid(alpha=0.3)
     if len(runs) > 1 or evaluations:
@@ -224,7 +226,9 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     title = args.run_dirs[0].name if len(runs) == 1 else f"{len(runs)} runs"
     if evaluations:
         axes[-1, 0].set_xlabel("environment steps of the checkpoint")
-        count = len({(label.rsplit(", ", 1)[0], r["step"]) for label, rows in runs for r in rows})
+        count = len(
+            {(str(label).rsplit(", ", 1)[0], r["step"]) for label, rows in runs for r in rows}
+        )
         starts = sorted({r["_start"] for _, rows in runs for r in rows})
         fig.suptitle(f"evaluations of {count} checkpoints ({' / '.join(starts)})")
     else:

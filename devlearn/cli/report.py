@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import argparse
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from devlearn.plugins import PluginRegistry
@@ -31,7 +31,7 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
 
     from devlearn.evaluation.report import write_report
 
-    def paper_results(behavior: str, config: dict) -> dict[str, Any] | None:
+    def paper_results(behavior: str, config: dict) -> tuple[str, dict[str, float]] | None:
         if behavior not in registry.behaviors():
             return None  # its plugin is not installed: no paper column
         return registry.behavior(behavior).paper_results(config)

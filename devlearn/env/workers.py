@@ -131,13 +131,16 @@ def worker_main(
             elif cmd == "step":
                 reply = step_envs(envs, offset, arrays)
             elif cmd == "set_stage":
-                reply = [env.set_stage(arg) for env in envs]
+                for env in envs:
+                    env.set_stage(arg)
+                reply = [None] * len(envs)
             elif cmd == "state":
                 reply = [env.state_dict() for env in envs]
             elif cmd == "memory":
                 reply = run_memories(envs)
             elif cmd == "load_memory":
-                reply = load_run_memories(envs, arg)
+                load_run_memories(envs, arg)
+                reply = None
             elif cmd == "load":
                 for i, (env, state) in enumerate(zip(envs, arg)):
                     env.load_state_dict(state)
@@ -223,7 +226,7 @@ class WorkerPool:
             for chunk in self.chunks:
                 parent_conn, child_conn = ctx.Pipe()
                 chunk_seeds = [seeds[i] for i in chunk]
-                proc = ctx.Process(
+                proc = ctx.Process(  # type: ignore[attr-defined]  # every concrete context has it
                     target=worker_main,
                     args=(
                         child_conn,

@@ -143,10 +143,10 @@ def collect(paths: Sequence[str | Path]) -> tuple[list[tuple[Path, dict]], list[
     if not found:
         where = ", ".join(map(str, paths))
         raise UsageError(f"no evaluation with a recorded protocol under {where}")
-    behaviors = sorted({d.get("behavior", "?") for d in found.values()})
-    if len(behaviors) > 1:
+    names = sorted({d.get("behavior", "?") for d in found.values()})
+    if len(names) > 1:
         raise UsageError(
-            f"evaluations of different behaviours mixed ({', '.join(behaviors)}); "
+            f"evaluations of different behaviours mixed ({', '.join(names)}); "
             "report one behaviour at a time"
         )
     return sorted(found.items()), notes

@@ -189,6 +189,7 @@ def touch_from_contacts(skin: Skin, sides: ContactSides | None) -> np.ndarray:
     """Sensor forces, (num_sensors, 3) float32, body frames."""
     if sides is None:
         return np.zeros((skin.num_sensors, 3), dtype=np.float32)
+    assert sides.force is not None, "ContactSides without forces (sides(with_force=False))"
     return skin.spread(sides.body, sides.point, sides.force, sides.cand, sides.dist)
 
 
@@ -198,6 +199,7 @@ def sparse_touch_from_contacts(
     """The sensors that feel a force, (M,) int64 sorted, and those forces, (M, 3) float32."""
     if sides is None:
         return np.zeros(0, dtype=np.int64), np.zeros((0, 3), dtype=np.float32)
+    assert sides.force is not None, "ContactSides without forces (sides(with_force=False))"
     return skin.spread_sparse(sides.body, sides.point, sides.force, sides.cand, sides.dist)
 
 

@@ -162,7 +162,8 @@ def contact_touch(
         # edges @ [[1, mu, 0], [1, -mu, 0], [1, 0, mu], [1, 0, -mu]] (mju_decodePyramid), as
         # BLAS accumulates it over the 4 edges (products by 0 and 1 are exact and left out)
         local[0] = ((e0 + e1) + e2) + e3
-        local[1] = _fma(e1, -mu, e0 * mu)
+        # (an @intrinsic: numba passes its typing context; the stubs ask for it)
+        local[1] = _fma(e1, -mu, e0 * mu)  # type: ignore[call-arg]
         local[2] = _fma(e3, -mu, e2 * mu)
         for j in range(3):  # f_world = f_local @ frame (rows: normal, tangents); numpy's loop
             fworld[j] = (local[0] * con_frame[c, j] + local[1] * con_frame[c, 3 + j]) + local[

@@ -159,6 +159,7 @@ def _compute_layout(model: mujoco.MjModel) -> SkinLayout:
         body = f"left_{spec.name}" if spec.paired else spec.name
         pos, parts = _half_body(model, body, spec.name, spec.spacing, not spec.paired)
         mirrored = pos * [1.0, -1.0, 1.0]
+        halves: tuple[tuple[str, np.ndarray, np.ndarray], ...]
         if spec.paired:
             halves = ((body, pos, parts), (f"right_{spec.name}", mirrored, parts + NUM_PARTS))
         else:

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import pickle
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import mujoco
@@ -44,7 +44,7 @@ def check_behavior_class(behavior_cls: type[Behavior]) -> None:
     check_picklable(behavior_cls(config), f"behavior '{name}'")  # travels to worker processes
 
 
-def check_reward_terms(terms: list[IntrinsicReward | BatchedIntrinsicReward]) -> None:
+def check_reward_terms(terms: Sequence[IntrinsicReward | BatchedIntrinsicReward]) -> None:
     """Check reward terms: unique names, a docstring each, picklable state."""
     names = [t.name for t in terms]
     require(len(names) == len(set(names)), f"reward term names must be unique: {names}")

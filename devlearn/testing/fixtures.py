@@ -29,7 +29,7 @@ def registry_for(
         for behavior in behaviors:
             register(behavior)
 
-    module.register_behaviors = register_behaviors
+    module.register_behaviors = register_behaviors  # type: ignore[attr-defined]
     if learned_rewards:
 
         @hookimpl
@@ -37,7 +37,7 @@ def registry_for(
             for term in learned_rewards:
                 register(term)
 
-        module.register_learned_rewards = register_learned_rewards
+        module.register_learned_rewards = register_learned_rewards  # type: ignore[attr-defined]
     return PluginRegistry([PluginSource(name, module, "test-dist", "0")], disabled=())
 
 

@@ -36,7 +36,7 @@ class HookTracker(TinyBehavior):
         self.pending_action: np.ndarray | None = None
         self.problems: list[str] = []
 
-    def on_episode_start(self, infant: Infant, rng: np.random.Generator) -> None:
+    def on_episode_start(self, infant: Any, rng: np.random.Generator) -> None:
         if not isinstance(rng, np.random.Generator):
             self.problems.append(f"rng is {type(rng).__name__}")
         if np.any(infant.position != 0):  # fixed-pose stage: the reset already happened

@@ -246,12 +246,12 @@ class MultiSenseModel(MLPModel):
         """The shared body (rsl-rl's ``share_cnn_encoders`` passes it to the critic)."""
         return self._body() if self.shared else None
 
-    def _input(self, obs: TensorDict, group: str) -> torch.Tensor:
+    def _input(self, obs: Observations, group: str) -> torch.Tensor:
         x = as_float(obs[group], self.legacy_uint8_scale)
         return self.normalizers[group](x) if group in self.normalizers else x
 
     def get_latent(
-        self, obs: TensorDict, masks: torch.Tensor | None = None, hidden_state: Any = None
+        self, obs: Observations, masks: torch.Tensor | None = None, hidden_state: Any = None
     ) -> torch.Tensor:
         """Normalise the groups named in ``spec.normalize``, encode every group, concatenate
         (separate layout), or the shared body's features (shared layout).

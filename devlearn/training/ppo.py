@@ -54,7 +54,8 @@ class UniqueParamPPO(PPO):
         with warnings.catch_warnings():  # the parent's optimiser, replaced below, may warn
             warnings.filterwarnings("ignore", message=".*duplicate parameters")
             super().__init__(actor, critic, storage, *args, **kwargs)
-        self.optimizer = type(self.optimizer)(
+        # the parent's optimiser class (Adam...) takes lr; torch's Optimizer base does not
+        self.optimizer = type(self.optimizer)(  # type: ignore[call-arg]
             unique_parameters(self.actor, self.critic), lr=self.learning_rate
         )
 

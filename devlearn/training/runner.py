@@ -146,7 +146,7 @@ class DevRunner(RunnerCheckpoints, RunnerMetrics, OnPolicyRunner):
             torch.cuda.set_device(self.gpu_local_rank)
 
     # --- training loop --------------------------------------------------------------------
-    def learn(self, total_steps: int) -> None:  # type: ignore[override]
+    def learn(self, total_steps: int) -> None:
         """Train until ``total_steps`` environment steps (all envs, all ranks) are done."""
         env, alg = self.env, self.alg
         rnd = bool(self.cfg["algorithm"].get("rnd_cfg"))

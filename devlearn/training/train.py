@@ -155,7 +155,8 @@ def train(
             last good state is written first).
     """
     # Config (and, when resuming, the checkpoint it continues from).
-    checkpoint, ckpt_path = None, None
+    checkpoint: dict[str, Any] | None = None
+    ckpt_path: str | Path | None = None
     if resume is not None:
         run_dir = Path(resume)
         ckpt_path, checkpoint = resume_checkpoint(run_dir)

@@ -10,7 +10,7 @@ recorded steps. The body map's sums repeat numpy's float operations in numpy's o
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, cast
 
 import numba
 import numpy as np
@@ -72,7 +72,9 @@ def batch_touch_facts(
     if touch_source == "hands":
         touched = contacts.any(axis=1)
     else:
-        above = g > touch_threshold  # float32 against the Python float, as facts() compares
+        above = cast(
+            np.ndarray, g > touch_threshold
+        )  # float32 against the Python float, as facts() compares
         touched = above if touch_source == "threshold" else contacts.any(axis=1) | above
     return [
         {"body_map": g[i], "hand_contacts": contacts[i], "hand_parts": parts[i], "touched": t}
