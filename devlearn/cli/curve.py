@@ -14,7 +14,7 @@ import argparse
 import json
 import os
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from devlearn.api.errors import UsageError
 
@@ -183,6 +183,7 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     import matplotlib.pyplot as plt
     import numpy as np
 
+    runs: list[tuple[Any, list[dict]]]  # (run folder, rows), then (label, rows) by start
     runs, evaluations = _load([list(args.run_dirs), *(args.vs or [])])
     every = {k for _, rows in runs for r in rows for k in r if not k.startswith("_")}
     if evaluations:

@@ -10,7 +10,7 @@ recorded steps. The body map's sums repeat numpy's float operations in numpy's o
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any, cast
+from typing import Any
 
 import numba
 import numpy as np
@@ -72,13 +72,12 @@ def batch_touch_facts(
     if touch_source == "hands":
         touched = contacts.any(axis=1)
     else:
-        above = cast(
-            np.ndarray, g > touch_threshold
-        )  # float32 against the Python float, as facts() compares
+        above = g > touch_threshold  # float32 against the Python float, as facts() compares
         touched = above if touch_source == "threshold" else contacts.any(axis=1) | above
+    # touched is (n, 68) bool; numpy's stubs also allow a scalar for any(axis=1) and ">"
     return [
         {"body_map": g[i], "hand_contacts": contacts[i], "hand_parts": parts[i], "touched": t}
-        for i, t in enumerate(touched)
+        for i, t in enumerate(touched)  # type: ignore[arg-type]
     ]
 
 
