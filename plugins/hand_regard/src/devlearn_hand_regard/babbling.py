@@ -131,7 +131,7 @@ def babble(
     if arms not in ARMS:
         raise ValueError(f"babbling arms must be one of {', '.join(ARMS)}, got {arms!r}")
     own = infant is None
-    if own:
+    if infant is None:
         from devlearn import build_infant
 
         infant = build_infant(scene, senses=("proprioception", "eyes"), appearance=appearance)

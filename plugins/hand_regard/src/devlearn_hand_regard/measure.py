@@ -19,7 +19,7 @@ import json
 import sys
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -75,7 +75,7 @@ def held_out(
     data = babble(
         steps,
         seed=seed,
-        infant=recorder,
+        infant=cast("Infant", recorder),  # a proxy: the infant, recording segmentations
         episode_steps=episode_steps,
         random_pose=random_pose,
         start=start,
@@ -220,7 +220,7 @@ def detection_picture(
         for hand, colour in ((0, (0, 220, 0)), (1, (0, 80, 255))):
             tinted[masks[0, hand]] = 0.4 * tinted[masks[0, hand]] + 0.6 * np.array(colour)
         big = cv2.resize(tinted.astype(np.uint8), None, fx=scale, fy=scale, interpolation=0)
-        truth = np.isin(segmentation[t, 0], (1, 2)).astype(np.uint8)
+        truth: np.ndarray = np.isin(segmentation[t, 0], (1, 2)).astype(np.uint8)
         truth = cv2.resize(truth, None, fx=scale, fy=scale, interpolation=0)
         contours, _ = cv2.findContours(truth, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
         cv2.drawContours(big, contours, -1, (255, 0, 0), 1)
