@@ -11,7 +11,14 @@ import numpy as np
 from tqdm import tqdm
 
 if TYPE_CHECKING:
+    from collections import deque
+    from pathlib import Path
+
     from torch.utils.tensorboard import SummaryWriter
+
+    from devlearn.api.behavior import RunMetrics
+    from devlearn.api.curriculum import Curriculum
+    from devlearn.training.learned_rewards import LearnedRewards
 
 
 class RunnerMetrics:
@@ -21,6 +28,18 @@ class RunnerMetrics:
     ``run_metrics``, ``is_main``, ``logger``, ``run_dir`` and ``headline_metric``; sets
     ``last_row``.
     """
+
+    # What the host runner provides (DevRunner sets them), declared for the type checker:
+    # annotations only, no values.
+    env_steps: int
+    curriculum: Curriculum
+    episodes: deque[dict[str, float]]
+    learned: LearnedRewards
+    run_metrics: RunMetrics | None
+    is_main: bool
+    logger: Any  # rsl-rl's Logger (its writer: TensorBoard, W&B... or None)
+    run_dir: Path
+    headline_metric: str
 
     def _record(
         self,
