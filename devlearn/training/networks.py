@@ -117,7 +117,7 @@ class SharedBody(nn.Module):
     def update_normalization(self, obs: TensorDict) -> None:
         """Update the running statistics of the normalised groups from a rollout batch."""
         for group, normalizer in self.normalizers.items():
-            normalizer.update(as_float(obs[group], self.legacy_uint8_scale))  # type: ignore
+            normalizer.update(as_float(obs[group], self.legacy_uint8_scale))  # type: ignore[operator]
 
 
 class MultiSenseModel(MLPModel):
@@ -275,7 +275,7 @@ class MultiSenseModel(MLPModel):
                 self.body.update_normalization(obs)
             return
         for group, normalizer in self.normalizers.items():
-            normalizer.update(as_float(obs[group], self.legacy_uint8_scale))  # type: ignore
+            normalizer.update(as_float(obs[group], self.legacy_uint8_scale))  # type: ignore[operator]
 
     def as_jit(self) -> nn.Module:
         raise NotImplementedError(
