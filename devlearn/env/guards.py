@@ -39,9 +39,8 @@ class GuardError(UsageError):
             f"{self.step} (values must be finite with magnitude <= {bound:g})"
         )
 
-    def __reduce__(
-        self,
-    ) -> tuple[type[GuardError], tuple[Any, ...]]:  # crosses the worker-process boundary intact
+    # crosses the worker-process boundary intact
+    def __reduce__(self) -> tuple[type[GuardError], tuple[Any, ...]]:
         return GuardError, (self.kind, self.name, self.value, self.env_index, self.step)
 
 

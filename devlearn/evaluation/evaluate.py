@@ -176,9 +176,9 @@ def _policy(
             return held.copy()
 
         return hold
-    assert actor is not None, "the checkpoint policy needs a checkpoint's actor"
 
     def act(obs: dict[str, np.ndarray]) -> np.ndarray:
+        assert actor is not None, "the checkpoint policy needs a checkpoint's actor"
         with torch.inference_mode():
             return actor(_batch(obs))[0].numpy()
 
