@@ -11,8 +11,26 @@ Plugins import only ``devlearn``, ``devlearn.api`` and ``devlearn.testing`` (che
 from __future__ import annotations
 
 import os
+from typing import TYPE_CHECKING
 
 from devlearn.lazy import lazy_getattr
+
+if TYPE_CHECKING:  # the same names, for type checkers (which do not run __getattr__)
+    from devlearn.api.behavior import Behavior, Evaluator, RunMetrics
+    from devlearn.api.curriculum import Curriculum, Stage
+    from devlearn.api.errors import UsageError
+    from devlearn.api.hookspecs import hookimpl
+    from devlearn.api.learned import LearnedReward, LearnedRewardConfig, Transitions
+    from devlearn.api.network_spec import NetworkSpec
+    from devlearn.api.rewards import (
+        BatchContext,
+        BatchedIntrinsicReward,
+        IntrinsicReward,
+        StepContext,
+    )
+    from devlearn.api.sensors import MLPEncoder, SensorEncoder
+    from devlearn.api.stats import episode_stats
+    from devlearn.infant import Infant, build_infant
 
 # MuJoCo picks its GL backend when first imported: headless EGL (no display needed) unless the
 # user chose another. Set here, before anything can import mujoco through devlearn.

@@ -12,7 +12,7 @@ import inspect
 import json
 import os
 import re
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -178,7 +178,7 @@ class PluginRegistry:
         self._owner[(kind, name)] = info.name
         return True
 
-    def _register_behaviors(self, info: PluginInfo):
+    def _register_behaviors(self, info: PluginInfo) -> Callable[[type], None]:
         def register(behavior: type) -> None:
             if not (inspect.isclass(behavior) and issubclass(behavior, Behavior)):
                 raise TypeError(f"register_behaviors got {behavior!r}, not a Behavior subclass")
@@ -193,7 +193,7 @@ class PluginRegistry:
 
         return register
 
-    def _register_learned_rewards(self, info: PluginInfo):
+    def _register_learned_rewards(self, info: PluginInfo) -> Callable[[type], None]:
         def register(term: type) -> None:
             from devlearn.api.learned import LearnedReward, LearnedRewardConfig
 

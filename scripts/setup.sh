@@ -7,7 +7,7 @@ PY=${PYTHON:-python3}
 if [ ! -x .venv/bin/python ]; then
   "$PY" -m venv .venv
 fi
-# The test extra brings the pinned ruff and import-linter (.ci/run) and the wandb extra W&B
+# The test extra brings the pinned ruff, import-linter and mypy (.ci/run) and the wandb extra W&B
 # logging, so CI tests `--logger wandb` (offline). Install the pinned torch first so nothing else pulls a CUDA build.
 .venv/bin/python -m pip install -q --disable-pip-version-check -c constraints.txt torch
 .venv/bin/python -m pip install -q --disable-pip-version-check -c constraints.txt \

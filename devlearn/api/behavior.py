@@ -101,7 +101,7 @@ class Behavior(ABC):
     """Unique name used on the command line (``devlearn run NAME``)."""
     description: ClassVar[str] = ""
     """One line shown by ``devlearn plugins`` and ``devlearn info``."""
-    scene: ClassVar[str]
+    scene: str
     """Infant scene to build: ``"crib"``, ``"sitting"`` or ``"sitting_babybench"``
     (:func:`devlearn.infant.build_infant`); an instance may set its own from its config."""
     senses: ClassVar[tuple[str, ...]] = ("touch", "proprioception", "vestibular")
@@ -205,7 +205,7 @@ class Behavior(ABC):
 
     # --- rewards, actions, curriculum ----------------------------------------------------
     @abstractmethod
-    def reward_terms(self) -> list[IntrinsicReward | BatchedIntrinsicReward]:
+    def reward_terms(self) -> Sequence[IntrinsicReward | BatchedIntrinsicReward]:
         """Return fresh reward-term instances for one environment.
 
         A :class:`~devlearn.api.rewards.BatchedIntrinsicReward` in the list is computed once per

@@ -16,6 +16,10 @@ class RunningScale(nn.Module):
     Its buffers are in :meth:`state_dict`, so a resumed run keeps the scale.
     """
 
+    count: torch.Tensor  # buffers (state_dict): () float64 each
+    mean: torch.Tensor
+    m2: torch.Tensor
+
     def __init__(self) -> None:
         super().__init__()
         self.register_buffer("count", torch.zeros((), dtype=torch.float64))

@@ -9,9 +9,12 @@ from __future__ import annotations
 
 import copy
 import time
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from devlearn.api.behavior import Behavior
 
 BREAKDOWN_PARTS = ("physics", "touch", "eyes", "facts", "observe", "rewards", "env")
 """Parts of an environment step: physics (``infant.step``); touch (the compiled contact routine:
@@ -39,7 +42,7 @@ def physics_ceiling(scene: str, steps: int, seed: int = 0) -> float:
     return rate
 
 
-def env_breakdown(behavior, steps: int, seed: int = 0) -> dict[str, float]:
+def env_breakdown(behavior: Behavior, steps: int, seed: int = 0) -> dict[str, float]:
     """Milliseconds per step of each part of one BehaviorEnv's step (:data:`BREAKDOWN_PARTS`).
 
     Runs the same calls as :meth:`devlearn.env.BehaviorEnv.step`, in the same order, with a
@@ -111,7 +114,7 @@ def env_breakdown(behavior, steps: int, seed: int = 0) -> dict[str, float]:
     return result
 
 
-def reference_env_steps_per_s(behavior, steps: int) -> float:
+def reference_env_steps_per_s(behavior: Behavior, steps: int) -> float:
     """Steps/s of the same environment on the previous code paths, in the same run: the numpy
     touch routine instead of the compiled one, and per-environment reward terms where the
     behaviour offers them (``per_env_reward_terms()``, as self_touch does)."""
@@ -119,11 +122,11 @@ def reference_env_steps_per_s(behavior, steps: int) -> float:
 
     behavior = copy.deepcopy(behavior)
     if hasattr(behavior, "per_env_reward_terms"):
-        behavior.reward_terms = behavior.per_env_reward_terms
+        behavior.reward_terms = behavior.per_env_reward_terms  # type: ignore[method-assign]
     return bench_behavior_env(behavior, steps, reference_touch=True)
 
 
-def with_per_env_observations(behavior):
+def with_per_env_observations(behavior: Behavior) -> Behavior:
     """A copy of ``behavior`` on the per-environment path: its class's ``batch_facts`` and
     ``batch_observe`` replaced by :class:`~devlearn.Behavior`'s, so every env calls ``facts``
     and ``observe`` (the path before batched observations; in-process use only: the copy's
@@ -178,7 +181,7 @@ def touch_old_and_new(steps: int, seed: int = 0) -> dict[str, Any]:
     return {key: 1000.0 * total / steps for key, total in spent.items()}
 
 
-def observations_old_and_new(behavior, steps: int, vec_steps: int) -> dict[str, Any]:
+def observations_old_and_new(behavior: Behavior, steps: int, vec_steps: int) -> dict[str, Any]:
     """Steps/s of a behaviour that batches its facts and observations against the same
     behaviour on the per-environment path (:func:`with_per_env_observations`), same run.
 

@@ -5,14 +5,22 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from devlearn.bench.speed import bench_training, without_user_warnings
 
+if TYPE_CHECKING:
+    from tensordict import TensorDict
 
-def build_learner(behavior, layout: str, num_envs: int, seed: int = 0):
+    from devlearn.api.behavior import Behavior
+    from devlearn.training.ppo import UniqueParamPPO
+
+
+def build_learner(
+    behavior: Behavior, layout: str, num_envs: int, seed: int = 0
+) -> tuple[UniqueParamPPO, Callable[[], TensorDict]]:
     """The PPO algorithm a run of ``behavior`` would train, on random observations.
 
     Observation shapes and dtypes come from one real environment reset; the networks, optimiser
@@ -57,7 +65,9 @@ def build_learner(behavior, layout: str, num_envs: int, seed: int = 0):
     return alg, observations
 
 
-def collect_random(alg, observations, num_steps: int) -> float:
+def collect_random(
+    alg: UniqueParamPPO, observations: Callable[[], TensorDict], num_steps: int
+) -> float:
     """Fill the rollout storage with ``num_steps`` random steps; return ms of inference/step."""
     import torch
 
@@ -78,8 +88,13 @@ def collect_random(alg, observations, num_steps: int) -> float:
 
 @without_user_warnings
 def bench_update(
-    behavior, layout: str, num_envs: int, num_steps: int, repeats: int = 2, threads: int = 0
-) -> dict[str, float]:
+    behavior: Behavior,
+    layout: str,
+    num_envs: int,
+    num_steps: int,
+    repeats: int = 2,
+    threads: int = 0,
+) -> dict[str, Any]:
     """The PPO update's cost per rollout sample, and the rollout inference's per step.
 
     One update is ``ppo.num_learning_epochs`` passes of ``ppo.num_mini_batches`` mini-batches

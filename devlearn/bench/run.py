@@ -13,7 +13,7 @@ import subprocess
 import sys
 import time
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from devlearn.bench.ceiling import (
     env_breakdown,
@@ -30,6 +30,9 @@ from devlearn.bench.speed import (
     bench_vec_env,
     decision_rate,
 )
+
+if TYPE_CHECKING:
+    from devlearn.plugins import PluginRegistry
 
 STARTUP_COMMANDS = {
     "help": ["--help"],
@@ -56,7 +59,9 @@ def cli_startup_s(args: list[str], repeats: int = 3) -> float:
     return best
 
 
-def run_bench(registry, quick: bool = False, progress: Callable[[str], None] = print) -> dict:
+def run_bench(
+    registry: PluginRegistry, quick: bool = False, progress: Callable[[str], None] = print
+) -> dict:
     """Run every measurement; return the figures (see ``devlearn bench --help``)."""
     n = 300 if quick else 2000
     result_startup = {}

@@ -15,17 +15,24 @@ import time
 import warnings
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, ParamSpec, TypeVar
 
 import numpy as np
 
+if TYPE_CHECKING:
+    from devlearn.api.behavior import Behavior
+    from devlearn.plugins import PluginRegistry
 
-def without_user_warnings(function):
+P = ParamSpec("P")
+R = TypeVar("R")
+
+
+def without_user_warnings(function: Callable[P, R]) -> Callable[P, R]:
     """Run ``function`` with UserWarnings silenced: a speed figure of an unprepared behaviour
     (hand regard's uncalibrated detector) does not depend on what it would perceive."""
 
     @functools.wraps(function)
-    def wrapper(*args, **kwargs):
+    def wrapper(*args: P.args, **kwargs: P.kwargs) -> R:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", UserWarning)
             return function(*args, **kwargs)
@@ -34,7 +41,7 @@ def without_user_warnings(function):
 
 
 @without_user_warnings
-def bench_behavior_env(behavior, steps: int, reference_touch: bool = False) -> float:
+def bench_behavior_env(behavior: Behavior, steps: int, reference_touch: bool = False) -> float:
     """Single-process environment steps per second of one BehaviorEnv (random actions);
     ``reference_touch``: with the numpy touch routine instead of the compiled one."""
     from devlearn.env import BehaviorEnv
@@ -50,7 +57,11 @@ def bench_behavior_env(behavior, steps: int, reference_touch: bool = False) -> f
 
 
 def random_steps_per_s(
-    step, rng: np.random.Generator, action_dim: int, steps: int, warmup: int
+    step: Callable[[np.ndarray], object],
+    rng: np.random.Generator,
+    action_dim: int,
+    steps: int,
+    warmup: int,
 ) -> float:
     """Steps per second of ``step(action)`` on uniform random actions in [-1, 1]: ``warmup``
     untimed steps, then ``steps`` timed ones (actions drawn beforehand, outside the timing)."""
@@ -63,7 +74,7 @@ def random_steps_per_s(
     return steps / (time.perf_counter() - start)
 
 
-def bench_vec_env(behavior, num_envs: int, workers: int, steps: int) -> float:
+def bench_vec_env(behavior: Behavior, num_envs: int, workers: int, steps: int) -> float:
     """Environment steps per second (summed over envs) of a DevVecEnv with ``workers`` processes."""
     import torch
 
@@ -107,7 +118,7 @@ def bench_training(
 
 
 def decision_rate(
-    registry,
+    registry: PluginRegistry,
     behavior: str,
     steps: int,
     extra: list[str],

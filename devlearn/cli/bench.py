@@ -5,6 +5,10 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from devlearn.plugins import PluginRegistry
 
 # (key, label, unit, BabyBench reference on our machine kind, our target, higher is better).
 # BabyBench's self-touch figure is the one measured beside ours in one run (issue 14).
@@ -108,7 +112,7 @@ ROWS = [
 ]
 
 
-def add_parser(subparsers) -> list[str]:
+def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> list[str]:
     """Register the ``bench`` sub-command."""
     p = subparsers.add_parser("bench", help="measure environment and training speed")
     p.add_argument("--json", action="store_true", help="print the figures as a JSON object")
@@ -141,7 +145,7 @@ def format_table(result: dict) -> str:
     return "\n".join(lines)
 
 
-def run(args: argparse.Namespace, registry) -> int:
+def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     """Run the measurements with progress on stderr; print a table or JSON."""
     from devlearn.bench.run import run_bench
 

@@ -5,13 +5,17 @@ from __future__ import annotations
 import argparse
 import json
 import textwrap
+from typing import TYPE_CHECKING
 
 from devlearn.config.help import describe_keys
 from devlearn.config.run_config import RunConfig, apply_preset, default_config
 from devlearn.config.values import apply_overrides
 
+if TYPE_CHECKING:
+    from devlearn.plugins import PluginRegistry
 
-def add_parser(subparsers) -> list[str]:
+
+def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> list[str]:
     """Register the ``config`` sub-command."""
     p = subparsers.add_parser(
         "config",
@@ -38,7 +42,7 @@ def add_parser(subparsers) -> list[str]:
     return ["config"]
 
 
-def run(args: argparse.Namespace, registry) -> int:
+def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     """Print the keys as a table (grouped by section) or as JSON."""
     behavior_cls = registry.behavior(args.behavior)
     core = RunConfig(behavior_name=behavior_cls.name, behavior=behavior_cls.config_class())

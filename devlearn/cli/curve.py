@@ -14,14 +14,18 @@ import argparse
 import json
 import os
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from devlearn.api.errors import UsageError
+
+if TYPE_CHECKING:
+    from devlearn.plugins import PluginRegistry
 
 SMOOTH_MAX = 100_000
 """Largest ``--smooth`` window (iterations)."""
 
 
-def add_parser(subparsers) -> list[str]:
+def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> list[str]:
     """Register the ``curve`` sub-command."""
     p = subparsers.add_parser("curve", help="plot metrics of a run against environment steps")
     p.add_argument(
@@ -107,7 +111,9 @@ def start_label(protocol: dict) -> str:
     rest``), ``random starts`` (the stage's seeded random poses) or ``stage starts``."""
     if protocol.get("start") == "rest":
         return "rest start"
-    stage = protocol.get("stage") if isinstance(protocol.get("stage"), dict) else {}
+    stage = protocol.get("stage")
+    if not isinstance(stage, dict):
+        stage = {}
     return "random starts" if stage.get("random_pose", True) else "stage starts"
 
 
@@ -169,7 +175,7 @@ def _load(groups: list[list[Path]]) -> tuple[list[tuple[Path, list[dict]]], bool
     return [(Path(os.path.relpath(c)), read_evaluations(g)) for c, g in zip(common, groups)], True
 
 
-def run(args: argparse.Namespace, registry) -> int:
+def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     """Plot the chosen metrics (moving average) against steps and write a PNG."""
     import matplotlib
 
@@ -177,6 +183,7 @@ def run(args: argparse.Namespace, registry) -> int:
     import matplotlib.pyplot as plt
     import numpy as np
 
+    runs: list[tuple[Any, list[dict]]]  # (run folder, rows), then (label, rows) by start
     runs, evaluations = _load([list(args.run_dirs), *(args.vs or [])])
     every = {k for _, rows in runs for r in rows for k in r if not k.startswith("_")}
     if evaluations:
@@ -212,7 +219,7 @@ def run(args: argparse.Namespace, registry) -> int:
             smooth = np.convolve(values, np.ones(window) / window, mode="valid")
             if len(runs) == 1:
                 ax.plot(steps, values, color="0.8", lw=0.8)
-            ax.plot(steps[window - 1 :], smooth, lw=1.6, label=run_dir.name)
+            ax.plot(steps[window - 1 :], smooth, lw=1.6, label=Path(run_dir).name)
         ax.set_ylabel(key.split("/")[-1])
         ax.grid(alpha=0.3)
     if len(runs) > 1 or evaluations:
@@ -220,7 +227,9 @@ def run(args: argparse.Namespace, registry) -> int:
     title = args.run_dirs[0].name if len(runs) == 1 else f"{len(runs)} runs"
     if evaluations:
         axes[-1, 0].set_xlabel("environment steps of the checkpoint")
-        count = len({(label.rsplit(", ", 1)[0], r["step"]) for label, rows in runs for r in rows})
+        count = len(
+            {(str(label).rsplit(", ", 1)[0], r["step"]) for label, rows in runs for r in rows}
+        )
         starts = sorted({r["_start"] for _, rows in runs for r in rows})
         fig.suptitle(f"evaluations of {count} checkpoints ({' / '.join(starts)})")
     else:

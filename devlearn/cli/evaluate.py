@@ -6,12 +6,16 @@ import argparse
 import json
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from devlearn.api.errors import UsageError
 from devlearn.cli.folders import removed_on_failure
 
+if TYPE_CHECKING:
+    from devlearn.plugins import PluginRegistry
 
-def add_parser(subparsers) -> list[str]:
+
+def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> list[str]:
     """Register the ``eval`` sub-command."""
     p = subparsers.add_parser(
         "eval",
@@ -92,7 +96,7 @@ def _print(summary: dict, as_json: bool) -> None:
         print(f"{key.ljust(width)}  {text}")
 
 
-def run(args: argparse.Namespace, registry) -> int:
+def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     """Evaluate and print the summary (a table, or JSON with --json), then where files went.
 
     The summary is printed even when writing the files failed (then exit code 2).

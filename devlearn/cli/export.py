@@ -4,9 +4,13 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from devlearn.plugins import PluginRegistry
 
 
-def add_parser(subparsers) -> list[str]:
+def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> list[str]:
     """Register the ``export`` sub-command."""
     p = subparsers.add_parser(
         "export",
@@ -24,7 +28,7 @@ def add_parser(subparsers) -> list[str]:
     return ["export"]
 
 
-def run(args: argparse.Namespace, registry) -> int:
+def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     """Export and print what was written and its inputs."""
     from devlearn.api.errors import UsageError
     from devlearn.evaluation.export import FORMATS, export_policy, load_policy

@@ -4,11 +4,15 @@ from __future__ import annotations
 
 import argparse
 import json
+from typing import TYPE_CHECKING
 
 from devlearn.evaluation.describe import describe_behavior
 
+if TYPE_CHECKING:
+    from devlearn.plugins import PluginRegistry
 
-def add_parser(subparsers) -> list[str]:
+
+def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> list[str]:
     """Register the ``info`` sub-command."""
     p = subparsers.add_parser("info", help="describe a behaviour's observations, actions, skin")
     p.add_argument("behavior", help="behaviour name (see `devlearn plugins`)")
@@ -16,7 +20,7 @@ def add_parser(subparsers) -> list[str]:
     return ["info"]
 
 
-def run(args: argparse.Namespace, registry) -> int:
+def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     """Print the description as a table or JSON."""
     behavior = registry.create(args.behavior)
     info = describe_behavior(behavior)

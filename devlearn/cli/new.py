@@ -7,8 +7,12 @@ import keyword
 import string
 from importlib import resources
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from devlearn.api.errors import UsageError
+
+if TYPE_CHECKING:
+    from devlearn.plugins import PluginRegistry
 
 # Template file -> where it goes in the new distribution (``{module}``: the import name).
 FILES = {
@@ -21,7 +25,7 @@ FILES = {
 }
 
 
-def add_parser(subparsers) -> list[str]:
+def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> list[str]:
     """Register the ``new`` sub-command."""
     p = subparsers.add_parser(
         "new",
@@ -49,7 +53,9 @@ def names_for(name: str) -> dict[str, str]:
     }
 
 
-def write_plugin(name: str, out: str | Path | None = None, registry=None) -> list[Path]:
+def write_plugin(
+    name: str, out: str | Path | None = None, registry: PluginRegistry | None = None
+) -> list[Path]:
     """Write the plugin distribution for ``name`` into ``out``; return the files written.
 
     Raises:
@@ -76,7 +82,7 @@ def write_plugin(name: str, out: str | Path | None = None, registry=None) -> lis
     return written
 
 
-def run(args: argparse.Namespace, registry) -> int:
+def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     """Write the plugin and print the next commands."""
     files = write_plugin(args.name, args.out, registry)
     root = files[0].parent

@@ -3,11 +3,15 @@
 from __future__ import annotations
 
 import argparse
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from devlearn.plugins import PluginRegistry
 
 PICTURES = ("body-map", "eyes")
 
 
-def add_parser(subparsers) -> list[str]:
+def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> list[str]:
     """Register the ``picture`` sub-command."""
     p = subparsers.add_parser(
         "picture", help="draw the 68-region body map or what the two eyes see (PNG)"
@@ -17,7 +21,7 @@ def add_parser(subparsers) -> list[str]:
     return ["picture"]
 
 
-def run(args: argparse.Namespace, registry) -> int:
+def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     """Write the picture and print its path (``registry`` is unused)."""
     del registry
     from devlearn.infant.pictures import body_map_picture, eyes_picture

@@ -6,10 +6,10 @@ import argparse
 import json
 
 from devlearn.api.errors import UsageError
-from devlearn.plugins import set_plugin_disabled
+from devlearn.plugins import PluginRegistry, set_plugin_disabled
 
 
-def add_parser(subparsers) -> list[str]:
+def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> list[str]:
     """Register the ``plugins`` sub-command."""
     p = subparsers.add_parser("plugins", help="list installed plugins (or enable/disable one)")
     p.add_argument("--json", action="store_true", help="print a JSON list of plugin objects")
@@ -18,7 +18,7 @@ def add_parser(subparsers) -> list[str]:
     return ["plugins"]
 
 
-def run(args: argparse.Namespace, registry) -> int:
+def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     """List plugins as a table or JSON, or change which are disabled."""
     for name, disable in ((args.disable, True), (args.enable, False)):
         if name:

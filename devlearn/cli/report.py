@@ -3,9 +3,13 @@
 from __future__ import annotations
 
 import argparse
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from devlearn.plugins import PluginRegistry
 
 
-def add_parser(subparsers) -> list[str]:
+def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> list[str]:
     """Register the ``report`` sub-command."""
     p = subparsers.add_parser(
         "report",
@@ -21,13 +25,13 @@ def add_parser(subparsers) -> list[str]:
     return ["report"]
 
 
-def run(args: argparse.Namespace, registry) -> int:
+def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     """Write the report and print its table."""
     from pathlib import Path
 
     from devlearn.evaluation.report import write_report
 
-    def paper_results(behavior: str, config: dict):
+    def paper_results(behavior: str, config: dict) -> tuple[str, dict[str, float]] | None:
         if behavior not in registry.behaviors():
             return None  # its plugin is not installed: no paper column
         return registry.behavior(behavior).paper_results(config)

@@ -7,12 +7,16 @@ import contextlib
 import signal
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from devlearn.api.errors import UsageError
 from devlearn.config.checks import check_config
 
+if TYPE_CHECKING:
+    from devlearn.plugins import PluginRegistry
 
-def add_parser(subparsers) -> list[str]:
+
+def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> list[str]:
     """Register the ``run`` sub-command."""
     p = subparsers.add_parser(
         "run",
@@ -66,7 +70,7 @@ def add_parser(subparsers) -> list[str]:
     return ["run"]
 
 
-def run(args: argparse.Namespace, registry) -> int:
+def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     """Build the config, train, print the run directory and a final summary."""
     from devlearn.cli.summary import finished_message, paper_budget, run_summary
     from devlearn.config.run_config import default_config

@@ -4,9 +4,13 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from devlearn.plugins import PluginRegistry
 
 
-def add_parser(subparsers) -> list[str]:
+def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> list[str]:
     """Register the ``slim`` sub-command."""
     p = subparsers.add_parser(
         "slim",
@@ -21,7 +25,7 @@ def add_parser(subparsers) -> list[str]:
     return ["slim"]
 
 
-def run(args: argparse.Namespace, registry) -> int:
+def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     """Write the policy file and say where, and how much smaller it is."""
     from devlearn.evaluation.evaluate import POLICY_FILE, resolve_checkpoint
     from devlearn.evaluation.policy_file import slim_checkpoint

@@ -5,9 +5,12 @@ from __future__ import annotations
 import json
 import shlex
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from devlearn.training.checkpoint import LATEST
+
+if TYPE_CHECKING:
+    from devlearn.config.run_config import RunConfig
 
 
 def _rows(run_dir: Path) -> list[dict[str, Any]]:
@@ -144,7 +147,7 @@ def run_summary(
     return "\n".join(lines)
 
 
-def finished_message(run_dir: str | Path, cfg, found: tuple | None = None) -> str | None:
+def finished_message(run_dir: str | Path, cfg: RunConfig, found: tuple | None = None) -> str | None:
     """If the run's newest checkpoint already reached ``cfg.total_steps``, say so; else None.
 
     Reads only the newest checkpoint (or takes ``found``, the ``(path, state)`` of

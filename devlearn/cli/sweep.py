@@ -5,11 +5,15 @@ from __future__ import annotations
 import argparse
 import shlex
 import sys
+from typing import TYPE_CHECKING
 
 from devlearn.api.errors import UsageError
 
+if TYPE_CHECKING:
+    from devlearn.plugins import PluginRegistry
 
-def add_parser(subparsers) -> list[str]:
+
+def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> list[str]:
     """Register the ``sweep`` sub-command."""
     p = subparsers.add_parser(
         "sweep",
@@ -71,7 +75,7 @@ def add_parser(subparsers) -> list[str]:
     return ["sweep"]
 
 
-def run(args: argparse.Namespace, registry) -> int:
+def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     """Build the sweep, check it, run it (or list it with --dry-run)."""
     from devlearn.cli.run import _interrupt_on_signals
     from devlearn.sweep import build_spec, plan_sweep, run_sweep

@@ -7,8 +7,12 @@ import os
 import re
 import tempfile
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from devlearn.api.errors import UsageError
+
+if TYPE_CHECKING:
+    from devlearn.config.run_config import RunConfig
 
 SEED_MAX = 2**32 - 1
 """Largest seed (numpy's global generator takes 32-bit seeds)."""
@@ -22,7 +26,9 @@ RUN_FILES = ("config.json", "metrics.jsonl", "checkpoint_latest.pt")
 _DEVICE = re.compile(r"^(cpu|cuda(:\d+)?)$")
 
 
-def _positive(cfg, name: str, low: float = 0.0, high: float = math.inf, closed: bool = False):
+def _positive(
+    cfg: RunConfig, name: str, low: float = 0.0, high: float = math.inf, closed: bool = False
+) -> None:
     value = getattr(cfg.ppo, name)
     inside = low <= value <= high if closed else low < value <= high
     if not (isinstance(value, (int, float)) and math.isfinite(value) and inside):
@@ -46,7 +52,7 @@ PPO_COUNT_MAX = 10**6
 """Largest rollout length, epochs and mini-batches per iteration."""
 
 
-def _whole(value, option: str, low: int, high: int, low_note: str = "") -> None:
+def _whole(value: Any, option: str, low: int, high: int, low_note: str = "") -> None:
     """Raise UsageError unless ``value`` is an integer in ``[low, high]``."""
     if isinstance(value, bool) or not isinstance(value, int):
         raise UsageError(f"{option} must be an integer, got {value!r}")
@@ -57,7 +63,7 @@ def _whole(value, option: str, low: int, high: int, low_note: str = "") -> None:
         raise UsageError(f"{option} must be at most {high:g}, got {value:g}")
 
 
-def check_config(cfg) -> None:
+def check_config(cfg: RunConfig) -> None:
     """Reject values that would fail later (or train on garbage) with a less clear error: every
     number within bounds (each message one line naming the option and its valid range), checked
     before anything is written."""

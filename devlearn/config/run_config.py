@@ -6,10 +6,13 @@ from __future__ import annotations
 import dataclasses
 import json
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from devlearn.api.errors import UsageError
 from devlearn.config.values import apply_overrides, convert, field_types
+
+if TYPE_CHECKING:
+    from devlearn.api.behavior import Behavior
 
 
 @dataclass
@@ -171,7 +174,7 @@ class RunConfig:
 
 
 def default_config(
-    behavior_cls: type,
+    behavior_cls: type[Behavior],
     overrides: list[str] | None = None,
     preset: str | None = None,
     **top: Any,
@@ -233,7 +236,7 @@ def head_max_std(spec: Any) -> float:
     return float(spec.max_std) if spec.max_std else 1.0
 
 
-def apply_preset(cfg: RunConfig, behavior_cls: type, preset: str) -> RunConfig:
+def apply_preset(cfg: RunConfig, behavior_cls: type[Behavior], preset: str) -> RunConfig:
     """Apply the behaviour's preset ``preset`` (its ``presets()``) to ``cfg`` in place and
     record its name in ``cfg.preset``.
 
@@ -274,7 +277,7 @@ def _fill(obj: Any, data: dict[str, Any], prefix: str) -> None:
             raise UsageError(f"unknown config key '{prefix}{name}' in saved config")
 
 
-def from_dict(data: dict[str, Any], behavior_cls: type) -> RunConfig:
+def from_dict(data: dict[str, Any], behavior_cls: type[Behavior]) -> RunConfig:
     """Rebuild a RunConfig saved by :func:`to_dict` for the behaviour class ``behavior_cls``.
 
     A key the saved config lacks takes its default, except where the old runs were trained

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from devlearn.env.behavior_env import BehaviorEnv
 from devlearn.env.workers import EnvWorkerError
@@ -13,7 +13,7 @@ if TYPE_CHECKING:
 __all__ = ["BehaviorEnv", "DevVecEnv", "EnvWorkerError"]
 
 
-def __getattr__(name: str):
+def __getattr__(name: str) -> Any:
     # DevVecEnv pulls in rsl-rl and tensordict (seconds of imports); worker processes, which
     # import this package for BehaviorEnv, never need it.
     if name == "DevVecEnv":

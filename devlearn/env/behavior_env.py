@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
-from devlearn.api.rewards import BatchContext, BatchedIntrinsicReward, StepContext
+from devlearn.api.rewards import BatchContext, BatchedIntrinsicReward, IntrinsicReward, StepContext
 from devlearn.env.batch_advance import advance_batch, clipped_actions
 from devlearn.env.guards import (
     REWARD_BOUND,
@@ -269,7 +269,7 @@ def term_values(envs: list[BehaviorEnv], contexts: list[StepContext]) -> np.ndar
             own_terms = True
             for i, (env, ctx) in enumerate(zip(envs, contexts)):
                 try:
-                    raw[k, i] = float(env.terms[k](ctx))
+                    raw[k, i] = float(cast(IntrinsicReward, env.terms[k])(ctx))
                 except Exception as exc:  # named, and the run stops as on a NaN (guards.py)
                     from devlearn.env.guards import TermError
 
@@ -285,7 +285,9 @@ def term_values(envs: list[BehaviorEnv], contexts: list[StepContext]) -> np.ndar
 
 
 def step_batch(
-    envs: list[BehaviorEnv], actions, obs_out: dict[str, np.ndarray] | None = None
+    envs: list[BehaviorEnv],
+    actions: Sequence[np.ndarray] | np.ndarray,
+    obs_out: dict[str, np.ndarray] | None = None,
 ) -> list[tuple]:
     """One decision of ``envs``: ``action_repeat`` physics steps with ``actions[i]`` held.
 
@@ -318,7 +320,7 @@ def step_batch(
 
 def step_physics(
     envs: list[BehaviorEnv],
-    actions,
+    actions: Sequence[np.ndarray] | np.ndarray,
     obs_out: dict[str, np.ndarray] | None = None,
     paid: int = 1,
 ) -> list[tuple]:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import Any
 
 import numba
 import numpy as np
@@ -38,7 +39,8 @@ class GuardError(UsageError):
             f"{self.step} (values must be finite with magnitude <= {bound:g})"
         )
 
-    def __reduce__(self):  # crosses the worker-process boundary intact
+    # crosses the worker-process boundary intact
+    def __reduce__(self) -> tuple[type[GuardError], tuple[Any, ...]]:
         return GuardError, (self.kind, self.name, self.value, self.env_index, self.step)
 
 
@@ -61,7 +63,7 @@ class TermError(GuardError):
             self, f"reward term '{name}' raised {error} in {where} at episode step {self.step}"
         )
 
-    def __reduce__(self):
+    def __reduce__(self) -> tuple[type[GuardError], tuple[Any, ...]]:
         return TermError, (self.name, self.error, self.env_index, self.step)
 
     @classmethod

@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 import weakref
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import torch
@@ -22,6 +22,9 @@ from devlearn.env.behavior_env import (
 )
 from devlearn.env.buffers import EnvBuffers, env_spec, write_obs
 from devlearn.env.workers import EpisodeInfos, WorkerPool, make_envs, step_envs
+
+if TYPE_CHECKING:
+    from devlearn.api.behavior import Behavior
 
 
 class DevVecEnv(VecEnv):
@@ -49,7 +52,7 @@ class DevVecEnv(VecEnv):
 
     def __init__(
         self,
-        behavior,
+        behavior: Behavior,
         num_envs: int,
         seed: int,
         workers: int = 0,

@@ -10,7 +10,7 @@ import os
 import signal
 import sys
 import traceback
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -24,6 +24,11 @@ from devlearn.env.behavior_env import (
 )
 from devlearn.env.buffers import attach, env_spec, write_obs
 from devlearn.env.guards import GuardError
+
+if TYPE_CHECKING:
+    from multiprocessing.connection import Connection
+
+    from devlearn.api.behavior import Behavior
 
 EpisodeInfos = list[tuple[int, dict[str, float]]]
 """(global env index, episode_info) for every episode that ended this step."""
@@ -59,7 +64,7 @@ def step_envs(envs: list[BehaviorEnv], offset: int, arrays: dict[str, np.ndarray
 
 
 def make_envs(
-    behavior,
+    behavior: Behavior,
     seeds: list[int],
     infant_factory: InfantFactory | None,
     offset: int = 0,
@@ -92,7 +97,12 @@ def _die_with_parent() -> None:
 
 
 def worker_main(
-    conn, behavior, seeds: list[int], offset: int, infant_factory, action_repeat: int = 1
+    conn: Connection,
+    behavior: Behavior,
+    seeds: list[int],
+    offset: int,
+    infant_factory: InfantFactory | None,
+    action_repeat: int = 1,
 ) -> None:
     """Entry point of one worker process: serve commands from the parent until told to close.
 
@@ -121,13 +131,16 @@ def worker_main(
             elif cmd == "step":
                 reply = step_envs(envs, offset, arrays)
             elif cmd == "set_stage":
-                reply = [env.set_stage(arg) for env in envs]
+                for env in envs:
+                    env.set_stage(arg)
+                reply = [None] * len(envs)
             elif cmd == "state":
                 reply = [env.state_dict() for env in envs]
             elif cmd == "memory":
                 reply = run_memories(envs)
             elif cmd == "load_memory":
-                reply = load_run_memories(envs, arg)
+                load_run_memories(envs, arg)
+                reply = None
             elif cmd == "load":
                 for i, (env, state) in enumerate(zip(envs, arg)):
                     env.load_state_dict(state)
@@ -197,10 +210,10 @@ class WorkerPool:
 
     def __init__(
         self,
-        behavior,
+        behavior: Behavior,
         seeds: list[int],
         workers: int,
-        infant_factory=None,
+        infant_factory: InfantFactory | None = None,
         action_repeat: int = 1,
         context: str = "spawn",
     ) -> None:
@@ -213,7 +226,7 @@ class WorkerPool:
             for chunk in self.chunks:
                 parent_conn, child_conn = ctx.Pipe()
                 chunk_seeds = [seeds[i] for i in chunk]
-                proc = ctx.Process(
+                proc = ctx.Process(  # type: ignore[attr-defined]  # every concrete context has it
                     target=worker_main,
                     args=(
                         child_conn,

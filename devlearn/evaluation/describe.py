@@ -3,14 +3,19 @@
 from __future__ import annotations
 
 import warnings
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from devlearn.api.behavior import Behavior
 
+if TYPE_CHECKING:
+    from devlearn.env.behavior_env import InfantFactory
 
-def describe_behavior(behavior: Behavior, infant_factory=None) -> dict[str, Any]:
+
+def describe_behavior(
+    behavior: Behavior, infant_factory: InfantFactory | None = None
+) -> dict[str, Any]:
     """Build the behaviour's infant once and describe its environment.
 
     Args:

@@ -8,7 +8,7 @@ import subprocess
 import sys
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import torch
@@ -28,6 +28,12 @@ from devlearn.config.run_config import (
 from devlearn.env.behavior_env import BehaviorEnv
 from devlearn.training.checkpoint import LATEST, check_behavior, check_fits, load_checkpoint
 from devlearn.training.process import quiet
+
+if TYPE_CHECKING:
+    from devlearn.api.behavior import Behavior
+    from devlearn.env.behavior_env import InfantFactory
+    from devlearn.plugins import PluginRegistry
+    from devlearn.training.networks import MultiSenseModel
 
 VIDEO_FPS = 25
 """Frame rate of evaluation videos (every k-th control step is rendered to match it)."""
@@ -134,10 +140,10 @@ def _batch(obs: dict[str, np.ndarray]) -> TensorDict:
 def load_actor(
     cfg: RunConfig,
     checkpoint: dict[str, Any],
-    behavior,
+    behavior: Behavior,
     obs: dict[str, np.ndarray],
     action_dim: int,
-):
+) -> MultiSenseModel:
     """Rebuild the checkpoint's policy network for ``behavior`` (eval mode, CPU)."""
     train_cfg = to_rsl_rl(cfg, behavior, list(obs))
     batch = _batch(obs)
@@ -152,7 +158,7 @@ def load_actor(
 
 
 def _policy(
-    policy: str, actor, action_dim: int, seed: int, repeat: int = 1
+    policy: str, actor: MultiSenseModel | None, action_dim: int, seed: int, repeat: int = 1
 ) -> Callable[[dict[str, np.ndarray]], np.ndarray]:
     """``act(obs) -> (action_dim,)``: the actor's mean action, zeros, or seeded uniform noise."""
     if policy == "zero":
@@ -172,6 +178,7 @@ def _policy(
         return hold
 
     def act(obs: dict[str, np.ndarray]) -> np.ndarray:
+        assert actor is not None, "the checkpoint policy needs a checkpoint's actor"
         with torch.inference_mode():
             return actor(_batch(obs))[0].numpy()
 
@@ -194,11 +201,11 @@ def evaluate(
     behavior_name: str,
     checkpoint: str | Path | None,
     episodes: int,
-    registry,
+    registry: PluginRegistry,
     video: str | Path | None = None,
     seed: int = 0,
     out_dir: str | Path | None = None,
-    infant_factory=None,
+    infant_factory: InfantFactory | None = None,
     progress: bool = True,
     policy: str = "checkpoint",
     start: str = "stage",

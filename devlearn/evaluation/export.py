@@ -6,13 +6,17 @@ import contextlib
 import logging
 import warnings
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import torch
 import torch.nn as nn
 
 from devlearn.api.errors import UsageError
+
+if TYPE_CHECKING:
+    from devlearn.plugins import PluginRegistry
+    from devlearn.training.networks import MultiSenseModel
 
 FORMATS = ("onnx", "torchscript")
 """Formats ``devlearn export`` writes."""
@@ -31,7 +35,7 @@ class DeterministicPolicy(nn.Module):
         actor: A trained :class:`~devlearn.training.networks.MultiSenseModel` actor.
     """
 
-    def __init__(self, actor: nn.Module) -> None:
+    def __init__(self, actor: MultiSenseModel) -> None:
         super().__init__()
         self.actor = actor
         self.names = list(actor.obs_groups)
@@ -43,7 +47,7 @@ class DeterministicPolicy(nn.Module):
 
 
 def load_policy(
-    behavior_name: str, checkpoint: str | Path, registry
+    behavior_name: str, checkpoint: str | Path, registry: PluginRegistry
 ) -> tuple[DeterministicPolicy, dict[str, np.ndarray]]:
     """Rebuild a checkpoint's deterministic policy and one observation of its behaviour.
 
@@ -165,4 +169,5 @@ def _export_onnx(policy: DeterministicPolicy, inputs: tuple[torch.Tensor, ...], 
         dynamic_shapes={"observations": tuple({0: batch} for _ in inputs)},
         verbose=False,
     )
+    assert program is not None  # dynamo=True always returns the program
     program.save(str(out))

@@ -3,17 +3,22 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from devlearn.config.run_config import from_dict
 from devlearn.training.checkpoint import FORMAT, load_checkpoint, save_atomic
+
+if TYPE_CHECKING:
+    from devlearn.plugins import PluginRegistry
 
 KEPT = ("behavior", "config", "iteration", "env_steps", "actor_state_dict")
 """Training-checkpoint keys a policy file keeps; the critic, optimiser, curriculum, env and rng
 states (what only resuming needs) are left out."""
 
 
-def slim_checkpoint(source: str | Path, target: str | Path, registry) -> dict[str, Any]:
+def slim_checkpoint(
+    source: str | Path, target: str | Path, registry: PluginRegistry
+) -> dict[str, Any]:
     """Write a policy file: policy weights, config, training steps and the behaviour's
     :meth:`~devlearn.Behavior.policy_artifacts` (e.g. hand_regard's detector calibration).
 

@@ -143,10 +143,10 @@ def collect(paths: Sequence[str | Path]) -> tuple[list[tuple[Path, dict]], list[
     if not found:
         where = ", ".join(map(str, paths))
         raise UsageError(f"no evaluation with a recorded protocol under {where}")
-    behaviors = sorted({d.get("behavior", "?") for d in found.values()})
-    if len(behaviors) > 1:
+    names = sorted({d.get("behavior", "?") for d in found.values()})
+    if len(names) > 1:
         raise UsageError(
-            f"evaluations of different behaviours mixed ({', '.join(behaviors)}); "
+            f"evaluations of different behaviours mixed ({', '.join(names)}); "
             "report one behaviour at a time"
         )
     return sorted(found.items()), notes
@@ -203,7 +203,9 @@ def paper_columns(
     """The paper's figures for the variants: ``{column label: {metric: value}}``, one column
     per label (variants that share the paper's figures share its column)."""
     out: dict[str, dict[str, float]] = {}
-    for c in variants if paper_results else []:
+    if paper_results is None:
+        return out
+    for c in variants:
         data = columns[c][0][1]
         found = paper_results(data.get("behavior", "?"), data.get("config") or {})
         if found is not None:

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 from dm_control import mjcf
@@ -24,7 +24,7 @@ BODY_CONTYPE = 1  # collision bit of body geoms; world geoms use bit 2 and colli
 WORLD_CONTYPE = 2
 
 
-def mirror_point(p) -> tuple[float, ...]:
+def mirror_point(p: Sequence[float]) -> tuple[float, ...]:
     """Mirror positions across the body's midline plane y = 0 (also 6-vectors like fromto)."""
     p = list(p)
     for i in range(1, len(p), 3):
@@ -32,7 +32,7 @@ def mirror_point(p) -> tuple[float, ...]:
     return tuple(p)
 
 
-def mirror_axis(axis) -> tuple[float, float, float]:
+def mirror_axis(axis: Sequence[float]) -> tuple[float, float, float]:
     """Mirror a rotation axis (a pseudo-vector): (ax, ay, az) -> (-ax, ay, -az).
 
     With the axis mirrored this way the same joint angle gives the mirrored movement, so
@@ -41,7 +41,7 @@ def mirror_axis(axis) -> tuple[float, float, float]:
     return (-axis[0], axis[1], -axis[2])
 
 
-def axis_angle_quat(axis, angle: float) -> np.ndarray:
+def axis_angle_quat(axis: Sequence[float], angle: float) -> np.ndarray:
     """Unit quaternion (w, x, y, z) of a rotation by ``angle`` about ``axis``."""
     a = np.asarray(axis, dtype=float)
     a = a / np.linalg.norm(a)
@@ -74,8 +74,8 @@ def _parent_name(spec: BodySpec, side: str | None) -> str:
 def add_infant(
     root: mjcf.RootElement,
     *,
-    root_pos,
-    root_quat,
+    root_pos: Sequence[float],
+    root_quat: Sequence[float],
     actuated_groups: set[str],
     held: Mapping[str, float],
     vestibular: bool,
@@ -180,7 +180,9 @@ def add_infant(
     return actuated
 
 
-def _colour(spec, hand_rgba) -> tuple[float, float, float, float]:
+def _colour(
+    spec: BodySpec, hand_rgba: tuple[float, float, float, float]
+) -> tuple[float, float, float, float]:
     """RGBA of a body's geoms: eyes dark, hands (and fingers) ``hand_rgba``, the rest skin."""
     if not spec.collides:
         return EYE_RGBA

@@ -100,7 +100,7 @@ PASSIVE = {
 }
 
 
-def _j(name: str, axis: Vec3, lo_deg: float, hi_deg: float, torque: float, group: str):
+def _j(name: str, axis: Vec3, lo_deg: float, hi_deg: float, torque: float, group: str) -> JointSpec:
     return JointSpec(
         name, axis, (math.radians(lo_deg), math.radians(hi_deg)), torque, group, *PASSIVE[group]
     )

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import Any
+
 import mujoco
 import numpy as np
 
@@ -24,12 +27,20 @@ class ContactSides:
 
     __slots__ = ("body", "other_body", "point", "force", "cand", "dist")
 
-    def __init__(self, body, other_body, point, force, cand, dist) -> None:
+    def __init__(
+        self,
+        body: np.ndarray,
+        other_body: np.ndarray,
+        point: np.ndarray,
+        force: np.ndarray | None,
+        cand: np.ndarray,
+        dist: np.ndarray,
+    ) -> None:
         self.body, self.other_body, self.point = body, other_body, point
         self.force, self.cand, self.dist = force, cand, dist
 
 
-def contact_forces_world(model: mujoco.MjModel, data: mujoco.MjData, ids: np.ndarray):
+def contact_forces_world(model: mujoco.MjModel, data: mujoco.MjData, ids: np.ndarray) -> np.ndarray:
     """World-frame force that geom1 exerts on geom2, (len(ids), 3) float64.
 
     Vectorised equivalent of ``mj_contactForce`` followed by the rotation out of the contact
@@ -82,14 +93,17 @@ class ContactReader:
             self.pyramid = np.array([[1, mu, 0], [1, -mu, 0], [1, 0, mu], [1, 0, -mu]], float)
         self._acc = np.zeros((skin.num_sensors, 3))
         self._mark = np.zeros(skin.num_sensors, dtype=bool)
-        self._kernel = None  # the compiled routine, imported (numba) on first use
+        # the compiled routine, imported (numba) on first use
+        self._kernel: Callable[..., Any] | None = None
         self._views: tuple | None = None  # (data, data.xpos, data.xmat)
         # The kernel needs uniform pyramidal cones and candidate lists no longer than its
         # pairwise-sum block (kernels.MAX_CANDIDATES = 128; this skin's are 68).
         self.compiled = compiled and self.pyramid is not None and skin._cells.shape[1] <= 128
         """True when :meth:`touch_and_hands` runs as one compiled routine."""
 
-    def touch_and_hands(self, data: mujoco.MjData, hand_of_body: np.ndarray):
+    def touch_and_hands(
+        self, data: mujoco.MjData, hand_of_body: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Sparse touch and hand contacts of this step in one compiled call (the hot path).
 
         Equal to :func:`sparse_touch_from_contacts` and :func:`hand_contacts` of :meth:`sides`
@@ -175,13 +189,17 @@ def touch_from_contacts(skin: Skin, sides: ContactSides | None) -> np.ndarray:
     """Sensor forces, (num_sensors, 3) float32, body frames."""
     if sides is None:
         return np.zeros((skin.num_sensors, 3), dtype=np.float32)
+    assert sides.force is not None, "ContactSides without forces (sides(with_force=False))"
     return skin.spread(sides.body, sides.point, sides.force, sides.cand, sides.dist)
 
 
-def sparse_touch_from_contacts(skin: Skin, sides: ContactSides | None):
+def sparse_touch_from_contacts(
+    skin: Skin, sides: ContactSides | None
+) -> tuple[np.ndarray, np.ndarray]:
     """The sensors that feel a force, (M,) int64 sorted, and those forces, (M, 3) float32."""
     if sides is None:
         return np.zeros(0, dtype=np.int64), np.zeros((0, 3), dtype=np.float32)
+    assert sides.force is not None, "ContactSides without forces (sides(with_force=False))"
     return skin.spread_sparse(sides.body, sides.point, sides.force, sides.cand, sides.dist)
 
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import mujoco
@@ -194,7 +194,7 @@ class Infant:
                 f"{', '.join(self.senses) or 'none'}); pass senses=(..., '{sense}') to build_infant"
             )
 
-    def _cached(self, key: str, compute) -> Any:
+    def _cached(self, key: str, compute: Callable[[], Any]) -> Any:
         value = self._cache.get(key)
         if value is None:
             value = compute()

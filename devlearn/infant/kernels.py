@@ -8,6 +8,8 @@ computes exactly what its numpy reference does (the equivalence tests compare th
 
 from __future__ import annotations
 
+from typing import Any
+
 import numba
 import numpy as np
 from llvmlite import ir
@@ -26,7 +28,8 @@ from devlearn.infant.senses import LIMIT_ZONE
 # Haswell-and-later kernels); those two are repeated here with fma, in BLAS's k order. The
 # (Q, 1, 3) @ (Q, 3, 3) product is numpy's own loop: plain multiply, then add.
 
-_JIT = {"cache": True, "nogil": True}  # cache: compiled once per machine, not per process
+# cache: compiled once per machine, not per process
+_JIT: dict[str, Any] = {"cache": True, "nogil": True}
 
 
 @intrinsic
@@ -98,10 +101,13 @@ def _nearest(q, body, point, cand, dist, k_max, num_sensors, sensor_body, sensor
 
 @numba.njit(**_JIT)
 def contact_touch(
-    con_geom, con_efc, con_pos, con_frame, efc_force, xpos, xmat,
-    geom_body, geom_skin, mu, params, cells, cell_count, pos_padded, inv_radius,
-    sensor_body, sensor_pos, sensor_region, hand_of_body, acc, mark, num_regions,
-):  # fmt: skip
+    con_geom: np.ndarray, con_efc: np.ndarray, con_pos: np.ndarray, con_frame: np.ndarray,
+    efc_force: np.ndarray, xpos: np.ndarray, xmat: np.ndarray,
+    geom_body: np.ndarray, geom_skin: np.ndarray, mu: float, params: np.ndarray,
+    cells: np.ndarray, cell_count: np.ndarray, pos_padded: np.ndarray, inv_radius: np.ndarray,
+    sensor_body: np.ndarray, sensor_pos: np.ndarray, sensor_region: np.ndarray,
+    hand_of_body: np.ndarray, acc: np.ndarray, mark: np.ndarray, num_regions: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
     """Sparse touch and hand contacts of one step, from MuJoCo's contact list.
 
     Args:
@@ -159,7 +165,8 @@ def contact_touch(
         # edges @ [[1, mu, 0], [1, -mu, 0], [1, 0, mu], [1, 0, -mu]] (mju_decodePyramid), as
         # BLAS accumulates it over the 4 edges (products by 0 and 1 are exact and left out)
         local[0] = ((e0 + e1) + e2) + e3
-        local[1] = _fma(e1, -mu, e0 * mu)
+        # (an @intrinsic: numba passes its typing context; the stubs ask for it)
+        local[1] = _fma(e1, -mu, e0 * mu)  # type: ignore[call-arg]
         local[2] = _fma(e3, -mu, e2 * mu)
         for j in range(3):  # f_world = f_local @ frame (rows: normal, tangents); numpy's loop
             fworld[j] = (local[0] * con_frame[c, j] + local[1] * con_frame[c, 3 + j]) + local[
@@ -252,8 +259,10 @@ def _max(a: float, b: float) -> float:
 
 @numba.njit(**_JIT)
 def gather(
-    qpos, qvel, qfrc_actuator, qfrc_passive, qfrc_constraint, ctrl, qpos_index, dof, lo, hi, out
-):
+    qpos: np.ndarray, qvel: np.ndarray, qfrc_actuator: np.ndarray, qfrc_passive: np.ndarray,
+    qfrc_constraint: np.ndarray, ctrl: np.ndarray, qpos_index: np.ndarray, dof: np.ndarray,
+    lo: np.ndarray, hi: np.ndarray, out: np.ndarray,
+) -> None:  # fmt: skip
     """``Proprioception.reference`` (:mod:`devlearn.infant.senses`) into ``out`` (6 J,) float32,
     element by element: the same float64 operations in the same order (no fast-math), each
     rounded once to float32."""

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import cv2
 import mujoco
@@ -12,6 +13,9 @@ from devlearn.infant.infant import build_infant
 from devlearn.infant.regions import NUM_PARTS, PART_NAMES
 from devlearn.infant.scenes import SCENE_GROUP
 
+if TYPE_CHECKING:
+    from devlearn.infant.infant import Infant
+
 # Looking down at both hands held in front, toys on the floor beyond.
 EYES_POSE = {"head_tilt": 0.95, "shoulder_flexion": 0.6, "elbow": 1.0, "shoulder_abduction": -0.3}
 
@@ -20,7 +24,8 @@ def part_colours() -> np.ndarray:
     """(34, 3) RGB in [0, 1]: 34 distinct colours (matplotlib's tab20, then tab20b)."""
     from matplotlib import colormaps
 
-    palette = list(colormaps["tab20"].colors) + list(colormaps["tab20b"].colors)
+    # both are ListedColormaps (with .colors); the registry's stubs say Colormap
+    palette = list(colormaps["tab20"].colors) + list(colormaps["tab20b"].colors)  # type: ignore[attr-defined]
     return np.array(palette[:NUM_PARTS])[:, :3]
 
 
@@ -30,7 +35,7 @@ def region_colours() -> np.ndarray:
     return np.concatenate([part, 0.75 * part])
 
 
-def _sensor_view(infant, camera: mujoco.MjvCamera, size: tuple[int, int]) -> np.ndarray:
+def _sensor_view(infant: Infant, camera: mujoco.MjvCamera, size: tuple[int, int]) -> np.ndarray:
     """Render the infant without its surroundings, each sensor a dot in its region's colour."""
     model, data, skin = infant.model, infant.data, infant.skin
     option = mujoco.MjvOption()
@@ -158,7 +163,7 @@ def eyes_picture(
     return _write_png(path, picture)
 
 
-def _write_png(path, picture: np.ndarray) -> Path:
+def _write_png(path: str | Path, picture: np.ndarray) -> Path:
     """Write a BGR uint8 picture to ``path`` (parent folders made); return the path."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)

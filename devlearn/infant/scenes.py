@@ -4,6 +4,7 @@ versions, BabyBench's (head pitch held, arms hanging: the hand-regard default) a
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 from dm_control import mjcf
@@ -193,7 +194,7 @@ def _options(root: mjcf.RootElement) -> None:
     root.visual.headlight.diffuse = (0.35, 0.35, 0.35)
 
 
-def _props(root: mjcf.RootElement, scene: str, toy_colours) -> None:
+def _props(root: mjcf.RootElement, scene: str, toy_colours: Sequence[Sequence[float]]) -> None:
     world = root.worldbody
     world.add(
         "light",

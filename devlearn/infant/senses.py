@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import mujoco
 import numpy as np
 
@@ -26,7 +28,8 @@ class Proprioception:
 
     def __init__(self, model: mujoco.MjModel, joints: list[str], compiled: bool = True) -> None:
         self.compiled = compiled
-        self._gather = None  # the compiled routine, imported (numba) on first use
+        # the compiled routine, imported (numba) on first use
+        self._gather: Callable[..., None] | None = None
         ids = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, j) for j in joints]
         self.qpos = np.array([model.jnt_qposadr[j] for j in ids])
         self.dof = np.array([model.jnt_dofadr[j] for j in ids])

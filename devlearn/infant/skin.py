@@ -121,12 +121,18 @@ class Skin:
         dist = np.einsum("qki,qki->qk", diff, diff)
         return cand, np.sqrt(dist, out=dist)
 
-    def nearest(self, bodies: np.ndarray, points: np.ndarray, cand=None, dist=None) -> np.ndarray:
+    def nearest(
+        self,
+        bodies: np.ndarray,
+        points: np.ndarray,
+        cand: np.ndarray | None = None,
+        dist: np.ndarray | None = None,
+    ) -> np.ndarray:
         """Index of the nearest sensor of each body to each point, (Q,) int64.
 
         ``cand``/``dist`` from :meth:`candidates` may be passed to avoid recomputing them.
         """
-        if cand is None:
+        if cand is None or dist is None:
             cand, dist = self.candidates(bodies, points)
         best = cand[np.arange(len(cand)), np.argmin(dist, axis=1)]
         for q in np.flatnonzero(best == self.num_sensors):  # no sensor near the point: rare
@@ -134,7 +140,14 @@ class Skin:
             best[q] = idx[np.argmin(np.linalg.norm(self.sensor_pos[idx] - points[q], axis=1))]
         return best
 
-    def spread(self, bodies, points, forces, cand=None, dist=None) -> np.ndarray:
+    def spread(
+        self,
+        bodies: np.ndarray,
+        points: np.ndarray,
+        forces: np.ndarray,
+        cand: np.ndarray | None = None,
+        dist: np.ndarray | None = None,
+    ) -> np.ndarray:
         """Spread contact forces over the skin.
 
         Args:
@@ -151,7 +164,14 @@ class Skin:
         out[sensors] = values
         return out
 
-    def spread_sparse(self, bodies, points, forces, cand=None, dist=None):
+    def spread_sparse(
+        self,
+        bodies: np.ndarray,
+        points: np.ndarray,
+        forces: np.ndarray,
+        cand: np.ndarray | None = None,
+        dist: np.ndarray | None = None,
+    ) -> tuple[np.ndarray, np.ndarray]:
         """:meth:`spread`, returning only the sensors that received force (the hot path).
 
         Returns:
@@ -161,7 +181,7 @@ class Skin:
         """
         if len(bodies) == 0:
             return np.zeros(0, dtype=np.int64), np.zeros((0, 3), dtype=np.float32)
-        if cand is None:
+        if cand is None or dist is None:
             cand, dist = self.candidates(bodies, points)
         weight = 1.0 - dist * self._inv_radius.take(bodies)[:, None]
         np.maximum(weight, 0.0, out=weight)

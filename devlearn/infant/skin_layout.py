@@ -114,7 +114,9 @@ def _geom_frame(model: mujoco.MjModel, g: int) -> tuple[np.ndarray, np.ndarray]:
     return mat.reshape(3, 3), model.geom_pos[g].copy()
 
 
-def _half_body(model: mujoco.MjModel, body: str, side_free: str, spacing: float, midline: bool):
+def _half_body(
+    model: mujoco.MjModel, body: str, side_free: str, spacing: float, midline: bool
+) -> tuple[np.ndarray, np.ndarray]:
     """Sensors of one left or midline body (midline: the y > 0 half only)."""
     bid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, body)
     geoms = [
@@ -157,6 +159,7 @@ def _compute_layout(model: mujoco.MjModel) -> SkinLayout:
         body = f"left_{spec.name}" if spec.paired else spec.name
         pos, parts = _half_body(model, body, spec.name, spec.spacing, not spec.paired)
         mirrored = pos * [1.0, -1.0, 1.0]
+        halves: tuple[tuple[str, np.ndarray, np.ndarray], ...]
         if spec.paired:
             halves = ((body, pos, parts), (f"right_{spec.name}", mirrored, parts + NUM_PARTS))
         else:

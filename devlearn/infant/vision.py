@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import atexit
 import weakref
+from collections.abc import Callable
 
 import mujoco
 import numpy as np
@@ -38,7 +39,7 @@ def fast_renderer(model: mujoco.MjModel, height: int, width: int) -> mujoco.Rend
 
 
 _LIVE: weakref.WeakSet = weakref.WeakSet()
-_EXIT_HOOK = []
+_EXIT_HOOK: list[Callable[[], None]] = []
 
 
 def _track(renderer: mujoco.Renderer) -> None:

@@ -211,7 +211,9 @@ class RayExecutor:
             self.ray.shutdown()
 
 
-def make_executor(kind: str, cores_per_run: int, jobs: int | None, address: str | None):
+def make_executor(
+    kind: str, cores_per_run: int, jobs: int | None, address: str | None
+) -> LocalExecutor | RayExecutor:
     """The executor ``kind`` (local or ray); UsageError if it cannot run here."""
     if kind == "ray":
         if jobs is not None:

@@ -7,7 +7,7 @@ import shutil
 import sys
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, TextIO
 
 from devlearn.api.errors import UsageError
 from devlearn.sweep.bookkeeping import SweepFolder, check_folder
@@ -15,6 +15,9 @@ from devlearn.sweep.executors import make_executor
 from devlearn.sweep.job import RunJob
 from devlearn.sweep.progress import Progress
 from devlearn.sweep.spec import SweepSpec, Variant, variants
+
+if TYPE_CHECKING:
+    from devlearn.plugins import PluginRegistry
 
 POLL_S = 1.0
 """Seconds between two looks at the running runs."""
@@ -32,7 +35,9 @@ class PlannedRun:
     """The run's training budget (environment steps)."""
 
 
-def plan_sweep(spec: SweepSpec, registry, global_args: list[str] | None = None) -> list[PlannedRun]:
+def plan_sweep(
+    spec: SweepSpec, registry: PluginRegistry, global_args: list[str] | None = None
+) -> list[PlannedRun]:
     """Every run of the sweep, each config built and checked as ``devlearn run`` would.
 
     Raises:
@@ -105,11 +110,11 @@ def write_sweep_report(run_dirs: list[Path], out_dir: Path) -> dict[str, Any]:
 
 def run_sweep(
     spec: SweepSpec,
-    registry,
+    registry: PluginRegistry,
     *,
     global_args: list[str] | None = None,
     command: str = "",
-    stream=None,
+    stream: TextIO | None = None,
 ) -> int:
     """Run a sweep: train and evaluate every run not done yet, then write the report.
 
@@ -188,7 +193,7 @@ def run_sweep(
         folder.close()
 
 
-def _finish(spec: SweepSpec, runs: list[PlannedRun], records: dict, stream) -> int:
+def _finish(spec: SweepSpec, runs: list[PlannedRun], records: dict, stream: TextIO) -> int:
     """Summary line, then the report over the evaluated runs."""
     done = [r for r in runs if records.get(r.job.name, {}).get("status") == "done"]
     failed = [r.job.name for r in runs if records.get(r.job.name, {}).get("status") != "done"]

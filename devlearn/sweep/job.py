@@ -133,7 +133,7 @@ def _now() -> str:
 class _Run:
     """Executes one job; keeps its record on disk as it goes."""
 
-    def __init__(self, job: RunJob, cores: list[int] | None, stop: threading.Event | None):
+    def __init__(self, job: RunJob, cores: list[int] | None, stop: threading.Event | None) -> None:
         self.job, self.cores, self.stop = job, cores, stop
         self.record = read_json(job.record_path) or {}
         self.record.update(
@@ -158,7 +158,12 @@ class _Run:
         """Run one command with its output appended to the log; return its exit code."""
         job = self.job
         version = code_version()
-        attempt = {"phase": phase, "argv": argv, "host": socket.gethostname(), "started": _now()}
+        attempt: dict[str, Any] = {
+            "phase": phase,
+            "argv": argv,
+            "host": socket.gethostname(),
+            "started": _now(),
+        }
         attempt.update(commit=version["commit"], dirty=version["dirty"], cores=self.cores)
         self.record["attempts"].append(attempt)
         self.record["commit"] = version

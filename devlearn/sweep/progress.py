@@ -6,7 +6,7 @@ import json
 import sys
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, TextIO
 
 from tqdm import tqdm
 
@@ -39,7 +39,13 @@ def _number(value: Any) -> str:
 class Progress:
     """Prints run lines (stdout) and keeps a bar of finished runs (stderr, on a terminal)."""
 
-    def __init__(self, total: int, headline: str | None, stream=None, interval=TRAINING_LINE_S):
+    def __init__(
+        self,
+        total: int,
+        headline: str | None,
+        stream: TextIO | None = None,
+        interval: float = TRAINING_LINE_S,
+    ) -> None:
         self.stream = stream or sys.stdout
         self.headline = headline
         self.interval = interval

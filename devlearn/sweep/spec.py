@@ -193,7 +193,8 @@ def variants(grid: dict[str, list[str]], seeds: list[int]) -> list[Variant]:
     sweep stopped early still holds a complete comparison."""
     keys = list(grid)
     short = _short_keys(keys)
-    result, names = [], {}
+    result: list = []
+    names: dict = {}
     for seed in seeds:
         for combo in itertools.product(*(grid[k] for k in keys)):
             parts = [f"{short[k]}={_UNSAFE.sub('_', v)}" for k, v in zip(keys, combo)]

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import pickle
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import mujoco
@@ -43,7 +44,7 @@ def check_behavior_class(behavior_cls: type[Behavior]) -> None:
     check_picklable(behavior_cls(config), f"behavior '{name}'")  # travels to worker processes
 
 
-def check_reward_terms(terms: list[IntrinsicReward | BatchedIntrinsicReward]) -> None:
+def check_reward_terms(terms: Sequence[IntrinsicReward | BatchedIntrinsicReward]) -> None:
     """Check reward terms: unique names, a docstring each, picklable state."""
     names = [t.name for t in terms]
     require(len(names) == len(set(names)), f"reward term names must be unique: {names}")
@@ -54,14 +55,14 @@ def check_reward_terms(terms: list[IntrinsicReward | BatchedIntrinsicReward]) ->
             f"{term!r} is not an IntrinsicReward or BatchedIntrinsicReward",
         )
         require(bool(type(term).__doc__), f"reward term '{term.name}' needs a docstring")
-        if batched:
+        if isinstance(term, BatchedIntrinsicReward):
             term.bind(1)
             state = term.state_dict(0)
         else:
             state = term.state_dict()
         require(isinstance(state, dict), f"reward term '{term.name}': state_dict() -> a dict")
         check_picklable(state, f"reward term '{term.name}' state_dict()", "state")
-        if batched:
+        if isinstance(term, BatchedIntrinsicReward):
             term.load_state_dict(0, pickle.loads(pickle.dumps(state)))
         else:
             term.load_state_dict(pickle.loads(pickle.dumps(state)))
@@ -154,7 +155,7 @@ def check_behavior(
     try:
         env.terms = checked_terms(env.terms, phase)
         checked = CheckedEvaluator(env.evaluator, behavior.evaluator(training=False), phase)
-        env.evaluator = checked
+        env.evaluator = checked  # type: ignore[assignment]  # duck-typed: records and checks
         env.episode_steps = max(1, min(env.episode_steps, episode_steps))
         first = env.reset()
         shapes = check_observations(first, None, "after reset")
@@ -200,7 +201,9 @@ def check_behavior(
     return shapes
 
 
-def _scripted_contacts(env: Any, rng: np.random.Generator, count: int, step) -> None:
+def _scripted_contacts(
+    env: Any, rng: np.random.Generator, count: int, step: Callable[[np.ndarray, str], bool]
+) -> None:
     """Take ``count`` steps on which a hand touches the body (placed there before each step)."""
     infant = env.infant
     if count <= 0 or not hasattr(infant, "_qpos_index"):  # a fake infant: nothing to place

@@ -10,13 +10,18 @@ curiosity plugin's train with them; a plugin's learned reward or evaluator can t
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Any
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 import devlearn
 from devlearn import StepContext
+
+if TYPE_CHECKING:
+    from devlearn.infant import Infant
 
 
 class FakeInfant:
@@ -28,14 +33,14 @@ class FakeInfant:
     def __init__(
         self,
         scene: str,
-        senses=("proprioception",),
+        senses: Iterable[str] = ("proprioception",),
         eye_size: int = 8,
         episode_steps: int = 10,
         action_dim: int = 3,
         fail_after: int | None = None,
         interrupt_after: int | None = None,
         die_after: int | None = None,
-    ):
+    ) -> None:
         self.scene = scene
         self.senses = tuple(senses)
         self.eye_size = eye_size
@@ -83,7 +88,9 @@ class FakeInfant:
         pass
 
 
-def fake_infant_factory(scene: str, senses=("proprioception",), eye_size: int = 8, **kwargs):
+def fake_infant_factory(
+    scene: str, senses: Iterable[str] = ("proprioception",), eye_size: int = 8, **kwargs: Any
+) -> FakeInfant:
     """Build a FakeInfant; extra kwargs (episode_steps, action_dim, fail_after...) pass through."""
     return FakeInfant(scene, senses, eye_size, **kwargs)
 
@@ -159,7 +166,7 @@ class CloseEvaluator(devlearn.Evaluator):
     def summary(self) -> dict[str, Any]:
         return {"episodes": self.episodes, "close": self.close_steps / max(self.steps, 1)}
 
-    def write_artifacts(self, out_dir):
+    def write_artifacts(self, out_dir: Path) -> list[Path]:
         path = out_dir / "close.txt"
         path.write_text(f"{self.close_steps}/{self.steps}\n")
         return [path]
@@ -175,14 +182,14 @@ class TinyBehavior(devlearn.Behavior):
     config_class = TinyConfig
     headline_metric = "close"
 
-    def observe(self, infant, facts: dict[str, Any]) -> dict[str, np.ndarray]:
+    def observe(self, infant: Infant, facts: dict[str, Any]) -> dict[str, np.ndarray]:
         obs = {"proprioception": infant.proprioception()}
         if self.config.use_eyes:
             obs["eyes"] = infant.eyes()
         return obs
 
     def network(self) -> devlearn.NetworkSpec:
-        encoders = {"proprioception": devlearn.MLPEncoder((16,))}
+        encoders: dict[str, devlearn.SensorEncoder] = {"proprioception": devlearn.MLPEncoder((16,))}
         if self.config.use_eyes:
             encoders["eyes"] = devlearn.MLPEncoder((8,))
         return devlearn.NetworkSpec(encoders, fusion_dims=(16,), trunk_dims=(16,), init_std=0.5)

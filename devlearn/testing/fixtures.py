@@ -3,11 +3,16 @@
 from __future__ import annotations
 
 import types
+from collections.abc import Callable, Iterator
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from devlearn.api.behavior import Behavior
 from devlearn.plugins import PluginRegistry, PluginSource
+
+if TYPE_CHECKING:
+    from devlearn.infant import Infant
 
 
 def registry_for(
@@ -20,27 +25,27 @@ def registry_for(
     module = types.ModuleType(name)
 
     @hookimpl
-    def register_behaviors(register):
+    def register_behaviors(register: Callable[[type], None]) -> None:
         for behavior in behaviors:
             register(behavior)
 
-    module.register_behaviors = register_behaviors
+    module.register_behaviors = register_behaviors  # type: ignore[attr-defined]
     if learned_rewards:
 
         @hookimpl
-        def register_learned_rewards(register):
+        def register_learned_rewards(register: Callable[[type], None]) -> None:
             for term in learned_rewards:
                 register(term)
 
-        module.register_learned_rewards = register_learned_rewards
+        module.register_learned_rewards = register_learned_rewards  # type: ignore[attr-defined]
     return PluginRegistry([PluginSource(name, module, "test-dist", "0")], disabled=())
 
 
-def _infant_fixture(scene: str, senses: tuple[str, ...]):
+def _infant_fixture(scene: str, senses: tuple[str, ...]) -> Callable[[], Iterator[Infant]]:
     import pytest
 
     @pytest.fixture(scope="module")
-    def fixture():
+    def fixture() -> Iterator[Infant]:
         from devlearn.infant import build_infant
 
         infant = build_infant(scene, senses=senses)

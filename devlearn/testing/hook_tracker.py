@@ -8,13 +8,16 @@ behaviour, in one env, a batch or worker processes.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 import devlearn
 from devlearn import StepContext
-from devlearn.testing.fake_infant import TinyBehavior
+from devlearn.testing.fake_infant import TinyBehavior, TinyConfig
+
+if TYPE_CHECKING:
+    from devlearn.infant import Infant
 
 
 class HookTracker(TinyBehavior):
@@ -26,14 +29,14 @@ class HookTracker(TinyBehavior):
 
     name = "hook_tracker"
 
-    def __init__(self, config=None) -> None:
+    def __init__(self, config: TinyConfig | None = None) -> None:
         super().__init__(config)
         self.episodes = 0
         self.calls: list[str] = []
         self.pending_action: np.ndarray | None = None
         self.problems: list[str] = []
 
-    def on_episode_start(self, infant, rng: np.random.Generator) -> None:
+    def on_episode_start(self, infant: Any, rng: np.random.Generator) -> None:
         if not isinstance(rng, np.random.Generator):
             self.problems.append(f"rng is {type(rng).__name__}")
         if np.any(infant.position != 0):  # fixed-pose stage: the reset already happened
@@ -41,7 +44,7 @@ class HookTracker(TinyBehavior):
         self.episodes += 1
         self.calls = ["start"]
 
-    def before_step(self, infant, action: np.ndarray) -> None:
+    def before_step(self, infant: Infant, action: np.ndarray) -> None:
         if np.any(np.abs(action) > 1.0):
             self.problems.append("before_step saw an unclipped action")
         self.pending_action = np.array(action, copy=True)
@@ -54,7 +57,7 @@ class HookTracker(TinyBehavior):
         self.calls.append("process")
         return action
 
-    def facts(self, infant) -> dict[str, Any]:
+    def facts(self, infant: Infant) -> dict[str, Any]:
         self.calls.append("facts")
         return {"calls": list(self.calls), "episode": self.episodes, "problems": len(self.problems)}
 

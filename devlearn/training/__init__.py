@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import sys
 import types
+from typing import Any
 
 from devlearn.lazy import lazy_getattr
 
@@ -27,7 +28,7 @@ class _Package(types.ModuleType):
     eagerly, also once its module is imported (the import system then sets the module as an
     attribute of its package)."""
 
-    def __setattr__(self, name: str, value) -> None:
+    def __setattr__(self, name: str, value: Any) -> None:
         if name == "train" and isinstance(value, types.ModuleType):
             value = getattr(value, name)
         super().__setattr__(name, value)

@@ -171,6 +171,7 @@ def _pickle_globals(path: Path, limit: int = 1 << 30) -> set[str]:
         start = stream.tell()
         memo: dict[int, Any] = {}
         recent: list[Any] = []  # values pushed lately (STACK_GLOBAL takes the last two)
+        arg: Any  # an int for the memo opcodes (PUT, GET...), a str for the string ones
         try:
             for op, arg, _ in pickletools.genops(stream):
                 if op.name == "GLOBAL":  # protocols 0-2: Python 2 names mapped as load does
@@ -405,7 +406,8 @@ def resume_checkpoint(
         except UsageError as exc:
             errors.append(str(exc))
     for path in periodic:
-        if best is not None and int(_PERIODIC.match(path.name).group(1)) <= best[1]["env_steps"]:
+        match = _PERIODIC.match(path.name)  # periodic_checkpoints() keeps only names it matches
+        if best is not None and match and int(match.group(1)) <= best[1]["env_steps"]:
             break  # this and every older periodic checkpoint are no further along
         try:
             state = load_checkpoint(path, RESUME_KEYS)

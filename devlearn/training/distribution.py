@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from typing import cast
 
 import torch
 import torch.nn as nn
@@ -46,7 +47,11 @@ class DiagonalNormal(Distribution):
     def log_prob(self, outputs: torch.Tensor) -> torch.Tensor:
         return self._distribution.log_prob(outputs).sum(dim=-1)  # type: ignore[union-attr]
 
-    def kl_divergence(self, old_params, new_params) -> torch.Tensor:
+    def kl_divergence(
+        self,
+        old_params: tuple[torch.Tensor, torch.Tensor],
+        new_params: tuple[torch.Tensor, torch.Tensor],
+    ) -> torch.Tensor:
         return torch.distributions.kl_divergence(Normal(*old_params), Normal(*new_params)).sum(-1)
 
 
@@ -104,9 +109,11 @@ class TanhSoftplusGaussian(DiagonalNormal):
     def as_deterministic_output_module(self) -> nn.Module:
         return _TanhFirstSlice()
 
-    def init_mlp_weights(self, mlp: nn.Module) -> None:
+    def init_mlp_weights(self, mlp: nn.Sequential) -> None:
         """Start near mean 0 and std ``init_std``: small head weights, matching std bias."""
-        head = mlp[-2]  # the last Linear (followed by Unflatten to (2, output_dim))
+        head = cast(
+            nn.Linear, mlp[-2]
+        )  # the last Linear (followed by Unflatten to (2, output_dim))
         with torch.no_grad():
             head.weight.mul_(0.01)
             head.bias[: self.output_dim].zero_()
@@ -180,9 +187,9 @@ class BoundedGaussian(DiagonalNormal):
     def as_deterministic_output_module(self) -> nn.Module:
         return nn.Hardtanh()  # clamp to [-1, 1], exportable
 
-    def init_mlp_weights(self, mlp: nn.Module) -> None:
+    def init_mlp_weights(self, mlp: nn.Sequential) -> None:
         """Start near mean 0: small weights and zero bias on the mean's layer."""
-        head = mlp[-1]
+        head = cast(nn.Linear, mlp[-1])
         with torch.no_grad():
             head.weight.mul_(0.01)
             head.bias.zero_()

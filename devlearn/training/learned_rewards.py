@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import torch
 
@@ -12,6 +12,13 @@ from devlearn.api.learned import LearnedReward, Transitions
 from devlearn.config.run_config import RunConfig
 from devlearn.config.values import convert, field_types
 from devlearn.env.guards import GuardError
+
+if TYPE_CHECKING:
+    from rsl_rl.storage import RolloutStorage
+    from tensordict import TensorDict
+    from torch.utils.tensorboard import SummaryWriter
+
+    from devlearn.plugins import PluginRegistry
 
 
 class LearnedRewards:
@@ -41,7 +48,7 @@ class LearnedRewards:
         self.last: dict[str, float] = {}
 
     @classmethod
-    def from_config(cls, cfg: RunConfig, registry) -> LearnedRewards:
+    def from_config(cls, cfg: RunConfig, registry: PluginRegistry) -> LearnedRewards:
         """Look up ``cfg.curiosity``'s names and build their configs from ``cfg.learned``.
 
         Writes every term's resolved options back into ``cfg.learned`` (so config.json
@@ -86,7 +93,9 @@ class LearnedRewards:
         return self
 
     # --- the training loop ----------------------------------------------------------------
-    def apply(self, storage, last_obs, env_steps: int) -> dict[str, float]:
+    def apply(
+        self, storage: RolloutStorage, last_obs: TensorDict, env_steps: int
+    ) -> dict[str, float]:
         """Reward the rollout in ``storage``, add it to its rewards and train every term.
 
         Args:
@@ -114,7 +123,7 @@ class LearnedRewards:
         self.last = row
         return row
 
-    def write(self, writer, iteration: int) -> None:
+    def write(self, writer: SummaryWriter | None, iteration: int) -> None:
         """Add the last iteration's values to TensorBoard (``writer`` may be None)."""
         if writer is None:
             return
@@ -171,7 +180,7 @@ def _guard(name: str, reward: torch.Tensor, valid: torch.Tensor, envs: int) -> N
         raise LearnedRewardGuardError(name, float(reward[first]), flat % envs, flat // envs)
 
 
-def transitions(storage, last_obs) -> tuple[Transitions, torch.Tensor]:
+def transitions(storage: RolloutStorage, last_obs: TensorDict) -> tuple[Transitions, torch.Tensor]:
     """The rollout as (observation, action, next observation) triples, finished ones left out.
 
     Returns:

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
+from typing import Any
 
 import torch
 import torch.nn as nn
@@ -13,6 +15,9 @@ from tensordict import TensorDict
 
 from devlearn.api.network_spec import NetworkSpec
 from devlearn.training.distribution import TanhSoftplusGaussian, inverse_softplus
+
+Observations = TensorDict | Mapping[str, torch.Tensor]
+"""A batch of observation groups, each (N, *shape): rsl-rl's TensorDict or a plain dict."""
 
 __all__ = ["MultiSenseModel", "SharedBody", "TanhSoftplusGaussian", "as_float", "inverse_softplus"]
 
@@ -76,7 +81,7 @@ class SharedBody(nn.Module):
         self.out_dim = hidden[-1]
         self._last: tuple | None = None
 
-    def forward(self, obs, caller: int = 0) -> torch.Tensor:
+    def forward(self, obs: Observations, caller: int = 0) -> torch.Tensor:
         """Features of a batch (``obs[group]`` of shape (N, *shape)); returns (N, out_dim).
 
         ``caller`` identifies the model asking. Without gradients a result is reused by
@@ -91,7 +96,7 @@ class SharedBody(nn.Module):
         key = (versions, grad, torch.is_inference_mode_enabled())
         last = self._last
         reusable = last is not None and last[0] is obs and last[1] == key
-        if reusable and not (grad and last[3] == caller):
+        if last is not None and reusable and not (grad and last[3] == caller):
             if grad:
                 self._last = None
             return last[2]
@@ -99,7 +104,7 @@ class SharedBody(nn.Module):
         self._last = (obs, key, features, caller)
         return features
 
-    def encode(self, obs) -> torch.Tensor:
+    def encode(self, obs: Observations) -> torch.Tensor:
         """:meth:`forward` without reuse (for export): (N, out_dim) features."""
         parts = []
         for g in self.groups:
@@ -112,7 +117,7 @@ class SharedBody(nn.Module):
     def update_normalization(self, obs: TensorDict) -> None:
         """Update the running statistics of the normalised groups from a rollout batch."""
         for group, normalizer in self.normalizers.items():
-            normalizer.update(as_float(obs[group], self.legacy_uint8_scale))  # type: ignore
+            normalizer.update(as_float(obs[group], self.legacy_uint8_scale))  # type: ignore[operator]
 
 
 class MultiSenseModel(MLPModel):
@@ -241,11 +246,13 @@ class MultiSenseModel(MLPModel):
         """The shared body (rsl-rl's ``share_cnn_encoders`` passes it to the critic)."""
         return self._body() if self.shared else None
 
-    def _input(self, obs: TensorDict, group: str) -> torch.Tensor:
+    def _input(self, obs: Observations, group: str) -> torch.Tensor:
         x = as_float(obs[group], self.legacy_uint8_scale)
         return self.normalizers[group](x) if group in self.normalizers else x
 
-    def get_latent(self, obs: TensorDict, masks=None, hidden_state=None) -> torch.Tensor:
+    def get_latent(
+        self, obs: Observations, masks: torch.Tensor | None = None, hidden_state: Any = None
+    ) -> torch.Tensor:
         """Normalise the groups named in ``spec.normalize``, encode every group, concatenate
         (separate layout), or the shared body's features (shared layout).
 
@@ -256,7 +263,7 @@ class MultiSenseModel(MLPModel):
             return self._body()(obs, id(self))
         return torch.cat([self.encoders[g](self._input(obs, g)) for g in self.obs_groups], dim=-1)
 
-    def encode(self, obs) -> torch.Tensor:
+    def encode(self, obs: Observations) -> torch.Tensor:
         """:meth:`get_latent` without the shared body's reuse of results (for export)."""
         return self._body().encode(obs) if self.shared else self.get_latent(obs)
 
@@ -268,7 +275,7 @@ class MultiSenseModel(MLPModel):
                 self.body.update_normalization(obs)
             return
         for group, normalizer in self.normalizers.items():
-            normalizer.update(as_float(obs[group], self.legacy_uint8_scale))  # type: ignore
+            normalizer.update(as_float(obs[group], self.legacy_uint8_scale))  # type: ignore[operator]
 
     def as_jit(self) -> nn.Module:
         raise NotImplementedError(

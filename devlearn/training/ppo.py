@@ -4,10 +4,16 @@ from __future__ import annotations
 
 import warnings
 from itertools import chain
+from typing import TYPE_CHECKING, Any
 
+import torch
 import torch.nn as nn
 from rsl_rl.algorithms import PPO
 from rsl_rl.utils import reduce_gradients_in_buckets
+
+if TYPE_CHECKING:
+    from rsl_rl.models import MLPModel
+    from rsl_rl.storage import RolloutStorage
 
 
 def unique_parameters(*modules: nn.Module) -> list[nn.Parameter]:
@@ -35,11 +41,21 @@ class UniqueParamPPO(PPO):
     policy head (its gradient holds both losses), the value head on its own.
     """
 
-    def __init__(self, actor, critic, storage, *args, **kwargs) -> None:
+    optimizer: torch.optim.Optimizer
+
+    def __init__(
+        self,
+        actor: MLPModel,
+        critic: MLPModel,
+        storage: RolloutStorage,
+        *args: Any,
+        **kwargs: Any,
+    ) -> None:
         with warnings.catch_warnings():  # the parent's optimiser, replaced below, may warn
             warnings.filterwarnings("ignore", message=".*duplicate parameters")
             super().__init__(actor, critic, storage, *args, **kwargs)
-        self.optimizer = type(self.optimizer)(
+        # the parent's optimiser class (Adam...) takes lr; torch's Optimizer base does not
+        self.optimizer = type(self.optimizer)(  # type: ignore[call-arg]
             unique_parameters(self.actor, self.critic), lr=self.learning_rate
         )
 

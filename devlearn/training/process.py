@@ -9,6 +9,7 @@ import os
 import random
 import signal
 import threading
+from collections.abc import Iterator
 
 import numpy as np
 import torch
@@ -100,7 +101,7 @@ def set_threads(threads: int) -> None:
 
 
 @contextlib.contextmanager
-def update_threads(threads: int):
+def update_threads(threads: int) -> Iterator[None]:
     """Run the block with ``threads`` torch intra-op threads (0: unchanged), then restore."""
     before = torch.get_num_threads()
     if threads > 0 and threads != before:
@@ -113,14 +114,14 @@ def update_threads(threads: int):
 
 
 @contextlib.contextmanager
-def quiet():
+def quiet() -> Iterator[None]:
     """Swallow rsl-rl's console report (the progress bar and metrics.jsonl replace it)."""
     with contextlib.redirect_stdout(io.StringIO()):
         yield
 
 
 @contextlib.contextmanager
-def interrupts_deferred():
+def interrupts_deferred() -> Iterator[None]:
     """Hold Ctrl-C and SIGTERM until the block ends, then deliver them to their handlers.
 
     The runner closes an iteration inside it (merge the reward memory, take the boundary
@@ -139,8 +140,8 @@ def interrupts_deferred():
     finally:
         for signum, handler in saved.items():
             signal.signal(signum, signal.SIG_DFL if handler is None else handler)
-        for signum in dict.fromkeys(held):
-            signal.raise_signal(signum)
+        for held_signum in dict.fromkeys(held):
+            signal.raise_signal(held_signum)
 
 
 _DEFERRED = (signal.SIGINT, signal.SIGTERM)

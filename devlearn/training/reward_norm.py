@@ -27,7 +27,9 @@ class RewardNormalizer(nn.Module):
         eps: Added to the variance before the square root.
     """
 
-    def __init__(self, num_envs: int, gamma: float, clip: float = 10.0, eps: float = 1e-8):
+    returns: torch.Tensor  # buffer (state_dict): (num_envs, 1) discounted returns
+
+    def __init__(self, num_envs: int, gamma: float, clip: float = 10.0, eps: float = 1e-8) -> None:
         super().__init__()
         self.gamma, self.clip, self.eps = float(gamma), float(clip), float(eps)
         self.moments = EmpiricalNormalization(1, eps=0.0)
@@ -36,7 +38,7 @@ class RewardNormalizer(nn.Module):
     @property
     def std(self) -> float:
         """The current scale: sqrt(running variance of the returns + eps)."""
-        return float(torch.sqrt(self.moments._var.squeeze() + self.eps))  # type: ignore[operator]
+        return float(torch.sqrt(self.moments._var.squeeze() + self.eps))
 
     @torch.no_grad()
     def forward(self, rewards: torch.Tensor, dones: torch.Tensor) -> torch.Tensor:

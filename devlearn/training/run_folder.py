@@ -8,6 +8,7 @@ import contextlib
 import json
 import os
 import shutil
+from collections.abc import Iterator
 from pathlib import Path
 
 
@@ -40,7 +41,7 @@ _SMALL_FILE = 1 << 20  # files up to this size are restored byte for byte after 
 
 
 @contextlib.contextmanager
-def start_up(run_dir: Path, replace: bool, owner: bool):
+def start_up(run_dir: Path, replace: bool, owner: bool) -> Iterator[None]:
     """Within the block, a failure puts ``run_dir`` back as it was: new entries are deleted
     (and the folder itself, if it was new), small files rewritten (config.json...) are restored.
     With ``replace`` the folder's entries are set aside first and deleted once the block
@@ -71,9 +72,9 @@ def start_up(run_dir: Path, replace: bool, owner: bool):
         for p in run_dir.iterdir():
             if p != aside and (replace or p.name not in before):
                 shutil.rmtree(p) if p.is_dir() and not p.is_symlink() else p.unlink()
-            elif before.get(p.name) is not None and p.is_file():
-                if p.read_bytes() != before[p.name]:
-                    p.write_bytes(before[p.name])
+            elif (saved := before.get(p.name)) is not None and p.is_file():
+                if p.read_bytes() != saved:
+                    p.write_bytes(saved)
         if replace:
             for name in before:
                 os.replace(aside / name, run_dir / name)

@@ -10,7 +10,7 @@ import sys
 import time
 from collections import deque
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import torch
 import torch.distributed as dist
@@ -38,6 +38,9 @@ from devlearn.training.process import (
 from devlearn.training.reward_norm import RewardNormalizer
 from devlearn.training.runner_checkpoints import RunnerCheckpoints
 from devlearn.training.runner_metrics import RunnerMetrics, purge_tensorboard_from
+
+if TYPE_CHECKING:
+    from devlearn.env import DevVecEnv
 
 
 class DevRunner(RunnerCheckpoints, RunnerMetrics, OnPolicyRunner):
@@ -85,7 +88,7 @@ class DevRunner(RunnerCheckpoints, RunnerMetrics, OnPolicyRunner):
 
     def __init__(
         self,
-        env,
+        env: DevVecEnv,
         train_cfg: dict,
         cfg: RunConfig,
         run_dir: Path,
@@ -143,7 +146,7 @@ class DevRunner(RunnerCheckpoints, RunnerMetrics, OnPolicyRunner):
             torch.cuda.set_device(self.gpu_local_rank)
 
     # --- training loop --------------------------------------------------------------------
-    def learn(self, total_steps: int) -> None:  # type: ignore[override]
+    def learn(self, total_steps: int) -> None:
         """Train until ``total_steps`` environment steps (all envs, all ranks) are done."""
         env, alg = self.env, self.alg
         rnd = bool(self.cfg["algorithm"].get("rnd_cfg"))

@@ -5,8 +5,9 @@ from __future__ import annotations
 
 import copy
 import random
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import torch
@@ -21,6 +22,14 @@ from devlearn.training.checkpoint import (
 )
 from devlearn.training.run_folder import forget_metrics_after
 
+if TYPE_CHECKING:
+    from devlearn.api.behavior import RunMetrics
+    from devlearn.api.curriculum import Curriculum
+    from devlearn.config.run_config import RunConfig
+    from devlearn.env import DevVecEnv
+    from devlearn.training.learned_rewards import LearnedRewards
+    from devlearn.training.reward_norm import RewardNormalizer
+
 
 class RunnerCheckpoints:
     """Snapshot, save and restore for :class:`~devlearn.training.runner.DevRunner`.
@@ -32,6 +41,22 @@ class RunnerCheckpoints:
     (e.g. self-touch's training-score window), rng states, behaviour name and config
     (``docs/checkpoints.md``).
     """
+
+    # What the host runner provides (DevRunner sets them; rsl-rl's OnPolicyRunner: alg and
+    # the rank attributes), declared for the type checker: annotations only, no values.
+    alg: Any  # UniqueParamPPO
+    env: DevVecEnv
+    curriculum: Curriculum
+    learned: LearnedRewards
+    reward_norm: RewardNormalizer | None
+    run_metrics: RunMetrics | None
+    run_cfg: RunConfig
+    run_dir: Path
+    is_main: bool
+    is_distributed: bool
+    gpu_global_rank: int
+    gpu_world_size: int
+    _all_ranks: Callable[[Any], list]
 
     def _snapshot(self) -> dict[str, Any]:
         """A copy of the state at an iteration boundary (the :meth:`checkpoint_state` of this

@@ -5,10 +5,20 @@ TensorBoard told what a resumed run redoes (a mixin of
 from __future__ import annotations
 
 import json
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from tqdm import tqdm
+
+if TYPE_CHECKING:
+    from collections import deque
+    from pathlib import Path
+
+    from torch.utils.tensorboard import SummaryWriter
+
+    from devlearn.api.behavior import RunMetrics
+    from devlearn.api.curriculum import Curriculum
+    from devlearn.training.learned_rewards import LearnedRewards
 
 
 class RunnerMetrics:
@@ -18,6 +28,18 @@ class RunnerMetrics:
     ``run_metrics``, ``is_main``, ``logger``, ``run_dir`` and ``headline_metric``; sets
     ``last_row``.
     """
+
+    # What the host runner provides (DevRunner sets them), declared for the type checker:
+    # annotations only, no values.
+    env_steps: int
+    curriculum: Curriculum
+    episodes: deque[dict[str, float]]
+    learned: LearnedRewards
+    run_metrics: RunMetrics | None
+    is_main: bool
+    logger: Any  # rsl-rl's Logger (its writer: TensorBoard, W&B... or None)
+    run_dir: Path
+    headline_metric: str
 
     def _record(
         self,
@@ -89,7 +111,7 @@ class RunnerMetrics:
             bar.update(self.env_steps - bar.n)
 
 
-def purge_tensorboard_from(writer, step: int) -> None:
+def purge_tensorboard_from(writer: SummaryWriter | None, step: int) -> None:
     """Tell TensorBoard to hide earlier event files' points at ``step`` and later (a resumed
     run redoes the iterations a killed run logged after its last checkpoint): the
     ``SessionLog.START`` event that ``SummaryWriter(purge_step=...)`` writes."""

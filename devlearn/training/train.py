@@ -9,7 +9,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import torch
 
@@ -39,6 +39,10 @@ from devlearn.training.process import (
 from devlearn.training.run_folder import copy_metrics, start_up
 from devlearn.training.runner import DevRunner
 
+if TYPE_CHECKING:
+    from devlearn.env.behavior_env import InfantFactory
+    from devlearn.plugins import PluginRegistry
+
 CONFIG_FILE = "config.json"
 
 
@@ -63,7 +67,7 @@ def default_run_dir(behavior_name: str) -> Path:
     return Path("runs") / f"{behavior_name}-{time.strftime('%Y%m%d-%H%M%S')}"
 
 
-def load_run_config(run_dir: str | Path, registry) -> RunConfig:
+def load_run_config(run_dir: str | Path, registry: PluginRegistry) -> RunConfig:
     """Read a run directory's ``config.json`` (UsageError if missing or unreadable)."""
     path = Path(run_dir) / CONFIG_FILE
     try:
@@ -78,7 +82,7 @@ def load_run_config(run_dir: str | Path, registry) -> RunConfig:
 
 
 def config_from_checkpoint(
-    path: str | Path, registry, behavior_name: str, preset: str | None = None
+    path: str | Path, registry: PluginRegistry, behavior_name: str, preset: str | None = None
 ) -> RunConfig:
     """The config a run started with ``devlearn run --from CHECKPOINT`` begins with: the
     checkpoint's own (``preset``, if given, applied over it), to be changed by the command
@@ -112,11 +116,11 @@ def check_resumable(cfg: RunConfig, checkpoint: dict[str, Any], path: str | Path
 
 def train(
     cfg: RunConfig | None,
-    registry,
+    registry: PluginRegistry,
     *,
     resume: str | Path | None = None,
     start_from: str | Path | None = None,
-    infant_factory=None,
+    infant_factory: InfantFactory | None = None,
     progress: bool = True,
     force: bool = False,
     started: Callable[[Path], None] | None = None,
@@ -151,7 +155,8 @@ def train(
             last good state is written first).
     """
     # Config (and, when resuming, the checkpoint it continues from).
-    checkpoint, ckpt_path = None, None
+    checkpoint: dict[str, Any] | None = None
+    ckpt_path: str | Path | None = None
     if resume is not None:
         run_dir = Path(resume)
         ckpt_path, checkpoint = resume_checkpoint(run_dir)
@@ -305,7 +310,7 @@ def _build(
     return env, runner
 
 
-def _restore(runner, checkpoint: dict[str, Any], curriculum: bool, source: str) -> None:
+def _restore(runner: DevRunner, checkpoint: dict[str, Any], curriculum: bool, source: str) -> None:
     """``runner.restore`` after checking that the checkpoint's weights fit the networks this
     config builds; a value that still does not load is one line naming the checkpoint."""
     fresh = runner.alg.save()

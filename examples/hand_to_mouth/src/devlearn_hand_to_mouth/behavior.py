@@ -6,12 +6,15 @@ Written only against devlearn's public API (``devlearn``, with its Infant).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 import devlearn
 from devlearn import StepContext
+
+if TYPE_CHECKING:
+    from devlearn import Infant
 
 
 @dataclass
@@ -108,7 +111,7 @@ class HandToMouth(devlearn.Behavior):
         self._target: np.ndarray | None = None  # (68,) bool, built from the infant's regions
         self._last_action = np.zeros(0)
 
-    def _target_regions(self, infant) -> np.ndarray:
+    def _target_regions(self, infant: Infant) -> np.ndarray:
         if self._target is None:
             names = list(infant.regions.part_names)
             unknown = [p for p in self.config.target_parts if p not in names]
@@ -118,15 +121,15 @@ class HandToMouth(devlearn.Behavior):
             self._target = np.isin(np.asarray(infant.regions.parts), wanted)
         return self._target
 
-    def on_episode_start(self, infant, rng: np.random.Generator) -> None:
+    def on_episode_start(self, infant: Infant, rng: np.random.Generator) -> None:
         # No action yet in a new episode: the first facts() pays no action cost.
         self._last_action = np.zeros(0)
 
-    def before_step(self, infant, action: np.ndarray) -> None:
+    def before_step(self, infant: Infant, action: np.ndarray) -> None:
         # The action of the step about to be taken, read by facts() after it.
         self._last_action = action
 
-    def facts(self, infant) -> dict[str, Any]:
+    def facts(self, infant: Infant) -> dict[str, Any]:
         contacts = infant.hand_contacts()  # (2 hands, 68) bool
         energy = float(np.mean(np.square(self._last_action))) if self._last_action.size else 0.0
         return {
@@ -134,7 +137,7 @@ class HandToMouth(devlearn.Behavior):
             "action_energy": energy,
         }
 
-    def observe(self, infant, facts: dict[str, Any]) -> dict[str, np.ndarray]:
+    def observe(self, infant: Infant, facts: dict[str, Any]) -> dict[str, np.ndarray]:
         return {"proprioception": infant.proprioception().astype(np.float32)}
 
     def network(self) -> devlearn.NetworkSpec:

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, cast
 
 from devlearn import LearnedReward, LearnedRewardConfig, Transitions
 
@@ -40,6 +40,7 @@ class ForwardModel(LearnedReward):
     name = "forward_model"
     description = "forward self-model: error predicting the next (eye) features from the action"
     config_class = ForwardModelConfig
+    model: nn.ModuleDict  # encoders, normalizer, predictor (:meth:`build`)
 
     def build(self) -> nn.Module:
         import torch
@@ -76,7 +77,7 @@ class ForwardModel(LearnedReward):
     def _raw_features(self, observations: dict[str, torch.Tensor]) -> torch.Tensor:
         import torch
 
-        encoders = self.model["encoders"]
+        encoders = cast("nn.ModuleDict", self.model["encoders"])
         with torch.no_grad():
             return torch.cat([encoders[g](observations[g].float()) for g in self.groups], dim=1)
 
@@ -87,7 +88,7 @@ class ForwardModel(LearnedReward):
     def observe(self, batch: Transitions) -> None:
         """Update the encoding's running mean and std with the rollout."""
         if len(batch):
-            self.model["normalizer"].update(self._raw_features(batch.observations))
+            cast(Any, self.model["normalizer"]).update(self._raw_features(batch.observations))
 
     def errors(self, batch: Transitions) -> torch.Tensor:
         """(B,) mean squared error of the predicted next encoding."""

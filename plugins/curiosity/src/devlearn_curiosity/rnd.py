@@ -10,6 +10,7 @@ from devlearn import LearnedReward, LearnedRewardConfig, Transitions
 if TYPE_CHECKING:  # torch and rsl-rl load when a run builds the term, not when it registers
     import torch
     import torch.nn as nn
+    from rsl_rl.extensions import RandomNetworkDistillation
 
 
 @dataclass
@@ -48,6 +49,7 @@ class RND(LearnedReward):
     """
 
     name = "rnd"
+    model: RandomNetworkDistillation  # rsl-rl's RND (:meth:`build`)
     description = "random network distillation: a predictor chasing a fixed random net"
     config_class = RNDConfig
 

@@ -9,8 +9,12 @@ from __future__ import annotations
 import sys
 import time
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from devlearn import Infant
 
 PROGRESS_SECONDS = 5.0
 """Babbling prints a progress line at most this often (it takes minutes on a CPU)."""
@@ -74,7 +78,7 @@ def babble(
     hold_steps: int = 8,
     head_hold_steps: int = 50,
     head_scale: float = 0.3,
-    infant=None,
+    infant: Infant | None = None,
     episode_steps: int | None = None,
     appearance: str = "mittens",
     random_pose: bool = False,
@@ -127,7 +131,7 @@ def babble(
     if arms not in ARMS:
         raise ValueError(f"babbling arms must be one of {', '.join(ARMS)}, got {arms!r}")
     own = infant is None
-    if own:
+    if infant is None:
         from devlearn import build_infant
 
         infant = build_infant(scene, senses=("proprioception", "eyes"), appearance=appearance)

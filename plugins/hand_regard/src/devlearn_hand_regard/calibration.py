@@ -278,7 +278,7 @@ def calibrate(
     labels = np.stack([label_image(im, centres) for im in sample])
     side_boxes: list[list[list[int]]] = [[], []]
     dropped: list[list[int]] = []
-    side_pixels = []
+    side_pixels: list[np.ndarray] = []
     for side in range(2):
         pixels = [
             data.eyes[s, t.eye].reshape(-1, 3)[p]

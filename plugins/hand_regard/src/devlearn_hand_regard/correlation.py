@@ -95,9 +95,11 @@ def track_correlation(
 def head_speeds(data: BabblingData) -> np.ndarray:
     """Return (T,) head joint-speed magnitude from the recorded head pose (finite differences;
     zeros when the recording has no head pose)."""
-    if data.head_pose.shape[1] == 0:
+    head_pose = data.head_pose
+    assert head_pose is not None  # BabblingData.__post_init__ makes it (T, 0) at least
+    if head_pose.shape[1] == 0:
         return np.zeros(len(data))
     speed = np.zeros(len(data))
-    speed[1:] = np.linalg.norm(np.diff(data.head_pose, axis=0), axis=1)
+    speed[1:] = np.linalg.norm(np.diff(head_pose, axis=0), axis=1)
     speed[1:][data.episode[1:] != data.episode[:-1]] = 0.0  # no motion across a reset
     return speed

@@ -113,7 +113,7 @@ def colour_blobs(mask: np.ndarray, min_area: float, max_area: float, kernel: int
         Blobs sorted by decreasing area.
     """
     element = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (kernel, kernel))
-    clean = mask.astype(np.uint8) * 255
+    clean: np.ndarray = mask.astype(np.uint8) * 255
     clean = cv2.morphologyEx(clean, cv2.MORPH_OPEN, element)  # removes specks
     clean = cv2.morphologyEx(clean, cv2.MORPH_CLOSE, element)  # fills small holes
     count, labels, stats, centroids = cv2.connectedComponentsWithStats(clean, connectivity=8)
@@ -121,7 +121,8 @@ def colour_blobs(mask: np.ndarray, min_area: float, max_area: float, kernel: int
     for label in range(1, count):
         area = float(stats[label, cv2.CC_STAT_AREA])
         if min_area <= area <= max_area:
-            blobs.append(Blob(tuple(map(float, centroids[label])), area, labels == label))
+            x, y = map(float, centroids[label])
+            blobs.append(Blob((x, y), area, labels == label))
     return sorted(blobs, key=lambda b: -b.area)
 
 
@@ -141,7 +142,7 @@ class HandDetector:
         """Return (H, W) bool: pixels inside the learned hand colour boxes of an RGB image
         (``side`` 0 or 1: that hand's own boxes, ``side_hsv_ranges``)."""
         hsv = cv2.cvtColor(np.ascontiguousarray(image), cv2.COLOR_RGB2HSV)
-        mask = np.zeros(image.shape[:2], dtype=np.uint8)
+        mask: np.ndarray = np.zeros(image.shape[:2], dtype=np.uint8)
         if self.params is None:
             boxes = []
         elif side is None:
@@ -175,9 +176,11 @@ class HandDetector:
         hand's image position from the joint angles, learned while babbling). Otherwise the
         hands' mean babbling positions (``hand_means``).
         """
-        model = self.params.position_model
+        params = self.params
+        assert params is not None, "a detector without calibration expects no hand anywhere"
+        model = params.position_model
         if proprioception is None or not model:
-            return np.asarray(self.params.hand_means[eye], dtype=float)
+            return np.asarray(params.hand_means[eye], dtype=float)
         mean = np.asarray(model["joint_mean"])
         angles = np.asarray(proprioception, dtype=float)[: len(mean)]
         features = np.r_[1.0, eye - 0.5, (angles - mean) / np.asarray(model["joint_scale"])]
@@ -202,6 +205,7 @@ class HandDetector:
             return [None, None]
         height = blobs[0].mask.shape[0]
         means = self.expected_positions(eye, proprioception)
+        assert self.params is not None  # blobs come only from a calibrated detector
         means = means * width / float(self.params.image_size[1])
         inside = (
             (means[:, 0] >= 0) & (means[:, 0] < width) & (means[:, 1] >= 0) & (means[:, 1] < height)
@@ -291,7 +295,7 @@ class HandFlow:
             for eye in range(len(eyes)):
                 if not pixels[eye].any():
                     continue
-                flow = cv2.calcOpticalFlowFarneback(
+                flow = cv2.calcOpticalFlowFarneback(  # type: ignore[call-overload]  # flow=None: a new one
                     self.previous[eye], grey[eye], None, 0.5, 2, 9, 3, 5, 1.1, 0
                 )
                 magnitude = np.linalg.norm(flow, axis=-1)  # (H, W) pixels per step

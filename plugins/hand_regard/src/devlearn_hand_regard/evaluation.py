@@ -73,9 +73,11 @@ class HandRegardEvaluator(Evaluator):
         self, ground_truth: bool, measure: Callable[[Any], dict[str, np.ndarray]] | None = None
     ) -> None:
         if measure is None:
-            from devlearn_hand_regard.visibility import measure_visibility as measure
+            from devlearn_hand_regard.visibility import measure_visibility
+
+            measure = measure_visibility
         self.ground_truth = ground_truth
-        self.measure = measure
+        self.measure: Callable[[Any], dict[str, np.ndarray]] = measure
         self.episodes = 0
         self.steps = 0
         names = ("detector", *CRITERIA) if ground_truth else ("detector",)
@@ -173,7 +175,7 @@ class HandRegardEvaluator(Evaluator):
         pairs = list(out.values())
         out["average"] = {}
         for k in ("accuracy", "precision", "recall"):
-            values = [p[k] for p in pairs if p[k] is not None]
+            values = [v for p in pairs if (v := p[k]) is not None]
             out["average"][k] = float(np.mean(values)) if values else None
         return out
 

@@ -69,7 +69,8 @@ def drop_background_boxes(
         (kept, dropped) boxes.
     """
     hsv = np.stack([cv2.cvtColor(np.ascontiguousarray(im), cv2.COLOR_RGB2HSV) for im in eyes])
-    kept, dropped = [], []
+    kept: list[list[int]] = []
+    dropped: list[list[int]] = []
     for box in boxes:
         inside = np.all((hsv >= box[:3]) & (hsv <= box[3:]), axis=-1)
         purity = hand_pixels[inside].mean() if inside.any() else 0.0
@@ -93,7 +94,8 @@ def colour_palette(data: BabblingData, clusters: int, seed: int, frames: int = 2
     pixels = np.random.default_rng(seed).permutation(pixels)[:200_000]
     cv2.setRNGSeed(seed)
     criteria = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 50, 0.5)
-    _, _, centres = cv2.kmeans(pixels, clusters, None, criteria, 3, cv2.KMEANS_PP_CENTERS)
+    # bestLabels=None (OpenCV allocates them); the stubs ask for an array
+    _, _, centres = cv2.kmeans(pixels, clusters, None, criteria, 3, cv2.KMEANS_PP_CENTERS)  # type: ignore[call-overload]
     return centres
 
 

@@ -19,6 +19,7 @@ import json
 import sys
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -27,6 +28,9 @@ from devlearn_hand_regard.calibration import calibrate
 from devlearn_hand_regard.detector import DetectorParams, HandDetector
 from devlearn_hand_regard.evaluation import PAIRS, pair_name
 
+if TYPE_CHECKING:
+    from devlearn import Infant
+
 LABELS = ("background", "left_hand", "right_hand", "body", "scene")
 """Segmentation labels (``devlearn.infant.vision``): 0..4."""
 
@@ -34,20 +38,21 @@ LABELS = ("background", "left_hand", "right_hand", "body", "scene")
 class SegmentationRecorder:
     """Wraps an infant; records the segmentation render whenever the eyes are read."""
 
-    def __init__(self, infant) -> None:
-        self.infant, self.segmentation = infant, []
+    def __init__(self, infant: Infant) -> None:
+        self.infant = infant
+        self.segmentation: list[np.ndarray] = []
 
-    def __getattr__(self, name):
+    def __getattr__(self, name: str) -> Any:
         return getattr(self.infant, name)
 
-    def eyes(self):
+    def eyes(self) -> np.ndarray:
         """The eye images; their segmentation is kept in ``self.segmentation``."""
         self.segmentation.append(self.infant.eyes_segmentation().copy())
         return self.infant.eyes()
 
 
 def held_out(
-    infant,
+    infant: Infant,
     steps: int,
     seed: int,
     episode_steps: int | None = None,
@@ -70,7 +75,7 @@ def held_out(
     data = babble(
         steps,
         seed=seed,
-        infant=recorder,
+        infant=cast("Infant", recorder),  # a proxy: the infant, recording segmentations
         episode_steps=episode_steps,
         random_pose=random_pose,
         start=start,
@@ -215,7 +220,7 @@ def detection_picture(
         for hand, colour in ((0, (0, 220, 0)), (1, (0, 80, 255))):
             tinted[masks[0, hand]] = 0.4 * tinted[masks[0, hand]] + 0.6 * np.array(colour)
         big = cv2.resize(tinted.astype(np.uint8), None, fx=scale, fy=scale, interpolation=0)
-        truth = np.isin(segmentation[t, 0], (1, 2)).astype(np.uint8)
+        truth: np.ndarray = np.isin(segmentation[t, 0], (1, 2)).astype(np.uint8)
         truth = cv2.resize(truth, None, fx=scale, fy=scale, interpolation=0)
         contours, _ = cv2.findContours(truth, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
         cv2.drawContours(big, contours, -1, (255, 0, 0), 1)

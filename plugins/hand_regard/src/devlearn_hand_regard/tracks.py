@@ -7,12 +7,16 @@ within each eye; a track ends when its blob is not found, and at resets.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from devlearn_hand_regard.babbling import BabblingData
 from devlearn_hand_regard.detector import colour_blobs
 from devlearn_hand_regard.hand_colour import label_image
+
+if TYPE_CHECKING:
+    from devlearn_hand_regard.detector import Blob
 
 
 @dataclass
@@ -99,7 +103,7 @@ def track_blobs(
     return done
 
 
-def _extend(track: Track, step: int, blob) -> Track:
+def _extend(track: Track, step: int, blob: Blob) -> Track:
     track.steps.append(step)
     track.centroids.append(blob.centroid)
     track.areas.append(blob.area)

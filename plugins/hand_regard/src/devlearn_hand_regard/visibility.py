@@ -3,9 +3,12 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from devlearn import Infant
 
 CONE_DEGREES = 15.0
 """``cone``: the hand body's centre lies within this angle of the eye camera's true optical
@@ -146,7 +149,7 @@ def criteria_protocol(cone_degrees: float = CONE_DEGREES, min_pixels: int = MIN_
     }
 
 
-def measure_visibility(infant) -> dict[str, np.ndarray]:
+def measure_visibility(infant: Infant) -> dict[str, np.ndarray]:
     """Every criterion's verdict for the real infant's current state.
 
     Args:

@@ -74,9 +74,10 @@ def batch_touch_facts(
     else:
         above = g > touch_threshold  # float32 against the Python float, as facts() compares
         touched = above if touch_source == "threshold" else contacts.any(axis=1) | above
+    # touched is (n, 68) bool; numpy's stubs also allow a scalar for any(axis=1) and ">"
     return [
         {"body_map": g[i], "hand_contacts": contacts[i], "hand_parts": parts[i], "touched": t}
-        for i, t in enumerate(touched)
+        for i, t in enumerate(touched)  # type: ignore[arg-type]
     ]
 
 

@@ -160,7 +160,7 @@ class SelfTouch(Behavior):
             Balance(c.weight_balance, c.balance_reward, c.balance_tolerance, c.balance_min_parts),
         ]
 
-    def _touch_args(self) -> tuple:
+    def _touch_args(self) -> tuple[float, float, float, float, float, float]:
         c = self.config
         return (
             c.weight_touch_novelty,
