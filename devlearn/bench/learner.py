@@ -19,14 +19,16 @@ if TYPE_CHECKING:
 
 
 def build_learner(
-    behavior: Behavior, layout: str, num_envs: int, seed: int = 0
+    behavior: Behavior, layout: str, num_envs: int, num_steps: int, seed: int = 0
 ) -> tuple[UniqueParamPPO, Callable[[], TensorDict]]:
     """The PPO algorithm a run of ``behavior`` would train, on random observations.
 
     Observation shapes and dtypes come from one real environment reset; the networks, optimiser
     and rollout storage are built exactly as ``devlearn run`` builds them, with the run
-    config's defaults and ``network.layout=layout``. Returns ``(alg, observations)``: the
-    algorithm and a function that draws a fresh (num_envs, *shape) observation batch.
+    config's defaults, ``network.layout=layout`` and a storage of ``num_steps`` steps per
+    environment (``ppo.num_steps_per_env``: the rollout the benchmark collects). Returns
+    ``(alg, observations)``: the algorithm and a function that draws a fresh
+    (num_envs, *shape) observation batch.
     """
     from types import SimpleNamespace
 
@@ -43,7 +45,8 @@ def build_learner(
     dt = SimpleNamespace(step_dt=env.step_dt)
     fake_env = SimpleNamespace(num_envs=num_envs, num_actions=env.action_dim, unwrapped=dt)
     env.close()
-    cfg = default_config(type(behavior), [f"network.layout={layout}"])
+    overrides = [f"network.layout={layout}", f"ppo.num_steps_per_env={num_steps}"]
+    cfg = default_config(type(behavior), overrides)
     train_cfg = to_rsl_rl(cfg, behavior, list(first))
     train_cfg["multi_gpu"] = None
     gen = torch.Generator().manual_seed(seed)
@@ -120,7 +123,7 @@ def bench_update(
     from devlearn.training.process import learner_threads, update_threads
 
     threads = threads or learner_threads()
-    alg, observations = build_learner(behavior, layout, num_envs)
+    alg, observations = build_learner(behavior, layout, num_envs, num_steps)
     best, inference = float("inf"), float("inf")
     with update_threads(threads):
         for k in range(repeats + 1):
