@@ -199,6 +199,8 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
         raise UsageError(f"--smooth must be from 1 to {SMOOTH_MAX}, got {args.smooth}")
     fig, axes = plt.subplots(len(keys), 1, figsize=(7, 2.4 * len(keys)), squeeze=False)
     for ax, key in zip(axes[:, 0], keys):
+        if len(runs) > 10:  # matplotlib's default cycle repeats after 10 colours
+            ax.set_prop_cycle(color=[plt.get_cmap("tab20")(i) for i in range(20)])
         for run_dir, rows in runs:
             points = [(r["step"], r[key]) for r in rows if r.get(key) is not None]
             if not points:
@@ -223,7 +225,8 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
         ax.set_ylabel(key.split("/")[-1])
         ax.grid(alpha=0.3)
     if len(runs) > 1 or evaluations:
-        axes[0, 0].legend(fontsize=8)
+        # beside the plot, not over it: a sweep's many runs would hide the curves
+        axes[0, 0].legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     title = args.run_dirs[0].name if len(runs) == 1 else f"{len(runs)} runs"
     if evaluations:
         axes[-1, 0].set_xlabel("environment steps of the checkpoint")
@@ -237,6 +240,6 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
         fig.suptitle(f"{title}: mean over episodes ending in each iteration")
     fig.tight_layout()
     out = args.out or default_out(list(args.run_dirs), evaluations)
-    fig.savefig(out, dpi=110)
+    fig.savefig(out, dpi=110, bbox_inches="tight")  # the legend beside the axes included
     print(out)
     return 0

@@ -145,3 +145,25 @@ def test_curve_of_evaluations_draws_headlines_keeps_starts_apart_and_saves_besid
     assert [ax.get_ylabel() for ax in fig.axes] == ["score", "episode_score_mean"]
     assert all(len(ax.get_lines()) == 2 for ax in fig.axes)  # one line per start
     assert "evaluations of 2 checkpoints (random starts / rest start)" in fig._suptitle.get_text()
+
+
+def test_the_legend_of_many_runs_does_not_cover_the_curves(tmp_path, monkeypatch):
+    import matplotlib.pyplot as plt
+
+    figures = []
+    monkeypatch.setattr(plt.Figure, "savefig", lambda fig, *a, **k: figures.append(fig))
+    names = [f"seed={i}" for i in range(11)]
+    for i, name in enumerate(names):
+        (tmp_path / name).mkdir()
+        rows = [{"step": 100 * s, "metrics/score": i * s} for s in range(6)]
+        (tmp_path / name / "metrics.jsonl").write_text("\n".join(json.dumps(r) for r in rows))
+    args = _args(tmp_path / names[0], out=tmp_path / "all.png", metric=["metrics/score"])
+    args.run_dirs += [tmp_path / n for n in names[1:]]
+    assert curve.run(args, None) == 0
+    fig = figures[0]
+    fig.canvas.draw()
+    ax = fig.axes[0]
+    legend = ax.get_legend().get_window_extent()
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == names
+    assert not legend.overlaps(ax.get_window_extent())
+    assert len({tuple(line.get_color()) for line in ax.get_lines()}) == len(names)  # no repeats
