@@ -5,8 +5,8 @@
 # checkpoints at each 1,024,000 steps (the 4,096,000 one is the stage switch) evaluated on
 # 100 random-pose episodes (eval seed 0, 10-step settle, deterministic policy), the final
 # one also from the rest pose (--start rest); zero and random baselines under the same two
-# protocols (random actions held for the behaviour's default action repeat). Two runs at a
-# time, one core each. Evaluations already written are skipped, so a rerun resumes: the
+# protocols (random actions held for the behaviour's default action repeat). JOBS runs (and
+# evaluations) at a time, one core each. Evaluations already written are skipped, so a rerun resumes: the
 # sweep continues unfinished runs from their checkpoints. From the repository root:
 #   bash results/self_touch/curriculum.sh OUT SEEDS [ARGS...]     # e.g. sweeps/st30 1-5
 # ARGS go to `devlearn sweep` (e.g. --set ppo.entropy_coef=0.01). Budgets (for smoke tests):
@@ -44,12 +44,18 @@ source "$(dirname "$0")/common.sh"
   --set behavior.fixed_pose_steps="$STAGE_STEPS" --set behavior.random_pose_steps="$STAGE_STEPS" \
   --set save_interval=$((EVAL_EVERY / PER_ITERATION)) "$@"
 
+# the earlier checkpoints' evaluations, JOBS at a time (the final checkpoint's is the sweep's,
+# in $run/eval); a failed evaluation fails the script
 shopt -s nullglob
+throttle() { while (($(jobs -rp | wc -l) >= JOBS)); do wait -n; done; }
 for run in "$OUT"/runs/seed=*/; do
   run=${run%/}
   for ((step = EVAL_EVERY; step < TOTAL; step += EVAL_EVERY)); do
-    evaluate "$run/at_$step" --checkpoint "$run/checkpoint_$step.pt"
-  done  # the final checkpoint's is the sweep's, in $run/eval
-  evaluate "$run/rest" --checkpoint "$run/checkpoint_$TOTAL.pt" --start rest
+    throttle
+    evaluate "$run/at_$step" --checkpoint "$run/checkpoint_$step.pt" &
+  done
+  throttle
+  evaluate "$run/rest" --checkpoint "$run/checkpoint_$TOTAL.pt" --start rest &
 done
+while (($(jobs -rp | wc -l))); do wait -n; done
 baselines "$OUT"
