@@ -501,7 +501,9 @@ class Checkpoint:
         loaded (or found by name next to it, ``Behavior.load_policy_artifacts``); built once."""
         if self._behavior is None:
             behavior = self.registry.create(self.behavior_name, self.config.behavior)
-            behavior.load_policy_artifacts(dict(self.state.get("artifacts") or {}), self.path.parent)
+            behavior.load_policy_artifacts(
+                dict(self.state.get("artifacts") or {}), self.path.parent
+            )
             self._behavior = behavior
         return self._behavior
 

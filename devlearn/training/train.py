@@ -19,9 +19,9 @@ from devlearn.env import DevVecEnv
 from devlearn.training.checkpoint import (
     LATEST,
     RESUME_KEYS,
+    Checkpoint,
     check_behavior,
     check_fits,
-    Checkpoint,
     periodic_checkpoints,
     remove_temporaries,
     resume_checkpoint,
