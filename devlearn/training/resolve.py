@@ -158,8 +158,9 @@ def load_run_config(run_dir: str | Path, registry: PluginRegistry) -> RunConfig:
 def _from_saved(
     data: dict[str, Any], request: RunRequest, registry: PluginRegistry, source: str
 ) -> RunConfig:
-    """``data`` read for its behaviour, which must be the requested one (if one is)."""
-    name = data.get("behavior_name", "")
+    """``data`` read for its behaviour, which must be the requested one (if one is; a config
+    that names none is read for the requested one)."""
+    name = data.get("behavior_name") or request.behavior
     if request.behavior and name != request.behavior:
         raise UsageError(f"{source} trains '{name}', not '{request.behavior}'")
     return from_dict(data, registry.behavior(name))
