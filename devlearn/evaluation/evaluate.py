@@ -234,8 +234,8 @@ def evaluate(
         # LEGACY_DEFAULTS), acting at the decision rate a new run of the behaviour would use
         state = {}
         fresh = resolve_config(RunRequest(behavior_name), registry)
-        repeat = [f"env.action_repeat={fresh.env.action_repeat}"]
-        request = RunRequest(behavior_name, [*repeat, *(overrides or [])], saved={})
+        rate = [f"env.action_repeat={fresh.env.action_repeat}"]
+        request = RunRequest(behavior_name, [*rate, *(overrides or [])], saved={})
         cfg = resolve_config(request, registry)
         behavior = registry.create(behavior_name, cfg.behavior)
     torch.manual_seed(seed)
