@@ -57,21 +57,17 @@ def test_published_checkpoint_loads_and_acts(path, tmp_path):
     """Each published checkpoint, copied alone to a fresh folder, builds its policy and acts."""
     import torch
 
-    from devlearn.config.run_config import from_dict
     from devlearn.env.behavior_env import BehaviorEnv
-    from devlearn.evaluation.evaluate import load_actor
     from devlearn.plugins import PluginRegistry
-    from devlearn.training.checkpoint import load_checkpoint
+    from devlearn.training.checkpoint import Checkpoint, observation_batch
 
     copy = tmp_path / path.name
     shutil.copy(path, copy)
-    state = load_checkpoint(copy)
+    opened = Checkpoint.open(copy, PluginRegistry())
+    state, cfg = opened.state, opened.config
     if path.name == "policy.pt":
         assert state["policy_only"] and "optimizer_state_dict" not in state
         torch.load(copy, weights_only=True)  # plain data only
-    registry = PluginRegistry()
-    cls = registry.behavior(state["behavior"])
-    cfg = from_dict(state["config"], cls)
     # a run from before issue #28 loads with the head, decision rate and rewards it was
     # trained with, whatever today's defaults are
     saved = state["config"]
@@ -81,17 +77,14 @@ def test_published_checkpoint_loads_and_acts(path, tmp_path):
     else:
         assert cfg.network.head == saved["network"]["head"]
         assert cfg.env.action_repeat == saved["env"]["action_repeat"]
-    behavior = registry.create(state["behavior"], cfg.behavior)
-    behavior.load_policy_artifacts(dict(state.get("artifacts") or {}), copy.parent)
+    behavior = opened.behavior()
     env = BehaviorEnv(behavior, 0, training=False)
     try:
         env.set_stage(behavior.eval_stage())
         obs = env.reset()
-        actor = load_actor(cfg, state, behavior, obs, env.action_dim)
-        from devlearn.evaluation.evaluate import _batch
-
+        actor = opened.actor(obs, env.action_dim)
         with torch.inference_mode():
-            action = actor(_batch(obs))[0].numpy()
+            action = actor(observation_batch(obs))[0].numpy()
     finally:
         env.close()
     assert action.shape == (env.action_dim,) and np.all(np.isfinite(action))

@@ -8,7 +8,7 @@ import textwrap
 from typing import TYPE_CHECKING
 
 from devlearn.config.help import describe_keys
-from devlearn.config.run_config import RunConfig, apply_preset, default_config
+from devlearn.config.run_config import apply_preset, default_config, new_config
 from devlearn.config.values import apply_overrides
 
 if TYPE_CHECKING:
@@ -45,7 +45,7 @@ def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) 
 def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     """Print the keys as a table (grouped by section) or as JSON."""
     behavior_cls = registry.behavior(args.behavior)
-    core = RunConfig(behavior_name=behavior_cls.name, behavior=behavior_cls.config_class())
+    core = new_config(behavior_cls)
     cfg = default_config(behavior_cls)
     rows = describe_keys(cfg, core)
     changes = [("preset", lambda c: apply_preset(c, behavior_cls, args.preset), args.preset)]

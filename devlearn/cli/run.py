@@ -10,7 +10,6 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from devlearn.api.errors import UsageError
-from devlearn.config.checks import check_config
 
 if TYPE_CHECKING:
     from devlearn.plugins import PluginRegistry
@@ -62,6 +61,12 @@ def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) 
         "--set and the options above), weights, optimiser, step count and env memory",
     )
     p.add_argument(
+        "--config",
+        metavar="FILE",
+        help="start a new run from a resolved config file (a run's config.json, a sweep's "
+        "run_config.json), changed by --set and the options above",
+    )
+    p.add_argument(
         "--force",
         action="store_true",
         help="with --out: replace the run that DIR holds (deletes what DIR holds once the new "
@@ -71,57 +76,33 @@ def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) 
 
 
 def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
-    """Build the config, train, print the run directory and a final summary."""
+    """Resolve the config, train, print the run directory and a final summary."""
     from devlearn.cli.summary import finished_message, paper_budget, run_summary
-    from devlearn.config.run_config import default_config
-    from devlearn.config.values import apply_overrides
-    from devlearn.training.train import load_run_config, train
+    from devlearn.training.resolve import RunRequest, resolve_config
+    from devlearn.training.train import default_run_dir, train
 
     behavior_cls = registry.behavior(args.behavior)
-    top = {
-        "total_steps": args.steps,
-        "num_envs": args.envs,
-        "workers": args.workers,
-        "seed": args.seed,
-        "device": args.device,
-        "logger": args.logger,
-    }
-    if args.resume and (args.preset or args.start_from):
-        raise UsageError("--resume keeps the run's config; --preset and --from start new runs")
-    if args.start_from:
-        from devlearn.training.train import config_from_checkpoint
-
-        cfg = config_from_checkpoint(args.start_from, registry, args.behavior, args.preset)
-        apply_overrides(cfg, {k: v for k, v in top.items() if v is not None})
-        apply_overrides(cfg, args.overrides)
-        cfg.out_dir = args.out or ""
-    elif args.resume:
-        if args.out:
-            raise UsageError("--out and --resume exclude each other (a resumed run stays put)")
-        if args.force:
-            raise UsageError("--force and --resume exclude each other (--force replaces a run)")
-        run_dir = Path(args.resume)
-        if not run_dir.is_dir():
-            raise UsageError(f"run directory {run_dir} does not exist")
-        cfg = load_run_config(run_dir, registry)
-        if cfg.behavior_name != args.behavior:
-            raise UsageError(f"run {run_dir} trains '{cfg.behavior_name}', not '{args.behavior}'")
-        recorded_seed = cfg.seed
-        apply_overrides(cfg, {k: v for k, v in top.items() if v is not None})
-        apply_overrides(cfg, args.overrides)
-        if cfg.seed != recorded_seed:
-            raise UsageError(
-                f"run {run_dir} was trained with seed {recorded_seed}, which a resumed run keeps "
-                "(its random states continue from the checkpoint); for another seed start a new "
-                f"run from its checkpoint: --from {run_dir / 'checkpoint_latest.pt'} "
-                f"--seed {cfg.seed} --out NEW_DIR"
-            )
-    else:
-        cfg = default_config(behavior_cls, args.overrides, args.preset, out_dir=args.out, **top)
-    check_config(cfg)
+    if args.resume and args.force:
+        raise UsageError("--force and --resume exclude each other (--force replaces a run)")
+    request = RunRequest(
+        behavior=args.behavior,
+        overrides=args.overrides,
+        preset=args.preset or "",
+        top={
+            "total_steps": args.steps,
+            "num_envs": args.envs,
+            "workers": args.workers,
+            "seed": args.seed,
+            "device": args.device,
+            "logger": args.logger,
+        },
+        out_dir=args.out or "",
+        resume=args.resume or "",
+        start_from=args.start_from or "",
+        config_file=args.config or "",
+    )
+    cfg = resolve_config(request, registry)
     if not args.resume and not cfg.out_dir:
-        from devlearn.training.train import default_run_dir
-
         cfg.out_dir = str(default_run_dir(cfg.behavior_name))
     if args.resume:
         from devlearn.training.checkpoint import resume_checkpoint

@@ -108,7 +108,8 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
         for planned in runs:
             job = planned.job
             argv = ["devlearn", *global_args, "run", job.behavior, "--out", str(job.run_dir)]
-            print(f"{job.name}: {shlex.join([*argv, *job.train_args])}")
+            argv += ["--config", str(job.config_path)]
+            print(f"{job.name}: {shlex.join(argv)}  # {' '.join(job.settings)}")
         print(f"{len(runs)} runs in {spec.out}; nothing started (--dry-run)")
         return 0
     with _interrupt_on_signals():

@@ -173,6 +173,33 @@ class RunConfig:
     """The behaviour's own options (an instance of its ``config_class``)."""
 
 
+def new_config(behavior_cls: type[Behavior]) -> RunConfig:
+    """The core defaults with the behaviour's config class's defaults: the base every run
+    config starts from (:func:`fresh_config`, :func:`from_dict`)."""
+    return RunConfig(behavior_name=behavior_cls.name, behavior=behavior_cls.config_class())
+
+
+def fresh_config(
+    behavior_cls: type[Behavior],
+    overrides: list[str] | None = None,
+    preset: str | None = None,
+    **top: Any,
+) -> RunConfig:
+    """A new run's config, unchecked: defaults < the behaviour's ``train_defaults()`` < its
+    preset ``preset`` < ``top`` < overrides (:func:`default_config` checks it too).
+
+    Raises:
+        UsageError: An unknown preset (the valid ones named) or a bad override.
+    """
+    cfg = new_config(behavior_cls)
+    apply_overrides(cfg, behavior_cls(cfg.behavior).train_defaults())
+    if preset:
+        apply_preset(cfg, behavior_cls, preset)
+    apply_overrides(cfg, {k: v for k, v in top.items() if v is not None})
+    apply_overrides(cfg, overrides or [])
+    return cfg
+
+
 def default_config(
     behavior_cls: type[Behavior],
     overrides: list[str] | None = None,
@@ -180,7 +207,9 @@ def default_config(
     **top: Any,
 ) -> RunConfig:
     """Build a run's config: defaults < the behaviour's ``train_defaults()`` < its preset
-    ``preset`` < ``top`` < overrides.
+    ``preset`` < ``top`` < overrides, checked against the behaviour's network
+    (:func:`finish_config`). ``devlearn run`` and sweeps build theirs through
+    :func:`devlearn.training.resolve.resolve_config`, which also checks every value's bounds.
 
     Args:
         behavior_cls: The behaviour class.
@@ -191,12 +220,19 @@ def default_config(
         UsageError: An unknown preset (the valid ones named), a bad override, or values the
             behaviour's :class:`~devlearn.api.network_spec.NetworkSpec` rejects.
     """
-    cfg = RunConfig(behavior_name=behavior_cls.name, behavior=behavior_cls.config_class())
-    apply_overrides(cfg, behavior_cls(cfg.behavior).train_defaults())
-    if preset:
-        apply_preset(cfg, behavior_cls, preset)
-    apply_overrides(cfg, {k: v for k, v in top.items() if v is not None})
-    apply_overrides(cfg, overrides or [])
+    cfg = fresh_config(behavior_cls, overrides, preset, **top)
+    finish_config(cfg, behavior_cls)
+    return cfg
+
+
+def finish_config(cfg: RunConfig, behavior_cls: type[Behavior]) -> None:
+    """Check ``cfg`` against the network its behaviour builds under it and record the layout
+    the behaviour chooses where ``network.layout`` is empty (so config.json says it).
+
+    Raises:
+        UsageError: The behaviour's ``network()`` rejects the config, or the head, spread
+            bounds or decision rate are invalid (:func:`check_learner`).
+    """
     try:  # the spec checks its own values (e.g. the spread): say so before any env starts
         spec = behavior_cls(cfg.behavior).network()
     except ValueError as err:
@@ -204,10 +240,9 @@ def default_config(
             f"{behavior_cls.name}: its network() rejects the config: {err} "
             "(set through --set behavior.FIELD=VALUE, e.g. behavior.max_std)"
         ) from err
-    if not cfg.network.layout:  # record the behaviour's choice, so config.json says it
+    if not cfg.network.layout:
         cfg.network.layout = "shared" if spec.share else "separate"
     check_learner(cfg, spec)
-    return cfg
 
 
 def check_learner(cfg: RunConfig, spec: Any) -> None:
@@ -285,7 +320,7 @@ def from_dict(data: dict[str, Any], behavior_cls: type[Behavior]) -> RunConfig:
     field named in its config class's ``LEGACY_DEFAULTS`` (field -> value) that the saved
     ``behavior`` section lacks takes that value (a default changed after those runs).
     """
-    cfg = RunConfig(behavior_name=behavior_cls.name, behavior=behavior_cls.config_class())
+    cfg = new_config(behavior_cls)
     if "network" not in data:
         cfg.network = dataclasses.replace(LEGACY_NETWORK)
     for key, value in LEGACY_FIELDS.items():

@@ -12,25 +12,16 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import torch
-from rsl_rl.utils import resolve_class, resolve_obs_groups
-from tensordict import TensorDict
 from tqdm import tqdm
 
 from devlearn.api.errors import UsageError
-from devlearn.config.run_config import (
-    RunConfig,
-    apply_overrides,
-    default_config,
-    from_dict,
-    to_dict,
-    to_rsl_rl,
-)
+from devlearn.config.run_config import to_dict
 from devlearn.env.behavior_env import BehaviorEnv
-from devlearn.training.checkpoint import LATEST, check_behavior, check_fits, load_checkpoint
-from devlearn.training.process import quiet
+from devlearn.training.checkpoint import LATEST, Checkpoint, observation_batch
+from devlearn.training.checkpoint import load_actor as load_actor  # plugins' tests import it here
+from devlearn.training.resolve import RunRequest, resolve_config
 
 if TYPE_CHECKING:
-    from devlearn.api.behavior import Behavior
     from devlearn.env.behavior_env import InfantFactory
     from devlearn.plugins import PluginRegistry
     from devlearn.training.networks import MultiSenseModel
@@ -132,31 +123,6 @@ def code_version() -> dict[str, Any]:
     return {"commit": sha, "dirty": bool(status.strip())}
 
 
-def _batch(obs: dict[str, np.ndarray]) -> TensorDict:
-    """One env's observations as a batch of one (copied): groups (1, *shape)."""
-    return TensorDict({k: torch.from_numpy(np.array(v)[None]) for k, v in obs.items()}, [1])
-
-
-def load_actor(
-    cfg: RunConfig,
-    checkpoint: dict[str, Any],
-    behavior: Behavior,
-    obs: dict[str, np.ndarray],
-    action_dim: int,
-) -> MultiSenseModel:
-    """Rebuild the checkpoint's policy network for ``behavior`` (eval mode, CPU)."""
-    train_cfg = to_rsl_rl(cfg, behavior, list(obs))
-    batch = _batch(obs)
-    with quiet():  # rsl-rl prints the resolved sets
-        groups = resolve_obs_groups(batch, train_cfg["obs_groups"], ["actor", "critic"])
-    actor_class, actor_kwargs = resolve_class(train_cfg["actor"])
-    actor = actor_class(batch, groups, "actor", action_dim, **actor_kwargs)
-    source = f"the {behavior.name} checkpoint"
-    check_fits(actor.state_dict(), checkpoint["actor_state_dict"], source, "actor_state_dict")
-    actor.load_state_dict(checkpoint["actor_state_dict"])
-    return actor.eval()
-
-
 def _policy(
     policy: str, actor: MultiSenseModel | None, action_dim: int, seed: int, repeat: int = 1
 ) -> Callable[[dict[str, np.ndarray]], np.ndarray]:
@@ -180,7 +146,7 @@ def _policy(
     def act(obs: dict[str, np.ndarray]) -> np.ndarray:
         assert actor is not None, "the checkpoint policy needs a checkpoint's actor"
         with torch.inference_mode():
-            return actor(_batch(obs))[0].numpy()
+            return actor(observation_batch(obs))[0].numpy()
 
     return act
 
@@ -258,20 +224,20 @@ def evaluate(
     if overrides and checkpoint is not None:
         raise UsageError("--set applies to baselines only: a checkpoint evaluates with its config")
     out = prepare_out_dir(out_dir) if out_dir is not None else None
-    behavior_cls = registry.behavior(behavior_name)
+    opened = None
     if checkpoint is not None:
-        checkpoint = resolve_checkpoint(checkpoint)
-        state = load_checkpoint(checkpoint)
-        check_behavior(state, checkpoint, behavior_name)
-        cfg = from_dict(state["config"], behavior_cls)
-    else:  # a baseline acts at the decision rate a new run of the behaviour would use
+        opened = Checkpoint.open(resolve_checkpoint(checkpoint), registry, behavior_name)
+        checkpoint, state, cfg = opened.path, opened.state, opened.config
+        behavior = opened.behavior()
+    else:
+        # a baseline: the config a saved config without values means (the behaviour's
+        # LEGACY_DEFAULTS), acting at the decision rate a new run of the behaviour would use
         state = {}
-        cfg = from_dict({}, behavior_cls)
-        cfg.env.action_repeat = default_config(behavior_cls).env.action_repeat
-        apply_overrides(cfg, list(overrides or []))
-    behavior = registry.create(behavior_name, cfg.behavior)
-    if checkpoint is not None:
-        behavior.load_policy_artifacts(dict(state.get("artifacts") or {}), checkpoint.parent)
+        fresh = resolve_config(RunRequest(behavior_name), registry)
+        rate = [f"env.action_repeat={fresh.env.action_repeat}"]
+        request = RunRequest(behavior_name, [*rate, *(overrides or [])], saved={})
+        cfg = resolve_config(request, registry)
+        behavior = registry.create(behavior_name, cfg.behavior)
     torch.manual_seed(seed)
     threads = torch.get_num_threads()
     # A batch of one gains nothing from more threads, and several threads on a core that
@@ -293,9 +259,7 @@ def evaluate(
         env.set_stage(stage)
         started = "random" if stage.get("random_pose") else getattr(env.infant, "start", "rest")
         obs = env.reset()
-        actor = None
-        if checkpoint is not None:
-            actor = load_actor(cfg, state, behavior, obs, env.action_dim)
+        actor = opened.actor(obs, env.action_dim) if opened is not None else None
         act = _policy(policy, actor, env.action_dim, seed, repeat)
         if video is not None:
             import imageio.v2 as imageio

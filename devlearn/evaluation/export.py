@@ -60,15 +60,11 @@ def load_policy(
         UsageError: Missing, corrupt or foreign checkpoint, or an environment that cannot be
             built from the checkpoint's config.
     """
-    from devlearn.config.run_config import from_dict
     from devlearn.env import BehaviorEnv
-    from devlearn.evaluation.evaluate import load_actor
-    from devlearn.training.checkpoint import check_behavior, load_checkpoint
+    from devlearn.training.checkpoint import Checkpoint
 
-    state = load_checkpoint(checkpoint)
-    check_behavior(state, checkpoint, behavior_name)
-    cfg = from_dict(state["config"], registry.behavior(behavior_name))
-    behavior = registry.create(behavior_name, cfg.behavior)
+    opened = Checkpoint.open(checkpoint, registry, behavior_name)
+    behavior = opened.behavior()
     try:
         env = BehaviorEnv(behavior, 0, training=False)
     except OSError as exc:
@@ -78,7 +74,7 @@ def load_policy(
         ) from None
     try:
         obs = env.reset()
-        actor = load_actor(cfg, state, behavior, obs, env.action_dim)
+        actor = opened.actor(obs, env.action_dim)
     finally:
         env.close()
     return DeterministicPolicy(actor), obs

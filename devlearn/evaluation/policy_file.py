@@ -5,8 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from devlearn.config.run_config import from_dict
-from devlearn.training.checkpoint import FORMAT, load_checkpoint, save_atomic
+from devlearn.training.checkpoint import FORMAT, Checkpoint, save_atomic
 
 if TYPE_CHECKING:
     from devlearn.plugins import PluginRegistry
@@ -39,14 +38,11 @@ def slim_checkpoint(
     source, target = Path(source), Path(target)
     if target.resolve() == source.resolve():
         raise UsageError(f"slim {source}: --out must differ from the checkpoint itself")
-    state = load_checkpoint(source)
-    behavior_cls = registry.behavior(state["behavior"])
-    cfg = from_dict(state["config"], behavior_cls)
-    behavior = registry.create(state["behavior"], cfg.behavior)
-    behavior.load_policy_artifacts(dict(state.get("artifacts") or {}), source.parent)
+    opened = Checkpoint.open(source, registry)
+    state = opened.state
     slim = {"format": FORMAT, "policy_only": True}
     slim.update({k: state[k] for k in KEPT if k in state})
-    slim["artifacts"] = behavior.policy_artifacts()
+    slim["artifacts"] = opened.behavior().policy_artifacts()
     target.parent.mkdir(parents=True, exist_ok=True)
     save_atomic(slim, target)
     return slim

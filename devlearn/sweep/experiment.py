@@ -38,20 +38,21 @@ class PlannedRun:
 def plan_sweep(
     spec: SweepSpec, registry: PluginRegistry, global_args: list[str] | None = None
 ) -> list[PlannedRun]:
-    """Every run of the sweep, each config built and checked as ``devlearn run`` would.
+    """Every run of the sweep, each config resolved and checked as ``devlearn run`` would
+    (:func:`~devlearn.training.resolve.resolve_config`); the job carries that config, which
+    the run starts from (``devlearn run --config RUN/run_config.json``).
 
     Raises:
         UsageError: An unknown behaviour, grid key or value, a value the behaviour rejects (the
             run is named), or a launcher that is not installed.
     """
-    from devlearn.config.checks import check_config
-    from devlearn.config.run_config import default_config
+    from devlearn.config.run_config import to_dict
     from devlearn.config.values import in_table, valid_keys
     from devlearn.training.learned_rewards import LearnedRewards
+    from devlearn.training.resolve import RunRequest, resolve_config
 
-    behavior_cls = registry.behavior(spec.behavior)
     train = spec.train
-    base = default_config(behavior_cls)
+    base = resolve_config(RunRequest(spec.behavior), registry)
     keys = valid_keys(base)
     for key in spec.grid:
         if key not in keys and not in_table(base, key):  # learned.TERM.OPTION
@@ -62,25 +63,24 @@ def plan_sweep(
     runs = []
     for variant in variants(spec.grid, spec.seeds):
         overrides = [*train.overrides, *variant.overrides]
+        if not any(item.partition("=")[0].strip() == "torch_threads" for item in overrides):
+            # A fixed thread count (the run's cores), not the automatic plan: a run then trains
+            # the same numbers under either executor and on any machine.
+            overrides.append(f"torch_threads={train.cores_per_run}")
         top = {"total_steps": train.steps, "num_envs": train.envs, "workers": train.workers}
+        request = RunRequest(
+            spec.behavior, overrides, train.preset or "", {**top, "seed": variant.seed}
+        )
+        run_dir = spec.out.resolve() / "runs" / variant.name
         try:
-            cfg = default_config(behavior_cls, overrides, train.preset, seed=variant.seed, **top)
-            check_config(cfg)
+            cfg = resolve_config(request, registry)
             registry.create(spec.behavior, cfg.behavior)
             LearnedRewards.from_config(copy.deepcopy(cfg), registry)  # learned.* options too
         except UsageError as exc:
             raise UsageError(f"run {variant.name}: {exc}") from None
+        cfg.out_dir = str(run_dir)
         common = ["--workers", str(train.workers)]
         common += ["--steps", str(train.steps)] if train.steps is not None else []
-        train_args = ["--seed", str(variant.seed), *common]
-        train_args += ["--preset", train.preset] if train.preset else []
-        train_args += ["--envs", str(train.envs)] if train.envs is not None else []
-        for item in overrides:
-            train_args += ["--set", item]
-        if not any(item.partition("=")[0].strip() == "torch_threads" for item in overrides):
-            # A fixed thread count (the run's cores), not the automatic plan: a run then trains
-            # the same numbers under either executor and on any machine.
-            train_args += ["--set", f"torch_threads={train.cores_per_run}"]
         ev = spec.evaluation
         eval_args = ["--episodes", str(ev.episodes), "--seed", str(ev.seed), "--json", *ev.args]
         job = RunJob(
@@ -89,7 +89,8 @@ def plan_sweep(
             sweep_dir=str(spec.out.resolve()),
             values=dict(variant.values),
             seed=variant.seed,
-            train_args=train_args,
+            config=to_dict(cfg),
+            settings=_settings(variant.seed, train.preset, overrides),
             resume_args=common,
             eval_args=eval_args,
             launcher=spec.launcher,
@@ -99,6 +100,12 @@ def plan_sweep(
     if spec.launcher and shutil.which(spec.launcher[0]) is None:
         raise UsageError(f"launcher command '{spec.launcher[0]}' is not found")
     return runs
+
+
+def _settings(seed: int, preset: str | None, overrides: list[str]) -> list[str]:
+    """What a run sets beyond the behaviour's defaults, for people: ``seed=4``,
+    ``preset=paper``, then its ``--set`` items."""
+    return [f"seed={seed}", *([f"preset={preset}"] if preset else []), *overrides]
 
 
 def write_sweep_report(run_dirs: list[Path], out_dir: Path) -> dict[str, Any]:

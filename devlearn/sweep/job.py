@@ -17,6 +17,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from devlearn.training.resolve import RUN_CONFIG_FILE
+
 LOG_TAIL_LINES = 15
 """Lines of a failed run's log shown in its record and on the console."""
 PARENT_ENV = "DEVLEARN_PARENT_PID"
@@ -43,8 +45,12 @@ class RunJob:
     """The run's grid values."""
     seed: int
     """The run's seed."""
-    train_args: list[str]
-    """``devlearn run`` options of a fresh start (after ``run BEHAVIOR --out DIR``)."""
+    config: dict[str, Any]
+    """The run's resolved config (:func:`~devlearn.config.run_config.to_dict`), written to
+    ``RUN/run_config.json`` and started from (``devlearn run BEHAVIOR --config FILE``)."""
+    settings: list[str]
+    """What the run sets beyond the behaviour's defaults (seed, preset, ``--set`` items), as
+    people read it in ``--dry-run`` and the record."""
     resume_args: list[str]
     """``devlearn run`` options of a resume (after ``run BEHAVIOR --resume DIR``)."""
     eval_args: list[str]
@@ -58,6 +64,11 @@ class RunJob:
     def run_dir(self) -> Path:
         """The ``devlearn run`` folder: SWEEP/runs/NAME."""
         return Path(self.sweep_dir) / "runs" / self.name
+
+    @property
+    def config_path(self) -> Path:
+        """The run's resolved config: SWEEP/runs/NAME/run_config.json."""
+        return self.run_dir / RUN_CONFIG_FILE
 
     @property
     def record_path(self) -> Path:
@@ -250,7 +261,8 @@ class _Run:
                 else:
                     if job.run_dir.exists():  # a start killed before its first checkpoint
                         shutil.rmtree(job.run_dir)
-                    phase, args = "train", ["--out", run_dir, *job.train_args]
+                    write_json(job.config_path, job.config)
+                    phase, args = "train", ["--out", run_dir, "--config", str(job.config_path)]
                 returncode = self.command(phase, [*base, "run", job.behavior, *args], lock.fileno())
                 if returncode != 0:
                     return self.fail("training", returncode)

@@ -1,4 +1,5 @@
-"""Checkpoints: atomic writes, safe (data-only) loading, clear errors for unusable files."""
+"""Checkpoints: atomic writes, safe (data-only) loading, clear errors for unusable files, and
+:class:`Checkpoint`, an opened one (config, behaviour with its artifacts, policy network)."""
 
 from __future__ import annotations
 
@@ -8,13 +9,23 @@ import os
 import pickle
 import re
 import shutil
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import torch
 
 from devlearn.api.errors import UsageError
+from devlearn.config.run_config import from_dict, to_rsl_rl
+
+if TYPE_CHECKING:
+    from tensordict import TensorDict
+
+    from devlearn.api.behavior import Behavior
+    from devlearn.config.run_config import RunConfig
+    from devlearn.plugins import PluginRegistry
+    from devlearn.training.networks import MultiSenseModel
 
 FORMAT = "devlearn-checkpoint-1"
 """Value of the ``format`` key every devlearn checkpoint holds."""
@@ -426,3 +437,122 @@ def resume_checkpoint(
             for error in errors
         ]
     return best
+
+
+@dataclass
+class Checkpoint:
+    """An opened checkpoint (training checkpoint or policy file): its state, its config and,
+    built when asked for, its behaviour (with the policy artifacts it carries, e.g. hand
+    regard's detector calibration) and its policy network. Every command that reads a
+    checkpoint opens it here (``devlearn eval``, ``export``, ``slim``, ``run --from``).
+
+    Open with :meth:`open`.
+    """
+
+    path: Path
+    """The file."""
+    state: dict[str, Any]
+    """What :func:`load_checkpoint` read (weights, counters, ``config``...)."""
+    config: RunConfig
+    """The run config it was trained with (keys an old config lacks take the values it was
+    trained with, :func:`~devlearn.config.run_config.from_dict`)."""
+    registry: PluginRegistry
+    """The registry its behaviour is built from."""
+    _behavior: Behavior | None = field(default=None, repr=False)
+
+    @classmethod
+    def open(
+        cls,
+        path: str | Path,
+        registry: PluginRegistry,
+        behavior_name: str = "",
+        required: tuple[str, ...] = POLICY_KEYS,
+    ) -> Checkpoint:
+        """Load ``path`` (as data, :func:`load_checkpoint`) and rebuild its config.
+
+        Args:
+            path: The ``.pt`` file.
+            registry: Plugin registry.
+            behavior_name: The behaviour it must have been trained for (empty: any installed).
+            required: Keys it must hold (:data:`POLICY_KEYS`; :data:`RESUME_KEYS` to resume).
+        Raises:
+            UsageError: Missing, corrupt, foreign or incomplete file, or trained for another
+                (or no installed) behaviour.
+        """
+        path = Path(path)
+        state = load_checkpoint(path, required)
+        if behavior_name:
+            check_behavior(state, path, behavior_name)
+        config = from_dict(state["config"], registry.behavior(state["behavior"]))
+        return cls(path, state, config, registry)
+
+    @property
+    def behavior_name(self) -> str:
+        """The behaviour it was trained for."""
+        return str(self.state["behavior"])
+
+    @property
+    def env_steps(self) -> int:
+        """Environment steps it was trained for (0 where it does not say)."""
+        return int(self.state.get("env_steps", 0))
+
+    def behavior(self) -> Behavior:
+        """Its behaviour under its config, with the policy artifacts the checkpoint carries
+        loaded (or found by name next to it, ``Behavior.load_policy_artifacts``); built once."""
+        if self._behavior is None:
+            behavior = self.registry.create(self.behavior_name, self.config.behavior)
+            behavior.load_policy_artifacts(
+                dict(self.state.get("artifacts") or {}), self.path.parent
+            )
+            self._behavior = behavior
+        return self._behavior
+
+    def actor(self, obs: dict[str, np.ndarray], action_dim: int) -> MultiSenseModel:
+        """Its policy network (eval mode, CPU), built for one observation ``obs`` of its
+        behaviour (name -> unbatched array) and ``action_dim`` actions.
+
+        Raises:
+            UsageError: The saved weights do not fit the network its config builds.
+        """
+        return load_actor(self.config, self.state, self.behavior(), obs, action_dim)
+
+
+def load_actor(
+    cfg: RunConfig,
+    checkpoint: dict[str, Any],
+    behavior: Behavior,
+    obs: dict[str, np.ndarray],
+    action_dim: int,
+) -> MultiSenseModel:
+    """Rebuild a checkpoint's policy network for ``behavior`` under ``cfg`` (eval mode, CPU).
+
+    Args:
+        cfg: The checkpoint's config.
+        checkpoint: Its state (``actor_state_dict``).
+        behavior: Its behaviour.
+        obs: One observation (name -> unbatched array).
+        action_dim: Number of actions.
+    Raises:
+        UsageError: The weights do not fit the network ``cfg`` builds.
+    """
+    from rsl_rl.utils import resolve_class, resolve_obs_groups
+
+    from devlearn.training.process import quiet
+
+    train_cfg = to_rsl_rl(cfg, behavior, list(obs))
+    batch = observation_batch(obs)
+    with quiet():  # rsl-rl prints the resolved sets
+        groups = resolve_obs_groups(batch, train_cfg["obs_groups"], ["actor", "critic"])
+    actor_class, actor_kwargs = resolve_class(train_cfg["actor"])
+    actor = actor_class(batch, groups, "actor", action_dim, **actor_kwargs)
+    source = f"the {behavior.name} checkpoint"
+    check_fits(actor.state_dict(), checkpoint["actor_state_dict"], source, "actor_state_dict")
+    actor.load_state_dict(checkpoint["actor_state_dict"])
+    return actor.eval()
+
+
+def observation_batch(obs: dict[str, np.ndarray]) -> TensorDict:
+    """One env's observations as a batch of one (copied): groups (1, *shape)."""
+    from tensordict import TensorDict
+
+    return TensorDict({k: torch.from_numpy(np.array(v)[None]) for k, v in obs.items()}, [1])

@@ -10,6 +10,8 @@ import random
 import signal
 import threading
 from collections.abc import Iterator
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import torch
@@ -183,3 +185,32 @@ def resolve_device(device: str, local_rank: int, world_size: int) -> str:
     if device.startswith("cuda") and not torch.cuda.is_available():
         raise UsageError(f"device '{device}' requested but CUDA is not available; use --device cpu")
     return device
+
+
+@dataclass(frozen=True)
+class Ranks:
+    """This process's place among the ranks of a (torchrun) distributed run."""
+
+    rank: int = 0
+    """Global rank (0: the one that logs and saves)."""
+    world_size: int = 1
+    """Number of ranks."""
+
+    @property
+    def is_main(self) -> bool:
+        """Whether this rank logs and saves."""
+        return self.rank == 0
+
+    @property
+    def is_distributed(self) -> bool:
+        """Whether there is more than one rank."""
+        return self.world_size > 1
+
+    def all_gather(self, value: Any) -> list[Any]:
+        """Every rank's ``value``, in rank order (a collective: all ranks call it together);
+        ``[value]`` alone."""
+        if not self.is_distributed:
+            return [value]
+        values: list[Any] = [None] * self.world_size
+        dist.all_gather_object(values, value)
+        return values

@@ -1,4 +1,6 @@
-"""DevRunner: rsl-rl's OnPolicyRunner with a curriculum, metrics.jsonl and atomic checkpoints."""
+"""DevRunner: rsl-rl's OnPolicyRunner with a curriculum, metrics.jsonl and atomic checkpoints
+(held objects: :class:`~devlearn.training.runner_checkpoints.RunCheckpoints`,
+:class:`~devlearn.training.runner_metrics.MetricsLog`)."""
 
 from __future__ import annotations
 
@@ -8,12 +10,11 @@ import math
 import os
 import sys
 import time
-from collections import deque
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import torch
-import torch.distributed as dist
 from rsl_rl.runners import OnPolicyRunner
 from rsl_rl.utils import check_nan
 from tqdm import tqdm
@@ -22,13 +23,13 @@ from devlearn.api.behavior import RunMetrics
 from devlearn.api.curriculum import Curriculum
 from devlearn.api.errors import RunStopped
 from devlearn.config.run_config import RunConfig
-from devlearn.env.behavior_env import EPISODE_RECORD
 from devlearn.env.guards import GuardError
 from devlearn.env.workers import EnvWorkerError
 from devlearn.training.checkpoint import LATEST
 from devlearn.training.health import HealthWatch, rollout_health
 from devlearn.training.learned_rewards import LearnedRewards
 from devlearn.training.process import (
+    Ranks,
     ThreadPlan,
     init_distributed,
     interrupts_deferred,
@@ -36,30 +37,46 @@ from devlearn.training.process import (
     set_threads,
 )
 from devlearn.training.reward_norm import RewardNormalizer
-from devlearn.training.runner_checkpoints import RunnerCheckpoints
-from devlearn.training.runner_metrics import RunnerMetrics, purge_tensorboard_from
+from devlearn.training.runner_checkpoints import RunCheckpoints
+from devlearn.training.runner_metrics import MetricsLog, purge_tensorboard_from
 
 if TYPE_CHECKING:
     from devlearn.env import DevVecEnv
 
 
-class DevRunner(RunnerCheckpoints, RunnerMetrics, OnPolicyRunner):
-    """Trains one behaviour; the loop is rsl-rl's (act, step, returns, update, log).
+@dataclass
+class Rollout:
+    """What one iteration's rollout gathered besides PPO's storage."""
+
+    finished: list[dict[str, Any]]
+    """The finished episodes' figures (``reward/<term>``, ``metrics/<name>``, records)."""
+    mean_step_reward: float
+    """Mean reward per step (raw, before normalisation and learned rewards)."""
+    seconds: float
+    """Wall time of the rollout (the learned rewards and returns not included)."""
+    health: dict[str, float]
+    """The learner's figures over the rollout (:func:`~devlearn.training.health.rollout_health`)."""
+
+
+class DevRunner(OnPolicyRunner):
+    """Trains one behaviour; the loop is rsl-rl's: collect, update, log, checkpoint.
 
     Additions: the curriculum advances from the global env-step counter
     (``iterations * num_steps_per_env * num_envs * world_size``) before each iteration; a tqdm
-    bar and ``metrics.jsonl``; checkpoints (model, optimiser, iteration, env steps,
-    curriculum, every env's reward-term state, rng states, behaviour name, config) written
-    atomically as ``checkpoint_latest.pt`` every ``save_interval // 10`` iterations, plus
-    ``checkpoint_<step>.pt`` every ``save_interval``, before the first iteration of a new
-    curriculum stage (the stage-switch checkpoint another run may start from with
-    ``devlearn run --from``), at the end and on Ctrl-C or SIGTERM; the run-wide reward memory
-    merged across env workers and ranks at every iteration boundary
-    (:meth:`~devlearn.env.DevVecEnv.sync_run_memory`); and
-    CPU distributed training over gloo; learned rewards (``RunConfig.curiosity``), added to the
-    rollout's rewards and trained after each rollout, logged under ``reward/<name>/...`` and
-    saved in checkpoints (:mod:`devlearn.training.learned_rewards`). ``current_learning_iteration``
-    counts *completed* iterations, so a resumed run logs each iteration index once.
+    bar and ``metrics.jsonl`` (:attr:`metrics`, a
+    :class:`~devlearn.training.runner_metrics.MetricsLog`); checkpoints (:attr:`checkpoints`, a
+    :class:`~devlearn.training.runner_checkpoints.RunCheckpoints`: model, optimiser,
+    iteration, env steps, curriculum, every env's reward-term state, rng states, behaviour
+    name, config) written atomically as ``checkpoint_latest.pt`` every ``save_interval // 10``
+    iterations, plus ``checkpoint_<step>.pt`` every ``save_interval``, before the first
+    iteration of a new curriculum stage (the stage-switch checkpoint another run may start
+    from with ``devlearn run --from``), at the end and on Ctrl-C or SIGTERM; the run-wide
+    reward memory merged across env workers and ranks at every iteration boundary
+    (:meth:`~devlearn.env.DevVecEnv.sync_run_memory`); CPU distributed training over gloo;
+    learned rewards (``RunConfig.curiosity``), added to the rollout's rewards and trained
+    after each rollout, logged under ``reward/<name>/...`` and saved in checkpoints
+    (:mod:`devlearn.training.learned_rewards`). ``current_learning_iteration`` counts
+    *completed* iterations, so a resumed run logs each iteration index once.
 
     ``learn`` re-implements rsl-rl's ``OnPolicyRunner.learn`` loop (same calls in the same
     order: ``act``, ``env.step``, ``process_env_step``, ``compute_returns``, ``update``,
@@ -72,7 +89,8 @@ class DevRunner(RunnerCheckpoints, RunnerMetrics, OnPolicyRunner):
     Args:
         env: The DevVecEnv.
         train_cfg: From :func:`~devlearn.config.run_config.to_rsl_rl`.
-        cfg: The run config (saved in checkpoints).
+        cfg: The run config (saved in checkpoints; its ``ppo``, ``env`` and thread settings
+            are read here, everything rsl-rl reads comes from ``train_cfg``).
         run_dir: Where logs and checkpoints go.
         curriculum: The behaviour's curriculum.
         headline_metric: Evaluator key shown on the progress bar.
@@ -100,18 +118,15 @@ class DevRunner(RunnerCheckpoints, RunnerMetrics, OnPolicyRunner):
         run_metrics: RunMetrics | None = None,
     ) -> None:
         self.run_cfg = cfg
-        self.run_metrics = run_metrics
         self.run_dir = Path(run_dir)
         self.curriculum = curriculum
-        self.headline_metric = headline_metric
         self.show_progress = progress
         self.env_steps = 0
-        self.episodes: deque[dict[str, float]] = deque(maxlen=100)
-        self.last_row: dict[str, Any] = {}
         report = io.StringIO()
         with contextlib.redirect_stdout(report):
             super().__init__(env, train_cfg, log_dir=str(self.run_dir), device=device)
-        self.is_main = self.gpu_global_rank == 0
+        self.ranks = Ranks(self.gpu_global_rank, self.gpu_world_size)
+        self.is_main = self.ranks.is_main
         self.learned = (learned or LearnedRewards()).build(
             env.observation_shapes, env.num_actions, self.device
         )
@@ -123,8 +138,34 @@ class DevRunner(RunnerCheckpoints, RunnerMetrics, OnPolicyRunner):
             ).to(self.device)
         dist_cfg = train_cfg["actor"]["distribution_cfg"]
         self.health = HealthWatch((dist_cfg.get("min_std", 1e-3), dist_cfg.get("max_std", 0.0)))
+        self.checkpoints = RunCheckpoints(
+            self.alg,
+            env,
+            curriculum,
+            self.learned,
+            self.reward_norm,
+            run_metrics,
+            cfg,
+            self.run_dir,
+            self.ranks,
+        )
+        self.metrics = MetricsLog(
+            self.run_dir, curriculum, self.learned, run_metrics, headline_metric, self.is_main
+        )
         if self.is_main:
             (self.run_dir / "networks.txt").write_text(report.getvalue())
+
+    @property
+    def last_row(self) -> dict[str, Any]:
+        """The last metrics.jsonl row."""
+        return self.metrics.last_row
+
+    def restore(self, state: dict[str, Any], curriculum: bool = True) -> None:
+        """Continue from a checkpoint (:meth:`RunCheckpoints.restore
+        <devlearn.training.runner_checkpoints.RunCheckpoints.restore>`), counters included."""
+        self.current_learning_iteration, self.env_steps = self.checkpoints.restore(
+            state, curriculum
+        )
 
     # --- distributed ----------------------------------------------------------------------
     def _configure_multi_gpu(self) -> None:
@@ -149,16 +190,13 @@ class DevRunner(RunnerCheckpoints, RunnerMetrics, OnPolicyRunner):
     def learn(self, total_steps: int) -> None:
         """Train until ``total_steps`` environment steps (all envs, all ranks) are done."""
         env, alg = self.env, self.alg
-        rnd = bool(self.cfg["algorithm"].get("rnd_cfg"))
         threads = ThreadPlan(self.run_cfg.torch_threads, self.run_cfg.update_threads)
         # physics steps: each decision holds its action for action_repeat of them
         per_iteration = (
             self.cfg["num_steps_per_env"] * env.num_envs * self.gpu_world_size * self.action_repeat
         )
-        total_it = self.current_learning_iteration + max(
-            math.ceil((total_steps - self.env_steps) / per_iteration), 0
-        )
         start_it = self.current_learning_iteration
+        total_it = start_it + max(math.ceil((total_steps - self.env_steps) / per_iteration), 0)
         obs = env.get_observations().to(self.device)
         alg.train_mode()
         if self.is_distributed:
@@ -180,93 +218,59 @@ class DevRunner(RunnerCheckpoints, RunnerMetrics, OnPolicyRunner):
         )
         good = None  # the state at the last iteration boundary (what a fault checkpoint saves)
         try:
-            good = self._snapshot()
+            good = self.checkpoints.snapshot(self.current_learning_iteration, self.env_steps)
             while self.env_steps < total_steps:
                 if self.curriculum.update(self.env_steps):
                     env.set_stage(self.curriculum.stage.options)
                 collect_threads, learn_threads = threads.next_iteration()
-                set_threads(collect_threads)  # the workers wait while the policy runs
+
+                # Collect: a rollout with the workers stepping while the policy acts.
+                set_threads(collect_threads)
+                obs, rollout = self._collect(obs)
+
+                # Update: PPO (the workers sleep).
                 start = time.time()
-                finished: list[dict[str, float]] = []
-                step_rewards = 0.0
-                with torch.inference_mode():
-                    for _ in range(self.cfg["num_steps_per_env"]):
-                        actions = alg.act(obs)
-                        obs, rewards, dones, extras = env.step(actions.to(env.device))
-                        if self.cfg.get("check_for_nan", True):
-                            check_nan(obs, rewards, dones)
-                        obs, rewards = obs.to(self.device), rewards.to(self.device)
-                        dones = dones.to(self.device)
-                        ppo_rewards = rewards
-                        if self.reward_norm is not None:  # PPO sees the scaled rewards
-                            ppo_rewards = self.reward_norm(rewards, dones)
-                        alg.process_env_step(obs, ppo_rewards, dones, extras)
-                        intrinsic = alg.intrinsic_rewards if rnd else None
-                        self.logger.process_env_step(rewards, dones, extras, intrinsic)
-                        finished += extras["episode_infos"]
-                        step_rewards += float(rewards.mean())
-                    collect_time = time.time() - start
-                    self.learned.apply(alg.storage, obs, self.env_steps)  # adds to the rewards
-                    alg.compute_returns(obs)
-                    health = rollout_health(alg.storage)
-                start = time.time()
-                set_threads(learn_threads)  # the workers sleep during the update
+                set_threads(learn_threads)
                 losses = alg.update()
                 learn_time = time.time() - start
                 threads.record(learn_time)
+
+                # Log: the boundary, its snapshot and its metrics row: all or none on an
+                # interrupt.
                 it = self.current_learning_iteration
-                # the boundary, its snapshot and its metrics row: all or none on an interrupt
                 with interrupts_deferred():
                     self.current_learning_iteration += 1
                     self.env_steps += per_iteration
                     # one agent's lifetime memory: merge the workers' (and ranks') copies
-                    env.sync_run_memory(self._all_ranks if self.is_distributed else None)
-                    self._add_run_metrics(finished)
-                    good = self._snapshot()
-                    with quiet():
-                        self.logger.log(
-                            it=it,
-                            start_it=start_it,
-                            total_it=total_it,
-                            collect_time=collect_time,
-                            learn_time=learn_time,
-                            loss_dict=losses,
-                            learning_rate=alg.learning_rate,
-                            action_std=alg.get_policy().output_std,
-                            rnd_weight=alg.rnd.weight if rnd else None,
-                        )
-                    self.episodes.extend(finished)
-                    rate = per_iteration / max(collect_time + learn_time, 1e-9)
-                    mean_step = step_rewards / self.cfg["num_steps_per_env"]
+                    env.sync_run_memory(self.ranks.all_gather if self.is_distributed else None)
+                    self.metrics.add_episode_records(
+                        rollout.finished, self.ranks.all_gather if self.is_distributed else None
+                    )
+                    good = self.checkpoints.snapshot(
+                        self.current_learning_iteration, self.env_steps
+                    )
                     times = {
-                        "collect_s": collect_time,
+                        "collect_s": rollout.seconds,
                         "update_s": learn_time,
                         "update_threads": learn_threads,
                     }
-                    health["learning_rate"] = alg.learning_rate
-                    if self.reward_norm is not None:
-                        health["health/reward_scale"] = self.reward_norm.std
-                    self._record(it, len(finished), mean_step, losses, rate, times, bar, health)
-                    for warning in self.health.check(self.last_row):
-                        if self.is_main:
-                            tqdm.write(f"devlearn: {warning}", file=sys.stderr)
-                interval = self.cfg["save_interval"]
-                switch = self.curriculum.stage_index_at(self.env_steps) != self.curriculum.index
-                if self.current_learning_iteration % interval == 0 or switch:
-                    self.save_checkpoints(periodic=True, good=good)
-                elif self.current_learning_iteration % max(1, interval // 10) == 0:
-                    self.save_checkpoints(periodic=False, good=good)  # little lost on a kill
+                    self._log(it, start_it, total_it, rollout, losses, times, per_iteration, bar)
+
+                # Checkpoint: periodic and stage-switch files, and the latest often.
+                self._save_on_schedule(good)
         except KeyboardInterrupt:
             # The rollout (and update) under way is thrown away: the checkpoint holds the last
             # iteration boundary, "first ever" memories and rng states included.
-            self.save_checkpoints(periodic=False, gather=False, good=good)
+            if good is None:
+                good = self.checkpoints.snapshot(self.current_learning_iteration, self.env_steps)
+            self.checkpoints.save(good, periodic=False, gather=False)
             if self.is_main:
                 print(
                     f"\ninterrupted: checkpoint saved in {self.run_dir / LATEST}", file=sys.stderr
                 )
             raise
         except (GuardError, EnvWorkerError) as exc:
-            saved = self._fault_checkpoint(good)
+            saved = self.checkpoints.save_after_fault(good)
             if isinstance(exc, GuardError) or exc.died:
                 rank = f" on rank {self.gpu_global_rank}" if self.is_distributed else ""
                 # counted from 1, of the run's total: the iteration under way, after the
@@ -279,24 +283,99 @@ class DevRunner(RunnerCheckpoints, RunnerMetrics, OnPolicyRunner):
             raise
         finally:
             bar.close()
-        self.save_checkpoints(periodic=True)
+        final = self.checkpoints.snapshot(self.current_learning_iteration, self.env_steps)
+        self.checkpoints.save(final, periodic=True)
         with quiet():
             self.logger.stop_logging_writer()
             if self.logger.writer is not None:
                 self.logger.writer.close()
 
-    def _add_run_metrics(self, finished: list[dict[str, Any]]) -> None:
-        """Take the episode records out of ``finished`` (so only numbers are averaged) and give
-        every rank's, in rank order, to the run metrics (a collective when distributed)."""
-        records = [ep.pop(EPISODE_RECORD) for ep in finished if EPISODE_RECORD in ep]
-        if self.run_metrics is None:
-            return
-        if self.is_distributed:
-            records = [r for rank in self._all_ranks(records) for r in rank]
-        self.run_metrics.add(records)
+    def _collect(self, obs: Any) -> tuple[Any, Rollout]:
+        """One rollout of ``num_steps_per_env`` decisions into PPO's storage, the learned
+        rewards added and the returns computed; return the last observations and the rest."""
+        env, alg = self.env, self.alg
+        rnd = bool(self.cfg["algorithm"].get("rnd_cfg"))
+        start = time.time()
+        finished: list[dict[str, Any]] = []
+        step_rewards = 0.0
+        with torch.inference_mode():
+            for _ in range(self.cfg["num_steps_per_env"]):
+                actions = alg.act(obs)
+                obs, rewards, dones, extras = env.step(actions.to(env.device))
+                if self.cfg.get("check_for_nan", True):
+                    check_nan(obs, rewards, dones)
+                obs, rewards = obs.to(self.device), rewards.to(self.device)
+                dones = dones.to(self.device)
+                ppo_rewards = rewards
+                if self.reward_norm is not None:  # PPO sees the scaled rewards
+                    ppo_rewards = self.reward_norm(rewards, dones)
+                alg.process_env_step(obs, ppo_rewards, dones, extras)
+                intrinsic = alg.intrinsic_rewards if rnd else None
+                self.logger.process_env_step(rewards, dones, extras, intrinsic)
+                finished += extras["episode_infos"]
+                step_rewards += float(rewards.mean())
+            seconds = time.time() - start
+            self.learned.apply(alg.storage, obs, self.env_steps)  # adds to the rewards
+            alg.compute_returns(obs)
+            health = rollout_health(alg.storage)
+        mean_step = step_rewards / self.cfg["num_steps_per_env"]
+        return obs, Rollout(finished, mean_step, seconds, health)
 
-    def _all_ranks(self, value: Any) -> list:
-        """Every rank's ``value``, in rank order (a collective: all ranks call it together)."""
-        values = [None] * self.gpu_world_size
-        dist.all_gather_object(values, value)
-        return values
+    def _log(
+        self,
+        it: int,
+        start_it: int,
+        total_it: int,
+        rollout: Rollout,
+        losses: dict[str, float],
+        times: dict[str, float],
+        per_iteration: int,
+        bar: tqdm,
+    ) -> None:
+        """rsl-rl's log (TensorBoard, W&B), then metrics.jsonl and the progress bar, then the
+        learner-health warnings."""
+        alg = self.alg
+        rnd = bool(self.cfg["algorithm"].get("rnd_cfg"))
+        with quiet():
+            self.logger.log(
+                it=it,
+                start_it=start_it,
+                total_it=total_it,
+                collect_time=times["collect_s"],
+                learn_time=times["update_s"],
+                loss_dict=losses,
+                learning_rate=alg.learning_rate,
+                action_std=alg.get_policy().output_std,
+                rnd_weight=alg.rnd.weight if rnd else None,
+            )
+        rate = per_iteration / max(times["collect_s"] + times["update_s"], 1e-9)
+        health = rollout.health
+        health["learning_rate"] = alg.learning_rate
+        if self.reward_norm is not None:
+            health["health/reward_scale"] = self.reward_norm.std
+        row = self.metrics.record(
+            it,
+            self.env_steps,
+            rollout.finished,
+            rollout.mean_step_reward,
+            losses,
+            rate,
+            times,
+            bar,
+            self.logger.writer,
+            health,
+        )
+        for warning in self.health.check(row):
+            if self.is_main:
+                tqdm.write(f"devlearn: {warning}", file=sys.stderr)
+
+    def _save_on_schedule(self, good: dict[str, Any]) -> None:
+        """``checkpoint_<step>.pt`` every ``save_interval`` iterations and before the first
+        iteration of a new curriculum stage; the latest every ``save_interval // 10``."""
+        interval = self.cfg["save_interval"]
+        done = self.current_learning_iteration
+        switch = self.curriculum.stage_index_at(self.env_steps) != self.curriculum.index
+        if done % interval == 0 or switch:
+            self.checkpoints.save(good, periodic=True)
+        elif done % max(1, interval // 10) == 0:
+            self.checkpoints.save(good, periodic=False)  # little lost on a kill

@@ -1,70 +1,120 @@
-"""DevRunner's metrics: one metrics.jsonl line and a progress-bar refresh per iteration, and
-TensorBoard told what a resumed run redoes (a mixin of
-:class:`~devlearn.training.runner.DevRunner`)."""
+"""The runner's metrics: one metrics.jsonl line and a progress-bar refresh per iteration
+(:class:`MetricsLog`, held by :class:`~devlearn.training.runner.DevRunner`), and TensorBoard told
+what a resumed run redoes."""
 
 from __future__ import annotations
 
 import json
+from collections import deque
+from collections.abc import Callable
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from tqdm import tqdm
 
-if TYPE_CHECKING:
-    from collections import deque
-    from pathlib import Path
+from devlearn.env.behavior_env import EPISODE_RECORD
 
+if TYPE_CHECKING:
     from torch.utils.tensorboard import SummaryWriter
 
     from devlearn.api.behavior import RunMetrics
     from devlearn.api.curriculum import Curriculum
     from devlearn.training.learned_rewards import LearnedRewards
 
+EPISODES_AVERAGED = 100
+"""Finished episodes whose reward terms and metrics each metrics.jsonl row averages."""
 
-class RunnerMetrics:
-    """Per-iteration records for :class:`~devlearn.training.runner.DevRunner`.
 
-    Uses the runner's ``env_steps``, ``curriculum``, ``episodes``, ``learned``,
-    ``run_metrics``, ``is_main``, ``logger``, ``run_dir`` and ``headline_metric``; sets
-    ``last_row``.
+class MetricsLog:
+    """What each iteration records: a metrics.jsonl row (steps, stage, speed, the last
+    :data:`EPISODES_AVERAGED` episodes' rewards and metrics, losses, the behaviour's run
+    metrics, learner health, learned rewards), the TensorBoard scalars rsl-rl's logger does
+    not write, and the progress bar.
+
+    Args:
+        run_dir: Where metrics.jsonl is (appended to).
+        curriculum: The behaviour's curriculum (the stage each row names).
+        learned: The run's learned rewards (their figures join each row).
+        run_metrics: The behaviour's run metrics (None: it has none), fed every finished
+            episode's record and logged as ``metrics/<name>``.
+        headline_metric: The evaluator key shown on the progress bar.
+        is_main: Whether this rank writes (the others keep only :attr:`last_row`).
     """
 
-    # What the host runner provides (DevRunner sets them), declared for the type checker:
-    # annotations only, no values.
-    env_steps: int
-    curriculum: Curriculum
-    episodes: deque[dict[str, float]]
-    learned: LearnedRewards
-    run_metrics: RunMetrics | None
-    is_main: bool
-    logger: Any  # rsl-rl's Logger (its writer: TensorBoard, W&B... or None)
-    run_dir: Path
-    headline_metric: str
+    def __init__(
+        self,
+        run_dir: Path,
+        curriculum: Curriculum,
+        learned: LearnedRewards,
+        run_metrics: RunMetrics | None,
+        headline_metric: str = "",
+        is_main: bool = True,
+    ) -> None:
+        self.run_dir = Path(run_dir)
+        self.curriculum = curriculum
+        self.learned = learned
+        self.run_metrics = run_metrics
+        self.headline_metric = headline_metric
+        self.is_main = is_main
+        self.episodes: deque[dict[str, float]] = deque(maxlen=EPISODES_AVERAGED)
+        """The last finished episodes' figures (``reward/<term>``, ``metrics/<name>``...)."""
+        self.last_row: dict[str, Any] = {}
+        """The last row recorded."""
 
-    def _record(
+    def add_episode_records(
+        self,
+        finished: list[dict[str, Any]],
+        all_ranks: Callable[[Any], list[Any]] | None = None,
+    ) -> None:
+        """Take the episode records out of ``finished`` (so only numbers are averaged) and give
+        them to the run metrics: every rank's in rank order when ``all_ranks`` (a collective)
+        is given."""
+        records = [ep.pop(EPISODE_RECORD) for ep in finished if EPISODE_RECORD in ep]
+        if self.run_metrics is None:
+            return
+        if all_ranks is not None:
+            records = [r for rank in all_ranks(records) for r in rank]
+        self.run_metrics.add(records)
+
+    def record(
         self,
         it: int,
-        num_finished: int,
+        env_steps: int,
+        finished: list[dict[str, float]],
         mean_step_reward: float,
         losses: dict,
         rate: float,
         times: dict[str, float],
         bar: tqdm,
+        writer: SummaryWriter | None,
         health: dict[str, float] | None = None,
-    ) -> None:
-        """Append one line to metrics.jsonl and refresh the progress bar (rank 0).
+    ) -> dict[str, Any]:
+        """Add the iteration's finished episodes, append one line to metrics.jsonl, write the
+        extra TensorBoard scalars and refresh the progress bar (rank 0); return the row.
 
-        ``times`` holds the iteration's ``collect_s`` (rollout) and ``update_s`` (PPO) seconds;
-        ``health`` the learner's figures (:mod:`devlearn.training.health`), also shown on the
-        progress bar.
+        Args:
+            it: The iteration's index (from 0).
+            env_steps: Steps done after it (all envs and ranks).
+            finished: Its finished episodes' figures (records taken out).
+            mean_step_reward: Its mean reward per step.
+            losses: PPO's losses.
+            rate: Steps per second.
+            times: Its ``collect_s`` (rollout) and ``update_s`` (PPO) seconds and
+                ``update_threads``.
+            bar: The progress bar.
+            writer: rsl-rl's writer (TensorBoard, W&B...; None: none).
+            health: The learner's figures (:mod:`devlearn.training.health`), also shown on the
+                progress bar.
         """
+        self.episodes.extend(finished)
         row: dict[str, Any] = {
-            "step": self.env_steps,
+            "step": env_steps,
             "iteration": it,
             "stage": self.curriculum.stage.name,
             "steps_per_s": rate,
             **times,
-            "episodes": num_finished,
+            "episodes": len(finished),
             "mean_step_reward": mean_step_reward,
             "mean_reward": None,
         }
@@ -84,15 +134,27 @@ class RunnerMetrics:
         row.update(self.learned.last)
         self.last_row = row
         if not self.is_main:
-            return
-        self.learned.write(self.logger.writer, it)
-        if self.logger.writer is not None:
+            return row
+        self.learned.write(writer, it)
+        if writer is not None:
             for key, value in (health or {}).items():
-                self.logger.writer.add_scalar(key if "/" in key else f"health/{key}", value, it)
+                writer.add_scalar(key if "/" in key else f"health/{key}", value, it)
             for key, value in run_metrics.items():
-                self.logger.writer.add_scalar(key, value, it)
+                writer.add_scalar(key, value, it)
         with open(self.run_dir / "metrics.jsonl", "a") as f:
             f.write(json.dumps(row) + "\n")
+        self._show(row, rate, health, bar, env_steps)
+        return row
+
+    def _show(
+        self,
+        row: dict[str, Any],
+        rate: float,
+        health: dict[str, float] | None,
+        bar: tqdm,
+        env_steps: int,
+    ) -> None:
+        """The progress bar: steps done, and speed, stage, health and reward beside it."""
         postfix = {"steps/s": f"{rate:.0f}", "stage": row["stage"]}
         if health:
             postfix["std"] = f"{health['health/std_mean']:.2f}"
@@ -104,11 +166,11 @@ class RunnerMetrics:
         if headline is not None:
             postfix[self.headline_metric] = f"{headline:.3g}"
         bar.set_postfix(postfix, refresh=False)
-        total = getattr(bar, "total", None) or self.env_steps
-        if self.env_steps >= total:  # the last iteration: stop at the total; close() draws it once
+        total = getattr(bar, "total", None) or env_steps
+        if env_steps >= total:  # the last iteration: stop at the total; close() draws it once
             bar.n = total
         else:
-            bar.update(self.env_steps - bar.n)
+            bar.update(env_steps - bar.n)
 
 
 def purge_tensorboard_from(writer: SummaryWriter | None, step: int) -> None:

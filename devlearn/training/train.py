@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import errno
-import json
 import os
 import time
 from collections.abc import Callable
@@ -14,15 +13,15 @@ from typing import TYPE_CHECKING, Any
 import torch
 
 from devlearn.api.errors import UsageError
-from devlearn.config.checks import check_config, check_memory, check_out_dir, holds_run
-from devlearn.config.run_config import RunConfig, apply_preset, from_dict, to_dict, to_rsl_rl
+from devlearn.config.checks import check_memory, check_out_dir, holds_run
+from devlearn.config.run_config import RunConfig, to_rsl_rl
 from devlearn.env import DevVecEnv
 from devlearn.training.checkpoint import (
     LATEST,
     RESUME_KEYS,
+    Checkpoint,
     check_behavior,
     check_fits,
-    load_checkpoint,
     periodic_checkpoints,
     remove_temporaries,
     resume_checkpoint,
@@ -36,14 +35,14 @@ from devlearn.training.process import (
     resolve_workers,
     seed_everything,
 )
+from devlearn.training.resolve import CONFIG_FILE, RunRequest, resolve_config, write_config_file
+from devlearn.training.resolve import load_run_config as load_run_config  # plugins' tests use it
 from devlearn.training.run_folder import copy_metrics, start_up
 from devlearn.training.runner import DevRunner
 
 if TYPE_CHECKING:
     from devlearn.env.behavior_env import InfantFactory
     from devlearn.plugins import PluginRegistry
-
-CONFIG_FILE = "config.json"
 
 
 @dataclass
@@ -65,42 +64,6 @@ class TrainResult:
 def default_run_dir(behavior_name: str) -> Path:
     """``runs/<behavior>-<YYYYmmdd-HHMMSS>``."""
     return Path("runs") / f"{behavior_name}-{time.strftime('%Y%m%d-%H%M%S')}"
-
-
-def load_run_config(run_dir: str | Path, registry: PluginRegistry) -> RunConfig:
-    """Read a run directory's ``config.json`` (UsageError if missing or unreadable)."""
-    path = Path(run_dir) / CONFIG_FILE
-    try:
-        data = json.loads(path.read_text())
-    except (OSError, ValueError) as exc:
-        raise UsageError(f"cannot read {path}: {exc}") from None
-    if not isinstance(data, dict):
-        raise UsageError(
-            f"{path} is not a run config: it holds a JSON {type(data).__name__}, not an object"
-        )
-    return from_dict(data, registry.behavior(data.get("behavior_name", "")))
-
-
-def config_from_checkpoint(
-    path: str | Path, registry: PluginRegistry, behavior_name: str, preset: str | None = None
-) -> RunConfig:
-    """The config a run started with ``devlearn run --from CHECKPOINT`` begins with: the
-    checkpoint's own (``preset``, if given, applied over it), to be changed by the command
-    line; ``out_dir`` is cleared and ``start_from`` names the checkpoint.
-
-    Raises:
-        UsageError: The checkpoint cannot resume training, was trained for another
-            behaviour, or the preset is unknown.
-    """
-    state = load_checkpoint(path, RESUME_KEYS)
-    check_behavior(state, path, behavior_name)
-    behavior_cls = registry.behavior(behavior_name)
-    cfg = from_dict(state["config"], behavior_cls)
-    if preset:
-        apply_preset(cfg, behavior_cls, preset)
-    cfg.out_dir = ""
-    cfg.start_from = str(path)
-    return cfg
 
 
 def check_resumable(cfg: RunConfig, checkpoint: dict[str, Any], path: str | Path) -> None:
@@ -128,7 +91,9 @@ def train(
     """Train ``cfg.behavior_name`` with PPO; return where and how far it got.
 
     Args:
-        cfg: The run config (with ``resume``: None reads the run's config.json).
+        cfg: The run config, checked: from
+            :func:`~devlearn.training.resolve.resolve_config` (with ``resume``: None reads
+            the run's config.json).
         registry: Plugin registry (``.behavior(name)``).
         resume: A run directory to continue from its newest complete checkpoint: step counter,
             curriculum stage, reward-term state, networks and optimiser are restored.
@@ -137,7 +102,8 @@ def train(
             memory) and rng states are carried over, the curriculum is ``cfg``'s own (its
             stage follows from the step count), and the source run's metrics.jsonl rows up
             to the checkpoint's step are copied, so curves continue. ``cfg`` is usually
-            :func:`config_from_checkpoint` changed by the command line.
+            the checkpoint's own, changed by the command line
+            (:func:`~devlearn.training.resolve.resolve_config` with ``start_from``).
         infant_factory: Infant builder for the envs (tests); default the real infant.
         progress: Show a progress bar.
         force: Start a new run in ``cfg.out_dir`` even if it holds one (its contents are
@@ -160,14 +126,15 @@ def train(
     if resume is not None:
         run_dir = Path(resume)
         ckpt_path, checkpoint = resume_checkpoint(run_dir)
-        cfg = cfg or load_run_config(run_dir, registry)
+        cfg = cfg or resolve_config(RunRequest(resume=str(run_dir)), registry)
         check_resumable(cfg, checkpoint, ckpt_path)
     elif cfg is None:
         raise UsageError("train() needs a config or a run directory to resume")
     else:
         run_dir = Path(cfg.out_dir) if cfg.out_dir else default_run_dir(cfg.behavior_name)
         if start_from is not None:
-            checkpoint, ckpt_path = load_checkpoint(start_from, RESUME_KEYS), start_from
+            opened = Checkpoint.open(start_from, registry, cfg.behavior_name, RESUME_KEYS)
+            checkpoint, ckpt_path = opened.state, start_from
             check_resumable(cfg, checkpoint, start_from)
             cfg.start_from = str(start_from)
     rank = int(os.environ.get("RANK", "0"))
@@ -182,7 +149,6 @@ def train(
             "or replace it with --force (deletes what the folder holds)"
         )
     cfg.out_dir = str(run_dir)
-    check_config(cfg)
     check_out_dir(run_dir)
     world_size = int(os.environ.get("WORLD_SIZE", "1"))
     device = resolve_device(cfg.device, int(os.environ.get("LOCAL_RANK", "0")), world_size)
@@ -266,7 +232,7 @@ def _build(
         behavior.prepare(run_dir)
     cfg.behavior = behavior.config
     if rank == 0:
-        (run_dir / CONFIG_FILE).write_text(json.dumps(to_dict(cfg), indent=2) + "\n")
+        write_config_file(cfg, run_dir / CONFIG_FILE)
 
     # Environments (seeded seed + rank * num_envs + index) and the runner.
     env = DevVecEnv(

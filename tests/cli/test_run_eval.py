@@ -131,16 +131,17 @@ def test_sigterm_saves_a_checkpoint_and_restores_handlers(cli, tmp_path, monkeyp
     import signal
 
     from devlearn.training.checkpoint import load_checkpoint
-    from devlearn.training.runner import DevRunner
+    from devlearn.training.runner_metrics import MetricsLog
 
-    record = DevRunner._record
+    record = MetricsLog.record
 
-    def record_then_terminate(self, *args, **kwargs):
-        record(self, *args, **kwargs)
-        if self.env_steps == 32:  # the scheduler's SIGTERM, mid-run
+    def record_then_terminate(self, it, env_steps, *args, **kwargs):
+        row = record(self, it, env_steps, *args, **kwargs)
+        if env_steps == 32:  # the scheduler's SIGTERM, mid-run
             os.kill(os.getpid(), signal.SIGTERM)
+        return row
 
-    monkeypatch.setattr(DevRunner, "_record", record_then_terminate)
+    monkeypatch.setattr(MetricsLog, "record", record_then_terminate)
     before = signal.getsignal(signal.SIGTERM)
     out = tmp_path / "run"
     small = ["--envs", "2", "--seed", "1", "--set", "save_interval=1000"]

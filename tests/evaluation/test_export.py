@@ -12,10 +12,10 @@ from rsl_rl.utils import resolve_class, resolve_obs_groups
 from devlearn.cli import main
 from devlearn.config.run_config import default_config, from_dict, to_dict, to_rsl_rl
 from devlearn.env import BehaviorEnv
-from devlearn.evaluation.evaluate import _batch
 from devlearn.evaluation.export import DeterministicPolicy, export_policy, load_policy
 from devlearn.plugins import PluginRegistry
 from devlearn.training.checkpoint import FORMAT, load_checkpoint, save_atomic
+from devlearn.training.checkpoint import observation_batch as _batch
 from devlearn.training.process import quiet
 
 ROOT = Path(__file__).resolve().parents[2]

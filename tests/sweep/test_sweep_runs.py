@@ -104,7 +104,8 @@ def test_two_by_two_sweep_trains_and_evaluates_four_runs(local_sweep):
         assert all(a["returncode"] == 0 and a["wall_s"] > 0 for a in record["attempts"])
         assert record["commit"]["commit"] and len(record["commit"]["commit"]) == 40
         assert record["wall_s"] == pytest.approx(record["train_wall_s"] + record["eval_wall_s"])
-        assert "--set" in record["attempts"][0]["argv"]
+        argv = record["attempts"][0]["argv"]  # started from the resolved config file
+        assert argv[argv.index("--config") + 1] == str(out / "runs" / name / "run_config.json")
     # two at a time, each pinned to a core of its own
     cores = {tuple(found[n]["attempts"][0]["cores"] or ()) for n in NAMES[:2]}
     if len(os.sched_getaffinity(0)) >= 2:
@@ -116,6 +117,28 @@ def test_two_by_two_sweep_trains_and_evaluates_four_runs(local_sweep):
     sweep = json.loads((out / "sweep.json").read_text())
     assert sweep["what"]["behavior"] == "tiny" and sweep["seeds"] == [1, 2]
     assert sweep["grid"] == {"behavior.target": ["0.1", "0.15"]}
+
+
+@pytest.mark.slow
+def test_a_sweep_run_has_the_config_and_numbers_of_the_same_direct_run(local_sweep, tmp_path):
+    """Each run starts from the run_config.json the sweep resolved; `devlearn run` with the
+    same options resolves the same config (all but the folder) and trains the same numbers."""
+    out, code, stdout, stderr = local_sweep
+    run_dir = out / "runs" / NAMES[1]
+    written = json.loads((run_dir / "run_config.json").read_text())
+    direct = tmp_path / "direct"
+    argv = ["run", "tiny", "--out", str(direct), "--steps", "64", "--envs", "2", "--seed", "1",
+            "--workers", str(written["workers"]), "--set", "save_interval=1",
+            "--set", "behavior.target=0.15", "--set", "torch_threads=1"]  # fmt: skip
+    code, _, err = run_cli(argv)
+    assert code == 0, err
+    ours = json.loads((run_dir / "config.json").read_text())
+    theirs = json.loads((direct / "config.json").read_text())
+    assert ours.pop("out_dir") == str(run_dir) and written.pop("out_dir") == str(run_dir)
+    theirs.pop("out_dir")
+    assert ours == theirs
+    assert written == {**theirs, "workers": written["workers"]}
+    assert metrics(run_dir) == metrics(direct)
 
 
 def _cells(line: str) -> list[str]:

@@ -91,10 +91,15 @@ def test_plan_builds_each_runs_commands(tmp_path):
     runs = plan_sweep(build_spec("tiny", options, None), tiny_devlearn.registry())
     assert [r.job.name for r in runs] == ["target=0.3,seed=4", "target=0.6,seed=4"]
     job = runs[1].job
-    assert job.train_args == [
-        "--seed", "4", "--workers", "0", "--steps", "64", "--envs", "2",
-        "--set", "save_interval=1", "--set", "behavior.target=0.6",
-        "--set", "torch_threads=1",  # fixed: the same numbers under either executor
+    config = job.config  # resolved and checked, as `devlearn run` resolves one
+    assert (config["seed"], config["workers"], config["total_steps"]) == (4, 0, 64)
+    assert (config["num_envs"], config["save_interval"]) == (2, 1)
+    assert config["behavior"]["target"] == 0.6
+    assert config["torch_threads"] == 1  # fixed: the same numbers under either executor
+    assert config["out_dir"] == str(job.run_dir)
+    assert job.config_path == job.run_dir / "run_config.json"
+    assert job.settings == [
+        "seed=4", "save_interval=1", "behavior.target=0.6", "torch_threads=1",
     ]  # fmt: skip
     assert job.resume_args == ["--workers", "0", "--steps", "64"]
     assert job.eval_args == ["--episodes", "10", "--seed", "0", "--json", "--video", "x.mp4"]
@@ -191,7 +196,10 @@ def test_dry_run_lists_the_runs(cli, capsys, tmp_path):
     assert [line.split(":")[0] for line in printed[:4]] == [
         "target=0.3,seed=1", "target=0.6,seed=1", "target=0.3,seed=2", "target=0.6,seed=2",
     ]  # fmt: skip
-    assert "--set behavior.target=0.6" in printed[1] and "--seed 1" in printed[1]
+    assert "behavior.target=0.6" in printed[1] and "seed=1" in printed[1]
+    assert "--config" in printed[1] and printed[1].split("--config ")[1].split()[0].endswith(
+        "target=0.6,seed=1/run_config.json"
+    )
     assert printed[-1].startswith("4 runs in") and not out.exists()
 
 
@@ -206,11 +214,11 @@ def test_preset_reaches_every_run(capsys, tmp_path):
     spec = build_spec("self_touch", options, None)
     assert spec.what()["train"]["preset"] == "paper"
     runs = plan_sweep(spec, PluginRegistry(disabled=()), [])
-    args = runs[0].job.train_args
-    assert args[args.index("--preset") + 1] == "paper"
-    assert args[args.index("--steps") + 1] == "1000"  # the option wins over the preset's 8M
+    config = runs[0].job.config
+    assert config["preset"] == "paper" and "preset=paper" in runs[0].job.settings
+    assert config["total_steps"] == 1000  # the option wins over the preset's 8M
     assert main(["sweep", "self_touch", "--out", str(out), "--preset", "paper", "--dry-run"]) == 0
-    assert "--preset paper" in capsys.readouterr().out
+    assert "preset=paper" in capsys.readouterr().out
     assert main(["sweep", "self_touch", "--out", str(out), "--preset", "nope", "--dry-run"]) == 2
     assert "paper" in capsys.readouterr().err  # the valid presets are named
     without = build_spec("self_touch", {"out": str(out)}, None)
@@ -227,7 +235,7 @@ def test_grid_varies_a_learned_reward_option_and_checks_it_up_front(tmp_path):
                "grid": ["learned.rnd.weight=0,0.05"], "overrides": ["curiosity=rnd"]}  # fmt: skip
     runs = plan_sweep(build_spec("self_touch", options, None), registry, [])
     assert len(runs) == 2
-    sets = [a for r in runs for a in r.job.train_args if a.startswith("learned.")]
+    sets = [a for r in runs for a in r.job.settings if a.startswith("learned.")]
     assert sets == ["learned.rnd.weight=0", "learned.rnd.weight=0.05"]
     typo = {**options, "grid": ["learned.rnd.wieght=0,0.05"]}
     with pytest.raises(UsageError, match="wieght"):

@@ -12,9 +12,9 @@ from rsl_rl.utils import resolve_class, resolve_obs_groups
 
 from devlearn.config.run_config import default_config, from_dict, to_rsl_rl
 from devlearn.env import BehaviorEnv
-from devlearn.evaluation.evaluate import _batch, load_actor
 from devlearn.plugins import PluginRegistry
-from devlearn.training.checkpoint import load_checkpoint
+from devlearn.training.checkpoint import load_actor, load_checkpoint
+from devlearn.training.checkpoint import observation_batch as _batch
 from devlearn.training.process import quiet
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -316,9 +316,9 @@ def test_an_interrupt_while_an_iteration_closes_saves_what_metrics_record(tmp_pa
     import os
     import signal
 
-    from devlearn.training.runner import DevRunner
+    from devlearn.training.runner_metrics import MetricsLog
 
-    real = DevRunner._record
+    real = MetricsLog.record
     calls = []
 
     def interrupted_record(self, *args, **kwargs):
@@ -327,7 +327,7 @@ def test_an_interrupt_while_an_iteration_closes_saves_what_metrics_record(tmp_pa
             os.kill(os.getpid(), signal.SIGINT)
         return real(self, *args, **kwargs)
 
-    monkeypatch.setattr(DevRunner, "_record", interrupted_record)
+    monkeypatch.setattr(MetricsLog, "record", interrupted_record)
     out = tmp_path / "r"
     # Ctrl-C as `devlearn run` sets it up, whatever this process inherited (a shell's `cmd &`
     # starts pytest with SIGINT ignored, and the kill below would then do nothing).

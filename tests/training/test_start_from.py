@@ -14,7 +14,12 @@ from devlearn.api.errors import UsageError
 from devlearn.config.values import apply_overrides
 from devlearn.training import train
 from devlearn.training.checkpoint import load_checkpoint
-from devlearn.training.train import config_from_checkpoint, load_run_config
+from devlearn.training.resolve import RunRequest, load_run_config, resolve_config
+
+
+def config_from_checkpoint(path: Path, behavior: str):
+    """The config ``devlearn run BEHAVIOR --from PATH`` starts from, before its options."""
+    return resolve_config(RunRequest(behavior, start_from=str(path)), tiny_run.registry())
 
 
 def rows(run_dir: Path) -> list[dict]:
@@ -48,7 +53,7 @@ def test_a_run_from_a_checkpoint_continues_it_in_a_new_folder(tmp_path):
     run(cfg, resume=resumed)
     before = sorted(p.name for p in source.iterdir())
 
-    cfg = config_from_checkpoint(source / "checkpoint_64.pt", tiny_run.registry(), "tiny")
+    cfg = config_from_checkpoint(source / "checkpoint_64.pt", "tiny")
     cfg.out_dir, cfg.total_steps = str(tmp_path / "b"), 96
     result = run(cfg, start_from=source / "checkpoint_64.pt")
     assert (result.env_steps, result.iterations) == (96, 3)
@@ -69,7 +74,7 @@ def test_a_run_from_a_checkpoint_takes_a_changed_behaviour_config(tmp_path):
     source = tmp_path / "a"
     run(tiny_run.config(source, 96, "behavior.stage_steps=40"))
     assert [r["stage"] for r in rows(source)] == ["fixed", "fixed", "random"]
-    cfg = config_from_checkpoint(source / "checkpoint_64.pt", tiny_run.registry(), "tiny")
+    cfg = config_from_checkpoint(source / "checkpoint_64.pt", "tiny")
     apply_overrides(cfg, ["behavior.stage_steps=1000"])
     cfg.out_dir, cfg.total_steps = str(tmp_path / "b"), 96
     run(cfg, start_from=source / "checkpoint_64.pt")
@@ -80,8 +85,8 @@ def test_from_refuses_what_cannot_continue(tmp_path):
     source = tmp_path / "a"
     run(tiny_run.config(source, 32))
     with pytest.raises(UsageError, match="trained for 'tiny', not 'other'"):
-        config_from_checkpoint(source / "checkpoint_latest.pt", tiny_run.registry(), "other")
-    cfg = config_from_checkpoint(source / "checkpoint_latest.pt", tiny_run.registry(), "tiny")
+        config_from_checkpoint(source / "checkpoint_latest.pt", "other")
+    cfg = config_from_checkpoint(source / "checkpoint_latest.pt", "tiny")
     cfg.out_dir, cfg.num_envs = str(tmp_path / "b"), 2
     with pytest.raises(UsageError, match="resume with --envs 4"):
         run(cfg, start_from=source / "checkpoint_latest.pt")
