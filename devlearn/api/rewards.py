@@ -347,3 +347,35 @@ def build_reward_terms(
     return [
         reward_term_cfg(cfg).build(name, **shared.get(name, {})) for name, cfg in rewards.items()
     ]
+
+
+def upgrade_saved_rewards(saved: Mapping[str, Any], config_class: type) -> dict[str, Any]:
+    """A saved behaviour config (as a config file holds it) in today's form: fields that the
+    config class has since moved into its ``rewards`` table moved there.
+
+    The class names them in ``LEGACY_REWARD_KEYS`` (old field -> ``TERM.weight`` or
+    ``TERM.params.NAME``, e.g. self-touch's ``weight_balance`` -> ``balance.weight``). A saved
+    config with such fields and no ``rewards`` gets the class's default terms with those
+    weights and params set from the old fields, so a run saved before the move loads and acts
+    as trained. Anything else is returned unchanged.
+    """
+    moves: Mapping[str, str] = getattr(config_class, "LEGACY_REWARD_KEYS", {})
+    old = {key: saved[key] for key in moves if key in saved}
+    upgraded = {key: value for key, value in saved.items() if key not in old}
+    if not old:
+        return upgraded
+    if "rewards" not in upgraded:
+        upgraded["rewards"] = {
+            name: {"cls": term.cls, "weight": term.weight, "params": dict(term.params)}
+            for name, term in config_class().rewards.items()
+        }
+    for key, value in old.items():
+        term, _, where = moves[key].partition(".")
+        entry = upgraded["rewards"].get(term)
+        if entry is None:  # a term the saved table leaves out: nothing to set
+            continue
+        if where == "weight":
+            entry["weight"] = value
+        else:
+            entry["params"][where.removeprefix("params.")] = value
+    return upgraded
