@@ -24,8 +24,10 @@ if TYPE_CHECKING:  # the same names, for type checkers (which do not run __getat
     from devlearn.api.network_spec import NetworkSpec
     from devlearn.api.rewards import (
         BatchContext,
+        BatchedFromPerEnv,
         BatchedIntrinsicReward,
         IntrinsicReward,
+        RewardTermCfg,
         StepContext,
     )
     from devlearn.api.sensors import MLPEncoder, SensorEncoder
@@ -44,6 +46,7 @@ os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 # torch; a plugin that imports only Behavior, IntrinsicReward, Curriculum... stays light too.
 _PUBLIC = {
     "BatchContext": "devlearn.api.rewards",
+    "BatchedFromPerEnv": "devlearn.api.rewards",
     "BatchedIntrinsicReward": "devlearn.api.rewards",
     "Behavior": "devlearn.api.behavior",
     "Curriculum": "devlearn.api.curriculum",
@@ -54,6 +57,7 @@ _PUBLIC = {
     "LearnedRewardConfig": "devlearn.api.learned",
     "MLPEncoder": "devlearn.api.sensors",
     "NetworkSpec": "devlearn.api.network_spec",
+    "RewardTermCfg": "devlearn.api.rewards",
     "RunMetrics": "devlearn.api.behavior",
     "SensorEncoder": "devlearn.api.sensors",
     "Stage": "devlearn.api.curriculum",
@@ -77,6 +81,7 @@ __version__ = "0.1.0"
 
 __all__ = [
     "BatchContext",
+    "BatchedFromPerEnv",
     "BatchedIntrinsicReward",
     "Behavior",
     "Curriculum",
@@ -87,6 +92,7 @@ __all__ = [
     "LearnedRewardConfig",
     "MLPEncoder",
     "NetworkSpec",
+    "RewardTermCfg",
     "RunMetrics",
     "SensorEncoder",
     "Stage",

@@ -10,7 +10,12 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 
 from devlearn.api.curriculum import Curriculum, Stage
-from devlearn.api.rewards import BatchedIntrinsicReward, IntrinsicReward, StepContext
+from devlearn.api.rewards import (
+    BatchedIntrinsicReward,
+    IntrinsicReward,
+    StepContext,
+    build_reward_terms,
+)
 
 if TYPE_CHECKING:
     from devlearn.api.network_spec import NetworkSpec
@@ -204,14 +209,30 @@ class Behavior(ABC):
         """Return how to build the policy and value networks."""
 
     # --- rewards, actions, curriculum ----------------------------------------------------
-    @abstractmethod
     def reward_terms(self) -> Sequence[IntrinsicReward | BatchedIntrinsicReward]:
         """Return fresh reward-term instances for one environment.
 
-        A :class:`~devlearn.api.rewards.BatchedIntrinsicReward` in the list is computed once per
-        worker over all its environments (one value per environment); plain
-        :class:`IntrinsicReward` terms run in each environment. Both kinds may be mixed.
+        Default: the terms the config declares in its ``rewards`` field (term name ->
+        :class:`~devlearn.api.rewards.RewardTermCfg`: class, weight, params), built by
+        :func:`~devlearn.api.rewards.build_reward_terms`, so that every term can be switched off
+        or swept with ``--set behavior.rewards.NAME.weight=W``. Override it to add options of
+        the behaviour's own to some terms (self_touch's ``lifetime_memory``) or to leave terms
+        out. A :class:`~devlearn.api.rewards.BatchedIntrinsicReward` is computed once per
+        worker over all its environments; a plain :class:`IntrinsicReward` runs in each
+        environment (the core wraps it in :class:`~devlearn.api.rewards.BatchedFromPerEnv`).
+        Both kinds may be mixed.
+
+        Raises:
+            TypeError: The config has no ``rewards`` field and the behaviour does not override
+                this method.
         """
+        rewards = getattr(self.config, "rewards", None)
+        if rewards is None:
+            raise TypeError(
+                f"{type(self).__name__}: declare the reward terms in the config's `rewards` "
+                "field (name -> RewardTermCfg(class, weight, params)) or override reward_terms()"
+            )
+        return build_reward_terms(rewards)
 
     def curriculum(self) -> Curriculum:
         """Return the training curriculum (default: one stage, fixed initial pose)."""

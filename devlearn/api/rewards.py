@@ -1,8 +1,14 @@
-"""The IntrinsicReward interface: one small, documented, stateful reward term."""
+"""Reward terms: one small, documented, stateful term, in its per-environment form
+(:class:`IntrinsicReward`, easy to write) or its batched form (:class:`BatchedIntrinsicReward`,
+the one contract the core knows; :class:`BatchedFromPerEnv` wraps the first into it), and how a
+behaviour's config declares its terms (:class:`RewardTermCfg`: class, weight, params)."""
 
 from __future__ import annotations
 
+import copy
+import importlib
 from abc import ABC, abstractmethod
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -194,3 +200,182 @@ class BatchedIntrinsicReward(ABC):
 
     def load_run_memory(self, memory: dict[str, np.ndarray]) -> None:
         """Replace the run-wide memory by ``memory`` (a :meth:`merge_run_memory` result)."""
+
+
+class BatchedFromPerEnv(BatchedIntrinsicReward):
+    """Per-environment terms as one batched term: how the core runs an :class:`IntrinsicReward`.
+
+    The core knows only :class:`BatchedIntrinsicReward`; a behaviour may still return plain
+    :class:`IntrinsicReward` terms, each wrapped once in this adapter. It holds one instance of
+    the term per environment (the one it was given for environment 0, fresh copies of it for
+    the others, made by :meth:`bind`), calls each on its own environment's context, and keeps
+    the per-environment term's reset and state, so values, logs and checkpoints are those of
+    the term run in each environment.
+
+    Args:
+        term: A fresh (never called) per-environment term; its name and weight are this one's.
+    """
+
+    def __init__(self, term: IntrinsicReward) -> None:
+        super().__init__(term.weight)
+        self.name = term.name
+        self.terms = [term]
+        """One instance per environment, in batch order."""
+        self._fresh = copy.deepcopy(term)
+        self.failed_env: int | None = None
+        """Batch position of the environment whose term raised during the last call, or None."""
+
+    def bind(self, num_envs: int) -> None:
+        """Keep the first ``num_envs`` instances, adding fresh copies of the term as needed."""
+        super().bind(num_envs)
+        missing = max(0, self.num_envs - len(self.terms))
+        self.terms = self.terms[: self.num_envs] + [
+            copy.deepcopy(self._fresh) for _ in range(missing)
+        ]
+
+    def __call__(self, batch: BatchContext) -> np.ndarray:
+        """Every environment's term on its own context: (num_envs,) float64."""
+        values = np.empty(len(batch))
+        self.failed_env = None
+        for i, (term, ctx) in enumerate(zip(self.terms, batch.contexts)):
+            try:
+                values[i] = float(term(ctx))
+            except Exception:
+                self.failed_env = i
+                raise
+        return values
+
+    def reset(self, env: int) -> None:
+        self.terms[env].reset()
+
+    def state_dict(self, env: int) -> dict[str, Any]:
+        return self.terms[env].state_dict()
+
+    def load_state_dict(self, env: int, state: dict[str, Any]) -> None:
+        self.terms[env].load_state_dict(state)
+
+
+def as_batched(term: IntrinsicReward | BatchedIntrinsicReward) -> BatchedIntrinsicReward:
+    """``term`` in the batched form: itself, or wrapped in :class:`BatchedFromPerEnv`."""
+    if isinstance(term, BatchedIntrinsicReward):
+        return term
+    return BatchedFromPerEnv(term)
+
+
+@dataclass
+class RewardTermCfg:
+    """One reward term of a behaviour's config: its class, weight and parameters (mjlab's
+    ``RewardTermCfg``). A behaviour's config declares its terms as a mapping term name ->
+    ``RewardTermCfg`` in a field named ``rewards``, so that any term can be switched off or
+    swept from the command line (``--set behavior.rewards.balance.weight=0``,
+    ``--set behavior.rewards.balance.params.reward=5``) and
+    :meth:`devlearn.Behavior.reward_terms` builds them (:func:`build_reward_terms`).
+
+    Attributes:
+        cls: The term's class (an :class:`IntrinsicReward` or :class:`BatchedIntrinsicReward`
+            subclass), or its import path ``"package.module:Class"`` (what a saved config
+            holds; a class given here is stored as its path).
+        weight: The term's weight: the reward is the sum of ``weight * term``; 0 keeps the term
+            (logged, paying nothing) unless the behaviour leaves zero-weight terms out.
+        params: Keyword arguments of the class besides ``weight`` (its own constants).
+    """
+
+    cls: Any
+    weight: float = 1.0
+    params: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if isinstance(self.cls, type):
+            self.cls = f"{self.cls.__module__}:{self.cls.__qualname__}"
+        self.weight = float(self.weight)
+        self.params = dict(self.params)
+
+    def term_class(self) -> type[IntrinsicReward] | type[BatchedIntrinsicReward]:
+        """The class :attr:`cls` names (imported).
+
+        Raises:
+            ValueError: The path does not name a reward-term class.
+        """
+        module, _, name = str(self.cls).partition(":")
+        try:
+            found: Any = importlib.import_module(module)
+            for part in name.split("."):
+                found = getattr(found, part)
+        except (ImportError, AttributeError, ValueError) as err:
+            raise ValueError(f"reward term class '{self.cls}' not found ({err})") from None
+        if not (
+            isinstance(found, type) and issubclass(found, IntrinsicReward | BatchedIntrinsicReward)
+        ):
+            raise ValueError(f"'{self.cls}' is not an IntrinsicReward or BatchedIntrinsicReward")
+        return found
+
+    def build(self, name: str, **shared: Any) -> IntrinsicReward | BatchedIntrinsicReward:
+        """A fresh instance named ``name``: ``cls(weight=weight, **params, **shared)``.
+
+        Args:
+            name: The term's name in logs and config (``reward/<name>``).
+            shared: Keyword arguments the behaviour adds from its own fields (options that
+                several terms read, e.g. self-touch's ``lifetime_memory``).
+        """
+        term = self.term_class()(weight=self.weight, **self.params, **shared)
+        term.name = name
+        return term
+
+
+def reward_term_cfg(value: RewardTermCfg | Mapping[str, Any]) -> RewardTermCfg:
+    """A :class:`RewardTermCfg` from itself or from its saved form (a table with ``cls``,
+    ``weight`` and ``params``, as a config file holds it)."""
+    if isinstance(value, RewardTermCfg):
+        return value
+    unknown = set(value) - {"cls", "weight", "params"}
+    if unknown or "cls" not in value:
+        raise ValueError(f"a reward term is a table of cls, weight and params; got {sorted(value)}")
+    return RewardTermCfg(value["cls"], value.get("weight", 1.0), dict(value.get("params", {})))
+
+
+def build_reward_terms(
+    rewards: Mapping[str, RewardTermCfg | Mapping[str, Any]],
+    shared: Mapping[str, Mapping[str, Any]] | None = None,
+) -> list[IntrinsicReward | BatchedIntrinsicReward]:
+    """Fresh instances of a config's reward terms, in its order.
+
+    Args:
+        rewards: Term name -> :class:`RewardTermCfg` (or its saved table).
+        shared: Term name -> keyword arguments the behaviour adds to that term's params.
+    """
+    shared = shared or {}
+    return [
+        reward_term_cfg(cfg).build(name, **shared.get(name, {})) for name, cfg in rewards.items()
+    ]
+
+
+def upgrade_saved_rewards(saved: Mapping[str, Any], config_class: type) -> dict[str, Any]:
+    """A saved behaviour config (as a config file holds it) in today's form: fields that the
+    config class has since moved into its ``rewards`` table moved there.
+
+    The class names them in ``LEGACY_REWARD_KEYS`` (old field -> ``TERM.weight`` or
+    ``TERM.params.NAME``, e.g. self-touch's ``weight_balance`` -> ``balance.weight``). A saved
+    config with such fields and no ``rewards`` gets the class's default terms with those
+    weights and params set from the old fields, so a run saved before the move loads and acts
+    as trained. Anything else is returned unchanged.
+    """
+    moves: Mapping[str, str] = getattr(config_class, "LEGACY_REWARD_KEYS", {})
+    old = {key: saved[key] for key in moves if key in saved}
+    upgraded = {key: value for key, value in saved.items() if key not in old}
+    if not old:
+        return upgraded
+    if "rewards" not in upgraded:
+        upgraded["rewards"] = {
+            name: {"cls": term.cls, "weight": term.weight, "params": dict(term.params)}
+            for name, term in config_class().rewards.items()
+        }
+    for key, value in old.items():
+        term, _, where = moves[key].partition(".")
+        entry = upgraded["rewards"].get(term)
+        if entry is None:  # a term the saved table leaves out: nothing to set
+            continue
+        if where == "weight":
+            entry["weight"] = value
+        else:
+            entry["params"][where.removeprefix("params.")] = value
+    return upgraded

@@ -115,15 +115,12 @@ def env_breakdown(behavior: Behavior, steps: int, seed: int = 0) -> dict[str, fl
 
 
 def reference_env_steps_per_s(behavior: Behavior, steps: int) -> float:
-    """Steps/s of the same environment on the previous code paths, in the same run: the numpy
-    touch routine instead of the compiled one, and per-environment reward terms where the
-    behaviour offers them (``per_env_reward_terms()``, as self_touch does)."""
+    """Steps/s of the same environment on the previous touch path, in the same run: the numpy
+    touch routine instead of the compiled one (reward terms are the behaviour's own; the
+    per-environment twins of self_touch's terms are test oracles since issue #31)."""
     from devlearn.bench.speed import bench_behavior_env
 
-    behavior = copy.deepcopy(behavior)
-    if hasattr(behavior, "per_env_reward_terms"):
-        behavior.reward_terms = behavior.per_env_reward_terms  # type: ignore[method-assign]
-    return bench_behavior_env(behavior, steps, reference_touch=True)
+    return bench_behavior_env(copy.deepcopy(behavior), steps, reference_touch=True)
 
 
 def with_per_env_observations(behavior: Behavior) -> Behavior:

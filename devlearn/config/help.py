@@ -8,7 +8,7 @@ import inspect
 import textwrap
 from typing import TYPE_CHECKING, Any
 
-from devlearn.config.values import field_types, type_name
+from devlearn.config.values import field_types, is_term_table, type_name
 
 if TYPE_CHECKING:
     from devlearn.config.run_config import RunConfig
@@ -64,6 +64,9 @@ def describe_keys(cfg: RunConfig, core: RunConfig | None = None) -> list[dict[st
             if dataclasses.is_dataclass(value):
                 walk(value, before, f"{prefix}{f.name}.")
                 continue
+            if is_term_table(value):  # a behaviour's reward terms: every entry's keys
+                rows.extend(term_rows(value, before, f"{prefix}{f.name}.", base is not None))
+                continue
             row = {
                 "key": prefix + f.name,
                 "type": type_name(hints.get(f.name, f.type)),
@@ -75,4 +78,40 @@ def describe_keys(cfg: RunConfig, core: RunConfig | None = None) -> list[dict[st
             rows.append(row)
 
     walk(cfg, core, "")
+    return rows
+
+
+def term_rows(
+    table: dict[str, Any], before: dict[str, Any] | None, prefix: str, marked: bool
+) -> list[dict[str, Any]]:
+    """The keys of a table of reward terms (``behavior.rewards``): each term's ``cls``,
+    ``weight`` and every ``params`` entry, documented by the term class's first line."""
+    rows = []
+    for name, entry in table.items():
+        try:
+            summary = (entry.term_class().__doc__ or "").strip().splitlines()[0]
+        except (AttributeError, ValueError, IndexError):
+            summary = ""
+        old = (before or {}).get(name)
+        values = {"cls": entry.cls, "weight": entry.weight}
+        values.update({f"params.{k}": v for k, v in entry.params.items()})
+        for key, value in values.items():
+            doc = {
+                "cls": f"class of reward term '{name}': {summary}",
+                "weight": f"weight of reward term '{name}' (0: pays nothing)",
+            }.get(key, f"parameter of reward term '{name}'")
+            row = {
+                "key": f"{prefix}{name}.{key}",
+                "type": type_name(type(value)),
+                "default": _json_ready(value),
+                "doc": doc,
+            }
+            if marked:
+                was = None
+                if old is not None:
+                    was = (
+                        old.params.get(key[7:]) if key.startswith("params.") else getattr(old, key)
+                    )
+                row["set_by"] = "core" if was == value else "behavior"
+            rows.append(row)
     return rows

@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from devlearn.api.errors import UsageError
+from devlearn.api.rewards import upgrade_saved_rewards
 from devlearn.config.values import apply_overrides, convert, field_types
 
 if TYPE_CHECKING:
@@ -329,6 +330,9 @@ def from_dict(data: dict[str, Any], behavior_cls: type[Behavior]) -> RunConfig:
             setattr(getattr(cfg, section), name, value)
     saved = data.get("behavior")
     if isinstance(saved, dict) and cfg.behavior is not None:
+        # reward fields a config saved before issue #31 holds move into ``rewards``
+        saved = upgrade_saved_rewards(saved, type(cfg.behavior))
+        data = {**data, "behavior": saved}
         legacy = getattr(type(cfg.behavior), "LEGACY_DEFAULTS", {})
         _fill(cfg.behavior, {k: v for k, v in legacy.items() if k not in saved}, "behavior.")
     _fill(cfg, data, "")

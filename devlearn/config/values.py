@@ -61,6 +61,10 @@ def convert(value: Any, kind: Any, key: str) -> Any:
             table = json.loads(value) if isinstance(value, str) else value
             if not isinstance(table, dict):
                 raise ValueError("expected a table")
+            entry = args[1] if len(args) == 2 else None
+            if isinstance(entry, type) and dataclasses.is_dataclass(entry):
+                # a saved table of dataclasses (a behaviour's ``rewards``): rebuild each entry
+                return {k: v if isinstance(v, entry) else entry(**v) for k, v in table.items()}
             return table
     except (ValueError, TypeError):
         raise UsageError(f"bad value {value!r} for {key}: expected {_expected(kind)}") from None
@@ -107,19 +111,35 @@ RECORDED_ONLY = {"preset": "--preset NAME", "start_from": "--from CHECKPOINT"}
 """RunConfig fields set by a command-line flag, not by ``--set`` (field -> the flag)."""
 
 
-def _leaf_keys(obj: Any, prefix: str = "") -> list[str]:
+def is_term_table(value: Any) -> bool:
+    """Whether ``value`` is a table of dataclasses (a behaviour's ``rewards``: name ->
+    RewardTermCfg), whose entries' fields are keys too (``behavior.rewards.balance.weight``)."""
+    return (
+        isinstance(value, dict)
+        and bool(value)
+        and all(dataclasses.is_dataclass(v) for v in value.values())
+    )
+
+
+def _leaf_keys(obj: Any, prefix: str = "", in_entry: bool = False) -> list[str]:
     keys = []
     for f in dataclasses.fields(obj):
         value = getattr(obj, f.name)
         if dataclasses.is_dataclass(value):
             keys += _leaf_keys(value, f"{prefix}{f.name}.")
+        elif is_term_table(value):
+            for name, entry in value.items():
+                keys += _leaf_keys(entry, f"{prefix}{f.name}.{name}.", in_entry=True)
+        elif in_entry and isinstance(value, dict):  # a term's params: one key each
+            keys += [f"{prefix}{f.name}.{name}" for name in value]
         else:
             keys.append(prefix + f.name)
     return keys
 
 
 def valid_keys(cfg: Any) -> list[str]:
-    """Return every overridable dotted key (``ppo.learning_rate``, ``behavior.stage_steps``...)."""
+    """Return every overridable dotted key (``ppo.learning_rate``, ``behavior.stage_steps``,
+    ``behavior.rewards.balance.weight``, ``behavior.rewards.balance.params.reward``...)."""
     return _leaf_keys(cfg)
 
 
@@ -130,8 +150,32 @@ def in_table(cfg: Any, key: str) -> bool:
     return bool(rest) and isinstance(getattr(cfg, head, None), dict)
 
 
+def _value_kind(current: Any) -> Any:
+    """The type a new value of a table entry is converted to: that of the value it replaces."""
+    if isinstance(current, tuple) and current:
+        return tuple[type(current[0]), ...]  # type: ignore[misc]
+    if isinstance(current, list) and current:
+        return list[type(current[0])]  # type: ignore[misc]
+    return Any if current is None else type(current)
+
+
+def _unknown_in_table(key: str, where: str, name: str, table: dict) -> UsageError:
+    """``unknown key 'balanse' in 'behavior.rewards'; did you mean 'balance'? valid: ...``."""
+    match = difflib.get_close_matches(name, list(table), n=1, cutoff=0.6)
+    hint = f"; did you mean '{match[0]}'?" if match else ""
+    return UsageError(
+        f"unknown config key '{key}': no '{name}' in '{where}'{hint} "
+        f"(valid: {', '.join(table) or 'none'})"
+    )
+
+
 def set_value(cfg: Any, key: str, value: Any) -> None:
-    """Set dotted ``key`` to ``value`` (converted to the field's type); UsageError if unknown."""
+    """Set dotted ``key`` to ``value`` (converted to the field's type); UsageError if unknown.
+
+    Keys go through dataclass fields and through tables of them (a behaviour's ``rewards``:
+    ``behavior.rewards.balance.weight``, ``behavior.rewards.balance.params.reward``); an
+    unknown table entry is answered with the valid ones.
+    """
     head, _, rest = key.partition(".")
     if in_table(cfg, key):
         # A table of free-form options (``learned.rnd.weight``): kept as given here, then
@@ -148,11 +192,27 @@ def set_value(cfg: Any, key: str, value: Any) -> None:
         raise UsageError(f"'{key}' is set with {RECORDED_ONLY[key]}, not with --set")
     *path, leaf = key.split(".")
     obj: Any = cfg
-    for part in path:
-        obj = getattr(obj, part, None) if dataclasses.is_dataclass(obj) else None
+    for depth, part in enumerate(path):
+        if isinstance(obj, dict):  # an entry of a table (``rewards.balance``, ``params``)
+            if part not in obj:
+                raise _unknown_in_table(key, ".".join(path[:depth]), part, obj)
+            obj = obj[part]
+        else:
+            obj = getattr(obj, part, None) if dataclasses.is_dataclass(obj) else None
+    if isinstance(obj, dict) and path:
+        if leaf not in obj:
+            raise _unknown_in_table(key, ".".join(path), leaf, obj)
+        if dataclasses.is_dataclass(obj[leaf]):
+            fields = ", ".join(f.name for f in dataclasses.fields(obj[leaf]))
+            raise UsageError(f"config key '{key}' is a table; set one of its keys ({fields})")
+        obj[leaf] = convert(value, _value_kind(obj[leaf]), key)
+        return
     names = {f.name for f in dataclasses.fields(obj)} if dataclasses.is_dataclass(obj) else set()
     if leaf not in names or dataclasses.is_dataclass(getattr(obj, leaf)):
         raise UsageError(unknown_key_message(key, cfg))
+    if is_term_table(getattr(obj, leaf)):
+        entries = ", ".join(getattr(obj, leaf))
+        raise UsageError(f"config key '{key}' is a table; set a key of one of {entries}")
     setattr(obj, leaf, convert(value, field_types(obj).get(leaf, Any), key))
 
 

@@ -3,11 +3,17 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING, Any, cast
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from devlearn.api.rewards import BatchContext, BatchedIntrinsicReward, IntrinsicReward, StepContext
+from devlearn.api.rewards import (
+    BatchContext,
+    BatchedFromPerEnv,
+    BatchedIntrinsicReward,
+    StepContext,
+    as_batched,
+)
 from devlearn.env.batch_advance import advance_batch, clipped_actions
 from devlearn.env.guards import (
     REWARD_BOUND,
@@ -38,6 +44,13 @@ def build_default_infant(scene: str, senses: tuple[str, ...], **options: Any) ->
     return build_infant(scene, senses=senses, **options)
 
 
+def batched_reward_terms(behavior: Behavior) -> list[BatchedIntrinsicReward]:
+    """The behaviour's fresh reward terms in the one form the core runs: batched, a
+    per-environment :class:`~devlearn.api.rewards.IntrinsicReward` wrapped in
+    :class:`~devlearn.api.rewards.BatchedFromPerEnv` (the only place terms are wrapped)."""
+    return [as_batched(term) for term in behavior.reward_terms()]
+
+
 class BehaviorEnv:
     """A single sub-environment: one infant, one behaviour's reward terms and one evaluator.
 
@@ -45,9 +58,9 @@ class BehaviorEnv:
     its summary is returned as ``episode_info`` and a new episode begins (random initial pose
     when the stage options say ``random_pose``).
 
-    Batched reward terms (:class:`~devlearn.api.rewards.BatchedIntrinsicReward`) are bound to this
-    env alone, unless :func:`share_batched_terms` makes several envs share them (a worker's
-    envs, stepped together by :func:`step_batch`).
+    Its reward terms are batched (:func:`batched_reward_terms`) and bound to this env alone,
+    unless :func:`share_batched_terms` makes several envs share them (a worker's envs, stepped
+    together by :func:`step_batch`); this env is row :attr:`batch_index` of their arrays.
 
     Args:
         behavior: The behaviour (this env's own instance; it may keep per-env state).
@@ -75,11 +88,10 @@ class BehaviorEnv:
         options = behavior.infant_options()
         self.infant = factory(behavior.scene, senses=tuple(behavior.senses), **options)
         self.rng = np.random.default_rng(seed)
-        self.terms = list(behavior.reward_terms())
-        """Reward terms in the behaviour's order; batched ones may be shared with other envs."""
+        self.terms = batched_reward_terms(behavior)
+        """Reward terms in the behaviour's order, batched; may be shared with other envs."""
         for term in self.terms:
-            if isinstance(term, BatchedIntrinsicReward):
-                term.bind(1)
+            term.bind(1)
         self.batch_index = 0
         """This env's index in its batched terms' arrays."""
         self.evaluator = behavior.evaluator(training=training)
@@ -101,10 +113,7 @@ class BehaviorEnv:
         self.infant.reset(self.rng, random_pose=bool(self.stage.get("random_pose", False)))
         self.behavior.on_episode_start(self.infant, self.rng)
         for term in self.terms:
-            if isinstance(term, BatchedIntrinsicReward):
-                term.reset(self.batch_index)
-            else:
-                term.reset()
+            term.reset(self.batch_index)
         self.episode_step = 0
         self._sums = {term.name: 0.0 for term in self.terms}
         obs = self.behavior.observe(self.infant, self.behavior.facts(self.infant))
@@ -162,22 +171,14 @@ class BehaviorEnv:
 
     def state_dict(self) -> dict[str, Any]:
         """Return the resumable state: every reward term's state, the rng and the stage."""
-        terms = {}
-        for term in self.terms:
-            if isinstance(term, BatchedIntrinsicReward):
-                terms[term.name] = term.state_dict(self.batch_index)
-            else:
-                terms[term.name] = term.state_dict()
+        terms = {term.name: term.state_dict(self.batch_index) for term in self.terms}
         return {"terms": terms, "rng": self.rng.bit_generator.state, "stage": dict(self.stage)}
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
         """Restore :meth:`state_dict`'s output (call :meth:`reset` afterwards)."""
         for term in self.terms:
             if term.name in state["terms"]:
-                if isinstance(term, BatchedIntrinsicReward):
-                    term.load_state_dict(self.batch_index, state["terms"][term.name])
-                else:
-                    term.load_state_dict(state["terms"][term.name])
+                term.load_state_dict(self.batch_index, state["terms"][term.name])
         self.rng.bit_generator.state = state["rng"]
         self.stage = dict(state["stage"])
 
@@ -187,58 +188,51 @@ class BehaviorEnv:
 
 
 def share_batched_terms(envs: list[BehaviorEnv]) -> None:
-    """Make ``envs`` share the first env's batched terms, bound to ``len(envs)`` envs.
+    """Make ``envs`` share the first env's terms, bound to ``len(envs)`` envs.
 
-    Call before the envs' first reset. Per-environment terms stay each env's own.
+    Call before the envs' first reset. A wrapped per-environment term
+    (:class:`~devlearn.api.rewards.BatchedFromPerEnv`) then holds one instance per env.
     """
     lead = envs[0].terms
     for term in lead:
-        if isinstance(term, BatchedIntrinsicReward):
-            term.bind(len(envs))
+        term.bind(len(envs))
     for i, env in enumerate(envs):
-        env.terms = [
-            shared if isinstance(shared, BatchedIntrinsicReward) else own
-            for own, shared in zip(env.terms, lead)
-        ]
+        env.terms = lead
         env.batch_index = i
 
 
 def run_memories(envs: list[BehaviorEnv]) -> dict[str, dict[str, np.ndarray]]:
     """The run-wide memory of the batched terms ``envs`` share, term name -> memory (terms
     keeping none are left out; see :class:`~devlearn.api.rewards.BatchedIntrinsicReward`)."""
-    return {
-        term.name: memory
-        for term in envs[0].terms
-        if isinstance(term, BatchedIntrinsicReward) and (memory := term.run_memory())
-    }
+    return {term.name: memory for term in envs[0].terms if (memory := term.run_memory())}
 
 
 def load_run_memories(envs: list[BehaviorEnv], memories: dict[str, dict[str, np.ndarray]]) -> None:
     """Give the batched terms ``envs`` share the merged run-wide memories (term name -> memory)."""
     for term in envs[0].terms:
-        if isinstance(term, BatchedIntrinsicReward) and term.name in memories:
+        if term.name in memories:
             term.load_run_memory(memories[term.name])
 
 
 def merge_run_memories(
-    terms: list, copies: list[dict[str, dict[str, np.ndarray]]]
+    terms: list[BatchedIntrinsicReward], copies: list[dict[str, dict[str, np.ndarray]]]
 ) -> dict[str, dict[str, np.ndarray]]:
     """Merge copies of :func:`run_memories` (one per worker or rank, in order) term by term
     with each term's ``merge_run_memory``; ``terms`` are instances of the same terms."""
     return {
         term.name: term.merge_run_memory([c[term.name] for c in copies])
         for term in terms
-        if isinstance(term, BatchedIntrinsicReward) and term.name in copies[0]
+        if term.name in copies[0]
     }
 
 
 def term_values(envs: list[BehaviorEnv], contexts: list[StepContext]) -> np.ndarray:
     """Every reward term's weighted value for every env: the one place terms are evaluated.
 
-    Per-environment terms are called once per env (``weight * float(term(ctx))``, as always);
-    a batched term once for the batch. Every unweighted value passes the reward guard
-    (:func:`devlearn.env.guards.check_reward`: finite, within its bound) first. ``envs`` must
-    share their batched terms (see :func:`share_batched_terms`) and be in their batch order.
+    Each term (batched: :attr:`BehaviorEnv.terms`) is called once for the batch. Every
+    unweighted value passes the reward guard (:func:`devlearn.env.guards.check_reward`:
+    finite, within its bound) first. ``envs`` must share their terms (see
+    :func:`share_batched_terms`) and be in their batch order.
 
     Returns:
         (num_terms, num_envs) float64, rows in the behaviour's term order.
@@ -246,41 +240,34 @@ def term_values(envs: list[BehaviorEnv], contexts: list[StepContext]) -> np.ndar
     terms = envs[0].terms
     n = len(envs)
     raw = np.empty((len(terms), n))
-    batch = None
-    own_terms = False  # a per-environment term (each env's own instance and weight)
+    batch = BatchContext(contexts)
     for k, term in enumerate(terms):
-        if isinstance(term, BatchedIntrinsicReward):
-            if batch is None:
-                batch = BatchContext(contexts)
-            try:
-                value = term(batch)
-            except Exception as exc:  # named, and the run stops as on a NaN (guards.py)
-                from devlearn.env.guards import TermError
+        try:
+            value = term(batch)
+        except Exception as exc:  # named, and the run stops as on a NaN (guards.py)
+            from devlearn.env.guards import TermError
 
-                raise TermError.wrap(term.name, exc, -1, contexts[0].step) from exc
-            shape = value.shape if isinstance(value, np.ndarray) else np.shape(value)
-            if shape != (n,):
-                raise ValueError(
-                    f"batched reward term '{term.name}' returned shape {shape}; "
-                    f"expected ({n},), one value per environment"
+            failed = term.failed_env if isinstance(term, BatchedFromPerEnv) else None
+            env, step = (
+                (-1, contexts[0].step)
+                if failed is None
+                else (
+                    envs[failed].index,
+                    contexts[failed].step,
                 )
-            raw[k] = value
-        else:
-            own_terms = True
-            for i, (env, ctx) in enumerate(zip(envs, contexts)):
-                try:
-                    raw[k, i] = float(cast(IntrinsicReward, env.terms[k])(ctx))
-                except Exception as exc:  # named, and the run stops as on a NaN (guards.py)
-                    from devlearn.env.guards import TermError
-
-                    raise TermError.wrap(term.name, exc, env.index, ctx.step) from exc
+            )
+            raise TermError.wrap(term.name, exc, env, step) from exc
+        shape = value.shape if isinstance(value, np.ndarray) else np.shape(value)
+        if shape != (n,):
+            raise ValueError(
+                f"batched reward term '{term.name}' returned shape {shape}; "
+                f"expected ({n},), one value per environment"
+            )
+        raw[k] = value
     if not reward_within_bound(raw):  # name the first bad value: term order, then env
         for k, i in np.argwhere(~(np.abs(raw) <= REWARD_BOUND)):  # also NaN
             check_reward(terms[k].name, float(raw[k, i]), envs[i].index, contexts[i].step)
-    if own_terms:  # (T, N): each env's own term's weight (equal unless changed)
-        weights = np.array([[env.terms[k].weight for env in envs] for k in range(len(terms))])
-    else:
-        weights = np.array([term.weight for term in terms])[:, None]
+    weights = np.array([term.weight for term in terms])[:, None]
     return weights * raw
 
 

@@ -12,10 +12,10 @@ import torch
 from rsl_rl.env import VecEnv
 from tensordict import TensorDict
 
-from devlearn.api.rewards import BatchedIntrinsicReward
 from devlearn.env.behavior_env import (
     EPISODE_RECORD,
     InfantFactory,
+    batched_reward_terms,
     load_run_memories,
     merge_run_memories,
     run_memories,
@@ -71,15 +71,13 @@ class DevVecEnv(VecEnv):
         if workers > 0:
             self._pool = WorkerPool(behavior, seeds, workers, infant_factory, action_repeat)
             spec = self._pool.spec
-            self._merge_terms = list(behavior.reward_terms())  # merge rules of the run memory
+            self._merge_terms = batched_reward_terms(behavior)  # merge rules of the run memory
         else:
             self._envs = make_envs(behavior, seeds, infant_factory, action_repeat=action_repeat)
             first = [env.reset() for env in self._envs]
             spec = env_spec(self._envs[0], first[0])
             self._merge_terms = self._envs[0].terms
-        self._has_run_memory = any(
-            isinstance(t, BatchedIntrinsicReward) and t.run_memory() for t in self._merge_terms
-        )
+        self._has_run_memory = any(t.run_memory() for t in self._merge_terms)
         self._buffers = EnvBuffers(spec, num_envs, shared=self._pool is not None)
         self._finalizer = weakref.finalize(self, _shutdown, self._pool, self._envs, self._buffers)
         if self._pool is not None:

@@ -16,7 +16,7 @@ import torch
 from devlearn.api.behavior import Behavior
 from devlearn.api.curriculum import Curriculum
 from devlearn.api.network_spec import NetworkSpec
-from devlearn.api.rewards import BatchedIntrinsicReward, IntrinsicReward
+from devlearn.api.rewards import BatchedFromPerEnv, BatchedIntrinsicReward, IntrinsicReward
 from devlearn.env.guards import TermError
 from devlearn.testing.values import (
     ConformanceError,
@@ -380,14 +380,14 @@ class CheckedBatchedTerm(BatchedIntrinsicReward):
         self.term.load_run_memory(memory)
 
 
-def checked_terms(terms: list[Any], phase: list[str]) -> list[Any]:
-    """Wrap every term (per-env or batched) so each value it returns is checked."""
-    return [
-        CheckedBatchedTerm(t, phase)
-        if isinstance(t, BatchedIntrinsicReward)
-        else CheckedTerm(t, phase)
-        for t in terms
-    ]
+def checked_terms(terms: list[BatchedIntrinsicReward], phase: list[str]) -> list[Any]:
+    """Wrap every term of an env so each value it returns is checked: a batched term as a
+    whole, a wrapped per-environment one (:class:`~devlearn.api.rewards.BatchedFromPerEnv`)
+    in each environment, before its value is made a float."""
+    for term in terms:
+        if isinstance(term, BatchedFromPerEnv):
+            term.terms = [CheckedTerm(t, phase) for t in term.terms]  # type: ignore[misc]
+    return [t if isinstance(t, BatchedFromPerEnv) else CheckedBatchedTerm(t, phase) for t in terms]
 
 
 class CheckedEvaluator:

@@ -24,7 +24,9 @@ def test_json_lists_run_ppo_and_behavior_keys_with_docs(capsys):
     assert rows["num_envs"] == {**rows["num_envs"], "type": "int", "default": 16, "set_by": "core"}
     assert rows["behavior.fixed_pose_steps"]["type"] == "int"
     assert "stage 1" in rows["behavior.fixed_pose_steps"]["doc"]
-    assert rows["behavior.milestones"]["default"] == [5, 10, 15, 20, 25, 30]
+    milestones = rows["behavior.rewards.diversity_milestones.params.milestones"]
+    assert milestones["default"] == [5, 10, 15, 20, 25, 30]
+    assert rows["behavior.rewards.balance.weight"]["default"] == 1.0
     assert all(r["doc"] for r in rows.values()), [k for k, r in rows.items() if not r["doc"]]
     from devlearn_self_touch import SelfTouch  # every key `run --set` accepts is listed
 

@@ -66,7 +66,7 @@ def test_state_dict_restores_terms_rng_and_stage():
 
     fresh = make_env(seed=99)
     fresh.load_state_dict(state)
-    assert fresh.terms[1].count == 7
+    assert fresh.terms[1].terms[0].count == 7  # a per-env term, wrapped (BatchedFromPerEnv)
     assert fresh.stage == {"random_pose": True}
     np.testing.assert_array_equal(fresh.reset()["proprioception"], expected_next)
 

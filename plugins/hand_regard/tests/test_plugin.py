@@ -46,7 +46,9 @@ def test_class_terms_and_curriculum_conform():
 def test_zero_weight_switches_a_term_off():
     from devlearn_hand_regard import HandRegardConfig
 
-    terms = HandRegard(HandRegardConfig(bilateral_weight=0.0)).reward_terms()
+    config = HandRegardConfig()
+    config.rewards["bilateral_balance"].weight = 0.0
+    terms = HandRegard(config).reward_terms()
     assert "bilateral_balance" not in [t.name for t in terms]
 
 

@@ -22,15 +22,21 @@ def _names(config: HandRegardConfig) -> list[str]:
     return [t.name for t in HandRegard(config).reward_terms()]
 
 
+def _bilateral_weight(config: HandRegardConfig, weight: float) -> HandRegardConfig:
+    config.rewards["bilateral_balance"].weight = weight
+    return config
+
+
 def test_paper_reward_has_no_bilateral_term():
     # The paper's reward (sec. II-B4) whatever the bilateral weight says.
     assert _names(HandRegardConfig(reward="paper")) == PAPER_TERMS
-    assert _names(HandRegardConfig(reward="paper", bilateral_weight=2.0)) == PAPER_TERMS
+    assert _names(_bilateral_weight(HandRegardConfig(reward="paper"), 2.0)) == PAPER_TERMS
 
 
 def test_bilateral_reward_adds_the_bilateral_term():
     assert _names(HandRegardConfig(reward="bilateral")) == PAPER_TERMS + ["bilateral_balance"]
-    terms = HandRegard(HandRegardConfig(reward="bilateral", bilateral_weight=0.5)).reward_terms()
+    config = _bilateral_weight(HandRegardConfig(reward="bilateral"), 0.5)
+    terms = HandRegard(config).reward_terms()
     assert terms[-1].weight == 0.5
 
 

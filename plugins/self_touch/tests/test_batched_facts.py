@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from devlearn_self_touch import SelfTouch, SelfTouchConfig
+from per_env_rewards import per_env_reward_terms
 from self_touch_fakes import FakeInfant, ScriptedInfant, same_info
 
 from devlearn.api.behavior import Behavior
@@ -23,7 +24,7 @@ class PerEnvSelfTouch(SelfTouch):
     batch_observe = Behavior.batch_observe
 
     def reward_terms(self):
-        return self.per_env_reward_terms()
+        return per_env_reward_terms(self.config)
 
 
 @pytest.fixture(scope="module")

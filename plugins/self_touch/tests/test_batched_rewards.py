@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from devlearn_self_touch import SelfTouch, SelfTouchConfig
+from per_env_rewards import per_env_reward_terms
 from self_touch_fakes import ScriptedInfant, same_info
 
 from devlearn import StepContext
@@ -37,14 +38,22 @@ def recorded_steps(rng, num_envs: int, steps: int, episode: int):
         yield contexts
 
 
-PER_ENV = "per_env"  # the per-environment twins keep per-environment lifetime memory
+PER_ENV = "per_env"
+
+
+def _with_min_parts(config: SelfTouchConfig, parts: int) -> SelfTouchConfig:
+    config.rewards["balance"].params["min_parts"] = parts
+    return config
+
+
+# the per-environment twins keep per-environment lifetime memory
 
 
 @pytest.mark.parametrize(
     "config",
     [
         SelfTouchConfig(lifetime_memory=PER_ENV),
-        SelfTouchConfig(lifetime_memory=PER_ENV, balance_min_parts=4),
+        _with_min_parts(SelfTouchConfig(lifetime_memory=PER_ENV), 4),
     ],
 )
 def test_batched_terms_equal_per_env_terms_bit_for_bit(config):
@@ -53,7 +62,7 @@ def test_batched_terms_equal_per_env_terms_bit_for_bit(config):
     batched = behavior.reward_terms()
     for term in batched:
         term.bind(num_envs)
-    per_env = [behavior.per_env_reward_terms() for _ in range(num_envs)]
+    per_env = [per_env_reward_terms(behavior.config) for _ in range(num_envs)]
     assert [t.name for t in batched] == [t.name for t in per_env[0]]
     totals = np.zeros((len(batched), num_envs))
     for contexts in recorded_steps(np.random.default_rng(3), num_envs, 6 * episode, episode):
@@ -85,7 +94,7 @@ class PerEnvSelfTouch(SelfTouch):
     """SelfTouch with today's per-environment terms (the reference)."""
 
     def reward_terms(self):
-        return self.per_env_reward_terms()
+        return per_env_reward_terms(self.config)
 
 
 def test_envs_log_the_same_sums_with_either_form():

@@ -6,13 +6,8 @@ import math
 
 import numpy as np
 import pytest
-from devlearn_self_touch.rewards import (
-    Balance,
-    ContactNovelty,
-    DiversityMilestones,
-    TouchNovelty,
-    f_decay,
-)
+from devlearn_self_touch.rewards import f_decay
+from per_env_rewards import Balance, ContactNovelty, DiversityMilestones, TouchNovelty
 from self_touch_fakes import make_ctx
 
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import torch
 from devlearn_self_touch import SelfTouch, SelfTouchConfig
-from devlearn_self_touch.batched_rewards import BatchedContactNovelty, BatchedTouchNovelty
+from devlearn_self_touch.rewards import ContactNovelty, TouchNovelty
 from self_touch_fakes import SwappingInfant, make_ctx, train_swapping
 
 from devlearn import BatchContext
@@ -36,15 +36,15 @@ def test_two_envs_one_discovery_one_first_ever_bonus(memory, touch, contact):
     """Both envs touch region 3 with the left hand on the same step: shared memory pays the
     first env first-ever and the second what a known region pays (first in episode)."""
     step = [make_ctx(touched=[3], hand_contacts=[(0, 3)]) for _ in range(2)]
-    assert _pay(BatchedTouchNovelty(lifetime_memory=memory), step) == touch
-    assert _pay(BatchedContactNovelty(lifetime_memory=memory), step) == contact
+    assert _pay(TouchNovelty(lifetime_memory=memory), step) == touch
+    assert _pay(ContactNovelty(lifetime_memory=memory), step) == contact
 
 
 def test_unknown_lifetime_memory_names_the_valid_ones():
     with pytest.raises(ValueError, match="lifetime_memory 'global'; valid: shared, per_env"):
         SelfTouchConfig(lifetime_memory="global")
     with pytest.raises(ValueError, match="valid: shared, per_env"):
-        BatchedTouchNovelty(lifetime_memory="run")
+        TouchNovelty(lifetime_memory="run")
 
 
 def _episode_sums(vec: DevVecEnv, term: str) -> list[float]:

@@ -6,31 +6,15 @@ Written only against devlearn's public API (``devlearn``, with its Infant).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
 import devlearn
-from devlearn import StepContext
+from devlearn import RewardTermCfg, StepContext
 
 if TYPE_CHECKING:
     from devlearn import Infant
-
-
-@dataclass
-class HandToMouthConfig:
-    """Options of the hand_to_mouth behaviour."""
-
-    target_parts: tuple[str, ...] = ("mouth",)
-    """Side-free body-map part names that count as the mouth (see docs/body_map.md)."""
-    contact_reward: float = 1.0
-    """Reward per step in which a hand touches a target part."""
-    first_contact_bonus: float = 5.0
-    """Extra reward the first time in an episode a hand reaches a target part."""
-    action_cost: float = 0.01
-    """Penalty weight on the mean squared action (keeps movements calm)."""
-    stages: list[int] = field(default_factory=lambda: [100_000])
-    """Steps of the fixed-pose stage before random initial poses begin."""
 
 
 class MouthContact(devlearn.IntrinsicReward):
@@ -41,8 +25,10 @@ class MouthContact(devlearn.IntrinsicReward):
 
     name = "mouth_contact"
 
-    def __init__(self, contact_reward: float, first_bonus: float) -> None:
-        super().__init__()
+    def __init__(
+        self, weight: float = 1.0, contact_reward: float = 1.0, first_bonus: float = 5.0
+    ) -> None:
+        super().__init__(weight)
         self.contact_reward = contact_reward
         self.first_bonus = first_bonus
         self.reached = False
@@ -65,6 +51,38 @@ class ActionCost(devlearn.IntrinsicReward):
 
     def __call__(self, ctx: StepContext) -> float:
         return -float(ctx.facts["action_energy"])
+
+
+def hand_to_mouth_rewards() -> dict[str, RewardTermCfg]:
+    """A reward for every step a hand touches the mouth (plus a first-contact bonus) and a
+    small cost on the action."""
+    return {
+        "mouth_contact": RewardTermCfg(
+            MouthContact, 1.0, {"contact_reward": 1.0, "first_bonus": 5.0}
+        ),
+        "action_cost": RewardTermCfg(ActionCost, 0.01),
+    }
+
+
+@dataclass
+class HandToMouthConfig:
+    """Options of the hand_to_mouth behaviour."""
+
+    LEGACY_REWARD_KEYS: ClassVar[dict[str, str]] = {
+        "contact_reward": "mouth_contact.params.contact_reward",
+        "first_contact_bonus": "mouth_contact.params.first_bonus",
+        "action_cost": "action_cost.weight",
+    }
+    """Fields of configs saved before issue #31, now in :attr:`rewards`."""
+
+    target_parts: tuple[str, ...] = ("mouth",)
+    """Side-free body-map part names that count as the mouth (see docs/body_map.md)."""
+    rewards: dict[str, RewardTermCfg] = field(default_factory=hand_to_mouth_rewards)
+    """Term name -> (class, weight, params): ``mouth_contact`` (``contact_reward`` per step a
+    hand touches a target part, ``first_bonus`` the first time in an episode) and
+    ``action_cost`` (its weight times the mean squared action, subtracted)."""
+    stages: list[int] = field(default_factory=lambda: [100_000])
+    """Steps of the fixed-pose stage before random initial poses begin."""
 
 
 class MouthEvaluator(devlearn.Evaluator):
@@ -146,13 +164,6 @@ class HandToMouth(devlearn.Behavior):
             fusion_dims=(256,),
             trunk_dims=(128, 128),
         )
-
-    def reward_terms(self) -> list[devlearn.IntrinsicReward]:
-        cfg = self.config
-        return [
-            MouthContact(cfg.contact_reward, cfg.first_contact_bonus),
-            ActionCost(weight=cfg.action_cost),
-        ]
 
     def curriculum(self) -> devlearn.Curriculum:
         return devlearn.Curriculum(

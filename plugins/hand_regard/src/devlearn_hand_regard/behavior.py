@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from devlearn import (
+    BatchedIntrinsicReward,
     Behavior,
     Curriculum,
     Evaluator,
@@ -18,10 +19,12 @@ from devlearn import (
     Stage,
     UsageError,
 )
+from devlearn.api.rewards import build_reward_terms
 from devlearn_hand_regard import detector_store
 from devlearn_hand_regard.config import (
     APPEARANCE_CHOICES,
     BABBLING_ARMS_CHOICES,
+    NOT_IN_PAPER,
     POLICY_CHOICES,
     REWARD_CHOICES,
     SCENE_CHOICES,
@@ -30,14 +33,7 @@ from devlearn_hand_regard.config import (
 )
 from devlearn_hand_regard.detector import DetectorParams, HandDetector, HandFlow
 from devlearn_hand_regard.evaluation import HandRegardEvaluator, paper_figures
-from devlearn_hand_regard.rewards import (
-    HANDS,
-    BilateralBalance,
-    HandCount,
-    HandMotion,
-    LivingPenalty,
-    hand_motion,
-)
+from devlearn_hand_regard.rewards import HANDS, hand_motion
 
 if TYPE_CHECKING:
     from devlearn import Infant
@@ -308,30 +304,21 @@ class HandRegard(Behavior):
         return np.concatenate([eyes[0], eyes[1], infant.render_view(384, 256)], axis=1)
 
     # --- rewards, actions, curriculum -------------------------------------------------------
-    def reward_terms(self) -> list[IntrinsicReward]:
-        """The paper's three terms, plus ``bilateral_balance`` when ``config.reward`` is
-        ``bilateral``; zero-weight terms are left out.
+    def reward_terms(self) -> list[IntrinsicReward | BatchedIntrinsicReward]:
+        """The config's ``rewards``: the paper's three terms, plus ``bilateral_balance`` when
+        ``config.reward`` is ``bilateral``; zero-weight terms are left out.
 
         Raises:
             UsageError: ``config.reward`` is not one of :data:`REWARD_CHOICES`.
         """
         cfg = self.config
         _check_choice("reward", cfg.reward, REWARD_CHOICES)
-        terms: list[IntrinsicReward] = [
-            HandCount(cfg.hand_count_weight),
-            HandMotion(cfg.motion_weight),
-            LivingPenalty(cfg.living_penalty_weight),
-        ]
-        if cfg.reward == "bilateral":
-            terms.append(
-                BilateralBalance(
-                    cfg.bilateral_weight,
-                    cfg.bilateral_bonus,
-                    cfg.bilateral_penalty,
-                    cfg.bilateral_horizon,
-                )
-            )
-        return [t for t in terms if t.weight != 0.0]
+        chosen = {
+            name: term
+            for name, term in cfg.rewards.items()
+            if not (cfg.reward == "paper" and name in NOT_IN_PAPER)
+        }
+        return [t for t in build_reward_terms(chosen) if t.weight != 0.0]
 
     def curriculum(self) -> Curriculum:
         """Left arm, right arm, both arms (paper sec. II-B5: ~175k + ~175k + ~1.5M steps)."""

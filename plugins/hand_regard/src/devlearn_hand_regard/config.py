@@ -2,13 +2,33 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, ClassVar
+
+from devlearn.api.rewards import RewardTermCfg
+from devlearn_hand_regard.rewards import BilateralBalance, HandCount, HandMotion, LivingPenalty
 
 APPEARANCE_CHOICES = ("two_colour_mittens", "mittens", "skin")
 """Valid ``appearance`` values (``devlearn.infant.scenes.APPEARANCES``)."""
 REWARD_CHOICES = ("paper", "bilateral")
 """Valid ``reward`` values."""
+NOT_IN_PAPER = ("bilateral_balance",)
+"""Reward terms ``reward=paper`` leaves out (ours, the paper's future work)."""
+
+
+def hand_regard_rewards() -> dict[str, RewardTermCfg]:
+    """The paper's three terms (sec. II-B4: R_t = R_hand + R_motion - 0.05) and our
+    ``bilateral_balance``, weight 1 each."""
+    return {
+        "hand_count": RewardTermCfg(HandCount, 1.0),
+        "motion": RewardTermCfg(HandMotion, 1.0),
+        "living_penalty": RewardTermCfg(LivingPenalty, 1.0),
+        "bilateral_balance": RewardTermCfg(
+            BilateralBalance, 1.0, {"bonus": 0.25, "penalty": 0.5, "horizon": 200.0}
+        ),
+    }
+
+
 SCENE_CHOICES = ("sitting_babybench", "sitting")
 """Valid ``scene`` values (``devlearn.infant.scenes.SCENES``, the sitting ones)."""
 START_CHOICES = ("babybench", "rest", "random")
@@ -35,6 +55,18 @@ class HandRegardConfig:
     """Values for keys a saved config lacks: runs saved before these keys existed were trained
     with mittens and the bilateral term, in the ``sitting`` scene from its rest pose, with the
     eye CNN, and evaluated from random starts; they load and evaluate that way."""
+
+    LEGACY_REWARD_KEYS: ClassVar[dict[str, str]] = {
+        "hand_count_weight": "hand_count.weight",
+        "motion_weight": "motion.weight",
+        "living_penalty_weight": "living_penalty.weight",
+        "bilateral_weight": "bilateral_balance.weight",
+        "bilateral_bonus": "bilateral_balance.params.bonus",
+        "bilateral_penalty": "bilateral_balance.params.penalty",
+        "bilateral_horizon": "bilateral_balance.params.horizon",
+    }
+    """Fields of configs saved before issue #31 that now live in :attr:`rewards` (old field ->
+    ``TERM.weight`` or ``TERM.params.NAME``); such a config loads with them moved there."""
 
     # --- the scene and how episodes start (issue #29: BabyBench's) -------------------------
     scene: str = "sitting_babybench"
@@ -99,24 +131,16 @@ class HandRegardConfig:
     # --- reward (sec. II-B4); a weight of 0 switches a term off ---------------------------
     reward: str = "bilateral"
     """Which reward: ``paper`` (the paper's exact terms: hand count, motion, living penalty;
-    the ``bilateral_*`` keys are ignored) or ``bilateral`` (those three plus our
-    ``bilateral_balance`` term, weighted by ``bilateral_weight``)."""
-    hand_count_weight: float = 1.0
-    """Weight of ``hand_count`` (-0.1, 0.25, 0.5, 1.0, 2.0 for n_t = 0..4)."""
-    motion_weight: float = 1.0
-    """Weight of ``motion`` (optical flow in the hand regions, rewarding moderate motion)."""
-    living_penalty_weight: float = 1.0
-    """Weight of ``living_penalty`` (-0.05 per step)."""
-    bilateral_weight: float = 1.0
-    """Weight of the extra ``bilateral_balance`` term (not in the paper; its future work), used
-    when ``reward=bilateral``. It only pays while both arms are active."""
-    bilateral_bonus: float = 0.25
-    """``bilateral_balance``: bonus on steps where each hand is detected by at least one eye."""
-    bilateral_penalty: float = 0.5
-    """``bilateral_balance``: penalty per unit of |v_left - v_right|, the gap between the two
-    hands' recent visibility (exponential moving averages over ``bilateral_horizon`` steps)."""
-    bilateral_horizon: float = 200.0
-    """``bilateral_balance``: time constant (steps) of the per-hand visibility averages."""
+    the terms of :data:`NOT_IN_PAPER` are left out) or ``bilateral`` (every term of
+    ``rewards``, our ``bilateral_balance`` included)."""
+    rewards: dict[str, RewardTermCfg] = field(default_factory=hand_regard_rewards)
+    """Term name -> (class, weight, params) (:func:`hand_regard_rewards`): ``hand_count``
+    (-0.1, 0.25, 0.5, 1.0, 2.0 for n_t = 0..4 detections), ``motion`` (optical flow in the hand
+    regions, rewarding moderate motion), ``living_penalty`` (-0.05 per step) and
+    ``bilateral_balance`` (not in the paper, its future work; only while both arms are
+    active: ``bonus`` on steps where each hand is detected by at least one eye, minus
+    ``penalty`` per unit of |v_left - v_right|, the gap between the hands' recent visibility,
+    exponential moving averages over ``horizon`` steps). A term of weight 0 is left out."""
 
     # --- curriculum (sec. II-B5) ----------------------------------------------------------
     left_arm_steps: int = 175_000

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from devlearn_self_touch.behavior import SelfTouch
-from devlearn_self_touch.config import SelfTouchConfig
+from devlearn_self_touch.config import SelfTouchConfig, paper_rewards
 from devlearn_self_touch.evaluation import SelfTouchEvaluator
 from devlearn_self_touch.rewards import (
     Balance,
@@ -22,4 +22,5 @@ __all__ = [
     "SelfTouchEvaluator",
     "TouchNovelty",
     "f_decay",
+    "paper_rewards",
 ]

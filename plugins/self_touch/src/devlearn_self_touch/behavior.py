@@ -17,12 +17,7 @@ from devlearn import (
     NetworkSpec,
     Stage,
 )
-from devlearn_self_touch.batched_rewards import (
-    BatchedBalance,
-    BatchedContactNovelty,
-    BatchedDiversityMilestones,
-    BatchedTouchNovelty,
-)
+from devlearn.api.rewards import build_reward_terms
 from devlearn_self_touch.body_map import (
     body_map_observation,
     hand_touched_parts,
@@ -30,7 +25,6 @@ from devlearn_self_touch.body_map import (
 )
 from devlearn_self_touch.config import SelfTouchConfig
 from devlearn_self_touch.evaluation import PAPER_RESULTS, SelfTouchEvaluator, TrainingScore
-from devlearn_self_touch.rewards import Balance, ContactNovelty, DiversityMilestones, TouchNovelty
 
 if TYPE_CHECKING:
     from devlearn import Infant
@@ -123,53 +117,17 @@ class SelfTouch(Behavior):
         )
 
     # --- rewards and curriculum ------------------------------------------------------------
-    def reward_terms(self) -> list[BatchedIntrinsicReward]:
-        """R_t = R_touch + R_geom + R_milestones + R_balance (sec. II-A3), fresh instances, in
-        batched form (computed once per worker over its envs; same numbers and logs as
-        :meth:`per_env_reward_terms`)."""
+    def reward_terms(self) -> list[IntrinsicReward | BatchedIntrinsicReward]:
+        """R_t = R_touch + R_geom + R_milestones + R_balance (sec. II-A3): the config's
+        ``rewards``, fresh instances (batched: computed once per worker over its envs), the
+        novelty terms told ``lifetime_memory`` and ``touch_count``."""
         c = self.config
-        return [
-            BatchedTouchNovelty(
-                *self._touch_args(), lifetime_memory=c.lifetime_memory, touch_count=c.touch_count
-            ),
-            BatchedContactNovelty(
-                c.weight_contact_novelty,
-                c.contact_first_ever,
-                c.contact_first_in_episode,
-                lifetime_memory=c.lifetime_memory,
-            ),
-            BatchedDiversityMilestones(
-                c.weight_diversity_milestones, c.milestone_reward, c.milestones
-            ),
-            BatchedBalance(
-                c.weight_balance, c.balance_reward, c.balance_tolerance, c.balance_min_parts
-            ),
-        ]
-
-    def per_env_reward_terms(self) -> list[IntrinsicReward]:
-        """The same four terms as per-environment :class:`IntrinsicReward` instances, each
-        with its own memory (equal to :meth:`reward_terms` with ``lifetime_memory="per_env"``;
-        they cannot share one)."""
-        c = self.config
-        return [
-            TouchNovelty(*self._touch_args(), touch_count=c.touch_count),
-            ContactNovelty(
-                c.weight_contact_novelty, c.contact_first_ever, c.contact_first_in_episode
-            ),
-            DiversityMilestones(c.weight_diversity_milestones, c.milestone_reward, c.milestones),
-            Balance(c.weight_balance, c.balance_reward, c.balance_tolerance, c.balance_min_parts),
-        ]
-
-    def _touch_args(self) -> tuple[float, float, float, float, float, float]:
-        c = self.config
-        return (
-            c.weight_touch_novelty,
-            c.touch_first_ever,
-            c.touch_first_in_episode,
-            c.touch_repeat_scale,
-            c.decay_midpoint,
-            c.decay_rate,
-        )
+        memory = {"lifetime_memory": c.lifetime_memory}
+        shared = {
+            "touch_novelty": {**memory, "touch_count": c.touch_count},
+            "contact_novelty": memory,
+        }
+        return build_reward_terms(c.rewards, shared)
 
     def curriculum(self) -> Curriculum:
         """``two_stage``: fixed pose for ``fixed_pose_steps``, then random initial poses;

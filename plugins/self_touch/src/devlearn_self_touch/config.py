@@ -2,17 +2,49 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
-from devlearn_self_touch.batched_rewards import LIFETIME_MEMORIES
-from devlearn_self_touch.rewards import TOUCH_COUNTS
+from devlearn.api.rewards import RewardTermCfg
+from devlearn_self_touch.rewards import (
+    LIFETIME_MEMORIES,
+    TOUCH_COUNTS,
+    Balance,
+    ContactNovelty,
+    DiversityMilestones,
+    TouchNovelty,
+)
 
 CURRICULA = ("two_stage", "fixed_only", "random_only")
 """Valid values of :attr:`SelfTouchConfig.curriculum` (paper sec. II-A5 and its ablation)."""
 
 TOUCH_SOURCES = ("hands", "hands_or_threshold", "threshold")
 """Valid values of :attr:`SelfTouchConfig.touch_source`."""
+
+
+def paper_rewards() -> dict[str, RewardTermCfg]:
+    """R_t = R_touch + R_geom + R_milestones + R_balance (sec. II-A3): the paper's four terms,
+    weight 1 each, with its constants."""
+    return {
+        "touch_novelty": RewardTermCfg(
+            TouchNovelty,
+            1.0,
+            {
+                "first_ever": 5.0,
+                "first_in_episode": 1.0,
+                "repeat_scale": 0.5,
+                "midpoint": 10.0,
+                "rate": 0.5,
+            },
+        ),
+        "contact_novelty": RewardTermCfg(
+            ContactNovelty, 1.0, {"first_ever": 10.0, "first_in_episode": 2.0}
+        ),
+        "diversity_milestones": RewardTermCfg(
+            DiversityMilestones, 1.0, {"reward": 5.0, "milestones": (5, 10, 15, 20, 25, 30)}
+        ),
+        "balance": RewardTermCfg(Balance, 1.0, {"reward": 10.0, "tolerance": 3, "min_parts": 0}),
+    }
 
 
 @dataclass
@@ -35,6 +67,28 @@ class SelfTouchConfig:
     trained with: runs from before these fields existed, or before their defaults changed
     (issue #20), load and resume as trained (read by ``devlearn.config.run_config.from_dict``)."""
 
+    LEGACY_REWARD_KEYS: ClassVar[dict[str, str]] = {
+        "weight_touch_novelty": "touch_novelty.weight",
+        "touch_first_ever": "touch_novelty.params.first_ever",
+        "touch_first_in_episode": "touch_novelty.params.first_in_episode",
+        "touch_repeat_scale": "touch_novelty.params.repeat_scale",
+        "decay_midpoint": "touch_novelty.params.midpoint",
+        "decay_rate": "touch_novelty.params.rate",
+        "weight_contact_novelty": "contact_novelty.weight",
+        "contact_first_ever": "contact_novelty.params.first_ever",
+        "contact_first_in_episode": "contact_novelty.params.first_in_episode",
+        "weight_diversity_milestones": "diversity_milestones.weight",
+        "milestone_reward": "diversity_milestones.params.reward",
+        "milestones": "diversity_milestones.params.milestones",
+        "weight_balance": "balance.weight",
+        "balance_reward": "balance.params.reward",
+        "balance_tolerance": "balance.params.tolerance",
+        "balance_min_parts": "balance.params.min_parts",
+    }
+    """Fields of configs saved before issue #31 that now live in :attr:`rewards` (old field ->
+    ``TERM.weight`` or ``TERM.params.NAME``); such a config loads with them moved there
+    (:func:`devlearn.api.rewards.upgrade_saved_rewards`)."""
+
     # --- what counts as "touched" (sec. II-A2/A3) ----------------------------------------
     touch_source: str = "hands"
     """How a region is marked touched for the touch-novelty and milestone terms.
@@ -51,63 +105,33 @@ class SelfTouchConfig:
     hand touch (0.3 N) reads 1.4, the weight on the mattress 0.7 to 2.4, a hard kick (30 N)
     5.7, instead of raw values spanning four orders of magnitude."""
 
-    # --- reward weights (R_t = R_touch + R_geom + R_milestones + R_balance, sec. II-A3) -----
-    weight_touch_novelty: float = 1.0
-    """Weight of R_touch (paper: 1)."""
-    weight_contact_novelty: float = 1.0
-    """Weight of R_geom (paper: 1)."""
-    weight_diversity_milestones: float = 1.0
-    """Weight of R_milestones (paper: 1)."""
-    weight_balance: float = 1.0
-    """Weight of R_balance (paper: 1)."""
+    # --- reward terms (R_t = R_touch + R_geom + R_milestones + R_balance, sec. II-A3) ----
+    rewards: dict[str, RewardTermCfg] = field(default_factory=paper_rewards)
+    """Term name -> (class, weight, params) (:func:`paper_rewards`, the paper's constants):
+    ``touch_novelty`` (R_touch: first_ever, first_in_episode, repeat_scale and f_decay's
+    midpoint and rate, f_decay(c) = 2 / (1 + exp(rate (c - midpoint))) - 1), ``contact_novelty``
+    (R_geom: first_ever, first_in_episode per (hand, region) pair), ``diversity_milestones``
+    (R_milestones: reward per milestone of distinct touched regions crossed in the episode) and
+    ``balance`` (R_balance: reward on the last step when |N_L - N_R| <= tolerance and
+    N_L + N_R >= min_parts; the paper's min_parts is 0, so an episode without any touch also
+    pays). ``--set behavior.rewards.balance.weight=0`` switches one off."""
 
     # --- touch novelty R_touch (sec. II-A3) ------------------------------------------------
     lifetime_memory: str = "shared"
-    """Whose lifetime the "first ever" bonuses (``touch_first_ever``, ``contact_first_ever``)
+    """Whose lifetime the "first ever" bonuses (``touch_novelty`` and ``contact_novelty``)
     count over. ``"shared"`` (default): the run's, as for the paper's one agent; one memory
     for all environments, merged across env workers (and torchrun ranks) at every PPO
     iteration boundary, so between two merges a discovery is paid at most once per worker.
     ``"per_env"``: each environment's own (a discovery can be paid once per environment, 16
     times with 16 envs); every run before issue #20 used it, and a saved config without this
     field means it."""
-    touch_first_ever: float = 5.0
-    """Reward for a region's first touch in the lifetime (see ``lifetime_memory``)."""
-    touch_first_in_episode: float = 1.0
-    """Reward for a region's first touch in the current episode."""
-    touch_repeat_scale: float = 0.5
-    """Repeats pay touch_repeat_scale * f_decay(c_j)."""
-    decay_midpoint: float = 10.0
-    """f_decay(c) = 2 / (1 + exp(decay_rate * (c - decay_midpoint))) - 1 crosses 0 here."""
-    decay_rate: float = 0.5
-    """Steepness of f_decay."""
     touch_count: str = "onset"
-    """What c_j counts and when repeats pay. ``onset`` (default): touch events only (a touch's
-    first step counts and pays; holding it costs nothing more); in the 300k pilots of issue #28
-    it raised the training per-episode score from 0.20-0.24 to 0.30-0.32 (2 seeds each,
-    ``results/learner/README.md``). ``step`` (the paper's literal rule, ``--preset paper``):
-    every step a region is touched, so a region held for a whole episode costs about -489.
-    A saved config without this field means ``step``."""
-
-    # --- contact novelty R_geom (sec. II-A3) ------------------------------------------------
-    contact_first_ever: float = 10.0
-    """Reward for a (hand, region) pair's first contact in the lifetime (``lifetime_memory``)."""
-    contact_first_in_episode: float = 2.0
-    """Reward for a (hand, region) pair's first contact in the current episode."""
-
-    # --- diversity milestones R_milestones (sec. II-A3) ------------------------------------
-    milestone_reward: float = 5.0
-    """Bonus paid once per episode per milestone crossed."""
-    milestones: tuple[int, ...] = (5, 10, 15, 20, 25, 30)
-    """Distinct touched regions (of 68) in the episode at which the bonus is paid."""
-
-    # --- balance R_balance (sec. II-A3) -----------------------------------------------------
-    balance_reward: float = 10.0
-    """Bonus on the episode's last step when |N_L - N_R| <= balance_tolerance."""
-    balance_tolerance: int = 3
-    """Largest |N_L - N_R| (distinct parts of 34 touched per hand) that still pays."""
-    balance_min_parts: int = 0
-    """Extra condition N_L + N_R >= this (paper: none, i.e. 0; then an episode without any
-    touch also pays the bonus). Set 1 or more to stop rewarding idleness."""
+    """What ``touch_novelty``'s c_j counts and when repeats pay. ``onset`` (default): touch
+    events only (a touch's first step counts and pays; holding it costs nothing more); in the
+    300k pilots of issue #28 it raised the training per-episode score from 0.20-0.24 to
+    0.30-0.32 (2 seeds each, ``results/learner/README.md``). ``step`` (the paper's literal
+    rule, ``--preset paper``): every step a region is touched, so a region held for a whole
+    episode costs about -489. A saved config without this field means ``step``."""
 
     # --- policy (sec. II-A4) -----------------------------------------------------------------
     max_std: float = 1.0
@@ -139,7 +163,7 @@ class SelfTouchConfig:
         self.validate()
 
     def validate(self) -> None:
-        """Raise ValueError naming a wrong choice and the valid ones; normalise milestones."""
+        """Raise ValueError naming a wrong choice and the valid ones."""
         if self.curriculum not in CURRICULA:
             raise ValueError(
                 f"unknown curriculum '{self.curriculum}'; valid: {', '.join(CURRICULA)}"
@@ -161,4 +185,9 @@ class SelfTouchConfig:
             raise ValueError(
                 f"training_score_episodes must be at least 1, got {self.training_score_episodes}"
             )
-        self.milestones = tuple(sorted(int(m) for m in self.milestones))
+        unknown = set(self.rewards) - set(paper_rewards())
+        if unknown:  # the behaviour passes lifetime_memory and touch_count to its own terms
+            raise ValueError(
+                f"unknown self_touch reward term(s) {sorted(unknown)}; "
+                f"valid: {', '.join(paper_rewards())}"
+            )

@@ -1,16 +1,27 @@
-"""The four intrinsic reward terms of Model I (paper sec. II-A3), one class each.
+"""The four Model I reward terms (paper sec. II-A3): one instance per worker, arrays over its envs.
 
-R_t = R_touch + R_geom + R_milestones + R_balance. Every term reads only ``ctx.facts``
-(computed once per step by :meth:`SelfTouch.facts`), so tests can drive them with synthetic
-:class:`devlearn.StepContext` objects:
+R_t = R_touch + R_geom + R_milestones + R_balance. Every term reads only facts (computed once
+per step by :meth:`SelfTouch.facts`): ``touched`` (68,) bool, ``hand_contacts`` (2, 68) bool,
+``hand_parts`` (2, 34) bool.
 
-- ``touched``: (68,) bool, region j counts as touched this step;
-- ``hand_contacts``: (2, 68) bool, hand h (left, right) touches region j (palm or fingers);
-- ``hand_parts``: (2, 34) bool, hand h touches side-free part p this step.
+Each class computes, for every environment at once, exactly the number (bit for bit) that the
+paper's per-environment formula gives (the oracle in ``plugins/self_touch/tests/
+per_env_rewards.py``), and saves the same per-environment state;
+``plugins/self_touch/tests/test_batched_rewards.py`` checks both.
+Where a per-environment term sums floats in a Python loop, the batched one sums them in the
+same order (a loop over the few touched pairs), and f_decay is tabulated with the same
+``math.exp``. The arrays are tiny, so the terms keep numpy calls few and return early when
+nothing was touched (most steps).
 
-"First ever" memory is lifetime state: kept across episodes by :meth:`reset`, saved by
-:meth:`state_dict` and restored on ``devlearn run --resume``. Per-episode memory is not saved
-(a resumed run starts fresh episodes).
+The two "first ever" memories (R_touch's regions, R_geom's hand-region pairs) are the run's by
+default (``lifetime_memory="shared"``): one memory per worker for all its envs, merged across
+workers and ranks at every iteration boundary (see
+:class:`devlearn.BatchedIntrinsicReward`), so a discovery pays first-ever once per agent
+rather than once per environment. When several envs of a worker make the same discovery on
+the same step, the first in batch order (the lowest env index) is paid first-ever and the
+others what an already-known region pays. ``lifetime_memory="per_env"`` keeps one memory per
+environment, as every run before issue #20 did; only that mode equals the per-environment
+twins.
 """
 
 from __future__ import annotations
@@ -20,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from devlearn import IntrinsicReward, StepContext
+from devlearn import BatchContext, BatchedIntrinsicReward
 from devlearn_self_touch.body_map import HANDS, NUM_PARTS, NUM_REGIONS
 
 
@@ -55,12 +66,25 @@ def _check_touch_count(touch_count: str) -> bool:
     return touch_count == "onset"
 
 
-class TouchNovelty(IntrinsicReward):
+LIFETIME_MEMORIES = ("shared", "per_env")
+"""Valid values of the terms' ``lifetime_memory`` (and of SelfTouchConfig.lifetime_memory)."""
+
+
+def _check_memory(lifetime_memory: str) -> bool:
+    """Return True for ``"shared"``; raise ValueError naming the valid values otherwise."""
+    if lifetime_memory not in LIFETIME_MEMORIES:
+        raise ValueError(
+            f"unknown lifetime_memory '{lifetime_memory}'; valid: {', '.join(LIFETIME_MEMORIES)}"
+        )
+    return lifetime_memory == "shared"
+
+
+class TouchNovelty(BatchedIntrinsicReward):
     """R_touch: novelty of each touched region, with the anti-boredom decay (sec. II-A3).
 
     For every region j touched this step (``facts["touched"]``), summed over regions::
 
-        first_ever          if j was never touched before in this environment's lifetime
+        first_ever          if j was never touched before in the lifetime (``lifetime_memory``)
         first_in_episode    else if c_j = 0
         repeat_scale * f_decay(c_j)   otherwise
 
@@ -77,6 +101,7 @@ class TouchNovelty(IntrinsicReward):
         touch_count: ``step`` (the paper's literal rule: every step a region is touched
             counts, so one region held for a whole episode costs about -489) or ``onset``
             (only a touch's first step counts and pays: holding costs nothing more).
+        lifetime_memory: ``shared`` (one memory for the run) or ``per_env`` (module docstring).
     """
 
     name = "touch_novelty"
@@ -89,51 +114,90 @@ class TouchNovelty(IntrinsicReward):
         repeat_scale: float = 0.5,
         midpoint: float = 10.0,
         rate: float = 0.5,
+        lifetime_memory: str = "shared",
         touch_count: str = "step",
     ) -> None:
         super().__init__(weight)
         self.first_ever, self.first_in_episode = float(first_ever), float(first_in_episode)
         self.repeat_scale, self.midpoint, self.rate = float(repeat_scale), midpoint, rate
+        self.shared = _check_memory(lifetime_memory)
         self.onset = _check_touch_count(touch_count)
-        self.ever = np.zeros(NUM_REGIONS, dtype=bool)
-        self.count = np.zeros(NUM_REGIONS, dtype=np.int64)
-        self.before = np.zeros(NUM_REGIONS, dtype=bool)
+        self._repeat = np.zeros(0)  # repeat_scale * f_decay(c) for c = 0, 1, ... (grown as needed)
+        self.bind(1)
 
-    def __call__(self, ctx: StepContext) -> float:
-        touched = np.asarray(ctx.facts["touched"], dtype=bool)
-        if self.onset:
+    def bind(self, num_envs: int) -> None:
+        super().bind(num_envs)
+        # ever: (1, 68) shared by the batch, or (num_envs, 68); count is always per env
+        self.ever = np.zeros((1 if self.shared else num_envs, NUM_REGIONS), dtype=bool)
+        self.count = np.zeros((num_envs, NUM_REGIONS), dtype=np.int64)
+        self.before = np.zeros((num_envs, NUM_REGIONS), dtype=bool)  # touched last step
+
+    def _repeat_pay(self, count: np.ndarray) -> np.ndarray:
+        """repeat_scale * f_decay(count), elementwise, with the per-env term's float math."""
+        need = int(count.max()) + 1
+        if need > len(self._repeat):
+            size = max(need, 2 * len(self._repeat), 64)
+            self._repeat = np.array(
+                [
+                    self.repeat_scale * f_decay(float(c), self.midpoint, self.rate)
+                    for c in range(size)
+                ]
+            )
+        return self._repeat.take(count)
+
+    def __call__(self, batch: BatchContext) -> np.ndarray:
+        touched = batch.stack("touched", bool)
+        if self.onset:  # only a touch's first step counts
             touched, self.before = touched & ~self.before, touched.copy()
-        reward = 0.0
-        for j in np.flatnonzero(touched):
-            if not self.ever[j]:
-                reward += self.first_ever
-            elif self.count[j] == 0:
-                reward += self.first_in_episode
-            else:
-                decay = f_decay(float(self.count[j]), self.midpoint, self.rate)
-                reward += self.repeat_scale * decay
-        self.ever |= touched
-        self.count += touched
-        return float(reward)
+        rows, cols = touched.nonzero()  # row-major: regions ascending
+        if len(rows) == 0:
+            return np.zeros(len(batch))
+        count = self.count[rows, cols]
+        if self.shared:
+            # Of the envs touching region j first this step, the lowest (pairs come in row
+            # order, so np.unique's first occurrence) is paid first-ever.
+            new = np.zeros(len(cols), dtype=bool)
+            _, first = np.unique(cols, return_index=True)
+            new[first] = ~self.ever[0, cols[first]]
+            self.ever[0, cols] = True
+        else:
+            new = ~self.ever[rows, cols]
+            self.ever[rows, cols] = True
+        pay = np.where(
+            new,
+            self.first_ever,
+            np.where(count == 0, self.first_in_episode, self._repeat_pay(count)),
+        )
+        reward = [0.0] * len(batch)
+        for row, value in zip(rows.tolist(), pay.tolist()):  # the per-env loop's order of sums
+            reward[row] += value
+        self.count[rows, cols] += 1
+        return np.array(reward)
 
-    def reset(self) -> None:
-        self.count[:] = 0
-        self.before[:] = False
+    def reset(self, env: int) -> None:
+        self.count[env] = 0
+        self.before[env] = False
 
-    def state_dict(self) -> dict[str, Any]:
-        return {"ever": self.ever.copy()}
+    def state_dict(self, env: int) -> dict[str, Any]:
+        return {"ever": self.ever[0 if self.shared else env].copy()}
 
-    def load_state_dict(self, state: dict[str, Any]) -> None:
-        self.ever = np.asarray(state["ever"], dtype=bool).copy()
+    def load_state_dict(self, env: int, state: dict[str, Any]) -> None:
+        _load_ever(self.ever, self.shared, env, state["ever"])
+
+    def run_memory(self) -> dict[str, np.ndarray]:
+        return {"ever": self.ever[0]} if self.shared else {}
+
+    def load_run_memory(self, memory: dict[str, np.ndarray]) -> None:
+        self.ever[0] = np.asarray(memory["ever"], dtype=bool)
 
 
-class ContactNovelty(IntrinsicReward):
+class ContactNovelty(BatchedIntrinsicReward):
     """R_geom: the event of hand h first touching region j (sec. II-A3).
 
     Per (hand, region) pair of ``facts["hand_contacts"]`` (2 x 68; the paper's body part j
     ranges over the 68-region map), summed over pairs::
 
-        first_ever          the pair's first contact in this environment's lifetime
+        first_ever          the pair's first contact in the lifetime (``lifetime_memory``)
         first_in_episode    its first contact in this episode
         0                   otherwise (sparse: holding or repeating a contact pays nothing)
 
@@ -141,37 +205,74 @@ class ContactNovelty(IntrinsicReward):
         weight: Term weight (paper: 1).
         first_ever: Paper: 10.0.
         first_in_episode: Paper: 2.0.
+        lifetime_memory: ``shared`` or ``per_env``, as for :class:`TouchNovelty`.
     """
 
     name = "contact_novelty"
 
     def __init__(
-        self, weight: float = 1.0, first_ever: float = 10.0, first_in_episode: float = 2.0
+        self,
+        weight: float = 1.0,
+        first_ever: float = 10.0,
+        first_in_episode: float = 2.0,
+        lifetime_memory: str = "shared",
     ) -> None:
         super().__init__(weight)
         self.first_ever, self.first_in_episode = float(first_ever), float(first_in_episode)
-        self.ever = np.zeros((len(HANDS), NUM_REGIONS), dtype=bool)
-        self.episode = np.zeros((len(HANDS), NUM_REGIONS), dtype=bool)
+        self.shared = _check_memory(lifetime_memory)
+        self.bind(1)
 
-    def __call__(self, ctx: StepContext) -> float:
-        contacts = np.asarray(ctx.facts["hand_contacts"], dtype=bool)
-        new_ever = contacts & ~self.ever
-        new_episode = contacts & ~self.episode & self.ever
-        self.ever |= contacts
+    def bind(self, num_envs: int) -> None:
+        super().bind(num_envs)
+        # ever: (1, 2, 68) shared by the batch, or (num_envs, 2, 68); episode is per env
+        self.ever = np.zeros((1 if self.shared else num_envs, len(HANDS), NUM_REGIONS), bool)
+        self.episode = np.zeros((num_envs, len(HANDS), NUM_REGIONS), dtype=bool)
+
+    def __call__(self, batch: BatchContext) -> np.ndarray:
+        contacts = batch.stack("hand_contacts", bool)  # (E, 2, 68)
+        if not contacts.any():
+            return np.zeros(len(batch))
+        known = self.ever  # (E, 2, 68), or (1, 2, 68) broadcast over the batch
+        if self.shared and len(contacts) > 1:
+            # a pair first contacted this step by several envs is new only to the first
+            earlier = np.zeros_like(contacts)
+            earlier[1:] = np.logical_or.accumulate(contacts[:-1], axis=0)
+            known = known | earlier
+        new_ever = (contacts & ~known).sum(axis=(1, 2))
+        new_episode = (contacts & ~self.episode & known).sum(axis=(1, 2))
+        self.ever |= contacts.any(axis=0, keepdims=True) if self.shared else contacts
         self.episode |= contacts
-        return float(self.first_ever * new_ever.sum() + self.first_in_episode * new_episode.sum())
+        return self.first_ever * new_ever + self.first_in_episode * new_episode
 
-    def reset(self) -> None:
-        self.episode[:] = False
+    def reset(self, env: int) -> None:
+        self.episode[env] = False
 
-    def state_dict(self) -> dict[str, Any]:
-        return {"ever": self.ever.copy()}
+    def state_dict(self, env: int) -> dict[str, Any]:
+        return {"ever": self.ever[0 if self.shared else env].copy()}
 
-    def load_state_dict(self, state: dict[str, Any]) -> None:
-        self.ever = np.asarray(state["ever"], dtype=bool).copy()
+    def load_state_dict(self, env: int, state: dict[str, Any]) -> None:
+        _load_ever(self.ever, self.shared, env, state["ever"])
+
+    def run_memory(self) -> dict[str, np.ndarray]:
+        return {"ever": self.ever[0]} if self.shared else {}
+
+    def load_run_memory(self, memory: dict[str, np.ndarray]) -> None:
+        self.ever[0] = np.asarray(memory["ever"], dtype=bool)
 
 
-class DiversityMilestones(IntrinsicReward):
+def _load_ever(ever: np.ndarray, shared: bool, env: int, saved: Any) -> None:
+    """Restore env ``env``'s saved "ever" memory: its own row, or into the shared row (env 0
+    replaces it, later envs are ORed in, so a batch loads the union of its envs' memories)."""
+    saved = np.asarray(saved, dtype=bool)
+    if not shared:
+        ever[env] = saved
+    elif env == 0:
+        ever[0] = saved
+    else:
+        ever[0] |= saved
+
+
+class DiversityMilestones(BatchedIntrinsicReward):
     """R_milestones: a bonus each time the episode's coverage crosses a milestone (sec. II-A3).
 
     The count is the number of distinct regions (of 68, the paper's "body parts" j of the body
@@ -195,22 +296,31 @@ class DiversityMilestones(IntrinsicReward):
         super().__init__(weight)
         self.reward = float(reward)
         self.milestones = tuple(sorted(int(m) for m in milestones))
-        self.seen = np.zeros(NUM_REGIONS, dtype=bool)
-        self.paid = 0  # milestones already paid this episode (they are crossed in order)
+        self._levels = np.asarray(self.milestones, dtype=np.int64)
+        self.bind(1)
 
-    def __call__(self, ctx: StepContext) -> float:
-        self.seen |= np.asarray(ctx.facts["touched"], dtype=bool)
-        reached = sum(1 for m in self.milestones if self.seen.sum() >= m)
+    def bind(self, num_envs: int) -> None:
+        super().bind(num_envs)
+        self.seen = np.zeros((num_envs, NUM_REGIONS), dtype=bool)
+        self.paid = np.zeros(num_envs, dtype=np.int64)
+
+    def __call__(self, batch: BatchContext) -> np.ndarray:
+        touched = batch.stack("touched", bool)
+        if not touched.any():
+            return np.zeros(len(batch))
+        self.seen |= touched
+        # milestones m <= count: the insertion point of count among the sorted milestones
+        reached = np.searchsorted(self._levels, self.seen.sum(axis=1), side="right")
         new = reached - self.paid
         self.paid = reached
-        return float(self.reward * new)
+        return self.reward * new
 
-    def reset(self) -> None:
-        self.seen[:] = False
-        self.paid = 0
+    def reset(self, env: int) -> None:
+        self.seen[env] = False
+        self.paid[env] = 0
 
 
-class Balance(IntrinsicReward):
+class Balance(BatchedIntrinsicReward):
     """R_balance: a bonus at episode end for ambidextrous exploration (sec. II-A3).
 
     N_L and N_R are the numbers of distinct side-free parts (of 34) the left and right hand
@@ -232,15 +342,21 @@ class Balance(IntrinsicReward):
     ) -> None:
         super().__init__(weight)
         self.reward, self.tolerance, self.min_parts = float(reward), int(tolerance), int(min_parts)
-        self.parts = np.zeros((len(HANDS), NUM_PARTS), dtype=bool)
+        self.bind(1)
 
-    def __call__(self, ctx: StepContext) -> float:
-        self.parts |= np.asarray(ctx.facts["hand_parts"], dtype=bool)
-        if not ctx.last_step:
-            return 0.0
-        n_left, n_right = (int(n) for n in self.parts.sum(axis=1))
-        balanced = abs(n_left - n_right) <= self.tolerance
-        return self.reward if balanced and n_left + n_right >= self.min_parts else 0.0
+    def bind(self, num_envs: int) -> None:
+        super().bind(num_envs)
+        self.parts = np.zeros((num_envs, len(HANDS), NUM_PARTS), dtype=bool)
 
-    def reset(self) -> None:
-        self.parts[:] = False
+    def __call__(self, batch: BatchContext) -> np.ndarray:
+        self.parts |= batch.stack("hand_parts", bool)
+        if not any(ctx.last_step for ctx in batch.contexts):  # pays only at episode ends
+            return np.zeros(len(batch))
+        last = batch.last_step
+        n = self.parts.sum(axis=2)  # (E, 2): parts touched by the left and right hand
+        balanced = np.abs(n[:, 0] - n[:, 1]) <= self.tolerance
+        pays = last & balanced & (n.sum(axis=1) >= self.min_parts)
+        return np.where(pays, self.reward, 0.0)
+
+    def reset(self, env: int) -> None:
+        self.parts[env] = False
