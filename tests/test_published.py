@@ -10,11 +10,12 @@ import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-MAX_TRACKED_BYTES = 40_000_000
-"""The tracked tree must stay under 40 MB so that a working tree travels to a GPU machine
+MAX_TRACKED_BYTES = 45_000_000
+"""The tracked tree must stay under 45 MB so that a working tree travels to a GPU machine
 (64 MiB, 67.1 MB) with room for what a run carries there (a run folder's training checkpoint:
 11.5 MB for hand regard). Back from 48 MB (issue #19's four hand-regard runs) to 40 MB in issue
-#32; superseded results go to git history (a restore command in their README), not the tree,
+#32; 45 MB since issue #30 (its five 8M-step policy files, 11.5 MB, which the issue asks to
+publish; 45 + 11.5 MB still fits); superseded results go to git history (a restore command in their README), not the tree,
 and tests use small fixtures (tests/training/data/), not published policy files."""
 
 
@@ -36,7 +37,7 @@ def test_tracked_tree_is_under_40_mb():
     total = sum(sizes.values())
     largest = sorted(sizes, key=sizes.get, reverse=True)[:5]
     assert total < MAX_TRACKED_BYTES, (
-        f"tracked files total {total / 1e6:.1f} MB (limit 40 MB); largest: "
+        f"tracked files total {total / 1e6:.1f} MB (limit 45 MB); largest: "
         + ", ".join(f"{p.relative_to(ROOT)} {sizes[p] / 1e6:.1f} MB" for p in largest)
         + ". Publish policy files (`devlearn slim`), not training checkpoints.")
 
