@@ -49,10 +49,9 @@ def replay(path: Path) -> dict[str, Any]:
 
     from devlearn.config.run_config import from_dict
     from devlearn.env.behavior_env import BehaviorEnv
-    from devlearn.training.checkpoint import load_actor
-    from devlearn.training.checkpoint import observation_batch as _batch
     from devlearn.plugins import PluginRegistry
-    from devlearn.training.checkpoint import load_checkpoint
+    from devlearn.training.checkpoint import load_actor, load_checkpoint
+    from devlearn.training.checkpoint import observation_batch as _batch
 
     torch.set_num_threads(1)
     state = load_checkpoint(path)

@@ -18,7 +18,6 @@ from devlearn.api.errors import UsageError
 from devlearn.config.run_config import to_dict
 from devlearn.env.behavior_env import BehaviorEnv
 from devlearn.training.checkpoint import LATEST, Checkpoint, observation_batch
-from devlearn.training.checkpoint import load_actor as load_actor  # plugins' tests import it here
 from devlearn.training.resolve import RunRequest, resolve_config
 
 if TYPE_CHECKING:

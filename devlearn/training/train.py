@@ -36,7 +36,6 @@ from devlearn.training.process import (
     seed_everything,
 )
 from devlearn.training.resolve import CONFIG_FILE, RunRequest, resolve_config, write_config_file
-from devlearn.training.resolve import load_run_config as load_run_config  # plugins' tests use it
 from devlearn.training.run_folder import copy_metrics, start_up
 from devlearn.training.runner import DevRunner
 

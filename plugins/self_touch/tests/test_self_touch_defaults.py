@@ -11,10 +11,9 @@ from devlearn_self_touch import SelfTouch
 from devlearn.api.errors import UsageError
 from devlearn.config.run_config import RunConfig, default_config, from_dict, to_dict
 from devlearn.env import BehaviorEnv
-from devlearn.evaluation.evaluate import load_actor
 from devlearn.plugins import PluginRegistry
-from devlearn.training.checkpoint import load_checkpoint
-from devlearn.training.train import load_run_config
+from devlearn.training.checkpoint import load_actor, load_checkpoint
+from devlearn.training.resolve import load_run_config
 
 ROOT = Path(__file__).resolve().parents[3]
 RESULTS = ROOT / "results/self_touch"

@@ -17,7 +17,7 @@ from devlearn.env import DevVecEnv
 from devlearn.testing import registry_for
 from devlearn.training import train
 from devlearn.training.checkpoint import load_checkpoint
-from devlearn.training.train import load_run_config
+from devlearn.training.resolve import load_run_config
 
 GROUPS = np.zeros(68, bool)
 GROUPS[:10] = True  # SwappingInfant's env 0 discovers regions 0-4, env 1 regions 5-9

@@ -15,7 +15,7 @@ from self_touch_fakes import SwappingInfant, make_ctx, train_swapping
 from devlearn.testing import registry_for
 from devlearn.training import train
 from devlearn.training.checkpoint import load_checkpoint
-from devlearn.training.train import load_run_config
+from devlearn.training.resolve import load_run_config
 
 
 def episode(left=(), right=()) -> np.ndarray:
