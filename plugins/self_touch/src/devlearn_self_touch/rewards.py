@@ -79,7 +79,35 @@ def _check_memory(lifetime_memory: str) -> bool:
     return lifetime_memory == "shared"
 
 
-class TouchNovelty(BatchedIntrinsicReward):
+class _LifetimeNovelty(BatchedIntrinsicReward):
+    """A novelty term's lifetime memory ``self.ever`` (one row per env, or one shared row when
+    ``self.shared``), saved per env and, when shared, as the run's memory."""
+
+    ever: np.ndarray
+    shared: bool
+
+    def state_dict(self, env: int) -> dict[str, Any]:
+        return {"ever": self.ever[0 if self.shared else env].copy()}
+
+    def load_state_dict(self, env: int, state: dict[str, Any]) -> None:
+        """Restore env ``env``'s saved memory: its own row, or into the shared row (env 0
+        replaces it, later envs are ORed in, so a batch loads the union of its envs' memories)."""
+        saved = np.asarray(state["ever"], dtype=bool)
+        if not self.shared:
+            self.ever[env] = saved
+        elif env == 0:
+            self.ever[0] = saved
+        else:
+            self.ever[0] |= saved
+
+    def run_memory(self) -> dict[str, np.ndarray]:
+        return {"ever": self.ever[0]} if self.shared else {}
+
+    def load_run_memory(self, memory: dict[str, np.ndarray]) -> None:
+        self.ever[0] = np.asarray(memory["ever"], dtype=bool)
+
+
+class TouchNovelty(_LifetimeNovelty):
     """R_touch: novelty of each touched region, with the anti-boredom decay (sec. II-A3).
 
     For every region j touched this step (``facts["touched"]``), summed over regions::
@@ -178,20 +206,8 @@ class TouchNovelty(BatchedIntrinsicReward):
         self.count[env] = 0
         self.before[env] = False
 
-    def state_dict(self, env: int) -> dict[str, Any]:
-        return {"ever": self.ever[0 if self.shared else env].copy()}
 
-    def load_state_dict(self, env: int, state: dict[str, Any]) -> None:
-        _load_ever(self.ever, self.shared, env, state["ever"])
-
-    def run_memory(self) -> dict[str, np.ndarray]:
-        return {"ever": self.ever[0]} if self.shared else {}
-
-    def load_run_memory(self, memory: dict[str, np.ndarray]) -> None:
-        self.ever[0] = np.asarray(memory["ever"], dtype=bool)
-
-
-class ContactNovelty(BatchedIntrinsicReward):
+class ContactNovelty(_LifetimeNovelty):
     """R_geom: the event of hand h first touching region j (sec. II-A3).
 
     Per (hand, region) pair of ``facts["hand_contacts"]`` (2 x 68; the paper's body part j
@@ -246,30 +262,6 @@ class ContactNovelty(BatchedIntrinsicReward):
 
     def reset(self, env: int) -> None:
         self.episode[env] = False
-
-    def state_dict(self, env: int) -> dict[str, Any]:
-        return {"ever": self.ever[0 if self.shared else env].copy()}
-
-    def load_state_dict(self, env: int, state: dict[str, Any]) -> None:
-        _load_ever(self.ever, self.shared, env, state["ever"])
-
-    def run_memory(self) -> dict[str, np.ndarray]:
-        return {"ever": self.ever[0]} if self.shared else {}
-
-    def load_run_memory(self, memory: dict[str, np.ndarray]) -> None:
-        self.ever[0] = np.asarray(memory["ever"], dtype=bool)
-
-
-def _load_ever(ever: np.ndarray, shared: bool, env: int, saved: Any) -> None:
-    """Restore env ``env``'s saved "ever" memory: its own row, or into the shared row (env 0
-    replaces it, later envs are ORed in, so a batch loads the union of its envs' memories)."""
-    saved = np.asarray(saved, dtype=bool)
-    if not shared:
-        ever[env] = saved
-    elif env == 0:
-        ever[0] = saved
-    else:
-        ever[0] |= saved
 
 
 class DiversityMilestones(BatchedIntrinsicReward):
