@@ -19,12 +19,23 @@ from devlearn.training.checkpoint import observation_batch as _batch
 from devlearn.training.process import quiet
 
 ROOT = Path(__file__).resolve().parents[2]
-PUBLISHED = {  # separate actor and critic; hand regard's with the old double image scaling
-    "self_touch": ROOT / "results/self_touch/run/policy.pt",
-    "hand_regard": ROOT / "results/hand_regard/run/policy.pt",
-    # a small fixture of the same (separate, pre-layout) kind, whatever stays published
+PUBLISHED = {
+    # issue #30's median seed (shared layout)
+    "self_touch": ROOT / "results/self_touch/i30/curriculum/runs/seed=4/policy.pt",
+    # the paper's CNN policy of issue #29 (separate layout, sees the eyes; its detector inside)
+    "hand_regard": ROOT / "results/hand_regard/i29/policy=cnn,seed=1/policy.pt",
+    # a small fixture as every run before the layouts saved it (separate, double uint8 scale)
     "hand_to_mouth": ROOT / "tests/training/data/hand_to_mouth_separate_legacy.pt",
 }
+# A hand-regard CNN policy saved as before the layouts (no network section: separate, double
+# uint8 image scale), made in the test: its published file (results/hand_regard/run/) moved to
+# git history to keep the tree small.
+LEGACY_CNN = [
+    "behavior.policy=cnn",
+    "network.layout=separate",
+    "network.legacy_uint8_scale=true",
+    "network.head=paper",
+]
 BEHAVIORS = ["self_touch", "hand_regard", "hand_to_mouth"]
 
 
@@ -46,9 +57,10 @@ def record(behavior, steps: int = 4) -> dict[str, np.ndarray]:
     return {k: np.stack([np.array(o[k]) for o in seen]) for k in seen[0]}
 
 
-def fresh_checkpoint(name: str, registry, path: Path) -> Path:
-    """A checkpoint of an untrained policy in today's default (shared) layout."""
-    cfg = default_config(registry.behavior(name))
+def fresh_checkpoint(name: str, registry, path: Path, overrides=(), legacy=False) -> Path:
+    """A checkpoint of an untrained policy in today's default (shared) layout, or as
+    ``overrides`` configure it; ``legacy``: its config saved without a network section."""
+    cfg = default_config(registry.behavior(name), list(overrides))
     behavior = registry.create(name, cfg.behavior)
     env = BehaviorEnv(behavior, 0, training=False)
     obs = env.reset()
@@ -61,7 +73,10 @@ def fresh_checkpoint(name: str, registry, path: Path) -> Path:
     actor = actor_class(_batch(obs), groups, "actor", env.action_dim, **kwargs)
     with torch.no_grad():  # undo the small initial head: actions far from 0
         [m for m in actor.mlp if isinstance(m, torch.nn.Linear)][-1].weight.mul_(100.0)
-    state = {"format": FORMAT, "behavior": name, "config": to_dict(cfg)}
+    saved = to_dict(cfg)
+    if legacy:
+        del saved["network"]
+    state = {"format": FORMAT, "behavior": name, "config": saved}
     state["actor_state_dict"] = actor.state_dict()
     save_atomic(state, path)
     return path
@@ -70,7 +85,7 @@ def fresh_checkpoint(name: str, registry, path: Path) -> Path:
 def published_checkpoint(name: str, tmp_path: Path) -> Path:
     """A published checkpoint, its detector pointed at the committed copy."""
     state = load_checkpoint(PUBLISHED[name])
-    if name == "hand_regard":
+    if name == "hand_regard" and not state.get("artifacts"):
         state["config"]["behavior"]["detector_file"] = str(
             ROOT / "results/hand_regard/hand_detector.json"
         )
@@ -87,6 +102,11 @@ def test_exported_policies_match_torch_on_recorded_observations(name, registry, 
     checkpoints = [fresh_checkpoint(name, registry, tmp_path / f"{name}.pt")]
     if name in PUBLISHED and PUBLISHED[name].exists():
         checkpoints.append(published_checkpoint(name, tmp_path))
+    if name == "hand_regard":
+        legacy = fresh_checkpoint(name, registry, tmp_path / "legacy.pt", LEGACY_CNN, legacy=True)
+        saved = from_dict(load_checkpoint(legacy)["config"], registry.behavior(name))
+        assert saved.network.layout == "separate" and saved.network.legacy_uint8_scale
+        checkpoints.append(legacy)
     for checkpoint in checkpoints:
         # observations of the behaviour as the checkpoint configures it (a published
         # hand-regard policy sees the eyes; today's default policy does not)

@@ -10,55 +10,31 @@ import torch
 import torch.nn as nn
 from rsl_rl.utils import resolve_class, resolve_obs_groups
 
-from devlearn.config.run_config import default_config, from_dict, to_rsl_rl
+from devlearn.config.run_config import default_config, from_dict, to_dict, to_rsl_rl
 from devlearn.env import BehaviorEnv
 from devlearn.plugins import PluginRegistry
-from devlearn.training.checkpoint import load_actor, load_checkpoint
+from devlearn.training.checkpoint import FORMAT, load_actor, load_checkpoint, save_atomic
 from devlearn.training.checkpoint import observation_batch as _batch
 from devlearn.training.process import quiet
 
 ROOT = Path(__file__).resolve().parents[2]
 DATA = Path(__file__).resolve().parent / "data"
-# Raw head outputs (mean row, then std row; first 4 actions) on synthetic() observations,
-# computed with the code these runs were trained with (main at 9026bfa, before the layouts).
-# Published runs whose policy files moved to git history (issue #32: max_std/run and
-# max_std_seed2/run, at fc8804f) are covered by the small committed fixture
-# data/hand_to_mouth_separate_legacy.pt instead.
-TRAINED_AS = {
-    "results/self_touch/run": [
-        -2392.8337,
-        -2301.7483,
-        1694.8726,
-        2369.4751,
-        10902.952,
-        13065.871,
-        12863.380,
-        6808.2773,
-    ],
-    "results/hand_regard/run": [
-        0.56497365,
-        10.585306,
-        14.386101,
-        10.992870,
-        13.227118,
-        4.9613376,
-        -2.6875684,
-        6.8206606,
-    ],
-}
+LEGACY_CNN = [
+    "behavior.policy=cnn",
+    "network.layout=separate",
+    "network.legacy_uint8_scale=true",
+    "network.head=paper",
+]
+# Policies saved before the layouts (separate actor, double uint8 scale): the published runs
+# of that kind (max_std/run and max_std_seed2/run at fc8804f, issue #32; self_touch/run and
+# hand_regard/run at 2d704d9) moved to git history to keep the tree small. The small committed
+# fixture data/hand_to_mouth_separate_legacy.pt stands for their file format, and a hand-regard
+# CNN policy saved the old way in the test below for their image scale.
 
 
 @pytest.fixture(scope="module")
 def registry():
     return PluginRegistry()
-
-
-def checkpoint_in(run: Path) -> Path:
-    """The run's policy file (a slim ``policy.pt`` where published so) or latest checkpoint."""
-    for name in ("policy.pt", "checkpoint_latest.pt"):
-        if (run / name).exists():
-            return run / name
-    raise FileNotFoundError(f"no checkpoint in {run}")
 
 
 def synthetic(obs: dict[str, np.ndarray], seed: int = 0) -> dict[str, np.ndarray]:
@@ -111,22 +87,36 @@ def act_a_few_steps(env, actor, obs, steps: int = 5) -> None:
         obs = env.step(action)[0]
 
 
-@pytest.mark.parametrize("run", sorted(TRAINED_AS))
-def test_published_separate_checkpoints_act_as_trained(run, registry):
-    cfg, env, obs, actor = rebuild(checkpoint_in(ROOT / run), registry)
+def test_an_old_cnn_policy_keeps_its_double_image_scale(registry, tmp_path):
+    """A hand-regard CNN policy saved before the layouts (no network section) is rebuilt
+    separate with the double uint8 scale it was trained with; [0, 1] images act otherwise."""
+    cfg = default_config(registry.behavior("hand_regard"), LEGACY_CNN)
+    behavior = registry.create("hand_regard", cfg.behavior)
+    env = BehaviorEnv(behavior, 0, training=False)
+    obs = env.reset()
+    env.close()
+    torch.manual_seed(3)
+    actor = untrained_actor(cfg, behavior, obs, env.action_dim)
+    with torch.no_grad():  # away from the initialisation, like trained weights
+        for p in actor.parameters():
+            p.add_(0.05 * torch.randn_like(p))
+    saved = to_dict(cfg)
+    del saved["network"]  # as every run before the layouts wrote it
+    path = tmp_path / "old_cnn.pt"
+    save_atomic({"format": FORMAT, "behavior": "hand_regard", "config": saved,
+                 "policy_only": True, "actor_state_dict": actor.state_dict()}, path)
+    as_saved = raw_head(actor, obs)
+    cfg, env, obs, rebuilt = rebuild(path, registry)
     try:
         assert cfg.network.layout == "separate" and cfg.network.legacy_uint8_scale
-        assert not actor.shared
-        np.testing.assert_allclose(raw_head(actor, obs), TRAINED_AS[run], rtol=1e-5)
-        act_a_few_steps(env, actor, obs)
+        assert not rebuilt.shared
+        np.testing.assert_allclose(raw_head(rebuilt, obs), as_saved, rtol=1e-5, atol=1e-6)
+        act_a_few_steps(env, rebuilt, obs)
     finally:
         env.close()
-    if "hand_regard" in run:  # the recorded scale matters: [0, 1] images give other actions
-        _, env, obs, fixed = rebuild(checkpoint_in(ROOT / run), registry, legacy_uint8_scale=False)
-        env.close()
-        # only slightly (up to ~7e-3 here): trained on near-black images, the eye CNNs'
-        # biases drown their input, so this policy hardly looks
-        assert not np.allclose(raw_head(fixed, obs), TRAINED_AS[run], rtol=1e-5)
+    _, env, obs, fixed = rebuild(path, registry, legacy_uint8_scale=False)
+    env.close()
+    assert not np.allclose(raw_head(fixed, obs), as_saved, rtol=1e-5, atol=1e-6)
 
 
 def test_committed_separate_legacy_checkpoint_acts_as_saved(registry):

@@ -86,12 +86,8 @@ def test_old_run_config_loads_with_mittens_and_the_bilateral_term():
     cfg = from_dict(saved, HandRegard)
     assert cfg.behavior.appearance == "mittens" and cfg.behavior.reward == "bilateral"
     assert "bilateral_balance" in _names(cfg.behavior)
-    # The published policy file carries the same config (tests/training/test_layouts.py
-    # loads it and acts with it).
-    from devlearn.training.checkpoint import load_checkpoint
-
-    state = load_checkpoint(ROOT / "results/hand_regard/run/policy.pt")
-    behavior = HandRegard(from_dict(state["config"], HandRegard).behavior)
+    # Its policy file (in git history since 2d704d9) carried this config: the old scene.
+    behavior = HandRegard(cfg.behavior)
     assert behavior.infant_options() == {"appearance": "mittens", "start": "rest"}
     assert behavior.scene == "sitting" and behavior.config.policy == "cnn"
     # A config saved now keeps its own values; no saved behaviour section: today's defaults.

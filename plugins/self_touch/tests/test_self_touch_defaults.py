@@ -12,7 +12,7 @@ from devlearn.api.errors import UsageError
 from devlearn.config.run_config import RunConfig, default_config, from_dict, to_dict
 from devlearn.env import BehaviorEnv
 from devlearn.plugins import PluginRegistry
-from devlearn.training.checkpoint import load_actor, load_checkpoint
+from devlearn.training.checkpoint import load_actor
 from devlearn.training.resolve import load_run_config
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -59,19 +59,29 @@ def test_published_runs_load_as_trained(run, max_std):
     assert (cfg.behavior.max_std, cfg.behavior.lifetime_memory) == (max_std, "per_env")
 
 
-def test_published_policy_file_acts_with_its_unbounded_spread():
-    """results/self_touch/run/policy.pt was trained with the paper's softplus spread (~1,000
-    by the end): rebuilt after the default became 1.0, its policy still has that spread."""
+def test_the_old_runs_policy_is_rebuilt_with_its_unbounded_spread():
+    """results/self_touch/run was trained with the paper's softplus spread (~1,000 by the end;
+    its policy file is in git history since 2d704d9): a policy of its saved config, rebuilt
+    after the default became 1.0, still has that spread."""
+    from rsl_rl.utils import resolve_class, resolve_obs_groups
+
+    from devlearn.config.run_config import to_rsl_rl
+    from devlearn.training.checkpoint import observation_batch
+
     registry = PluginRegistry()
-    state = load_checkpoint(RESULTS / "run/policy.pt")
-    cfg = from_dict(state["config"], SelfTouch)
+    cfg = from_dict(json.loads((RESULTS / "run/config.json").read_text()), SelfTouch)
     assert (cfg.behavior.max_std, cfg.behavior.lifetime_memory) == (0.0, "per_env")
     behavior = registry.create("self_touch", cfg.behavior)
     env = BehaviorEnv(behavior, 0, training=False)
     try:
         env.set_stage(behavior.eval_stage())
         obs = env.reset()
-        actor = load_actor(cfg, state, behavior, obs, env.action_dim)
+        train_cfg = to_rsl_rl(cfg, behavior, list(obs))
+        batch = observation_batch(obs)
+        groups = resolve_obs_groups(batch, train_cfg["obs_groups"], ["actor", "critic"])
+        actor_class, kwargs = resolve_class(train_cfg["actor"])
+        saved = actor_class(batch, groups, "actor", env.action_dim, **kwargs).state_dict()
+        actor = load_actor(cfg, {"actor_state_dict": saved}, behavior, obs, env.action_dim)
     finally:
         env.close()
     assert actor.distribution.max_std == 0.0
