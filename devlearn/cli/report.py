@@ -36,10 +36,21 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
             return None  # its plugin is not installed: no paper column
         return registry.behavior(behavior).paper_results(config)
 
+    def as_loaded(behavior: str, config: dict) -> dict:
+        from devlearn.api.errors import UsageError
+        from devlearn.config.run_config import from_dict, to_dict
+
+        if behavior not in registry.behaviors():
+            return config  # its plugin is not installed: compared as saved
+        try:
+            return to_dict(from_dict(config, registry.behavior(behavior)))
+        except UsageError:
+            return config  # a config this version cannot read: compared as saved
+
     from devlearn.cli.folders import removed_on_failure
 
     with removed_on_failure(args.out):
-        write_report(args.paths, args.out, paper_results)
+        write_report(args.paths, args.out, paper_results, as_loaded)
     print((Path(args.out) / "report.md").read_text(), end="")
     print(f"written to {args.out}: report.md, report.png")
     return 0

@@ -18,6 +18,11 @@ PaperResults = Callable[[str, dict[str, Any]], "tuple[str, dict[str, float]] | N
 """(behaviour name, a run's config) -> (column label, the paper's figures) or None: the named
 behaviour's :meth:`devlearn.Behavior.paper_results`."""
 
+ConfigLoader = Callable[[str, dict[str, Any]], dict[str, Any]]
+"""(behaviour name, a run's saved config) -> that config as a run loads it (keys saved before a
+rename upgraded, missing keys filled as the run was trained): in the CLI, the behaviour's
+``from_dict`` then ``to_dict``. Configs of the same recipe then compare equal however old."""
+
 BASELINES = ("zero", "random", "held_random")
 """Baseline policies (``devlearn eval BEHAVIOR --policy ...``) shown beside every variant."""
 NOT_VARIANT = frozenset(
@@ -152,23 +157,26 @@ def collect(paths: Sequence[str | Path]) -> tuple[list[tuple[Path, dict]], list[
     return sorted(found.items()), notes
 
 
-def group(evaluations: list[tuple[Path, dict]]) -> tuple[dict[str, list], list[str]]:
+def group(
+    evaluations: list[tuple[Path, dict]], as_loaded: ConfigLoader | None = None
+) -> tuple[dict[str, list], list[str]]:
     """Group checkpoint evaluations by variant (differing config keys), baselines by policy.
 
-    A run evaluated at several checkpoints counts once, with its latest checkpoint.
+    A run evaluated at several checkpoints counts once, with its latest checkpoint. With
+    ``as_loaded``, configs are compared as runs load them (a config saved with
+    ``behavior.weight_balance`` and one with ``behavior.rewards.balance.weight`` of the same
+    value are one variant); without it, as saved.
 
     Returns:
         ``({column name: [(path, summary), ...]}, notes)``; variants first, then baselines.
     """
     notes: list[str] = []
     runs = [(p, d) for p, d in evaluations if d.get("policy", "checkpoint") == "checkpoint"]
+    saved = [d.get("config") or {} for _, d in runs]
+    if as_loaded is not None:
+        saved = [as_loaded(d.get("behavior", "?"), c) for (_, d), c in zip(runs, saved)]
     configs = [
-        {
-            k: json.dumps(v)
-            for k, v in _flatten(d.get("config") or {}).items()
-            if k not in NOT_VARIANT
-        }
-        for _, d in runs
+        {k: json.dumps(v) for k, v in _flatten(c).items() if k not in NOT_VARIANT} for c in saved
     ]
     keys = sorted({k for c in configs for k in c if len({x.get(k) for x in configs}) > 1})
     columns: dict[str, dict] = {}
@@ -214,7 +222,10 @@ def paper_columns(
 
 
 def write_report(
-    paths: Sequence[str | Path], out_dir: str | Path, paper_results: PaperResults | None = None
+    paths: Sequence[str | Path],
+    out_dir: str | Path,
+    paper_results: PaperResults | None = None,
+    as_loaded: ConfigLoader | None = None,
 ) -> dict[str, Any]:
     """Write ``out_dir/report.md`` (table) and ``out_dir/report.png`` (bars with error bars).
 
@@ -224,6 +235,9 @@ def write_report(
         out_dir: Folder to write into (created).
         paper_results: Where the paper's figures for each variant come from (in the CLI, the
             behaviour's :meth:`devlearn.Behavior.paper_results`): columns after the baselines.
+        as_loaded: How a saved config loads (:data:`ConfigLoader`; in the CLI, through the
+            behaviour's config class), so that variants are told apart by what their runs
+            trained with, not by how old their config files are; None: as saved.
     Returns:
         ``{"behavior", "metrics": [...], "columns": {name: {"kind", "seeds", "paths"}},
         "table": {metric: {column: {"n", "mean", "std", "ci_low", "ci_high", "values"}}},
@@ -233,7 +247,7 @@ def write_report(
         UsageError: An empty or missing folder, mixed behaviours, no checkpoint evaluation.
     """
     evaluations, notes = collect(paths)
-    columns, more = group(evaluations)
+    columns, more = group(evaluations, as_loaded)
     notes += more
     variants = [c for c in columns if not c.endswith(" baseline")]
     if not variants:

@@ -197,3 +197,53 @@ def test_baselines_beside_an_evaluation_are_taken_only_of_its_behaviour(tmp_path
     fake_eval(tmp_path / "runs" / "hr_held", 0.0, 0, behavior="hand_regard", policy="random")
     result = write_report([run, tmp_path / "runs" / "st_zero"], tmp_path / "report")
     assert set(result["columns"]) == {"trained", "zero baseline"}
+
+
+def test_configs_saved_before_and_after_a_key_rename_are_one_variant(tmp_path, capsys):
+    """Issue #31 moved `behavior.weight_balance` to `behavior.rewards.balance.weight`: the
+    CLI compares configs as runs load them, so two seeds saved the old way and one saved the
+    new way are one recipe, and a changed weight (either way of saving) is another."""
+    from pathlib import Path
+
+    from devlearn.config.run_config import from_dict, to_dict
+    from devlearn.plugins import PluginRegistry
+
+    root = Path(__file__).resolve().parents[2]
+    old = json.loads(
+        (root / "results/self_touch/i30/curriculum/runs/seed=1/config.json").read_text()
+    )
+    assert "weight_balance" in old["behavior"] and "rewards" not in old["behavior"]
+    new = to_dict(from_dict(old, PluginRegistry().behavior("self_touch")))
+    assert "weight_balance" not in new["behavior"] and "rewards" in new["behavior"]
+    no_balance = json.loads(json.dumps(new))
+    no_balance["behavior"]["rewards"]["balance"]["weight"] = 0.0
+    no_balance_old = {**old, "behavior": {**old["behavior"], "weight_balance": 0.0}}
+    runs = []
+    for name, seed, config in [
+        ("old1", 1, old),
+        ("old2", 2, old),
+        ("new3", 3, new),
+        ("off1", 1, no_balance),
+        ("off2", 2, no_balance_old),
+    ]:
+        folder = fake_eval(tmp_path / name / "eval", 0.5 + seed / 10, seed)
+        data = json.loads((folder / "eval.json").read_text())
+        data["config"] = {**config, "seed": seed, "out_dir": f"runs/{name}"}
+        (folder / "eval.json").write_text(json.dumps(data))
+        runs.append(str(folder))
+    assert main(["report", *runs, "--out", str(tmp_path / "r")]) == 0
+    out = capsys.readouterr().out
+    markdown = (tmp_path / "r" / "report.md").read_text()
+    assert markdown in out
+    listed = {
+        line.split("**")[1]: line.split("seeds ")[1].split(" from")[0]
+        for line in markdown.splitlines()
+        if line.startswith("- **behavior.")
+    }
+    assert listed == {
+        "behavior.rewards.balance.weight=1.0": "[3, 1, 2]",  # new3/ sorts before old1/
+        "behavior.rewards.balance.weight=0.0": "[1, 2]",
+    }
+    # as saved (no loader), the old and new files would have been told apart
+    columns = write_report(runs, tmp_path / "raw")["columns"]
+    assert len([c for c in columns if not c.endswith("baseline")]) > 2
