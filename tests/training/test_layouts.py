@@ -87,24 +87,40 @@ def act_a_few_steps(env, actor, obs, steps: int = 5) -> None:
         obs = env.step(action)[0]
 
 
-def test_an_old_cnn_policy_keeps_its_double_image_scale(registry, tmp_path):
-    """A hand-regard CNN policy saved before the layouts (no network section) is rebuilt
-    separate with the double uint8 scale it was trained with; [0, 1] images act otherwise."""
-    cfg = default_config(registry.behavior("hand_regard"), LEGACY_CNN)
-    behavior = registry.create("hand_regard", cfg.behavior)
+def saved_the_old_way(name: str, overrides: list[str], seed: int, registry):
+    """A policy file's state as every run before the layouts saved it (a config without a
+    network section), of a seeded actor moved off its initialisation like trained weights;
+    and the actor and one observation."""
+    cfg = default_config(registry.behavior(name), overrides)
+    behavior = registry.create(name, cfg.behavior)
     env = BehaviorEnv(behavior, 0, training=False)
     obs = env.reset()
     env.close()
-    torch.manual_seed(3)
+    torch.manual_seed(seed)
     actor = untrained_actor(cfg, behavior, obs, env.action_dim)
-    with torch.no_grad():  # away from the initialisation, like trained weights
+    with torch.no_grad():
         for p in actor.parameters():
             p.add_(0.05 * torch.randn_like(p))
     saved = to_dict(cfg)
-    del saved["network"]  # as every run before the layouts wrote it
+    del saved["network"]
+    state = {
+        "format": FORMAT,
+        "behavior": name,
+        "config": saved,
+        "policy_only": True,
+        "iteration": 0,
+        "env_steps": 0,
+        "actor_state_dict": actor.state_dict(),
+    }
+    return state, actor, obs
+
+
+def test_an_old_cnn_policy_keeps_its_double_image_scale(registry, tmp_path):
+    """A hand-regard CNN policy saved before the layouts (no network section) is rebuilt
+    separate with the double uint8 scale it was trained with; [0, 1] images act otherwise."""
+    state, actor, obs = saved_the_old_way("hand_regard", LEGACY_CNN, 3, registry)
     path = tmp_path / "old_cnn.pt"
-    save_atomic({"format": FORMAT, "behavior": "hand_regard", "config": saved,
-                 "policy_only": True, "actor_state_dict": actor.state_dict()}, path)
+    save_atomic(state, path)
     as_saved = raw_head(actor, obs)
     cfg, env, obs, rebuilt = rebuild(path, registry)
     try:

@@ -9,42 +9,21 @@ repository root: ``.venv/bin/python tests/training/data/make_separate_legacy.py`
 import sys
 from pathlib import Path
 
-import torch
-
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # tests/training
-from test_layouts import raw_head, rebuild, untrained_actor
+from test_layouts import raw_head, rebuild, saved_the_old_way
 
-from devlearn.config.run_config import default_config, to_dict
-from devlearn.env import BehaviorEnv
 from devlearn.plugins import PluginRegistry
-from devlearn.training.checkpoint import FORMAT, save_atomic
+from devlearn.training.checkpoint import save_atomic
 
 registry = PluginRegistry()
-cfg = default_config(
-    registry.behavior("hand_to_mouth"),
-    ["network.layout=separate", "network.legacy_uint8_scale=true", "seed=5"],
-)
-behavior = registry.create("hand_to_mouth", cfg.behavior)
-env = BehaviorEnv(behavior, 0, training=False)
-obs = env.reset()
-env.close()
-torch.manual_seed(5)
-actor = untrained_actor(cfg, behavior, obs, env.action_dim)
+overrides = [
+    "network.layout=separate",
+    "network.legacy_uint8_scale=true",
+    "network.head=paper",  # the head every run before issue #28 had
+    "seed=5",
+]
+state, actor, _ = saved_the_old_way("hand_to_mouth", overrides, 5, registry)
 assert not actor.shared
-with torch.no_grad():
-    for p in actor.parameters():
-        p.add_(0.05 * torch.randn_like(p))  # away from the initialisation, like trained weights
-saved = to_dict(cfg)
-del saved["network"]  # as every run before the layouts wrote it
-state = {
-    "format": FORMAT,
-    "behavior": "hand_to_mouth",
-    "config": saved,
-    "policy_only": True,
-    "iteration": 0,
-    "env_steps": 0,
-    "actor_state_dict": actor.state_dict(),
-}
 out = Path(__file__).resolve().parent / "hand_to_mouth_separate_legacy.pt"
 save_atomic(state, out)
 cfg2, env2, obs2, actor2 = rebuild(out, registry)
