@@ -15,6 +15,8 @@ from devlearn.api.errors import UsageError
 from devlearn.env.behavior_env import BehaviorEnv
 from devlearn.infant import build_infant
 
+RESULTS = Path(__file__).resolve().parents[3] / "results" / "hand_regard"
+
 
 @pytest.fixture(scope="module")
 def sitting():
@@ -113,16 +115,51 @@ def test_policy_artifacts_carry_the_detector(detector_file):
     assert restored.detector.params == behavior.detector.params
 
 
-def test_relocated_run_folder_evaluates(tmp_path):
-    """A run whose config names its detector by an absolute path, moved after training."""
-    import torch
+def old_run_policy(detector_file: Path) -> dict:
+    """A policy file's state as a run before issue #29 saved it: results/hand_regard/run's
+    config (old scene, random starts; its policy file is in git history since 2d704d9) with
+    an actor of that config and the detector among its artifacts. The weights are fresh: these
+    tests check the evaluation protocol, not what the policy does."""
+    from rsl_rl.utils import resolve_class, resolve_obs_groups
 
+    from devlearn.config.run_config import from_dict, to_rsl_rl
+    from devlearn.training.checkpoint import FORMAT, observation_batch
+
+    saved = json.loads((RESULTS / "run" / "config.json").read_text())
+    saved["behavior"]["detector_file"] = str(detector_file)
+    cfg = from_dict(saved, HandRegard)
+    behavior = HandRegard(cfg.behavior)
+    env = BehaviorEnv(behavior, 0, training=False)
+    try:
+        env.set_stage(behavior.eval_stage())
+        obs = env.reset()
+        train_cfg = to_rsl_rl(cfg, behavior, list(obs))
+        batch = observation_batch(obs)
+        groups = resolve_obs_groups(batch, train_cfg["obs_groups"], ["actor", "critic"])
+        actor_class, kwargs = resolve_class(train_cfg["actor"])
+        actor = actor_class(batch, groups, "actor", env.action_dim, **kwargs)
+        artifacts = behavior.policy_artifacts()
+    finally:
+        env.close()
+    return {
+        "format": FORMAT,
+        "behavior": "hand_regard",
+        "config": saved,
+        "policy_only": True,
+        "iteration": 0,
+        "env_steps": 0,
+        "actor_state_dict": actor.state_dict(),
+        "artifacts": artifacts,
+    }
+
+
+def test_relocated_run_folder_evaluates(tmp_path, detector_file):
+    """A run whose config names its detector by an absolute path, moved after training."""
     from devlearn.evaluation.evaluate import evaluate
     from devlearn.plugins import PluginRegistry
     from devlearn.training.checkpoint import save_atomic
 
-    published = Path(__file__).resolve().parents[3] / "results" / "hand_regard" / "run"
-    state = torch.load(published / "policy.pt", weights_only=True)
+    state = old_run_policy(detector_file)
     original = tmp_path / "original"
     original.mkdir()
     detector = state.pop("artifacts")["hand_detector"]
@@ -155,12 +192,14 @@ def test_relocated_run_folder_evaluates(tmp_path):
     assert summary["config"]["behavior"].get("scene") is None
 
 
-def test_published_policy_evaluates_from_babybench_start(tmp_path):
-    """`devlearn eval hand_regard --start babybench` on a published policy file (old scene)."""
+def test_an_old_policy_file_evaluates_from_babybench_start(tmp_path, detector_file):
+    """`devlearn eval hand_regard --start babybench` on a policy file of the old scene."""
     from devlearn.evaluation.evaluate import evaluate
     from devlearn.plugins import PluginRegistry
+    from devlearn.training.checkpoint import save_atomic
 
-    published = Path(__file__).resolve().parents[3] / "results" / "hand_regard" / "run"
+    policy = tmp_path / "policy.pt"
+    save_atomic(old_run_policy(detector_file), policy)
     scenes = []
 
     def short(scene, **kwargs):
@@ -171,7 +210,7 @@ def test_published_policy_evaluates_from_babybench_start(tmp_path):
 
     summary = evaluate(
         "hand_regard",
-        published / "policy.pt",
+        policy,
         1,
         PluginRegistry(),
         infant_factory=short,
