@@ -14,7 +14,7 @@ from devlearn.config.run_config import default_config, from_dict, to_dict, to_rs
 from devlearn.env import BehaviorEnv
 from devlearn.evaluation.export import DeterministicPolicy, export_policy, load_policy
 from devlearn.plugins import PluginRegistry
-from devlearn.training.checkpoint import FORMAT, load_checkpoint, save_atomic
+from devlearn.training.checkpoint import FORMAT, Checkpoint, load_checkpoint, save_atomic
 from devlearn.training.checkpoint import observation_batch as _batch
 from devlearn.training.process import quiet
 
@@ -108,10 +108,9 @@ def test_exported_policies_match_torch_on_recorded_observations(name, registry, 
         assert saved.network.layout == "separate" and saved.network.legacy_uint8_scale
         checkpoints.append(legacy)
     for checkpoint in checkpoints:
-        # observations of the behaviour as the checkpoint configures it (a published
-        # hand-regard policy sees the eyes; today's default policy does not)
-        saved = from_dict(load_checkpoint(checkpoint)["config"], registry.behavior(name))
-        recorded = record(registry.create(name, saved.behavior))
+        # observations of the behaviour as the checkpoint configures it, with its artifacts
+        # (a published hand-regard policy sees the eyes and carries its detector)
+        recorded = record(Checkpoint.open(checkpoint, registry, name).behavior())
         policy, obs = load_policy(name, checkpoint, registry)
         inputs = [recorded[n] for n in policy.names]
         with torch.inference_mode():
