@@ -517,6 +517,31 @@ class Checkpoint:
         return load_actor(self.config, self.state, self.behavior(), obs, action_dim)
 
 
+def build_actor(
+    cfg: RunConfig, behavior: Behavior, obs: dict[str, np.ndarray], action_dim: int
+) -> MultiSenseModel:
+    """The policy network ``cfg`` builds for ``behavior`` (freshly initialised, from torch's
+    global generator): the network a run trains and :func:`load_actor` fills.
+
+    Args:
+        cfg: A run config.
+        behavior: Its behaviour.
+        obs: One observation (name -> unbatched array).
+        action_dim: Number of actions.
+    """
+    from rsl_rl.utils import resolve_class, resolve_obs_groups
+
+    from devlearn.training.process import quiet
+
+    train_cfg = to_rsl_rl(cfg, behavior, list(obs))
+    batch = observation_batch(obs)
+    with quiet():  # rsl-rl prints the resolved sets
+        groups = resolve_obs_groups(batch, train_cfg["obs_groups"], ["actor", "critic"])
+    actor_class, actor_kwargs = resolve_class(train_cfg["actor"])
+    actor: MultiSenseModel = actor_class(batch, groups, "actor", action_dim, **actor_kwargs)
+    return actor
+
+
 def load_actor(
     cfg: RunConfig,
     checkpoint: dict[str, Any],
@@ -535,16 +560,7 @@ def load_actor(
     Raises:
         UsageError: The weights do not fit the network ``cfg`` builds.
     """
-    from rsl_rl.utils import resolve_class, resolve_obs_groups
-
-    from devlearn.training.process import quiet
-
-    train_cfg = to_rsl_rl(cfg, behavior, list(obs))
-    batch = observation_batch(obs)
-    with quiet():  # rsl-rl prints the resolved sets
-        groups = resolve_obs_groups(batch, train_cfg["obs_groups"], ["actor", "critic"])
-    actor_class, actor_kwargs = resolve_class(train_cfg["actor"])
-    actor = actor_class(batch, groups, "actor", action_dim, **actor_kwargs)
+    actor = build_actor(cfg, behavior, obs, action_dim)
     source = f"the {behavior.name} checkpoint"
     check_fits(actor.state_dict(), checkpoint["actor_state_dict"], source, "actor_state_dict")
     actor.load_state_dict(checkpoint["actor_state_dict"])

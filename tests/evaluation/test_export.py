@@ -7,16 +7,20 @@ from pathlib import Path
 import numpy as np
 import pytest
 import torch
-from rsl_rl.utils import resolve_class, resolve_obs_groups
 
 from devlearn.cli import main
-from devlearn.config.run_config import default_config, from_dict, to_dict, to_rsl_rl
+from devlearn.config.run_config import default_config, from_dict, to_dict
 from devlearn.env import BehaviorEnv
 from devlearn.evaluation.export import DeterministicPolicy, export_policy, load_policy
 from devlearn.plugins import PluginRegistry
-from devlearn.training.checkpoint import FORMAT, Checkpoint, load_checkpoint, save_atomic
+from devlearn.training.checkpoint import (
+    FORMAT,
+    Checkpoint,
+    build_actor,
+    load_checkpoint,
+    save_atomic,
+)
 from devlearn.training.checkpoint import observation_batch as _batch
-from devlearn.training.process import quiet
 
 ROOT = Path(__file__).resolve().parents[2]
 PUBLISHED = {
@@ -65,12 +69,8 @@ def fresh_checkpoint(name: str, registry, path: Path, overrides=(), legacy=False
     env = BehaviorEnv(behavior, 0, training=False)
     obs = env.reset()
     env.close()
-    train_cfg = to_rsl_rl(cfg, behavior, list(obs))
-    with quiet():
-        groups = resolve_obs_groups(_batch(obs), train_cfg["obs_groups"], ["actor", "critic"])
-    actor_class, kwargs = resolve_class(train_cfg["actor"])
     torch.manual_seed(0)
-    actor = actor_class(_batch(obs), groups, "actor", env.action_dim, **kwargs)
+    actor = build_actor(cfg, behavior, obs, env.action_dim)
     with torch.no_grad():  # undo the small initial head: actions far from 0
         [m for m in actor.mlp if isinstance(m, torch.nn.Linear)][-1].weight.mul_(100.0)
     saved = to_dict(cfg)

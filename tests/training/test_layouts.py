@@ -8,14 +8,18 @@ import numpy as np
 import pytest
 import torch
 import torch.nn as nn
-from rsl_rl.utils import resolve_class, resolve_obs_groups
 
-from devlearn.config.run_config import default_config, from_dict, to_dict, to_rsl_rl
+from devlearn.config.run_config import default_config, from_dict, to_dict
 from devlearn.env import BehaviorEnv
 from devlearn.plugins import PluginRegistry
-from devlearn.training.checkpoint import FORMAT, load_actor, load_checkpoint, save_atomic
+from devlearn.training.checkpoint import (
+    FORMAT,
+    build_actor,
+    load_actor,
+    load_checkpoint,
+    save_atomic,
+)
 from devlearn.training.checkpoint import observation_batch as _batch
-from devlearn.training.process import quiet
 
 ROOT = Path(__file__).resolve().parents[2]
 DATA = Path(__file__).resolve().parent / "data"
@@ -64,15 +68,6 @@ def rebuild(path: Path, registry, **network):
     return cfg, env, obs, load_actor(cfg, state, behavior, obs, env.action_dim)
 
 
-def untrained_actor(cfg, behavior, obs, action_dim: int):
-    """The policy network a run of ``cfg`` starts from (built as load_actor builds it)."""
-    train_cfg = to_rsl_rl(cfg, behavior, list(obs))
-    with quiet():
-        groups = resolve_obs_groups(_batch(obs), train_cfg["obs_groups"], ["actor", "critic"])
-    actor_class, kwargs = resolve_class(train_cfg["actor"])
-    return actor_class(_batch(obs), groups, "actor", action_dim, **kwargs).eval()
-
-
 def raw_head(actor, obs) -> list[float]:
     with torch.inference_mode():
         raw = actor.mlp(actor.get_latent(_batch(synthetic(obs))))[0]
@@ -97,7 +92,7 @@ def saved_the_old_way(name: str, overrides: list[str], seed: int, registry):
     obs = env.reset()
     env.close()
     torch.manual_seed(seed)
-    actor = untrained_actor(cfg, behavior, obs, env.action_dim)
+    actor = build_actor(cfg, behavior, obs, env.action_dim).eval()
     with torch.no_grad():
         for p in actor.parameters():
             p.add_(0.05 * torch.randn_like(p))
@@ -173,7 +168,7 @@ def test_every_encoder_sees_images_in_zero_one(name, registry):
         env = BehaviorEnv(behavior, 0, training=False)
         obs = env.reset()
         env.close()
-        actor = untrained_actor(cfg, behavior, obs, env.action_dim)
+        actor = build_actor(cfg, behavior, obs, env.action_dim).eval()
         encoders = actor.body.encoders if actor.shared else actor.encoders
         seen: dict[str, float] = {}
         for group, encoder in encoders.items():

@@ -120,10 +120,8 @@ def old_run_policy(detector_file: Path) -> dict:
     config (old scene, random starts; its policy file is in git history since 2d704d9) with
     an actor of that config and the detector among its artifacts. The weights are fresh: these
     tests check the evaluation protocol, not what the policy does."""
-    from rsl_rl.utils import resolve_class, resolve_obs_groups
-
-    from devlearn.config.run_config import from_dict, to_rsl_rl
-    from devlearn.training.checkpoint import FORMAT, observation_batch
+    from devlearn.config.run_config import from_dict
+    from devlearn.training.checkpoint import FORMAT, build_actor
 
     saved = json.loads((RESULTS / "run" / "config.json").read_text())
     saved["behavior"]["detector_file"] = str(detector_file)
@@ -133,11 +131,7 @@ def old_run_policy(detector_file: Path) -> dict:
     try:
         env.set_stage(behavior.eval_stage())
         obs = env.reset()
-        train_cfg = to_rsl_rl(cfg, behavior, list(obs))
-        batch = observation_batch(obs)
-        groups = resolve_obs_groups(batch, train_cfg["obs_groups"], ["actor", "critic"])
-        actor_class, kwargs = resolve_class(train_cfg["actor"])
-        actor = actor_class(batch, groups, "actor", env.action_dim, **kwargs)
+        actor = build_actor(cfg, behavior, obs, env.action_dim)
         artifacts = behavior.policy_artifacts()
     finally:
         env.close()

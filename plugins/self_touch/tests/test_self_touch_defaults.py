@@ -63,10 +63,7 @@ def test_the_old_runs_policy_is_rebuilt_with_its_unbounded_spread():
     """results/self_touch/run was trained with the paper's softplus spread (~1,000 by the end;
     its policy file is in git history since 2d704d9): a policy of its saved config, rebuilt
     after the default became 1.0, still has that spread."""
-    from rsl_rl.utils import resolve_class, resolve_obs_groups
-
-    from devlearn.config.run_config import to_rsl_rl
-    from devlearn.training.checkpoint import observation_batch
+    from devlearn.training.checkpoint import build_actor
 
     registry = PluginRegistry()
     cfg = from_dict(json.loads((RESULTS / "run/config.json").read_text()), SelfTouch)
@@ -76,11 +73,7 @@ def test_the_old_runs_policy_is_rebuilt_with_its_unbounded_spread():
     try:
         env.set_stage(behavior.eval_stage())
         obs = env.reset()
-        train_cfg = to_rsl_rl(cfg, behavior, list(obs))
-        batch = observation_batch(obs)
-        groups = resolve_obs_groups(batch, train_cfg["obs_groups"], ["actor", "critic"])
-        actor_class, kwargs = resolve_class(train_cfg["actor"])
-        saved = actor_class(batch, groups, "actor", env.action_dim, **kwargs).state_dict()
+        saved = build_actor(cfg, behavior, obs, env.action_dim).state_dict()
         actor = load_actor(cfg, {"actor_state_dict": saved}, behavior, obs, env.action_dim)
     finally:
         env.close()
