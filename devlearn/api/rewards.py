@@ -6,7 +6,7 @@ behaviour's config declares its terms (:class:`RewardTermCfg`: class, weight, pa
 from __future__ import annotations
 
 import copy
-import importlib
+import inspect
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -14,8 +14,37 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from devlearn.api.errors import UsageError
+
 if TYPE_CHECKING:
     from devlearn.infant import Infant
+
+_TERM_CLASSES: dict[str, type] = {}
+"""Every reward-term class defined in this process, by its path ``module:QualName``: the only
+classes a config's ``cls`` may name (filled by the base classes' ``__init_subclass__``, i.e. by
+the code of the installed behaviours and plugins as Python imports it). A config never makes
+devlearn import anything: a checkpoint or a config file is data."""
+
+
+def term_path(cls: type) -> str:
+    """The path a config stores for the reward-term class ``cls``: ``module:QualName``."""
+    return f"{cls.__module__}:{cls.__qualname__}"
+
+
+def _register_term(cls: type) -> None:
+    _TERM_CLASSES[term_path(cls)] = cls
+
+
+def registered_terms() -> list[str]:
+    """The paths a config's ``cls`` may name: every concrete, public reward-term class that the
+    installed behaviours and plugins (or the caller's own code) defined."""
+    return sorted(
+        path
+        for path, cls in _TERM_CLASSES.items()
+        if not inspect.isabstract(cls)
+        and not any(part.startswith("_") for part in cls.__qualname__.split("."))
+        and cls is not BatchedFromPerEnv
+    )
 
 
 @dataclass
@@ -60,6 +89,10 @@ class IntrinsicReward(ABC):
 
     name: str = "reward"
     """Name used in logs (``reward/<name>``) and config."""
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        _register_term(cls)
 
     def __init__(self, weight: float = 1.0) -> None:
         self.weight = float(weight)
@@ -151,6 +184,10 @@ class BatchedIntrinsicReward(ABC):
 
     name: str = "reward"
     """Name used in logs (``reward/<name>``) and config."""
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        _register_term(cls)
 
     def __init__(self, weight: float = 1.0) -> None:
         self.weight = float(weight)
@@ -286,27 +323,26 @@ class RewardTermCfg:
 
     def __post_init__(self) -> None:
         if isinstance(self.cls, type):
-            self.cls = f"{self.cls.__module__}:{self.cls.__qualname__}"
+            self.cls = term_path(self.cls)
         self.weight = float(self.weight)
         self.params = dict(self.params)
 
     def term_class(self) -> type[IntrinsicReward] | type[BatchedIntrinsicReward]:
-        """The class :attr:`cls` names (imported).
+        """The class :attr:`cls` names, among the reward-term classes the installed behaviours
+        and plugins defined (:func:`registered_terms`). Nothing is imported: a path that names
+        no such class is refused, whatever module it names.
 
         Raises:
-            ValueError: The path does not name a reward-term class.
+            UsageError: The path names no registered reward-term class (one line, naming the
+                valid ones).
         """
-        module, _, name = str(self.cls).partition(":")
-        try:
-            found: Any = importlib.import_module(module)
-            for part in name.split("."):
-                found = getattr(found, part)
-        except (ImportError, AttributeError, ValueError) as err:
-            raise ValueError(f"reward term class '{self.cls}' not found ({err})") from None
-        if not (
-            isinstance(found, type) and issubclass(found, IntrinsicReward | BatchedIntrinsicReward)
-        ):
-            raise ValueError(f"'{self.cls}' is not an IntrinsicReward or BatchedIntrinsicReward")
+        found = _TERM_CLASSES.get(str(self.cls))
+        if found is None:
+            shown = repr(self.cls) if len(repr(self.cls)) <= 80 else repr(self.cls)[:77] + "..."
+            raise UsageError(
+                f"unknown reward term class {shown}: a config names only reward terms that the "
+                f"installed behaviours and plugins define; valid: {', '.join(registered_terms())}"
+            )
         return found
 
     def build(self, name: str, **shared: Any) -> IntrinsicReward | BatchedIntrinsicReward:

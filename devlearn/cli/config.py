@@ -8,6 +8,7 @@ import textwrap
 from typing import TYPE_CHECKING
 
 from devlearn.config.help import describe_keys
+from devlearn.config.checks import check_config
 from devlearn.config.run_config import apply_preset, default_config, new_config
 from devlearn.config.values import apply_overrides
 
@@ -53,7 +54,9 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     for label, change, wanted in changes:  # mark what --preset, then --set changed
         if wanted:
             marks = {r["key"]: (r["default"], r["set_by"]) for r in rows}
-            rows = describe_keys(change(cfg), core)
+            cfg = change(cfg)
+            check_config(cfg)  # as `devlearn run` checks it, before describing it
+            rows = describe_keys(cfg, core)
             for row in rows:
                 value, mark = marks[row["key"]]
                 row["set_by"] = label if row["default"] != value else mark

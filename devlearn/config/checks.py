@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from devlearn.api.errors import UsageError
+from devlearn.api.rewards import reward_term_cfg
 
 if TYPE_CHECKING:
     from devlearn.config.run_config import RunConfig
@@ -90,6 +91,18 @@ def check_config(cfg: RunConfig) -> None:
     _positive(cfg, "value_loss_coef", closed=True)
     if cfg.ppo.desired_kl is not None:
         _positive(cfg, "desired_kl")
+    check_reward_terms(cfg.behavior)
+
+
+def check_reward_terms(behavior_cfg: Any) -> None:
+    """Refuse a behaviour config whose ``rewards`` table names a class that no installed
+    behaviour or plugin defines (resolved by name among the registered terms, never imported:
+    a config or checkpoint is data)."""
+    for name, term in (getattr(behavior_cfg, "rewards", None) or {}).items():
+        try:
+            reward_term_cfg(term).term_class()
+        except UsageError as err:
+            raise UsageError(f"behavior.rewards.{name}.cls: {err}") from None
 
 
 def available_memory_mb() -> float | None:

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Any
 
 from devlearn.api.errors import UsageError
 from devlearn.api.rewards import upgrade_saved_rewards
+from devlearn.config.checks import check_reward_terms
 from devlearn.config.values import apply_overrides, convert, field_types
 
 if TYPE_CHECKING:
@@ -336,6 +337,7 @@ def from_dict(data: dict[str, Any], behavior_cls: type[Behavior]) -> RunConfig:
         legacy = getattr(type(cfg.behavior), "LEGACY_DEFAULTS", {})
         _fill(cfg.behavior, {k: v for k, v in legacy.items() if k not in saved}, "behavior.")
     _fill(cfg, data, "")
+    check_reward_terms(cfg.behavior)
     return cfg
 
 

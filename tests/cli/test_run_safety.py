@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import dataclasses
 import errno
 import functools
 import json
 import os
 import sys
 from pathlib import Path
+from typing import Any
 
 import pytest
 import torch
@@ -16,11 +18,17 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "env"))
 
 from tiny_behaviors import OtherBehavior  # noqa: E402
 
+import devlearn  # noqa: E402
 import devlearn.plugins  # noqa: E402
 from devlearn.cli import main  # noqa: E402
 from devlearn.config import checks  # noqa: E402
 from devlearn.testing import registry_for  # noqa: E402
-from devlearn.testing.fake_infant import TinyBehavior, fake_infant_factory  # noqa: E402
+from devlearn.testing.fake_infant import (  # noqa: E402
+    Reach,
+    TinyBehavior,
+    TinyConfig,
+    fake_infant_factory,
+)
 from devlearn.training import checkpoint as checkpoint_module  # noqa: E402
 
 SMALL = ["--envs", "2", "--seed", "1", "--workers", "0", "--set", "save_interval=1"]
@@ -402,3 +410,95 @@ def test_failed_commands_leave_no_new_folders(cli, tmp_path, capsys):
     kept.mkdir()
     error(cli, capsys, "eval", "tiny", "--checkpoint", str(missing), "--out", str(kept))
     assert kept.is_dir()  # what existed before stays
+
+
+@dataclasses.dataclass
+class TermsConfig(TinyConfig):
+    """The tiny behaviour's options with its reward declared as a term table."""
+
+    rewards: dict[str, devlearn.RewardTermCfg] = dataclasses.field(
+        default_factory=lambda: {"reach": devlearn.RewardTermCfg(Reach, 1.0, {"target": 0.5})}
+    )
+
+
+class TermsBehavior(TinyBehavior):
+    """The tiny behaviour with a ``rewards`` table (class, weight, params) in its config."""
+
+    name = "terms"
+    config_class = TermsConfig
+
+    def reward_terms(self) -> Any:
+        return devlearn.Behavior.reward_terms(self)
+
+
+@pytest.fixture
+def hostile(monkeypatch, tmp_path):
+    """A module on the path whose import writes a marker: what a hostile ``cls`` names."""
+    package = tmp_path / "pkg"
+    package.mkdir()
+    marker = tmp_path / "imported"
+    (package / "evil_term.py").write_text(f"open({str(marker)!r}, 'w').write('ran')\nX = 1\n")
+    monkeypatch.syspath_prepend(str(package))
+    return marker
+
+
+@pytest.fixture
+def terms_cli(monkeypatch):
+    registry = registry_for(TermsBehavior)
+    monkeypatch.setattr(devlearn.plugins, "PluginRegistry", lambda *a, **k: registry)
+    fake = functools.partial(fake_infant_factory, episode_steps=10)
+    monkeypatch.setattr("devlearn.env.behavior_env.build_default_infant", fake)
+    return main
+
+
+@pytest.fixture
+def terms_run(terms_cli, tmp_path, capsys):
+    out = tmp_path / "run"
+    assert terms_cli(["run", "terms", "--steps", "32", "--out", str(out), *SMALL]) == 0
+    capsys.readouterr()
+    return out
+
+
+EVIL = "evil_term:X"
+REFUSED = "behavior.rewards.reach.cls: unknown reward term class 'evil_term:X'"
+
+
+def test_a_reward_term_class_named_by_set_or_config_is_never_imported(
+    terms_cli, hostile, tmp_path, capsys
+):
+    out = tmp_path / "new"
+    err = error(terms_cli, capsys, "run", "terms", "--steps", "32", "--out", str(out), *SMALL,
+                "--set", f"behavior.rewards.reach.cls={EVIL}")  # fmt: skip
+    assert REFUSED in err and "valid: " in err and "fake_infant:Reach" in err
+    config = tmp_path / "config.json"
+    config.write_text(json.dumps({"behavior": {"rewards": {"reach": {"cls": EVIL}}}}))
+    err = error(terms_cli, capsys, "run", "terms", "--config", str(config), "--out", str(out))
+    assert REFUSED in err
+    err = error(terms_cli, capsys, "config", "terms", "--set", f"behavior.rewards.reach.cls={EVIL}")
+    assert REFUSED in err
+    assert not hostile.exists() and "evil_term" not in sys.modules and not out.exists()
+
+
+def test_a_checkpoint_naming_a_reward_term_class_imports_nothing(
+    terms_cli, terms_run, hostile, tmp_path, capsys
+):
+    state = damage(
+        terms_run, lambda s: s["config"]["behavior"]["rewards"]["reach"].update(cls=EVIL)
+    )
+    (terms_run / "config.json").write_text(json.dumps(state["config"]))
+    before = files(terms_run)
+    checkpoint = str(terms_run / "checkpoint_latest.pt")
+    commands = [
+        ["eval", "terms", "--checkpoint", checkpoint, "--episodes", "1", "--out", str(tmp_path / "e")],
+        ["run", "terms", "--resume", str(terms_run), "--steps", "64"],
+        ["run", "terms", "--from", checkpoint, "--out", str(tmp_path / "branch"), "--steps", "64"],
+        ["export", "terms", "--checkpoint", checkpoint, "--format", "torchscript",
+         "--out", str(tmp_path / "policy.ts")],
+        ["slim", checkpoint, "--out", str(tmp_path / "policy.pt")],
+        ["run", "terms", "--config", str(terms_run / "config.json"), "--out", str(tmp_path / "c")],
+    ]  # fmt: skip
+    for argv in commands:
+        assert REFUSED in error(terms_cli, capsys, *argv), argv
+    assert not hostile.exists() and "evil_term" not in sys.modules
+    assert files(terms_run) == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["pkg", "run"]  # nothing written
