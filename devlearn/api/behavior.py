@@ -239,8 +239,15 @@ class Behavior(ABC):
         return Curriculum([Stage("main", None, {})])
 
     def eval_stage(self) -> dict[str, Any]:
-        """Stage options used by ``devlearn eval`` (default: the curriculum's last stage)."""
-        return dict(self.curriculum().stages[-1].options)
+        """Stage options used by ``devlearn eval``: the behaviour's evaluation protocol.
+
+        The default evaluates where training starts, the curriculum's first stage (a run's
+        first episodes, and for a short run all of them, start there), so that a policy is
+        first judged on the skill it trained. A behaviour whose protocol differs declares it
+        here (self-touch: random initial poses, the paper's sec. II-A6; hand regard: both arms
+        from BabyBench's start). ``devlearn eval --start random|rest|babybench`` overrides the
+        start either way, and the eval JSON records the start used."""
+        return dict(self.curriculum().stages[0].options)
 
     def process_action(self, action: np.ndarray, stage: dict[str, Any]) -> np.ndarray:
         """Adjust a policy action before it reaches the body (e.g. zero an inactive arm).

@@ -7,8 +7,8 @@ import json
 import textwrap
 from typing import TYPE_CHECKING
 
-from devlearn.config.help import describe_keys
 from devlearn.config.checks import check_config
+from devlearn.config.help import describe_keys
 from devlearn.config.run_config import apply_preset, default_config, new_config
 from devlearn.config.values import apply_overrides
 

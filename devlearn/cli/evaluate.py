@@ -44,7 +44,7 @@ def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) 
         "--start",
         choices=("stage", "babybench", "rest", "random"),
         default="stage",
-        help="where episodes start: as the behaviour's evaluation stage says (default; "
+        help="where episodes start: as the behaviour's evaluation protocol says (default: where training starts, its curriculum's first stage, unless the behaviour declares one; "
         "self_touch: seeded random poses; hand_regard: babybench); babybench (the scene's "
         "settled state + 10 seeded random-action steps, as BabyBench's reset); rest (that "
         "state alone, every episode: a deterministic policy then repeats one episode); "

@@ -43,8 +43,10 @@ class PPOConfig:
     """Gradient-norm clip (actor and critic separately)."""
     desired_kl: float | None = 0.01
     """Target KL for the adaptive schedule (None disables adaptation)."""
-    schedule: str = "adaptive"
-    """Learning-rate schedule: ``adaptive`` (KL-driven) or ``fixed``."""
+    schedule: str = "fixed"
+    """Learning-rate schedule: ``fixed`` (the default, :data:`LEARNER_EVIDENCE`: the adaptive
+    schedule sat at its 1e-5 floor in issue #28's pilots) or ``adaptive`` (KL-driven, rsl-rl's;
+    ``desired_kl`` is its target). A saved config without this field means ``adaptive``."""
     normalize_rewards: bool = True
     """Divide every reward by a running standard deviation of the discounted return (as
     gymnasium's ``NormalizeReward`` and SB3's ``VecNormalize``), then clip it to
@@ -60,11 +62,12 @@ class PPOConfig:
 class NetworkConfig:
     """How the networks are laid out; recorded so that older checkpoints rebuild as trained."""
 
-    layout: str = ""
-    """``shared``: one set of encoders, fusion and trunk feeds separate policy and value heads
-    (the paper); ``separate``: actor and critic each have their own; empty: the behaviour's
-    ``NetworkSpec.share``. A saved config without a ``network`` section (runs from before the
-    shared layout) means ``separate``."""
+    layout: str = "separate"
+    """``separate`` (the default, :data:`LEARNER_EVIDENCE`: issue #28's pilots and the audit of
+    the published shared-trunk runs favoured it): actor and critic each have their own
+    encoders, fusion and trunk; ``shared``: one set feeds separate policy and value heads (the
+    paper); empty: the behaviour's ``NetworkSpec.share``. A saved config without a ``network``
+    section (runs from before the shared layout) means ``separate``."""
     legacy_uint8_scale: bool = False
     """Divide uint8 observations (eye images) by 255 twice, as every run before the input-scale
     fix did (the eye CNN divided its already-scaled input again). A saved config without a
@@ -92,24 +95,35 @@ HEADS = ("gaussian", "paper")
 LEGACY_FIELDS: dict[str, Any] = {
     "ppo.normalize_rewards": False,
     "network.head": "paper",
+    "env.action_repeat": 1,
+    "ppo.schedule": "adaptive",
 }
-"""Core fields a saved config may lack, and the value its run was trained with (the default
-changed when the field was added, issue #28): such a config loads as trained."""
+"""Core fields a saved run's config may lack, and the value its run was trained with (the
+default changed when the field was added, issue #28): such a config loads as trained. A new
+run's config file (``devlearn run --config``) takes today's defaults instead."""
+
+LEARNER_EVIDENCE = "results/learner/README.md"
+"""Where the core's learner defaults come from: issue #28's pilots and audit (a decision every
+5 physics steps, ``env.action_repeat=5``; a discount of 0.99 per decision and rollouts of 64
+decisions; a fixed learning rate; separate actor and critic; rewards normalised by the running
+spread of the return; the bounded Gaussian head). Every behaviour gets them; a behaviour
+overrides in ``train_defaults`` only what its own evidence supports (issue #38: a third-party
+behaviour learned with these and not with the old defaults)."""
 
 
 @dataclass
 class EnvConfig:
     """How the policy meets the environment."""
 
-    action_repeat: int = 1
+    action_repeat: int = 5
     """Physics steps per policy decision: one action is held for this many physics steps and
     their rewards summed (``env.action_repeat=K``; how facts and rewards are computed within
     a decision: ``Behavior.facts_every_physics_step``). Episode lengths, curriculum stages,
-    ``--steps`` and evaluation counts stay in physics steps. 1: a decision every physics step
-    (the paper's 200 Hz). Behaviours set their own in ``train_defaults`` (self-touch and hand
-    regard: 5, a decision every 25 ms): at 200 Hz independent noise held for 5 ms barely moves
-    an arm, so random exploration goes nowhere (issue #28, ``results/learner/README.md``).
-    Must divide the episode length."""
+    ``--steps`` and evaluation counts stay in physics steps. The default 5 is a decision every
+    25 ms: at 200 Hz (1, the paper's rate, its ``--preset paper``) independent noise held for
+    5 ms barely moves an arm, so random exploration goes nowhere (issue #28,
+    :data:`LEARNER_EVIDENCE`). A saved run's config without this field means 1. Must divide
+    the episode length."""
 
 
 @dataclass
@@ -314,18 +328,25 @@ def _fill(obj: Any, data: dict[str, Any], prefix: str) -> None:
             raise UsageError(f"unknown config key '{prefix}{name}' in saved config")
 
 
-def from_dict(data: dict[str, Any], behavior_cls: type[Behavior]) -> RunConfig:
+def from_dict(
+    data: dict[str, Any], behavior_cls: type[Behavior], new_run: bool = False
+) -> RunConfig:
     """Rebuild a RunConfig saved by :func:`to_dict` for the behaviour class ``behavior_cls``.
 
-    A key the saved config lacks takes its default, except where the old runs were trained
-    otherwise: a missing ``network`` section means :data:`LEGACY_NETWORK`, and a behaviour
-    field named in its config class's ``LEGACY_DEFAULTS`` (field -> value) that the saved
-    ``behavior`` section lacks takes that value (a default changed after those runs).
+    A saved run's config (a checkpoint's, a run folder's): a key it lacks takes its default,
+    except where the old runs were trained otherwise: a missing ``network`` section means
+    :data:`LEGACY_NETWORK`, a core field of :data:`LEGACY_FIELDS` takes its value there, and a
+    behaviour field named in its config class's ``LEGACY_DEFAULTS`` (field -> value) that the
+    saved ``behavior`` section lacks takes that value (a default changed after those runs).
+
+    ``new_run``: ``data`` is a new run's config file (``devlearn run --config``): a key it
+    lacks takes today's defaults, the behaviour's ``train_defaults()`` included
+    (:func:`fresh_config`), never the values old runs were trained with.
     """
-    cfg = new_config(behavior_cls)
-    if "network" not in data:
+    cfg = fresh_config(behavior_cls) if new_run else new_config(behavior_cls)
+    if not new_run and "network" not in data:
         cfg.network = dataclasses.replace(LEGACY_NETWORK)
-    for key, value in LEGACY_FIELDS.items():
+    for key, value in {} if new_run else LEGACY_FIELDS.items():
         section, name = key.split(".")
         if name not in (data.get(section) or {}):
             setattr(getattr(cfg, section), name, value)
@@ -334,7 +355,7 @@ def from_dict(data: dict[str, Any], behavior_cls: type[Behavior]) -> RunConfig:
         # reward fields a config saved before issue #31 holds move into ``rewards``
         saved = upgrade_saved_rewards(saved, type(cfg.behavior))
         data = {**data, "behavior": saved}
-        legacy = getattr(type(cfg.behavior), "LEGACY_DEFAULTS", {})
+        legacy = {} if new_run else getattr(type(cfg.behavior), "LEGACY_DEFAULTS", {})
         _fill(cfg.behavior, {k: v for k, v in legacy.items() if k not in saved}, "behavior.")
     _fill(cfg, data, "")
     check_reward_terms(cfg.behavior)

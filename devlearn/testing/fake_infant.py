@@ -209,4 +209,14 @@ class TinyBehavior(devlearn.Behavior):
         return CloseEvaluator(self.config.target)
 
     def train_defaults(self) -> dict[str, Any]:
-        return {"ppo.num_steps_per_env": 8, "ppo.num_mini_batches": 2, "ppo.num_learning_epochs": 2}
+        """Small rollouts, and the learner the core's tests and recorded tiny runs were made
+        with before issue #38 made issue #28's learner the core default: a decision every
+        physics step, the adaptive schedule, the shared layout."""
+        return {
+            "ppo.num_steps_per_env": 8,
+            "ppo.num_mini_batches": 2,
+            "ppo.num_learning_epochs": 2,
+            "env.action_repeat": 1,
+            "ppo.schedule": "adaptive",
+            "network.layout": "shared",
+        }

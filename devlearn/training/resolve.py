@@ -109,7 +109,8 @@ def resolve_config(request: RunRequest, registry: PluginRegistry) -> RunConfig:
         data = request.saved
         if data is None:
             data = read_config_file(request.config_file)
-        cfg = _from_saved(data, request, registry, request.config_file or "the saved config")
+        source = request.config_file or "the saved config"
+        cfg = _from_saved(data, request, registry, source, new_run=bool(request.config_file))
         apply_overrides(cfg, placed)
         apply_overrides(cfg, request.overrides)
     else:
@@ -156,14 +157,19 @@ def load_run_config(run_dir: str | Path, registry: PluginRegistry) -> RunConfig:
 
 
 def _from_saved(
-    data: dict[str, Any], request: RunRequest, registry: PluginRegistry, source: str
+    data: dict[str, Any],
+    request: RunRequest,
+    registry: PluginRegistry,
+    source: str,
+    new_run: bool = False,
 ) -> RunConfig:
     """``data`` read for its behaviour, which must be the requested one (if one is; a config
-    that names none is read for the requested one)."""
+    that names none is read for the requested one); ``new_run``: a new run's config file, whose
+    missing keys take today's defaults (:func:`~devlearn.config.run_config.from_dict`)."""
     name = data.get("behavior_name") or request.behavior
     if request.behavior and name != request.behavior:
         raise UsageError(f"{source} trains '{name}', not '{request.behavior}'")
-    return from_dict(data, registry.behavior(name))
+    return from_dict(data, registry.behavior(name), new_run)
 
 
 def _resumed(request: RunRequest, registry: PluginRegistry, top: dict[str, Any]) -> RunConfig:

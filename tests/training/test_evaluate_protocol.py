@@ -46,16 +46,16 @@ def registry(monkeypatch):
 @pytest.fixture
 def run_dir(registry, tmp_path):
     out = tmp_path / "run"
-    assert main(["run", "tiny", "--steps", "16", "--envs", "2", "--seed", "3", "--out",
-                 str(out)]) == 0
+    assert (
+        main(["run", "tiny", "--steps", "16", "--envs", "2", "--seed", "3", "--out", str(out)]) == 0
+    )
     RecordingInfant.log = []
     return out
 
 
 def actions_of(registry, checkpoint, policy, seed=0):
     RecordingInfant.log = []
-    summary = evaluate("tiny", checkpoint, 2, registry, seed=seed, progress=False,
-                       policy=policy)
+    summary = evaluate("tiny", checkpoint, 2, registry, seed=seed, progress=False, policy=policy)
     return np.array(RecordingInfant.log), summary
 
 
@@ -71,8 +71,11 @@ def test_baselines_run_through_the_checkpoint_path(registry, run_dir):
     np.testing.assert_array_equal(rand, again)  # seeded by the evaluation seed
     assert not np.array_equal(rand, actions_of(registry, None, "random", seed=1)[0])
     assert set(s_ckpt) == set(s_zero) == set(s_rand)
-    assert (s_ckpt["policy"], s_zero["policy"], s_rand["policy"]) == ("checkpoint", "zero",
-                                                                      "random")
+    assert (s_ckpt["policy"], s_zero["policy"], s_rand["policy"]) == (
+        "checkpoint",
+        "zero",
+        "random",
+    )
     assert s_ckpt["episodes"] == s_zero["episodes"] == 2
     assert s_ckpt["training_seed"] == 3 and s_ckpt["config"]["seed"] == 3
     assert s_zero["checkpoint"] is None and s_zero["training_seed"] is None
@@ -80,13 +83,16 @@ def test_baselines_run_through_the_checkpoint_path(registry, run_dir):
 
 def test_protocol_is_recorded(registry, run_dir, tmp_path):
     out = tmp_path / "eval"
-    summary = evaluate("tiny", run_dir / "checkpoint_latest.pt", 2, registry, seed=5,
-                       out_dir=out, progress=False)
+    summary = evaluate(
+        "tiny", run_dir / "checkpoint_latest.pt", 2, registry, seed=5, out_dir=out, progress=False
+    )
     written = json.loads((out / "eval.json").read_text())
     protocol = written["protocol"]
     assert protocol["episodes"] == 2 and protocol["seed"] == 5
     assert protocol["settle_steps"] == 0 and protocol["checkpoint_env_steps"] == 16
-    assert protocol["stage"] == {"random_pose": True} and protocol["action"] == "mean"
+    # tiny declares no evaluation protocol: it evaluates where training starts, its first stage
+    assert protocol["stage"] == {"random_pose": False} and protocol["action"] == "mean"
+    assert protocol["start"] == written["start"] == "rest"
     commit = protocol["code"]["commit"]
     assert commit is None or len(commit) == 40
     assert "written" not in written and summary["written"][0] == str(out / "eval.json")
@@ -101,8 +107,10 @@ def test_baseline_and_bad_policy_arguments(registry):
 
 def test_cli_baseline(registry, tmp_path, capsys):
     out = tmp_path / "zero"
-    assert main(["eval", "tiny", "--policy", "zero", "--episodes", "1", "--out", str(out),
-                 "--json"]) == 0
+    assert (
+        main(["eval", "tiny", "--policy", "zero", "--episodes", "1", "--out", str(out), "--json"])
+        == 0
+    )
     captured = capsys.readouterr()
     assert json.loads(captured.out)["policy"] == "zero"  # stdout: one JSON document
     assert f"written to {out}: eval.json, close.txt" in captured.err
@@ -128,16 +136,24 @@ def test_unwritable_out_is_refused_before_any_episode(registry, run_dir, tmp_pat
     assert "cannot write to output folder" in capsys.readouterr().err
 
 
-def test_summary_is_printed_when_writing_fails(registry, run_dir, tmp_path, capsys,
-                                               monkeypatch):
+def test_summary_is_printed_when_writing_fails(registry, run_dir, tmp_path, capsys, monkeypatch):
     def full_disk(self, out_dir):
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(
-        "devlearn.testing.fake_infant.CloseEvaluator.write_artifacts", full_disk
+    monkeypatch.setattr("devlearn.testing.fake_infant.CloseEvaluator.write_artifacts", full_disk)
+    code = main(
+        [
+            "eval",
+            "tiny",
+            "--checkpoint",
+            str(run_dir),
+            "--episodes",
+            "1",
+            "--json",
+            "--out",
+            str(tmp_path / "eval"),
+        ]
     )
-    code = main(["eval", "tiny", "--checkpoint", str(run_dir), "--episodes", "1", "--json",
-                 "--out", str(tmp_path / "eval")])
     captured = capsys.readouterr()
     assert code == 2 and "No space left on device" in captured.err
     assert json.loads(captured.out)["episodes"] == 1
@@ -163,25 +179,55 @@ def test_rest_start_overrides_the_eval_stage(registry, run_dir, tmp_path, capsys
         return PoseRecordingInfant(scene, senses, episode_steps=10)
 
     PoseRecordingInfant.resets = []
-    stage = evaluate("tiny", run_dir, 2, registry, infant_factory=pose_recording,
-                     progress=False)
-    assert PoseRecordingInfant.resets and all(PoseRecordingInfant.resets)
-    assert stage["protocol"]["start"] == "random" and stage["start"] == "random"
+    stage = evaluate(
+        "tiny", run_dir, 2, registry, infant_factory=pose_recording, progress=False
+    )  # tiny's first stage, where training starts: the rest pose
+    assert PoseRecordingInfant.resets and not any(PoseRecordingInfant.resets)
+    assert stage["protocol"]["start"] == "rest" and stage["start"] == "rest"
     assert stage["protocol"]["start_option"] == "stage"
     PoseRecordingInfant.resets = []
-    rest = evaluate("tiny", run_dir, 2, registry, infant_factory=pose_recording,
-                    progress=False, start="rest")
+    moved = evaluate(
+        "tiny", run_dir, 2, registry, infant_factory=pose_recording, progress=False, start="random"
+    )
+    assert PoseRecordingInfant.resets and all(PoseRecordingInfant.resets)
+    assert moved["protocol"]["start"] == "random" and moved["protocol"]["start_option"] == "random"
+    PoseRecordingInfant.resets = []
+    rest = evaluate(
+        "tiny", run_dir, 2, registry, infant_factory=pose_recording, progress=False, start="rest"
+    )
     assert PoseRecordingInfant.resets and not any(PoseRecordingInfant.resets)
     assert rest["protocol"]["stage"] == {"random_pose": False}
     assert rest["protocol"]["start"] == "rest"
     with pytest.raises(UsageError, match="valid: stage, babybench, rest, random"):
         evaluate("tiny", run_dir, 1, registry, start="sideways")
     with pytest.raises(UsageError, match="no such start"):  # a stand-in without starts
-        evaluate("tiny", run_dir, 1, registry, infant_factory=pose_recording, start="babybench",
-                 progress=False)
+        evaluate(
+            "tiny",
+            run_dir,
+            1,
+            registry,
+            infant_factory=pose_recording,
+            start="babybench",
+            progress=False,
+        )
     out = tmp_path / "rest"
-    assert main(["eval", "tiny", "--checkpoint", str(run_dir), "--episodes", "1", "--start",
-                 "rest", "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "eval",
+                "tiny",
+                "--checkpoint",
+                str(run_dir),
+                "--episodes",
+                "1",
+                "--start",
+                "rest",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     assert json.loads((out / "eval.json").read_text())["protocol"]["start"] == "rest"
 
 
@@ -203,8 +249,16 @@ def test_start_options_reach_the_infant_and_the_json(registry, run_dir, tmp_path
 
     StartingInfant.starts = []
     out = tmp_path / start
-    summary = evaluate("tiny", run_dir, 2, registry, infant_factory=factory, progress=False,
-                       start=start, out_dir=out)
+    summary = evaluate(
+        "tiny",
+        run_dir,
+        2,
+        registry,
+        infant_factory=factory,
+        progress=False,
+        start=start,
+        out_dir=out,
+    )
     assert set(StartingInfant.starts) == {start}
     saved = json.loads((out / "eval.json").read_text())
     assert saved["start"] == start and saved["protocol"]["start"] == start
@@ -224,12 +278,28 @@ def test_held_random_baseline_holds_its_actions(registry):
 
 
 def test_baseline_config_overrides(registry, tmp_path):
-    summary = evaluate("tiny", None, 1, registry, policy="zero", progress=False,
-                       overrides=["seed=7"])
+    summary = evaluate(
+        "tiny", None, 1, registry, policy="zero", progress=False, overrides=["seed=7"]
+    )
     assert summary["config"]["seed"] == 7
     with pytest.raises(UsageError, match="baselines only"):
         evaluate("tiny", tmp_path, 1, registry, overrides=["seed=7"])
     out = tmp_path / "zero"
-    assert main(["eval", "tiny", "--policy", "zero", "--episodes", "1", "--set", "seed=5",
-                 "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "eval",
+                "tiny",
+                "--policy",
+                "zero",
+                "--episodes",
+                "1",
+                "--set",
+                "seed=5",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     assert json.loads((out / "eval.json").read_text())["config"]["seed"] == 5

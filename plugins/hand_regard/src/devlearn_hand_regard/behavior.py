@@ -384,11 +384,11 @@ class HandRegard(Behavior):
         many hours of rendering on a CPU. The paper gives no PPO constants for Model II beyond
         the network.
 
-        The learner (issue #28, ``results/learner/README.md``): a decision every 5 physics
-        steps (renders and the detector once per decision), so a discount of 0.99 per decision;
-        no entropy bonus (with it the spread ran away from 0.5 to 2.7-5.7 in the published
-        runs, and the issue's pilot learned hand regard without one); a fixed learning rate and
-        separate actor and critic, as self-touch's pilots chose (not yet measured here).
+        The learner is the core's (issue #28's evidence: a decision every 5 physics steps, so
+        renders and the detector once per decision; a discount of 0.99 per decision; a fixed
+        learning rate; separate actor and critic), with one change this behaviour's evidence
+        supports: no entropy bonus (with it the spread ran away from 0.5 to 2.7-5.7 in the
+        published runs, and issue #28's pilot learned hand regard without one).
         """
         left, right, both = DEMO_STEPS
         return {
@@ -396,11 +396,7 @@ class HandRegard(Behavior):
             "behavior.right_arm_steps": right,
             "behavior.both_arms_steps": both,
             "total_steps": left + right + both,
-            "env.action_repeat": 5,
-            "ppo.gamma": 0.99,
             "ppo.entropy_coef": 0.0,
-            "ppo.schedule": "fixed",
-            "network.layout": "separate",
         }
 
     def presets(self) -> dict[str, dict[str, Any]]:

@@ -161,28 +161,6 @@ class SelfTouch(Behavior):
         steps, whatever the run's budget)."""
         return PAPER_RESULTS.get((config.get("behavior") or {}).get("curriculum", "two_stage"))
 
-    def train_defaults(self) -> dict[str, Any]:
-        """PPO settings for this behaviour.
-
-        ``total_steps`` is left to the core's short default so that ``devlearn run self_touch``
-        finishes in minutes; the paper's run is ``--steps 8000000`` (4M + 4M, sec. II-A5), or
-        ``--preset paper`` (:meth:`presets`).
-        Issue #28's learner (``results/learner/README.md``): a decision every 5 physics steps
-        (25 ms; ``env.action_repeat``), so a discount of 0.99 per decision (a horizon of
-        ~2.5 s) and rollouts of 64 decisions per environment; a fixed learning rate (the
-        adaptive schedule sat at its 1e-5 floor in the pilots); separate actor and critic
-        (the pilots' surrogate and evaluation favoured them, as did the audit of the published
-        shared-trunk runs). The paper gives no other PPO constants than the clip 0.2 (the
-        core's default).
-        """
-        return {
-            "env.action_repeat": 5,
-            "ppo.num_steps_per_env": 64,
-            "ppo.gamma": 0.99,
-            "ppo.schedule": "fixed",
-            "network.layout": "separate",
-        }
-
     def presets(self) -> dict[str, dict[str, Any]]:
         """``paper``: the paper's values where the default recipe differs (sec. II-A):
         the unbounded softplus spread (``behavior.max_std`` 0; the default bounds it at 1.0)
