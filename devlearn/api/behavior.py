@@ -238,16 +238,17 @@ class Behavior(ABC):
         """Return the training curriculum (default: one stage, fixed initial pose)."""
         return Curriculum([Stage("main", None, {})])
 
-    def eval_stage(self) -> dict[str, Any]:
-        """Stage options used by ``devlearn eval``: the behaviour's evaluation protocol.
+    def eval_stage(self) -> dict[str, Any] | None:
+        """The stage options of ``devlearn eval``, when the behaviour declares its evaluation
+        protocol (self-touch: random initial poses, the paper's sec. II-A6; hand regard: both
+        arms from BabyBench's start).
 
-        The default evaluates where training starts, the curriculum's first stage (a run's
-        first episodes, and for a short run all of them, start there), so that a policy is
-        first judged on the skill it trained. A behaviour whose protocol differs declares it
-        here (self-touch: random initial poses, the paper's sec. II-A6; hand regard: both arms
-        from BabyBench's start). ``devlearn eval --start random|rest|babybench`` overrides the
-        start either way, and the eval JSON records the start used."""
-        return dict(self.curriculum().stages[0].options)
+        None (the default): evaluation starts where the policy trained, the curriculum stage
+        of the checkpoint's training steps (a baseline: the stage a default run ends in), so
+        that a policy is first judged on the skill it trained
+        (:func:`evaluation_stage`). ``devlearn eval --start random|rest|babybench`` overrides
+        the start either way, and the eval JSON records the start used."""
+        return None
 
     def process_action(self, action: np.ndarray, stage: dict[str, Any]) -> np.ndarray:
         """Adjust a policy action before it reaches the body (e.g. zero an inactive arm).
@@ -333,3 +334,15 @@ class Behavior(ABC):
         what this behaviour attends to (hand regard puts both eyes' views beside it).
         """
         return infant.render_view()
+
+
+def evaluation_stage(behavior: Behavior, trained_steps: int) -> dict[str, Any]:
+    """The stage options ``devlearn eval`` (and the conformance kit) evaluate ``behavior``
+    under: its declared :meth:`Behavior.eval_stage`, or else the options of its curriculum's
+    stage at ``trained_steps`` (where a policy trained for that many steps ended its training).
+    """
+    declared = behavior.eval_stage()
+    if declared is not None:
+        return dict(declared)
+    curriculum = behavior.curriculum()
+    return dict(curriculum.stages[curriculum.stage_index_at(int(trained_steps))].options)

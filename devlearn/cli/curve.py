@@ -40,8 +40,15 @@ def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) 
         "--metric",
         action="append",
         default=None,
-        help="metrics.jsonl or eval.json key to plot (repeatable; default: every metrics/* "
-        "key of runs; of evaluations, the behaviour's headline and its per-episode mean)",
+        help="metrics.jsonl or eval.json key to plot (repeatable; default for runs: the "
+        "behaviour's headline, the reward, then its other metrics/* keys but counters; of "
+        "evaluations, the behaviour's headline and its per-episode mean)",
+    )
+    p.add_argument(
+        "--health",
+        action="store_true",
+        help="runs: also the learner's health (spread, saturated means, explained variance, "
+        "reward scale, learning rate, losses)",
     )
     p.add_argument(
         "--vs",
@@ -145,6 +152,39 @@ def _by_start(lines: list[tuple[Path, list[dict]]]) -> list[tuple[str, list[dict
     return split
 
 
+HEALTH_KEYS = ("learning_rate", "loss/surrogate", "loss/value")
+"""Learner figures drawn with ``--health`` beside every ``health/*`` key."""
+
+
+def is_counter(key: str) -> bool:
+    """Whether a metrics key counts things (``metrics/training_score_episodes``): not drawn by
+    default, it only grows."""
+    return key.rsplit("/", 1)[-1].endswith("episodes")
+
+
+def run_headline(run_dir: Path, registry: PluginRegistry | None) -> str | None:
+    """The metrics key of the run's behaviour's headline (``metrics/score``), when its
+    config.json names an installed behaviour that declares one."""
+    try:
+        name = json.loads((run_dir / "config.json").read_text())["behavior_name"]
+        headline = registry.behavior(name).headline_metric if registry is not None else ""
+    except (OSError, ValueError, KeyError, TypeError, UsageError):
+        return None
+    return f"metrics/{headline}" if headline else None
+
+
+def default_run_metrics(every: set[str], headline: str | None, health: bool) -> list[str]:
+    """What ``devlearn curve RUN`` draws: the headline, the reward, the behaviour's other
+    metrics (no counters) and, with ``health``, the learner's health."""
+    first = [k for k in (headline, "mean_reward") if k in every]
+    rest = sorted(k for k in every if k.startswith("metrics/") and not is_counter(k))
+    keys = first + [k for k in rest if k not in first]
+    if health:
+        keys += sorted(k for k in every if k.startswith("health/"))
+        keys += [k for k in HEALTH_KEYS if k in every]
+    return keys
+
+
 def default_out(dirs: list[Path], evaluations: bool) -> Path:
     """Runs: the first run folder's ``learning_curve.png``. Evaluations: ``eval_curve.png`` in
     the folder that holds them all (the run folder for ``RUN/eval_*``), never inside one of the
@@ -190,14 +230,18 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
         default = default_eval_metrics([r for _, rows in runs for r in rows])
         runs = _by_start(runs)
     else:
-        default = sorted(k for k in every if k.startswith("metrics/"))
+        headline = run_headline(Path(runs[0][0]), registry)
+        default = default_run_metrics(every, headline, getattr(args, "health", False))
     keys = args.metric or default or ["mean_step_reward"]  # before any episode ended
     unknown = [k for k in keys if k not in every]
     if unknown or not keys:
         raise UsageError(f"no such metric(s) {unknown}; valid: {', '.join(sorted(every))}")
     if not 1 <= args.smooth <= SMOOTH_MAX:
         raise UsageError(f"--smooth must be from 1 to {SMOOTH_MAX}, got {args.smooth}")
-    fig, axes = plt.subplots(len(keys), 1, figsize=(7, 2.4 * len(keys)), squeeze=False)
+    # constrained layout places the title above the first panel, never over it
+    fig, axes = plt.subplots(
+        len(keys), 1, figsize=(7, 2.4 * len(keys)), squeeze=False, layout="constrained"
+    )
     for ax, key in zip(axes[:, 0], keys):
         if len(runs) > 10:  # matplotlib's default cycle repeats after 10 colours
             ax.set_prop_cycle(color=[plt.get_cmap("tab20")(i) for i in range(20)])
@@ -238,7 +282,6 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     else:
         axes[-1, 0].set_xlabel("environment steps")
         fig.suptitle(f"{title}: mean over episodes ending in each iteration")
-    fig.tight_layout()
     out = args.out or default_out(list(args.run_dirs), evaluations)
     fig.savefig(out, dpi=110, bbox_inches="tight")  # the legend beside the axes included
     print(out)

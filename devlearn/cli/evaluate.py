@@ -44,8 +44,9 @@ def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) 
         "--start",
         choices=("stage", "babybench", "rest", "random"),
         default="stage",
-        help="where episodes start: as the behaviour's evaluation protocol says (default: where training starts, its curriculum's first stage, unless the behaviour declares one; "
-        "self_touch: seeded random poses; hand_regard: babybench); babybench (the scene's "
+        help="where episodes start: stage (default): the behaviour's evaluation protocol "
+        "(self_touch: seeded random poses; hand_regard: babybench), or for a behaviour that "
+        "declares none, the curriculum stage where the policy trained; babybench (the scene's "
         "settled state + 10 seeded random-action steps, as BabyBench's reset); rest (that "
         "state alone, every episode: a deterministic policy then repeats one episode); "
         "random (random joint angles: generalisation)",

@@ -14,6 +14,7 @@ import numpy as np
 import torch
 from tqdm import tqdm
 
+from devlearn.api.behavior import evaluation_stage
 from devlearn.api.errors import UsageError
 from devlearn.config.run_config import to_dict
 from devlearn.env.behavior_env import BehaviorEnv
@@ -178,7 +179,9 @@ def evaluate(
 ) -> dict[str, Any]:
     """Run ``episodes`` episodes of a policy and summarise them under the evaluation protocol.
 
-    The env uses ``behavior.eval_stage()`` options and ``behavior.evaluator(training=False)``.
+    The env uses :func:`~devlearn.api.behavior.evaluation_stage`'s options (the behaviour's
+    declared protocol, or the curriculum stage where the policy trained) and
+    ``behavior.evaluator(training=False)``.
     A checkpoint acts with its mean action (deterministic); the baselines ``zero`` and
     ``random`` run through exactly the same loop with the behaviour's default config.
 
@@ -246,7 +249,7 @@ def evaluate(
     env = BehaviorEnv(behavior, seed, infant_factory, training=False, action_repeat=repeat)
     writer = None
     try:
-        stage = behavior.eval_stage()
+        stage = evaluation_stage(behavior, int(state.get("env_steps", cfg.total_steps)))
         if start != "stage":
             stage = {**stage, "random_pose": start == "random"}
             if start != "random":

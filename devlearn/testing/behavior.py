@@ -13,7 +13,7 @@ import mujoco
 import numpy as np
 import torch
 
-from devlearn.api.behavior import Behavior
+from devlearn.api.behavior import Behavior, evaluation_stage
 from devlearn.api.curriculum import Curriculum
 from devlearn.api.network_spec import NetworkSpec
 from devlearn.api.rewards import BatchedFromPerEnv, BatchedIntrinsicReward, IntrinsicReward
@@ -188,7 +188,7 @@ def check_behavior(
             while not step(rng.uniform(-1, 1, env.action_dim), where):
                 pass
         require(checked.episodes >= 1, "no episode ended: the evaluator was never closed")
-        env.set_stage(behavior.eval_stage())
+        env.set_stage(evaluation_stage(behavior, 0))
         _scripted_contacts(env, rng, contact_steps, step)
         check_summaries(checked)
         with tempfile.TemporaryDirectory() as tmp:

@@ -12,7 +12,8 @@ from devlearn.cli import curve
 
 
 def _args(run_dir, **kw):
-    base = {"run_dirs": [run_dir], "metric": None, "smooth": 3, "out": None, "vs": None}
+    base = {"run_dirs": [run_dir], "metric": None, "smooth": 3, "out": None, "vs": None,
+            "health": False}
     return argparse.Namespace(**{**base, **kw})
 
 
@@ -167,3 +168,31 @@ def test_the_legend_of_many_runs_does_not_cover_the_curves(tmp_path, monkeypatch
     assert [t.get_text() for t in ax.get_legend().get_texts()] == names
     assert not legend.overlaps(ax.get_window_extent())
     assert len({tuple(line.get_color()) for line in ax.get_lines()}) == len(names)  # no repeats
+
+
+def test_a_run_curve_leads_with_the_headline_and_reward_and_draws_no_counters(
+    tmp_path, monkeypatch
+):
+    import matplotlib.pyplot as plt
+
+    from devlearn.plugins import PluginRegistry
+
+    figures = []
+    monkeypatch.setattr(plt.Figure, "savefig", lambda fig, *a, **k: figures.append(fig))
+    row = {"step": 0, "mean_reward": 1.0, "metrics/balance": 2.0, "metrics/coverage_left": 0.1,
+           "metrics/score": 0.3, "metrics/training_score_episodes": 40,
+           "health/std_mean": 0.5, "health/saturated": 0.1, "learning_rate": 3e-4}  # fmt: skip
+    rows = [{**row, "step": 100 * i} for i in range(6)]
+    (tmp_path / "metrics.jsonl").write_text("\n".join(json.dumps(r) for r in rows))
+    (tmp_path / "config.json").write_text(json.dumps({"behavior_name": "self_touch"}))
+    registry = PluginRegistry()
+    assert curve.run(_args(tmp_path), registry) == 0
+    labels = [ax.get_ylabel() for ax in figures[0].axes]
+    assert labels == ["score", "mean_reward", "balance", "coverage_left"]  # headline first
+    fig = figures[0]
+    fig.canvas.draw()
+    title = fig.get_suptitle() and fig._suptitle.get_window_extent()
+    assert title.y0 >= fig.axes[0].get_tightbbox().y1  # the title above the first panel
+    assert curve.run(_args(tmp_path, health=True), registry) == 0
+    labels = [ax.get_ylabel() for ax in figures[1].axes]
+    assert labels[4:] == ["saturated", "std_mean", "learning_rate"]

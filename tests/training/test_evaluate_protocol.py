@@ -90,7 +90,8 @@ def test_protocol_is_recorded(registry, run_dir, tmp_path):
     protocol = written["protocol"]
     assert protocol["episodes"] == 2 and protocol["seed"] == 5
     assert protocol["settle_steps"] == 0 and protocol["checkpoint_env_steps"] == 16
-    # tiny declares no evaluation protocol: it evaluates where training starts, its first stage
+    # tiny declares no evaluation protocol: it evaluates where the policy trained, the stage of
+    # its 16 training steps (the first: stage_steps 1000)
     assert protocol["stage"] == {"random_pose": False} and protocol["action"] == "mean"
     assert protocol["start"] == written["start"] == "rest"
     commit = protocol["code"]["commit"]
@@ -303,3 +304,18 @@ def test_baseline_config_overrides(registry, tmp_path):
         == 0
     )
     assert json.loads((out / "eval.json").read_text())["config"]["seed"] == 5
+
+
+def test_an_undeclared_protocol_evaluates_in_the_stage_the_policy_trained_in(registry, tmp_path):
+    from devlearn import evaluation_stage
+
+    behavior = TinyBehavior()  # fixed pose for stage_steps (1000), then random poses
+    assert behavior.eval_stage() is None
+    assert evaluation_stage(behavior, 0) == {"random_pose": False}
+    assert evaluation_stage(behavior, 999) == {"random_pose": False}
+    assert evaluation_stage(behavior, 1000) == {"random_pose": True}
+    declared = type("Declared", (TinyBehavior,), {"eval_stage": lambda self: {"x": 1}})()
+    assert evaluation_stage(declared, 0) == {"x": 1}
+    # a baseline evaluates in the stage a default run ends in (tiny: 150,000 steps: random)
+    summary = evaluate("tiny", None, 1, registry, policy="zero", progress=False)
+    assert summary["protocol"]["stage"] == {"random_pose": True} and summary["start"] == "random"
