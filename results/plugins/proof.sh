@@ -1,15 +1,15 @@
 #!/usr/bin/env bash
 # Issue #38's proof: a behaviour the built-ins did not tune for learns with the core defaults
 # alone. BEHAVIOR is trained for STEPS physics steps with each seed of SEEDS (devlearn sweep:
-# no --set beyond one thread per run), each final policy evaluated from where training starts
-# (the default start: the curriculum's first stage, the rest pose) and from random poses
-# (--start random); zero and random baselines under both protocols. One run at a time
+# no --set beyond one thread per run), each final policy evaluated with the default protocol
+# (a behaviour that declares none: the curriculum stage where the policy trained) and from the
+# rest pose (--start rest); zero and random baselines under both protocols. One run at a time
 # (JOBS=1: one core; pin the script with taskset), EPISODES (30) episodes per evaluation,
 # eval seed 0. A rerun resumes (the sweep continues unfinished runs, written evaluations are
 # skipped). From the repository root:
 #   bash results/plugins/proof.sh BEHAVIOR OUT SEEDS STEPS   # e.g. hand_to_mouth OUT 1-3 500000
-# Layout: OUT/runs/seed=N/ (run; eval/ from the default start, random/ from random poses),
-# OUT/baseline_{zero,random}[_random]/, OUT/report/ (the sweep's).
+# Layout: OUT/runs/seed=N/ (run; eval/ the default protocol, rest/ from the rest pose),
+# OUT/baseline_{zero,random}[_rest]/, OUT/report/ (the sweep's).
 set -euo pipefail
 USAGE="usage: proof.sh BEHAVIOR OUT SEEDS STEPS"
 BEHAVIOR=${1:?$USAGE}
@@ -33,9 +33,9 @@ evaluate() {  # evaluate DIR ARGS...: one evaluation (eval seed 0) unless DIR/ev
 shopt -s nullglob
 for run in "$OUT"/runs/seed=*/; do
   run=${run%/}
-  evaluate "$run/random" --checkpoint "$run/checkpoint_latest.pt" --start random
+  evaluate "$run/rest" --checkpoint "$run/checkpoint_latest.pt" --start rest
 done
 for policy in zero random; do
   evaluate "$OUT/baseline_$policy" --policy "$policy"
-  evaluate "$OUT/baseline_${policy}_random" --policy "$policy" --start random
+  evaluate "$OUT/baseline_${policy}_rest" --policy "$policy" --start rest
 done
