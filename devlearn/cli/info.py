@@ -22,8 +22,11 @@ def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) 
 
 def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     """Print the description as a table or JSON."""
-    behavior = registry.create(args.behavior)
-    info = describe_behavior(behavior)
+    from devlearn.config.run_config import fresh_config
+
+    cfg = fresh_config(registry.behavior(args.behavior))  # what `devlearn run` would use
+    behavior = registry.create(args.behavior, cfg.behavior)
+    info = describe_behavior(behavior, action_repeat=cfg.env.action_repeat)
     info["plugin"] = registry.plugin_of(args.behavior).name
     if args.json:
         print(json.dumps(info, indent=2))

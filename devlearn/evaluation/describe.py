@@ -14,7 +14,7 @@ if TYPE_CHECKING:
 
 
 def describe_behavior(
-    behavior: Behavior, infant_factory: InfantFactory | None = None
+    behavior: Behavior, infant_factory: InfantFactory | None = None, action_repeat: int = 1
 ) -> dict[str, Any]:
     """Build the behaviour's infant once and describe its environment.
 
@@ -22,12 +22,16 @@ def describe_behavior(
         behavior: A behaviour instance (its default config is fine).
         infant_factory: Optional ``(scene, senses, **behavior.infant_options()) -> Infant``
             replacement for tests.
+        action_repeat: Physics steps per policy decision of the run described
+            (``env.action_repeat``).
 
     Returns:
         JSON-ready dict with keys ``behavior``, ``description``, ``scene``, ``senses``,
         ``observations`` (name -> shape list), ``obs_groups``, ``action_dim``, ``touch_sensors``,
-        ``skin_regions``, ``regions_per_side``, ``physics_timestep``, ``control_timestep``,
-        ``episode_steps``, ``reward_terms`` and ``curriculum``.
+        ``skin_regions``, ``regions_per_side``, ``physics_timestep``, ``action_repeat``,
+        ``decision_interval`` (seconds between the policy's decisions: the physics step times
+        the action repeat), ``episode_steps`` (physics steps), ``reward_terms`` and
+        ``curriculum``.
     """
     if infant_factory is None:
         from devlearn.infant import build_infant
@@ -64,7 +68,8 @@ def describe_behavior(
         "skin_regions": int(body["skin_regions"]),
         "regions_per_side": int(body["regions_per_side"]),
         "physics_timestep": float(body["physics_timestep"]),
-        "control_timestep": float(body["control_timestep"]),
+        "action_repeat": int(action_repeat),
+        "decision_interval": round(float(body["control_timestep"]) * action_repeat, 9),
         "episode_steps": int(body["episode_steps"]),
         "reward_terms": [term.name for term in behavior.reward_terms()],
         "curriculum": [

@@ -82,7 +82,8 @@ def test_info_json(behavior, action_dim):
         "skin_regions",
         "regions_per_side",
         "physics_timestep",
-        "control_timestep",
+        "action_repeat",
+        "decision_interval",
         "episode_steps",
     }
     assert keys <= set(info)
@@ -90,4 +91,6 @@ def test_info_json(behavior, action_dim):
     assert info["skin_regions"] == 68 and info["regions_per_side"] == 34
     assert 4500 <= info["touch_sensors"] <= 7000
     assert info["physics_timestep"] == 0.005 and info["episode_steps"] == 1000
+    assert "control_timestep" not in info  # it read 0.005 where a decision is every 0.025 s
+    assert info["action_repeat"] == 5 and info["decision_interval"] == 0.025
     assert all(isinstance(s, list) for s in info["observations"].values())
