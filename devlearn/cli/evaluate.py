@@ -6,7 +6,7 @@ import argparse
 import json
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from devlearn.api.errors import UsageError
 from devlearn.cli.folders import removed_on_failure
@@ -60,7 +60,17 @@ def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) 
         help="a baseline's config value, e.g. behavior.detector_file=runs/hr/hand_detector.json "
         "(hand regard's baselines then score with a calibrated detector); repeatable",
     )
-    p.add_argument("--json", action="store_true", help="print the summary as JSON")
+    p.add_argument(
+        "--json", action="store_true", help="print every figure as JSON (eval.json's content)"
+    )
+    p.add_argument(
+        "--compare",
+        action="append",
+        default=[],
+        metavar="DIR",
+        help="a baseline's evaluation folder to show beside the headline (repeatable; default: "
+        "eval_BEHAVIOR_zero / _random / _held_random here, when they exist)",
+    )
     p.add_argument("--video", metavar="PATH", help="write an MP4 of the first episode")
     p.add_argument(
         "--out",
@@ -86,15 +96,114 @@ def _count(text: str, option: str, minimum: int, maximum: int) -> int:
     return value
 
 
-def _print(summary: dict, as_json: bool) -> None:
+BOOKKEEPING = {
+    "episodes", "steps", "behavior", "policy", "checkpoint", "checkpoint_env_steps",
+    "training_seed", "start", "protocol", "config", "written", "settle_steps",
+}  # fmt: skip
+"""Summary keys the human summary's header says in words (or leaves to --json)."""
+SHOWN_MAX = 8
+"""Further figures the human summary shows after the headline (the JSON has all)."""
+
+
+def headline_of(summary: dict, behavior_headline: str = "") -> tuple[str, float, tuple] | None:
+    """``(key, value, (low, high) or ())``: the behaviour's headline as a reader wants it, the
+    per-episode mean with its 95% interval where the evaluator reports one (self-touch's
+    ``episode_score_mean``), else the headline's own figure."""
+    names = [(summary.get("protocol") or {}).get("headline"), behavior_headline]
+    keys = [k for n in names if n for k in (f"episode_{n}_mean", f"{n}_mean", n)]
+    for key in keys:
+        value = summary.get(key)
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            base = key.removesuffix("_mean")
+            low, high = summary.get(f"{base}_ci_low"), summary.get(f"{base}_ci_high")
+            return key, float(value), (low, high) if low is not None and high is not None else ()
+    return None
+
+
+def _figure(value: Any) -> str:
+    return f"{value:.4g}" if isinstance(value, float) else json.dumps(value, default=float)
+
+
+def human_summary(
+    summary: dict, behavior_headline: str, baselines: dict[str, dict], json_path: Path | None
+) -> list[str]:
+    """A few lines for a reader: what was evaluated and how, the headline with its interval,
+    the baselines' headline under the same start, the next few figures, where the JSON is."""
+    protocol = summary.get("protocol") or {}
+    who = summary.get("checkpoint") or f"{summary.get('policy')} actions (baseline)"
+    trained = summary.get("checkpoint_env_steps")
+    lines = [
+        f"{summary.get('behavior')}: {who}"
+        + (f" ({trained:,} training steps)" if summary.get("checkpoint") else ""),
+        f"  {protocol.get('episodes', summary.get('episodes'))} episodes from "
+        f"{summary.get('start')} starts, eval seed {protocol.get('seed')}, "
+        f"{protocol.get('action', '')} action",
+    ]
+    head = headline_of(summary, behavior_headline)
+    shown: set[str] = set()
+    if head is not None:
+        key, value, ci = head
+        shown.add(key)
+        band = f" [{ci[0]:.4g}, {ci[1]:.4g}] (95% interval over episodes)" if ci else ""
+        lines.append(f"  headline  {key} = {value:.4g}{band}")
+        same = {
+            name: headline_of(other, behavior_headline)
+            for name, other in baselines.items()
+            if other.get("start") == summary.get("start")
+        }
+        beside = [f"{name} {h[1]:.4g}" for name, h in same.items() if h and h[0] == key]
+        other = sorted(
+            f"{name} ({b.get('start')})" for name, b in baselines.items() if name not in same
+        )
+        if beside:
+            lines.append(f"  baselines {', '.join(beside)} (same start)")
+        elif other:
+            lines.append(
+                f"  baselines none from {summary.get('start')} starts; other starts: "
+                f"{', '.join(other)} (devlearn eval --policy P --start ...)"
+            )
+    rest = [
+        (k, v)
+        for k, v in summary.items()
+        if k not in BOOKKEEPING
+        and k not in shown
+        and not isinstance(v, (list, dict))
+        and not k.endswith(("_std", "_ci_low", "_ci_high", "_boot_low", "_boot_high"))
+    ]
+    if rest:
+        text = ", ".join(f"{k} {_figure(v)}" for k, v in rest[:SHOWN_MAX])
+        more = f" (+{len(rest) - SHOWN_MAX} more)" if len(rest) > SHOWN_MAX else ""
+        lines.append(f"  also      {text}{more}")
+    if json_path is not None:
+        lines.append(f"  all figures: {json_path} (devlearn eval ... --json prints them)")
+    return lines
+
+
+def _baselines(behavior: str, compare: list[str]) -> dict[str, dict]:
+    """Baseline evaluations to show beside a checkpoint's: ``--compare`` folders, else the
+    folders a run's summary names (``eval_BEHAVIOR_zero``, ``eval_BEHAVIOR_random``)."""
+    folders = [Path(c) for c in compare] or [
+        Path(f"eval_{behavior}_{policy}") for policy in ("zero", "random", "held_random")
+    ]
+    found = {}
+    for folder in folders:
+        path = folder / "eval.json" if folder.is_dir() else folder
+        try:
+            data = json.loads(path.read_text())
+        except (OSError, ValueError):
+            if compare:
+                raise UsageError(f"--compare {folder}: no readable eval.json there") from None
+            continue
+        if isinstance(data, dict) and data.get("behavior") == behavior:
+            found[str(data.get("policy") if not compare else folder)] = data
+    return found
+
+
+def _print(summary: dict, as_json: bool, lines: list[str] | None = None) -> None:
     if as_json:
         print(json.dumps(summary, indent=2, default=float))
         return
-    shown = {k: v for k, v in summary.items() if k not in ("config", "part_touch_steps")}
-    width = max((len(k) for k in shown), default=0)
-    for key, value in shown.items():
-        text = f"{value:.4g}" if isinstance(value, float) else json.dumps(value, default=float)
-        print(f"{key.ljust(width)}  {text}")
+    print("\n".join(lines or []))
 
 
 def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
@@ -116,6 +225,12 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
         out_dir = checkpoint.parent / "eval"
     else:
         out_dir = Path(f"eval_{args.behavior}_{args.policy}")
+    headline = registry.behavior(args.behavior).headline_metric
+    baselines = _baselines(args.behavior, args.compare) if not args.json else {}
+
+    def human(summary: dict, json_path: Path | None) -> list[str]:
+        return human_summary(summary, headline, baselines, json_path)
+
     try:
         with removed_on_failure(out_dir):
             summary = evaluate(
@@ -131,10 +246,10 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
                 overrides=args.overrides,
             )
     except EvalWriteError as exc:
-        _print(exc.summary, args.json)
+        _print(exc.summary, args.json, human(exc.summary, None))
         raise
     written = summary.pop("written", [])
-    _print(summary, args.json)
+    _print(summary, args.json, human(summary, out_dir / "eval.json"))
     files = ", ".join(Path(p).name for p in written)
     # stderr with --json, so that stdout stays one JSON document
     print(

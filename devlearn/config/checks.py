@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import inspect
 import math
 import os
 import re
@@ -51,6 +52,9 @@ INTERVAL_MAX = 10**9
 """Largest ``save_interval`` (iterations)."""
 PPO_COUNT_MAX = 10**6
 """Largest rollout length, epochs and mini-batches per iteration."""
+WEIGHT_MAX = 1e6
+"""Largest magnitude of a reward term's weight (a larger one times a term's value overflows or
+drowns every other term; rewards are normalised anyway)."""
 
 
 def _whole(value: Any, option: str, low: int, high: int, low_note: str = "") -> None:
@@ -91,7 +95,43 @@ def check_config(cfg: RunConfig) -> None:
     _positive(cfg, "value_loss_coef", closed=True)
     if cfg.ppo.desired_kl is not None:
         _positive(cfg, "desired_kl")
+    _check_batches(cfg)
     check_reward_terms(cfg.behavior)
+
+
+def _check_batches(cfg: RunConfig) -> None:
+    """The decision rate against the episode and the budget, and the mini-batches against the
+    rollout: values that pass their own bounds but fail or hang together."""
+    from devlearn.infant.scenes import EPISODE_STEPS  # the infant's episode (physics steps)
+
+    repeat = cfg.env.action_repeat
+    _whole(repeat, "env.action_repeat", 1, EPISODE_STEPS)
+    if EPISODE_STEPS % repeat:
+        valid = [k for k in range(1, 21) if EPISODE_STEPS % k == 0]
+        raise UsageError(
+            f"env.action_repeat={repeat} must divide the episode ({EPISODE_STEPS} physics "
+            f"steps), e.g. {', '.join(map(str, valid))}"
+        )
+    rollout = cfg.num_envs * cfg.ppo.num_steps_per_env
+    iteration = rollout * repeat
+    if cfg.total_steps < iteration:
+        raise UsageError(
+            f"--steps {cfg.total_steps} is less than one iteration: {cfg.num_envs} envs x "
+            f"{cfg.ppo.num_steps_per_env} decisions x env.action_repeat {repeat} = {iteration} "
+            "physics steps; give more steps, fewer envs or a shorter rollout"
+        )
+    if rollout < 2:
+        raise UsageError(
+            f"a rollout of {rollout} sample ({cfg.num_envs} env x {cfg.ppo.num_steps_per_env} "
+            "decision) cannot normalise advantages; give more envs or ppo.num_steps_per_env"
+        )
+    if rollout // cfg.ppo.num_mini_batches < 2:
+        raise UsageError(
+            f"ppo.num_mini_batches={cfg.ppo.num_mini_batches} leaves fewer than 2 samples per "
+            f"mini-batch of a {rollout}-sample rollout ({cfg.num_envs} envs x "
+            f"{cfg.ppo.num_steps_per_env} decisions; advantages are normalised per mini-batch); "
+            f"at most {max(1, rollout // 2)}"
+        )
 
 
 def check_reward_terms(behavior_cfg: Any) -> None:
@@ -99,10 +139,25 @@ def check_reward_terms(behavior_cfg: Any) -> None:
     behaviour or plugin defines (resolved by name among the registered terms, never imported:
     a config or checkpoint is data)."""
     for name, term in (getattr(behavior_cfg, "rewards", None) or {}).items():
+        term = reward_term_cfg(term)
         try:
-            reward_term_cfg(term).term_class()
+            cls = term.term_class()
         except UsageError as err:
             raise UsageError(f"behavior.rewards.{name}.cls: {err}") from None
+        if not (math.isfinite(term.weight) and abs(term.weight) <= WEIGHT_MAX):
+            raise UsageError(
+                f"behavior.rewards.{name}.weight must be a finite number from -{WEIGHT_MAX:g} "
+                f"to {WEIGHT_MAX:g}, got {term.weight:g}"
+            )
+        accepted = inspect.signature(cls).parameters
+        if not any(p.kind is p.VAR_KEYWORD for p in accepted.values()):
+            valid = sorted(k for k in accepted if k not in ("self", "weight"))
+            for param in term.params:
+                if param not in accepted or param == "weight":
+                    raise UsageError(
+                        f"unknown parameter 'behavior.rewards.{name}.params.{param}' of "
+                        f"{cls.__name__}; valid: {', '.join(valid) or 'none'}"
+                    )
 
 
 def available_memory_mb() -> float | None:

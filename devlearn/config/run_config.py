@@ -256,6 +256,12 @@ def finish_config(cfg: RunConfig, behavior_cls: type[Behavior]) -> None:
             f"{behavior_cls.name}: its network() rejects the config: {err} "
             "(set through --set behavior.FIELD=VALUE, e.g. behavior.max_std)"
         ) from err
+    try:  # stage lengths are the behaviour's fields: a negative one fails here, not in a worker
+        behavior_cls(cfg.behavior).curriculum()
+    except ValueError as err:
+        raise UsageError(
+            f"{behavior_cls.name}: its curriculum() rejects the config: {err}"
+        ) from err
     if not cfg.network.layout:
         cfg.network.layout = "shared" if spec.share else "separate"
     check_learner(cfg, spec)

@@ -35,7 +35,11 @@ def convert(value: Any, kind: Any, key: str) -> Any:
                 if text not in ("true", "false", "1", "0", "yes", "no"):
                     raise ValueError("expected true or false")
                 return text in ("true", "1", "yes")
-            return bool(value)
+            if isinstance(value, bool) or (isinstance(value, int) and value in (0, 1)):
+                return bool(value)  # JSON: true, false, 1, 0; not 7, [] or null
+            raise ValueError("expected true or false")
+        if kind in (int, float) and isinstance(value, bool):
+            raise ValueError("expected a number, not true or false")
         if kind is int:
             number = float(value)
             if not number.is_integer():

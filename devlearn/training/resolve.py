@@ -132,6 +132,8 @@ def read_config_file(path: str | Path) -> dict[str, Any]:
         data = json.loads(path.read_text())
     except (OSError, ValueError) as exc:
         raise UsageError(f"cannot read {path}: {exc}") from None
+    except RecursionError:
+        raise UsageError(f"cannot read {path}: its JSON is nested too deeply") from None
     if not isinstance(data, dict):
         raise UsageError(
             f"{path} is not a run config: it holds a JSON {type(data).__name__}, not an object"

@@ -148,3 +148,30 @@ def test_sigterm_saves_a_checkpoint_and_restores_handlers(cli, tmp_path, monkeyp
     assert cli(["run", "tiny", "--steps", "100000", "--out", str(out), *small]) == 130
     assert load_checkpoint(out / "checkpoint_latest.pt")["env_steps"] == 32
     assert signal.getsignal(signal.SIGTERM) is before
+
+
+def test_eval_prints_a_short_summary_led_by_the_headline(cli, tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    out = tmp_path / "run"
+    assert cli(["run", "tiny", "--steps", "64", "--out", str(out), *SMALL]) == 0
+    assert cli(["eval", "tiny", "--policy", "zero", "--episodes", "2"]) == 0  # eval_tiny_zero
+    capsys.readouterr()
+    assert cli(["eval", "tiny", "--checkpoint", str(out), "--episodes", "2"]) == 0
+    printed = capsys.readouterr().out  # the baseline started elsewhere: said, not compared
+    assert "  baselines none from rest starts; other starts: zero (random)" in printed
+    args = ["--policy", "zero", "--episodes", "2", "--start", "rest", "--out", "eval_tiny_zero"]
+    assert cli(["eval", "tiny", *args]) == 0
+    capsys.readouterr()
+    assert cli(["eval", "tiny", "--checkpoint", str(out), "--episodes", "2"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0] == f"tiny: {out / 'checkpoint_latest.pt'} (64 training steps)"
+    assert lines[1].startswith("  2 episodes from rest starts, eval seed 0")
+    assert lines[2].startswith("  headline  close = ")  # the behaviour's headline, first
+    assert lines[3].startswith("  baselines zero ") and "(same start)" in lines[3]
+    assert any(line.startswith(f"  all figures: {out / 'eval' / 'eval.json'}") for line in lines)
+    assert len(lines) <= 7 and all(len(line) < 300 for line in lines)  # no raw dump
+    assert cli(["eval", "tiny", "--checkpoint", str(out), "--episodes", "2", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["episodes"] == 2  # --json keeps everything
+    err = "--compare nowhere: no readable eval.json there"
+    assert cli(["eval", "tiny", "--checkpoint", str(out), "--compare", "nowhere"]) == 2
+    assert err in capsys.readouterr().err

@@ -109,7 +109,7 @@ def test_out_on_an_existing_run_is_refused_and_leaves_it_unchanged(cli, run_dir,
 
 def test_a_rejected_resume_leaves_config_json_as_it_was(cli, run_dir, capsys):
     config = (run_dir / "config.json").read_bytes()
-    err = error(cli, capsys, "run", "tiny", "--resume", str(run_dir), "--envs", "8")
+    err = error(cli, capsys, "run", "tiny", "--resume", str(run_dir), "--envs", "8", "--steps", "128")
     assert "checkpoint has 2 envs per rank; resume with --envs 2" in err
     assert (run_dir / "config.json").read_bytes() == config
     assert cli(["run", "tiny", "--resume", str(run_dir), "--steps", "48"]) == 0
@@ -134,6 +134,12 @@ def test_a_rejected_resume_leaves_config_json_as_it_was(cli, run_dir, capsys):
         (["--set", "update_threads=-1"], "update_threads must be at least 0 (0: automatic)"),
         (["--set", "ppo.num_steps_per_env=1e12"], "ppo.num_steps_per_env must be at most 1e+06"),
         (["--set", "ppo.num_mini_batches=0"], "ppo.num_mini_batches must be at least 1, got 0"),
+        # values that passed their bounds, then crashed, hung or trained past the budget
+        (["--set", "env.action_repeat=7"], "env.action_repeat=7 must divide the episode (1000"),
+        (["--set", "env.action_repeat=1e9"], "env.action_repeat must be at most 1000"),
+        (["--envs", "2", "--set", "env.action_repeat=1000"], "--steps 16 is less than one iteration"),
+        (["--envs", "2", "--set", "ppo.num_mini_batches=1000000"], "fewer than 2 samples per mini"),
+        (["--envs", "1", "--steps", "64", "--set", "ppo.num_steps_per_env=1"], "a rollout of 1 sample"),
     ],
 )
 def test_bad_values_are_one_line_errors(cli, tmp_path, capsys, argv, expected):
@@ -166,7 +172,7 @@ def test_more_envs_than_memory_is_refused_before_building_them(cli, tmp_path, ca
         "run",
         "tiny",
         "--steps",
-        "16",
+        "8000",
         "--envs",
         "1000",
         "--workers",
@@ -176,7 +182,8 @@ def test_more_envs_than_memory_is_refused_before_building_them(cli, tmp_path, ca
     )
     assert "--envs 1000 needs at least 9.8 GB of memory" in err and "use --envs 100 or fewer" in err
     assert not out.exists()
-    assert "--envs 100000 needs at least" in error(cli, capsys, "run", "tiny", "--envs", "100000")
+    err = error(cli, capsys, "run", "tiny", "--envs", "100000", "--steps", "1e6")
+    assert "--envs 100000 needs at least" in err
 
 
 def test_unusable_out_folders(cli, tmp_path, capsys):
@@ -196,7 +203,7 @@ def test_unusable_out_folders(cli, tmp_path, capsys):
         locked.mkdir()
         locked.chmod(0o555)
         read_only = locked / "run"
-    err = error(cli, capsys, "run", "tiny", "--steps", "16", "--out", str(read_only))
+    err = error(cli, capsys, "run", "tiny", "--steps", "128", "--out", str(read_only))
     assert f"--out {read_only} is not writable" in err
 
 
@@ -502,3 +509,38 @@ def test_a_checkpoint_naming_a_reward_term_class_imports_nothing(
     assert not hostile.exists() and "evil_term" not in sys.modules
     assert files(terms_run) == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["pkg", "run"]  # nothing written
+
+
+
+@pytest.mark.parametrize(
+    ("config", "expected"),
+    [
+        ({"ppo": {"normalize_rewards": 7}}, "bad value 7 for ppo.normalize_rewards: expected bool"),
+        ({"ppo": {"normalize_rewards": []}}, "bad value [] for ppo.normalize_rewards"),
+        ({"ppo": {"normalize_rewards": None}}, "bad value None for ppo.normalize_rewards"),
+        ({"num_envs": True}, "bad value True for num_envs: expected int"),
+        ({"behavior": {"stage_steps": -5}}, "its curriculum() rejects the config: stage 'fixed'"),
+        ({"behavior": {"rewards": {"reach": {"cls": Reach.__module__ + ":Reach",
+                                             "params": {"target": 0.5, "nope": 1}}}}},
+         "unknown parameter 'behavior.rewards.reach.params.nope' of Reach; valid: target"),
+        ({"behavior": {"rewards": {"reach": {"cls": Reach.__module__ + ":Reach", "weight": 1e308,
+                                             "params": {"target": 0.5}}}}},
+         "behavior.rewards.reach.weight must be a finite number from -1e+06 to 1e+06"),
+    ],
+)  # fmt: skip
+def test_config_files_with_bad_values_are_refused_before_anything_is_written(
+    terms_cli, tmp_path, capsys, config, expected
+):
+    path = tmp_path / "config.json"
+    path.write_text(json.dumps(config))
+    out = tmp_path / "run"
+    assert expected in error(terms_cli, capsys, "run", "terms", "--config", str(path),
+                             "--out", str(out), "--steps", "32", "--envs", "2")  # fmt: skip
+    assert not out.exists()
+
+
+def test_a_deeply_nested_config_file_is_one_line(terms_cli, tmp_path, capsys):
+    path = tmp_path / "deep.json"
+    path.write_text('{"a":' * 100_000 + "1" + "}" * 100_000)
+    err = error(terms_cli, capsys, "run", "terms", "--config", str(path))
+    assert "its JSON is nested too deeply" in err
