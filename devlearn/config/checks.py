@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 from devlearn.api.errors import UsageError
 from devlearn.api.rewards import reward_term_cfg
+from devlearn.timing import EPISODE_STEPS
 
 if TYPE_CHECKING:
     from devlearn.config.run_config import RunConfig
@@ -102,8 +103,6 @@ def check_config(cfg: RunConfig) -> None:
 def _check_batches(cfg: RunConfig) -> None:
     """The decision rate against the episode and the budget, and the mini-batches against the
     rollout: values that pass their own bounds but fail or hang together."""
-    from devlearn.infant.scenes import EPISODE_STEPS  # the infant's episode (physics steps)
-
     repeat = cfg.env.action_repeat
     _whole(repeat, "env.action_repeat", 1, EPISODE_STEPS)
     if EPISODE_STEPS % repeat:

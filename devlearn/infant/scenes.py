@@ -11,10 +11,9 @@ from dm_control import mjcf
 
 from devlearn.infant.body import WORLD_CONTYPE, add_infant
 from devlearn.infant.body_table import MITTEN_RGBA, RIGHT_MITTEN_RGBA, SKIN_RGBA
+from devlearn.timing import EPISODE_STEPS, PHYSICS_TIMESTEP  # noqa: F401 (re-exported)
 
 SCENE_GROUP = 2  # geom group of everything that is not the infant (hidden in body-map pictures)
-PHYSICS_TIMESTEP = 0.005  # facts sec. 1: 5 ms, one physics step per control step (200 Hz)
-EPISODE_STEPS = 1000  # 5 simulated seconds
 
 TOY_COLOURS = (
     (0.85, 0.15, 0.15, 1),

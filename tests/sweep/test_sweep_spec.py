@@ -134,7 +134,7 @@ def error(cli, capsys, *argv: str) -> str:
 
 def test_bad_input_is_one_line_and_starts_nothing(cli, capsys, tmp_path, monkeypatch):
     out = tmp_path / "sweep"
-    base = ["sweep", "tiny", "--out", str(out), "--steps", "64"]
+    base = ["sweep", "tiny", "--out", str(out), "--steps", "128"]
     cases = {
         "--grid: unknown config key 'behavior.targt'; valid keys:": ["--grid", "behavior.targt=1"],
         "run target=far,seed=0: bad value 'far' for behavior.target": [
@@ -178,8 +178,8 @@ def test_a_folder_of_another_sweep_or_behaviour_is_refused(cli, capsys, tmp_path
     before = sorted(p.name for p in out.iterdir())
     err = error(cli, capsys, "sweep", "tiny", "--out", str(out))
     assert f"sweep folder {out} holds a sweep of 'other', not 'tiny'" in err
-    err = error(cli, capsys, "sweep", "other", "--out", str(out), "--steps", "99")
-    assert "was started with other settings (train.steps was None, now 99)" in err
+    err = error(cli, capsys, "sweep", "other", "--out", str(out), "--steps", "256")
+    assert "was started with other settings (train.steps was None, now 256)" in err
     assert sorted(p.name for p in out.iterdir()) == before
     run_dir = tmp_path / "a_run"
     run_dir.mkdir()
@@ -209,14 +209,14 @@ def test_preset_reaches_every_run(capsys, tmp_path):
     from devlearn.plugins import PluginRegistry
 
     out = tmp_path / "sweep"
-    options = {"out": str(out), "seeds": "1,2", "steps": "1000", "preset": "paper",
+    options = {"out": str(out), "seeds": "1,2", "steps": "4096", "preset": "paper",
                "overrides": ["behavior.lifetime_memory=per_env"]}  # fmt: skip
     spec = build_spec("self_touch", options, None)
     assert spec.what()["train"]["preset"] == "paper"
     runs = plan_sweep(spec, PluginRegistry(disabled=()), [])
     config = runs[0].job.config
     assert config["preset"] == "paper" and "preset=paper" in runs[0].job.settings
-    assert config["total_steps"] == 1000  # the option wins over the preset's 8M
+    assert config["total_steps"] == 4096  # the option wins over the preset's 8M
     assert main(["sweep", "self_touch", "--out", str(out), "--preset", "paper", "--dry-run"]) == 0
     assert "preset=paper" in capsys.readouterr().out
     assert main(["sweep", "self_touch", "--out", str(out), "--preset", "nope", "--dry-run"]) == 2
@@ -231,7 +231,7 @@ def test_grid_varies_a_learned_reward_option_and_checks_it_up_front(tmp_path):
     from devlearn.plugins import PluginRegistry
 
     registry = PluginRegistry(disabled=())
-    options = {"out": str(tmp_path / "s"), "seeds": "1", "steps": "1000",
+    options = {"out": str(tmp_path / "s"), "seeds": "1", "steps": "5120",
                "grid": ["learned.rnd.weight=0,0.05"], "overrides": ["curiosity=rnd"]}  # fmt: skip
     runs = plan_sweep(build_spec("self_touch", options, None), registry, [])
     assert len(runs) == 2
