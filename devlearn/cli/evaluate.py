@@ -105,21 +105,6 @@ SHOWN_MAX = 8
 """Further figures the human summary shows after the headline (the JSON has all)."""
 
 
-def headline_of(summary: dict, behavior_headline: str = "") -> tuple[str, float, tuple] | None:
-    """``(key, value, (low, high) or ())``: the behaviour's headline as a reader wants it, the
-    per-episode mean with its 95% interval where the evaluator reports one (self-touch's
-    ``episode_score_mean``), else the headline's own figure."""
-    names = [(summary.get("protocol") or {}).get("headline"), behavior_headline]
-    keys = [k for n in names if n for k in (f"episode_{n}_mean", f"{n}_mean", n)]
-    for key in keys:
-        value = summary.get(key)
-        if isinstance(value, (int, float)) and not isinstance(value, bool):
-            base = key.removesuffix("_mean")
-            low, high = summary.get(f"{base}_ci_low"), summary.get(f"{base}_ci_high")
-            return key, float(value), (low, high) if low is not None and high is not None else ()
-    return None
-
-
 def _figure(value: Any) -> str:
     return f"{value:.4g}" if isinstance(value, float) else json.dumps(value, default=float)
 
@@ -129,6 +114,8 @@ def human_summary(
 ) -> list[str]:
     """A few lines for a reader: what was evaluated and how, the headline with its interval,
     the baselines' headline under the same start, the next few figures, where the JSON is."""
+    from devlearn.evaluation.report import headline_of
+
     protocol = summary.get("protocol") or {}
     who = summary.get("checkpoint") or f"{summary.get('policy')} actions (baseline)"
     trained = summary.get("checkpoint_env_steps")

@@ -62,7 +62,8 @@ def test_three_seeds_give_scipys_interval(three_seeds, tmp_path):
     cell = result["table"]["score"]["trained"]
     assert cell["n"] == 3 and cell["mean"] == pytest.approx(sum(scores) / 3)
     assert (cell["ci_low"], cell["ci_high"]) == (pytest.approx(low), pytest.approx(high))
-    assert result["metrics"][0] == "score"  # the headline first
+    # the headline first, as the per-episode mean (self-touch's headline), not the union score
+    assert result["metrics"][0] == "episode_score_mean" and result["metrics"][1] == "score"
     assert "episode_score_std" not in result["table"]  # per-episode spread is not a metric
     assert "part_touch_steps.left.head" not in result["table"]
     # Baselines found beside the run folders, under the same metrics.
