@@ -279,6 +279,17 @@ class Behavior(ABC):
         """
         return {}
 
+    def run_length_defaults(self, total_steps: int) -> dict[str, Any]:
+        """Run-config values that depend on the run's length (dotted keys), applied to a new
+        run after ``--steps`` and ``--set`` for every key that neither ``--set`` nor the preset
+        gave: e.g. stage lengths as shares of the run (hand regard: 10% left arm, 10% right
+        arm, the rest both), so that a short run goes through every stage. Default: none.
+
+        Args:
+            total_steps: The run's ``total_steps``.
+        """
+        return {}
+
     def presets(self) -> dict[str, dict[str, Any]]:
         """Named sets of run-config overrides, chosen with ``devlearn run NAME --preset P``
         (e.g. ``{"paper": {"behavior.max_std": 0.0}}``: the paper's values one switch away

@@ -113,7 +113,14 @@ def run_summary(
             f"  {key}  {_number(last)} now, {_number(first)} at the start (step {first_step:,}), "
             "over training episodes"
         )
-    if result.last.get("stage"):
+    stages: dict[str, int] = {}  # the curriculum stages the run went through, with where
+    for row in rows:
+        if row.get("stage"):
+            stages.setdefault(str(row["stage"]), int(row.get("step", 0)))
+    if stages:
+        went = " -> ".join(f"{name} (logged from step {step:,})" for name, step in stages.items())
+        lines.append(f"  stages      {went}")
+    elif result.last.get("stage"):
         lines.append(f"  stage       {result.last['stage']}")
     lines += [f"  {warning}" for warning in result.warnings]  # the learner-health warnings
     if budget is not None and total_steps < budget[1]:

@@ -202,17 +202,26 @@ def fresh_config(
     **top: Any,
 ) -> RunConfig:
     """A new run's config, unchecked: defaults < the behaviour's ``train_defaults()`` < its
-    preset ``preset`` < ``top`` < overrides (:func:`default_config` checks it too).
+    preset ``preset`` < ``top`` < overrides, then the behaviour's
+    ``run_length_defaults(total_steps)`` for the keys neither the preset nor an override set
+    (:func:`default_config` checks it too).
 
     Raises:
         UsageError: An unknown preset (the valid ones named) or a bad override.
     """
     cfg = new_config(behavior_cls)
     apply_overrides(cfg, behavior_cls(cfg.behavior).train_defaults())
+    explicit: set[str] = set()
     if preset:
         apply_preset(cfg, behavior_cls, preset)
+        explicit |= set(behavior_cls(cfg.behavior).presets()[preset])
     apply_overrides(cfg, {k: v for k, v in top.items() if v is not None})
     apply_overrides(cfg, overrides or [])
+    given = overrides.items() if isinstance(overrides, dict) else (overrides or [])
+    explicit |= {str(o[0] if isinstance(o, tuple) else o).split("=", 1)[0].strip() for o in given}
+    # values that scale with the run's length, unless --set or the preset gave them
+    scaled = behavior_cls(cfg.behavior).run_length_defaults(int(cfg.total_steps))
+    apply_overrides(cfg, {k: v for k, v in scaled.items() if k not in explicit})
     return cfg
 
 

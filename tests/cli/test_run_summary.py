@@ -135,3 +135,11 @@ def test_the_summary_puts_the_run_beside_baselines_and_its_budget(tmp_path, monk
     assert "devlearn report run/eval eval_tiny_random eval_tiny_zero" in printed
     assert main(["run", "tiny", "--steps", "320", "--out", "full", *SMALL]) == 0
     assert "budget " not in capsys.readouterr().out  # a full run is no demonstration
+
+
+def test_the_summary_names_every_stage_the_run_went_through(cli, tmp_path, capsys):
+    out = tmp_path / "run"
+    argv = ["run", "tiny", "--steps", "64", "--out", str(out), "--set", "behavior.stage_steps=32"]
+    assert cli([*argv, *SMALL]) == 0
+    printed = capsys.readouterr().out
+    assert "stages      fixed (logged from step 16) -> random (logged from step 48)" in printed

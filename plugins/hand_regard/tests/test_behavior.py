@@ -223,3 +223,22 @@ def test_demonstration_by_default_and_the_paper_preset():
     paper = default_config(HandRegard, preset="paper")
     assert paper.total_steps == 1_850_000 and paper.behavior.policy == "cnn"
     assert (paper.behavior.left_arm_steps, paper.behavior.both_arms_steps) == (175_000, 1_500_000)
+
+
+def test_stage_lengths_scale_with_the_run_unless_set():
+    """A run of N steps goes through all three stages (10% + 10% + the rest, as the 614,400-step
+    experiments did); --set and the paper preset keep their own lengths."""
+    from devlearn.plugins import PluginRegistry
+    from devlearn.training.resolve import RunRequest, resolve_config
+
+    registry = PluginRegistry()
+
+    def stages(**request):
+        b = resolve_config(RunRequest("hand_regard", **request), registry).behavior
+        return b.left_arm_steps, b.right_arm_steps, b.both_arms_steps
+
+    assert stages() == (3_000, 3_000, 24_000)  # the demonstration
+    assert stages(top={"total_steps": 614_400}) == (61_440, 61_440, 491_520)
+    assert stages(preset="paper") == (175_000, 175_000, 1_500_000)
+    set_left = ["behavior.left_arm_steps=5000"]
+    assert stages(top={"total_steps": 614_400}, overrides=set_left) == (5_000, 61_440, 491_520)

@@ -40,6 +40,8 @@ if TYPE_CHECKING:
 
 DETECTOR_FILE = "hand_detector.json"
 """Name of the calibrated detector in a run directory."""
+STAGE_SHARE = 0.1
+"""Share of a run each one-arm stage takes unless set (:meth:`HandRegard.run_length_defaults`)."""
 DEMO_STEPS = (3_000, 3_000, 24_000)
 """``devlearn run hand_regard`` without ``--steps``: a demonstration of a few minutes on a CPU,
 the paper's three stages in short (left arm, right arm, both); ``--preset paper`` is the
@@ -397,6 +399,18 @@ class HandRegard(Behavior):
             "behavior.both_arms_steps": both,
             "total_steps": left + right + both,
             "ppo.entropy_coef": 0.0,
+        }
+
+    def run_length_defaults(self, total_steps: int) -> dict[str, Any]:
+        """The stages as shares of the run, as the 614,400-step experiments had them: 10% left
+        arm, 10% right arm, the rest both arms (the demonstration's 30k: 3k + 3k + 24k), so
+        that ``--steps N`` goes through every stage; ``--set behavior.left_arm_steps=...``
+        or ``--preset paper`` (175k + 175k + 1.5M) keep their own."""
+        one_arm = round(total_steps * STAGE_SHARE)
+        return {
+            "behavior.left_arm_steps": one_arm,
+            "behavior.right_arm_steps": one_arm,
+            "behavior.both_arms_steps": total_steps - 2 * one_arm,
         }
 
     def presets(self) -> dict[str, dict[str, Any]]:
