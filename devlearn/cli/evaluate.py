@@ -52,6 +52,13 @@ def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) 
         "random (random joint angles: generalisation)",
     )
     p.add_argument(
+        "--action",
+        choices=("mean", "sample"),
+        default="mean",
+        help="a checkpoint's action: mean (deterministic, default) or sample (drawn from the "
+        "policy's distribution, seeded by --seed, as in training)",
+    )
+    p.add_argument(
         "--set",
         action="append",
         default=[],
@@ -231,6 +238,7 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
                 policy=args.policy or "checkpoint",
                 start=args.start,
                 overrides=args.overrides,
+                action=args.action,
             )
     except EvalWriteError as exc:
         _print(exc.summary, args.json, human(exc.summary, None))

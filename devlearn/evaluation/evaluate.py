@@ -37,6 +37,8 @@ held for :data:`HOLD_STEPS` physics steps on average (each actuator redraws with
 1 / HOLD_STEPS per physics step, as motor babbling does; with a decision rate K, K / HOLD_STEPS
 per decision), which moves the damped limbs much further
 than i.i.d. noise. All seeded by the evaluation seed."""
+ACTIONS = ("mean", "sample")
+"""How a checkpoint acts in ``evaluate``: its mean action, or one sampled from its policy."""
 HOLD_STEPS = 8
 """Mean steps a ``held_random`` baseline action is held (40 ms at 200 Hz)."""
 STARTS = ("stage", "babybench", "rest", "random")
@@ -124,9 +126,16 @@ def code_version() -> dict[str, Any]:
 
 
 def _policy(
-    policy: str, actor: MultiSenseModel | None, action_dim: int, seed: int, repeat: int = 1
+    policy: str,
+    actor: MultiSenseModel | None,
+    action_dim: int,
+    seed: int,
+    repeat: int = 1,
+    sample: bool = False,
 ) -> Callable[[dict[str, np.ndarray]], np.ndarray]:
-    """``act(obs) -> (action_dim,)``: the actor's mean action, zeros, or seeded uniform noise."""
+    """``act(obs) -> (action_dim,)``: the actor's mean action (``sample``: an action drawn
+    from its distribution, from torch's generator seeded by the evaluation seed), zeros, or
+    seeded uniform noise."""
     if policy == "zero":
         return lambda obs: np.zeros(action_dim)
     if policy == "random":
@@ -146,7 +155,7 @@ def _policy(
     def act(obs: dict[str, np.ndarray]) -> np.ndarray:
         assert actor is not None, "the checkpoint policy needs a checkpoint's actor"
         with torch.inference_mode():
-            return actor(observation_batch(obs))[0].numpy()
+            return actor(observation_batch(obs), stochastic_output=sample)[0].numpy()
 
     return act
 
@@ -176,6 +185,7 @@ def evaluate(
     policy: str = "checkpoint",
     start: str = "stage",
     overrides: list[str] | None = None,
+    action: str = "mean",
 ) -> dict[str, Any]:
     """Run ``episodes`` episodes of a policy and summarise them under the evaluation protocol.
 
@@ -204,6 +214,9 @@ def evaluate(
             calibrated detector for hand regard's baselines
             (``behavior.detector_file=runs/hr/hand_detector.json``); not with a checkpoint,
             whose config is its own.
+        action: A checkpoint's action: ``mean`` (deterministic, the default protocol) or
+            ``sample`` (drawn from the policy's distribution, as in training: a behaviour whose
+            skill lives in the policy's noise shows it only so).
     Returns:
         ``evaluator.summary()`` plus ``behavior``, ``policy``, ``checkpoint``,
         ``checkpoint_env_steps`` (x axis of ``devlearn curve``), ``training_seed``, ``config``
@@ -219,6 +232,10 @@ def evaluate(
         raise UsageError(f"unknown policy '{policy}'; valid: {', '.join(POLICIES)}")
     if start not in STARTS:
         raise UsageError(f"unknown start '{start}'; valid: {', '.join(STARTS)}")
+    if action not in ACTIONS:
+        raise UsageError(f"unknown action '{action}'; valid: {', '.join(ACTIONS)}")
+    if action != "mean" and policy != "checkpoint":
+        raise UsageError(f"--action {action} is a checkpoint's; a baseline acts as it is named")
     if (checkpoint is None) != (policy != "checkpoint"):
         raise UsageError(
             "give a checkpoint, or a baseline policy (zero, random, held_random), not both"
@@ -262,7 +279,7 @@ def evaluate(
         started = "random" if stage.get("random_pose") else getattr(env.infant, "start", "rest")
         obs = env.reset()
         actor = opened.actor(obs, env.action_dim) if opened is not None else None
-        act = _policy(policy, actor, env.action_dim, seed, repeat)
+        act = _policy(policy, actor, env.action_dim, seed, repeat, sample=action == "sample")
         if video is not None:
             import imageio.v2 as imageio
 
@@ -299,7 +316,7 @@ def evaluate(
                 "episodes": episodes,
                 "seed": seed,
                 "policy": policy,
-                "action": "mean" if policy == "checkpoint" else policy,
+                "action": action if policy == "checkpoint" else policy,
                 "stage": json.loads(json.dumps(stage, default=str)),
                 "start": started,
                 "start_option": start,

@@ -92,7 +92,7 @@ def headline_of(summary: dict, behavior_headline: str = "") -> tuple[str, float,
     per-episode mean with its 95% interval where the evaluator reports one (self-touch's
     ``episode_score_mean``), else the headline's own figure."""
     names = [(summary.get("protocol") or {}).get("headline"), behavior_headline]
-    keys = [k for n in names if n for k in (f"episode_{n}_mean", f"{n}_mean", n)]
+    keys = [k for n in names if n for k in (f"episode_{n}_mean", f"{n}_mean", f"mean_{n}", n)]
     for key in keys:
         value = summary.get(key)
         if isinstance(value, (int, float)) and not isinstance(value, bool):
