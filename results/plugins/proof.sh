@@ -3,12 +3,15 @@
 # alone. BEHAVIOR is trained for STEPS physics steps with each seed of SEEDS (devlearn sweep:
 # no --set beyond one thread per run), each final policy evaluated with the default protocol
 # (a behaviour that declares none: the curriculum stage where the policy trained) and from the
-# rest pose (--start rest); zero and random baselines under both protocols. One run at a time
+# rest pose (--start rest), and with actions sampled from the policy (--action sample, the
+# default start: how the policy acted in training); zero and random baselines under both
+# starts. One run at a time
 # (JOBS=1: one core; pin the script with taskset), EPISODES (30) episodes per evaluation,
 # eval seed 0. A rerun resumes (the sweep continues unfinished runs, written evaluations are
 # skipped). From the repository root:
 #   bash results/plugins/proof.sh BEHAVIOR OUT SEEDS STEPS   # e.g. hand_to_mouth OUT 1-3 500000
-# Layout: OUT/runs/seed=N/ (run; eval/ the default protocol, rest/ from the rest pose),
+# Layout: OUT/runs/seed=N/ (run; eval/ the default protocol, rest/ from the rest pose,
+# sample/ sampled actions),
 # OUT/baseline_{zero,random}[_rest]/, OUT/report/ (the sweep's).
 set -euo pipefail
 USAGE="usage: proof.sh BEHAVIOR OUT SEEDS STEPS"
@@ -34,6 +37,7 @@ shopt -s nullglob
 for run in "$OUT"/runs/seed=*/; do
   run=${run%/}
   evaluate "$run/rest" --checkpoint "$run/checkpoint_latest.pt" --start rest
+  evaluate "$run/sample" --checkpoint "$run/checkpoint_latest.pt" --action sample
 done
 for policy in zero random; do
   evaluate "$OUT/baseline_$policy" --policy "$policy"

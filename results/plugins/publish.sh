@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Copy what issue #38's proof (results/plugins/proof.sh) produced in OUT into DEST, for git:
-# every seed's config, metrics and evaluations (default protocol and rest pose), the baselines'
+# every seed's config, metrics and evaluations (default protocol, rest pose, sampled actions), the
+# baselines'
 # evaluations and the sweep's report; the policy file (devlearn slim: weights, config) of the
 # seed named MEDIAN. From the repository root:
 #   bash results/plugins/publish.sh OUT DEST [MEDIAN]
@@ -13,10 +14,12 @@ mkdir -p "$DEST"
 for run in "$OUT"/runs/seed=*/; do
   run=${run%/}
   to="$DEST/runs/$(basename "$run")"
-  mkdir -p "$to/eval" "$to/rest"
+  mkdir -p "$to"
   cp "$run/config.json" "$run/metrics.jsonl" "$to/"
-  cp "$run/eval/eval.json" "$to/eval/"
-  cp "$run/rest/eval.json" "$to/rest/"
+  for protocol in eval rest sample; do
+    mkdir -p "$to/$protocol"
+    cp "$run/$protocol/eval.json" "$to/$protocol/"
+  done
 done
 for base in "$OUT"/baseline_*/; do
   base=${base%/}

@@ -39,9 +39,13 @@ def interval(values: list[float]) -> str:
 
 def main(out: Path) -> None:
     seeds = sorted(out.glob("runs/seed=*"), key=lambda p: int(p.name.split("=")[1]))
-    for folder, label in (("eval", "default protocol"), ("rest", "rest pose (--start rest)")):
+    protocols = (
+        ("eval", "", "default protocol, mean action"),
+        ("sample", "", "default protocol, actions sampled from the policy (--action sample)"),
+        ("rest", "_rest", "rest pose (--start rest), mean action"),
+    )
+    for folder, suffix, label in protocols:
         runs = [json.loads((s / folder / "eval.json").read_text()) for s in seeds]
-        suffix = "" if folder == "eval" else "_rest"
         base = {
             p: json.loads((out / f"baseline_{p}{suffix}" / "eval.json").read_text())
             for p in ("zero", "random")
@@ -50,7 +54,7 @@ def main(out: Path) -> None:
         starts = {r["start"] for r in runs} | {b["start"] for b in base.values()}
         print(f"\n**{label}**: episodes start from {', '.join(sorted(starts))}; "
               f"{runs[0]['protocol']['episodes']} episodes, eval seed "
-              f"{runs[0]['protocol']['seed']}, deterministic policy\n")
+              f"{runs[0]['protocol']['seed']}\n")
         print("| policy | " + " | ".join(names) + " |")
         print("|---" * (len(names) + 1) + "|")
         per_seed = {n: [measures(r)[n] for r in runs] for n in names}
