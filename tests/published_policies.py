@@ -47,6 +47,7 @@ def replay(path: Path) -> dict[str, Any]:
     import torch
     from tensordict import TensorDict
 
+    from devlearn.api.behavior import evaluation_stage
     from devlearn.config.run_config import from_dict
     from devlearn.env.behavior_env import BehaviorEnv
     from devlearn.plugins import PluginRegistry
@@ -62,7 +63,7 @@ def replay(path: Path) -> dict[str, Any]:
     repeat = cfg.env.action_repeat
     env = BehaviorEnv(behavior, 0, training=False, action_repeat=repeat)
     try:
-        env.set_stage(behavior.eval_stage())
+        env.set_stage(evaluation_stage(behavior, int(state.get("env_steps", 0))))
         obs = env.reset()
         actor = load_actor(cfg, state, behavior, obs, env.action_dim)
         rng = np.random.default_rng(7)

@@ -60,6 +60,7 @@ def test_published_checkpoint_loads_and_acts(path, tmp_path):
     """Each published checkpoint, copied alone to a fresh folder, builds its policy and acts."""
     import torch
 
+    from devlearn.api.behavior import evaluation_stage
     from devlearn.env.behavior_env import BehaviorEnv
     from devlearn.plugins import PluginRegistry
     from devlearn.training.checkpoint import Checkpoint, observation_batch
@@ -83,7 +84,7 @@ def test_published_checkpoint_loads_and_acts(path, tmp_path):
     behavior = opened.behavior()
     env = BehaviorEnv(behavior, 0, training=False)
     try:
-        env.set_stage(behavior.eval_stage())
+        env.set_stage(evaluation_stage(behavior, int(state.get("env_steps", 0))))
         obs = env.reset()
         actor = opened.actor(obs, env.action_dim)
         with torch.inference_mode():
