@@ -17,6 +17,7 @@ import numpy as np
 import torch
 
 from devlearn.api.errors import UsageError
+from devlearn.config.checks import STEPS_MAX
 from devlearn.config.run_config import from_dict, to_rsl_rl
 
 if TYPE_CHECKING:
@@ -302,9 +303,19 @@ def _check_shapes(state: dict[str, Any], path: Path, required: tuple[str, ...]) 
             and isinstance(ranks[0].get("envs"), list)
         ):
             raise UsageError(f"checkpoint {path} is damaged: 'env' lacks the envs' state")
-    for key in ("iteration", "env_steps"):
-        if key in required and state[key] < 0:
+    for key in ("iteration", "env_steps"):  # counts, wherever present (eval reads env_steps)
+        if key not in state:
+            continue
+        if isinstance(state[key], bool) or not isinstance(state[key], int):
+            raise UsageError(
+                f"checkpoint {path} is damaged: '{key}' is {state[key]!r}, not a count"
+            )
+        if state[key] < 0:
             raise UsageError(f"checkpoint {path} is damaged: '{key}' is {state[key]}, below 0")
+        if state[key] > STEPS_MAX:
+            raise UsageError(
+                f"checkpoint {path} is damaged: '{key}' is {state[key]:g}, above {STEPS_MAX:g}"
+            )
     if "rng" in required:
         missing = [k for k in ("torch", "numpy", "random") if k not in state["rng"]]
         if missing:
@@ -350,6 +361,8 @@ def state_dict_mismatch(expected: dict[str, Any], saved: Any) -> str | None:
             return f"'{key}' is a {type(got).__name__}, not a tensor"
         if tuple(got.shape) != tuple(value.shape):
             return f"'{key}' has shape {tuple(got.shape)}, the network expects {tuple(value.shape)}"
+        if got.is_floating_point() and not bool(torch.isfinite(got).all()):
+            return f"'{key}' holds NaN or infinite values"
     return None
 
 

@@ -252,6 +252,13 @@ def first_tensor(state: dict, key: str) -> str:
     return next(iter(state[key]))
 
 
+def nan_actor(state: dict) -> None:
+    """Every actor weight NaN (what a diverged run could save)."""
+    for tensor in state["actor_state_dict"].values():
+        if tensor.is_floating_point():
+            tensor.fill_(float("nan"))
+
+
 @pytest.mark.parametrize(
     ("change", "expected"),
     [
@@ -272,6 +279,9 @@ def first_tensor(state: dict, key: str) -> str:
             "is damaged: 'rng' holds an unusable torch state",
         ),
         (lambda s: s["rng"].update(random=(3, (1, 2), None)), "unusable random state"),
+        (nan_actor, "actor_state_dict: '"),
+        (lambda s: s.update(iteration=True), "is damaged: 'iteration' is True, not a count"),
+        (lambda s: s.update(env_steps=10**30), "is damaged: 'env_steps' is 1e+30, above 1e+12"),
     ],
 )
 def test_a_checkpoint_with_bad_values_is_refused_on_resume(cli, run_dir, capsys, change, expected):
@@ -296,6 +306,8 @@ def test_a_checkpoint_with_bad_values_is_refused_on_resume(cli, run_dir, capsys,
             "actor_state_dict: it lacks '",
         ),
         (lambda s: s["config"].update(behavior=5), "'behavior' holds 5, not a table of its fields"),
+        (nan_actor, "holds NaN or infinite values"),
+        (lambda s: s.update(env_steps=10**30), "is damaged: 'env_steps' is 1e+30, above 1e+12"),
         (lambda s: s["config"].update(ppo=[1]), "'ppo' holds [1], not a table of its fields"),
     ],
 )
@@ -544,3 +556,38 @@ def test_a_deeply_nested_config_file_is_one_line(terms_cli, tmp_path, capsys):
     path.write_text('{"a":' * 100_000 + "1" + "}" * 100_000)
     err = error(terms_cli, capsys, "run", "terms", "--config", str(path))
     assert "its JSON is nested too deeply" in err
+
+
+@pytest.mark.parametrize(
+    ("change", "expected"),
+    [
+        (nan_actor, "holds NaN or infinite values"),
+        (
+            lambda s: s["actor_state_dict"].update(
+                {first_tensor(s, "actor_state_dict"): torch.zeros(3, 3)}
+            ),
+            "has shape (3, 3), the network expects",
+        ),
+        (
+            lambda s: s["actor_state_dict"].update({first_tensor(s, "actor_state_dict"): "x"}),
+            "is a str, not a tensor",
+        ),
+    ],
+)
+def test_slim_export_from_and_resume_write_nothing_from_an_unusable_checkpoint(
+    cli, run_dir, tmp_path, capsys, change, expected
+):
+    damage(run_dir, change)
+    before = files(run_dir)
+    checkpoint = str(run_dir / "checkpoint_latest.pt")
+    commands = [
+        ["slim", checkpoint, "--out", str(tmp_path / "policy.pt")],
+        ["export", "tiny", "--checkpoint", checkpoint, "--format", "torchscript",
+         "--out", str(tmp_path / "policy.ts")],
+        ["run", "tiny", "--from", checkpoint, "--out", str(tmp_path / "branch"), "--steps", "64"],
+        ["run", "tiny", "--resume", str(run_dir), "--steps", "64"],
+    ]  # fmt: skip
+    for argv in commands:
+        assert expected in error(cli, capsys, *argv), argv
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]  # nothing written
+    assert files(run_dir) == before  # config.json included
