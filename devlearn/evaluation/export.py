@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import os
+import tempfile
 import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -104,18 +106,44 @@ def export_policy(policy: DeterministicPolicy, obs: dict[str, Any], fmt: str, ou
     if fmt not in FORMATS:
         raise UsageError(f"unknown export format '{fmt}'; valid: {', '.join(FORMATS)}")
     out = Path(out)
-    if not out.parent.is_dir():
-        raise UsageError(f"cannot write {out}: directory {out.parent} does not exist")
+    check_out_file(out)
     inputs = example_inputs(policy, obs)
+    # written beside, then renamed: a failed write (a full disk) leaves no partial file
+    partial = out.with_name(f".{out.name}.partial-{os.getpid()}")
     try:
         with torch.no_grad(), _known_exporter_noise_silenced():
             if fmt == "torchscript":
-                torch.jit.trace(policy, inputs, check_trace=False).save(str(out))
+                torch.jit.trace(policy, inputs, check_trace=False).save(str(partial))
             else:
-                _export_onnx(policy, inputs, out)
-    except PermissionError as exc:
-        raise UsageError(f"cannot write {out}: {exc.strerror}") from None
+                _export_onnx(policy, inputs, partial)
+        os.replace(partial, out)
+    except (OSError, RuntimeError) as exc:
+        reason = getattr(exc, "strerror", None) or " ".join(str(exc).split())[:160]
+        raise UsageError(f"cannot write {out}: {reason}") from None
+    finally:
+        partial.unlink(missing_ok=True)
     return out
+
+
+def check_out_file(out: Path) -> None:
+    """Refuse an export target that is a folder, lies in no folder, or cannot be written there
+    (tried by creating and deleting a file beside it), before anything is built.
+
+    Raises:
+        UsageError: One line naming the problem.
+    """
+    if out.is_dir():
+        raise UsageError(
+            f"--out {out} is a folder; give the file to write, e.g. {out / 'policy.onnx'}"
+        )
+    if not out.parent.is_dir():
+        raise UsageError(f"cannot write {out}: directory {out.parent} does not exist")
+    try:
+        fd, probe = tempfile.mkstemp(prefix=".devlearn-probe-", dir=out.parent)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        raise UsageError(f"cannot write {out}: {exc.strerror or exc}") from None
 
 
 HARMLESS_WARNINGS = (

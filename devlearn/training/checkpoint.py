@@ -90,10 +90,15 @@ def _write_error(path: Path, exc: OSError) -> UsageError:
             free = f"{shutil.disk_usage(path.parent).free / 2**20:.0f} MB free"
         except OSError:
             free = "no space"
-        return UsageError(
-            f"disk full: cannot write {path} ({free}); the previous checkpoint is kept: "
-            "free some space, then continue with --resume"
-        )
+        kept = sorted(p for p in path.parent.glob("checkpoint_*.pt") if p != path)
+        if kept:
+            advice = "the previous checkpoint is kept: free some space, then continue with --resume"
+        else:
+            advice = (
+                "no checkpoint was written before it: free some space, then start the run "
+                "again (--force replaces the folder)"
+            )
+        return UsageError(f"disk full: cannot write {path} ({free}); {advice}")
     return UsageError(f"cannot write {path}: {exc.strerror or exc}")
 
 

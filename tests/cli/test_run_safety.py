@@ -331,20 +331,35 @@ def test_a_checkpoint_with_bad_values_is_refused_on_eval(
     assert expected in err
 
 
+class FullDisk:
+    """``open`` on a full disk: the file is created, its first write fails."""
+
+    def __init__(self, *args, **kwargs):
+        open(*args, **kwargs).close()  # the temporary file exists, as on a real disk
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False
+
+    def write(self, data):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+
+def test_a_full_disk_before_the_first_checkpoint_says_to_start_again(
+    cli, tmp_path, capsys, monkeypatch
+):
+    monkeypatch.setattr(checkpoint_module, "open", FullDisk, raising=False)
+    out = tmp_path / "run"
+    capsys.readouterr()
+    assert cli(["run", "tiny", "--steps", "32", "--out", str(out), *SMALL]) == 2
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert "disk full: cannot write" in err and "no checkpoint was written before it" in err
+    assert "--resume" not in err and "the previous checkpoint is kept" not in err
+
+
 def test_a_full_disk_is_reported_as_such(cli, run_dir, capsys, monkeypatch):
-    class FullDisk:
-        def __init__(self, *args, **kwargs):
-            open(*args, **kwargs).close()  # the temporary file exists, as on a real disk
-
-        def __enter__(self):
-            return self
-
-        def __exit__(self, *exc):
-            return False
-
-        def write(self, data):
-            raise OSError(errno.ENOSPC, "No space left on device")
-
     monkeypatch.setattr(checkpoint_module, "open", FullDisk, raising=False)
     before = (run_dir / "checkpoint_latest.pt").read_bytes()
     capsys.readouterr()
@@ -591,3 +606,28 @@ def test_slim_export_from_and_resume_write_nothing_from_an_unusable_checkpoint(
         assert expected in error(cli, capsys, *argv), argv
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]  # nothing written
     assert files(run_dir) == before  # config.json included
+
+
+def test_export_to_an_unusable_place_is_one_line_and_leaves_nothing(
+    cli, run_dir, tmp_path, capsys, monkeypatch
+):
+    checkpoint = str(run_dir / "checkpoint_latest.pt")
+    base = ["export", "tiny", "--checkpoint", checkpoint, "--format", "torchscript", "--out"]
+    err = error(cli, capsys, *base, str(tmp_path))
+    assert f"--out {tmp_path} is a folder; give the file to write" in err
+    err = error(cli, capsys, *base, str(tmp_path / "missing" / "p.ts"))
+    assert "does not exist" in err
+    if os.geteuid() == 0 and Path("/sys").is_dir() and not _writable("/sys"):
+        assert "cannot write /sys/p.ts: " in error(cli, capsys, *base, "/sys/p.ts")
+    full = tmp_path / "full"
+    full.mkdir()
+
+    def no_space(self, path, *args, **kwargs):
+        Path(path).write_bytes(b"half")  # what a full disk leaves
+        raise RuntimeError("PytorchStreamWriter failed writing file: file write failed")
+
+    traced = type(torch.jit.trace(torch.nn.Linear(1, 1), torch.zeros(1, 1)))
+    monkeypatch.setattr(traced, "save", no_space)
+    err = error(cli, capsys, *base, str(full / "p.ts"))
+    assert "cannot write " in err and "file write failed" in err
+    assert list(full.iterdir()) == []  # no partial file
