@@ -3,11 +3,9 @@
 from __future__ import annotations
 
 import argparse
-import contextlib
-import signal
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from devlearn.api.errors import UsageError
 
@@ -133,24 +131,12 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     return 0
 
 
-@contextlib.contextmanager
-def _interrupt_on_signals():
+def _interrupt_on_signals() -> Any:
     """Within the block, SIGTERM (cluster schedulers, ``kill``) acts as Ctrl-C, which saves a
     checkpoint, and Ctrl-C works even where the shell started us with it ignored (``cmd &`` in
-    a script); the previous handlers come back afterwards."""
+    a script); both are taken at the runner's next safe point, between decisions
+    (:class:`~devlearn.training.process.StopRequests`), never inside a compiled kernel; the
+    previous handlers come back afterwards."""
+    from devlearn.training.process import StopRequests
 
-    def interrupt(signum, frame):
-        raise KeyboardInterrupt
-
-    try:
-        before = {
-            s: signal.signal(s, h)
-            for s, h in ((signal.SIGTERM, interrupt), (signal.SIGINT, signal.default_int_handler))
-        }
-    except ValueError:  # not the main thread (an embedding program): leave its handlers
-        before = {}
-    try:
-        yield
-    finally:
-        for signum, handler in before.items():
-            signal.signal(signum, handler)
+    return StopRequests.installed()

@@ -214,3 +214,47 @@ class Ranks:
         values: list[Any] = [None] * self.world_size
         dist.all_gather_object(values, value)
         return values
+
+
+class StopRequests:
+    """Ctrl-C and SIGTERM during training, taken at safe points.
+
+    A handler that raised ``KeyboardInterrupt`` could raise it anywhere, inside a compiled
+    kernel too (numba's dispatcher then reports ``SystemError: CPUDispatcher(contact_touch)
+    returned a result with an exception set`` and no checkpoint is written). The handlers that
+    :meth:`installed` sets only note the signal; the runner calls :meth:`check` between
+    decisions, which raises ``KeyboardInterrupt`` there (the checkpoint path). A second signal
+    before that raises at once, for a run that no longer reaches a safe point.
+    """
+
+    pending = False
+
+    @classmethod
+    def note(cls, signum: int, frame: Any) -> None:
+        if cls.pending:
+            raise KeyboardInterrupt
+        cls.pending = True
+
+    @classmethod
+    def check(cls) -> None:
+        """Raise ``KeyboardInterrupt`` if a stop was asked for since the last check."""
+        if cls.pending:
+            cls.pending = False
+            raise KeyboardInterrupt
+
+    @classmethod
+    @contextlib.contextmanager
+    def installed(cls) -> Iterator[None]:
+        """Within the block Ctrl-C and SIGTERM are noted for :meth:`check`; the previous
+        handlers come back afterwards (outside the main thread nothing changes)."""
+        try:
+            before = {s: signal.signal(s, cls.note) for s in _DEFERRED}
+        except ValueError:  # not the main thread (an embedding program): leave its handlers
+            before = {}
+        cls.pending = False
+        try:
+            yield
+        finally:
+            for signum, handler in before.items():
+                signal.signal(signum, handler)
+            cls.pending = False

@@ -30,6 +30,7 @@ from devlearn.training.health import HealthWatch, rollout_health
 from devlearn.training.learned_rewards import LearnedRewards
 from devlearn.training.process import (
     Ranks,
+    StopRequests,
     ThreadPlan,
     init_distributed,
     interrupts_deferred,
@@ -300,6 +301,7 @@ class DevRunner(OnPolicyRunner):
         step_rewards = 0.0
         with torch.inference_mode():
             for _ in range(self.cfg["num_steps_per_env"]):
+                StopRequests.check()  # Ctrl-C / SIGTERM, here between decisions
                 actions = alg.act(obs)
                 obs, rewards, dones, extras = env.step(actions.to(env.device))
                 if self.cfg.get("check_for_nan", True):

@@ -175,3 +175,31 @@ def test_eval_prints_a_short_summary_led_by_the_headline(cli, tmp_path, capsys, 
     err = "--compare nowhere: no readable eval.json there"
     assert cli(["eval", "tiny", "--checkpoint", str(out), "--compare", "nowhere"]) == 2
     assert err in capsys.readouterr().err
+
+
+def test_a_signal_inside_an_env_step_is_taken_between_decisions(cli, tmp_path, monkeypatch):
+    """SIGTERM that lands inside a step (a compiled kernel, in a real run) does not raise
+    there: the step finishes, and the run stops at the next decision with a checkpoint."""
+    import os
+    import signal
+
+    from devlearn.testing.fake_infant import FakeInfant
+    from devlearn.training.checkpoint import load_checkpoint
+
+    step = FakeInfant.step
+    calls: list[int] = []
+    finished: list[int] = []
+
+    def step_with_a_signal_inside(self, action):
+        calls.append(1)
+        if len(calls) == 40 and not finished:  # 20 decisions of 2 envs: the second iteration
+            os.kill(os.getpid(), signal.SIGTERM)  # mid-step, as inside a kernel
+            finished.append(1)  # still running: the handler raised nothing here
+        return step(self, action)
+
+    monkeypatch.setattr(FakeInfant, "step", step_with_a_signal_inside)
+    out = tmp_path / "run"
+    small = ["--envs", "2", "--seed", "1", "--workers", "0", "--set", "save_interval=1000"]
+    assert cli(["run", "tiny", "--steps", "100000", "--out", str(out), *small]) == 130
+    assert finished == [1]
+    assert load_checkpoint(out / "checkpoint_latest.pt")["env_steps"] == 32  # the last boundary
