@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+from typing import NoReturn
 
 from devlearn.api.errors import UsageError
 
@@ -37,9 +38,17 @@ def _load_commands() -> list:
     return modules
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """argparse with devlearn's errors: one line naming the problem and where the help is,
+    not the whole usage block (a bad --start printed 7 lines)."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"devlearn: error: {message} (see `{self.prog} --help`)\n")
+
+
 def build_parser() -> tuple[argparse.ArgumentParser, dict]:
     """Return the argument parser and a map from sub-command name to its module."""
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="devlearn",
         description="Developmental RL: a simulated infant learns body skills from curiosity.",
     )
@@ -50,7 +59,9 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict]:
         metavar="NAME",
         help="skip a plugin for this command (repeatable; see also DEVLEARN_DISABLE_PLUGINS)",
     )
-    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
+    subparsers = parser.add_subparsers(
+        dest="command", metavar="COMMAND", parser_class=OneLineParser
+    )
     handlers = {}
     for module in _load_commands():
         for name in module.add_parser(subparsers):

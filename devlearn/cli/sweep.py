@@ -105,6 +105,10 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
 
         runs = plan_sweep(spec, registry, global_args)
         check_folder(spec)
+        if spec.executor == "local":  # as the real sweep will, before it starts anything
+            from devlearn.sweep.executors import local_cores
+
+            local_cores(spec.train.cores_per_run)
         for planned in runs:
             job = planned.job
             argv = ["devlearn", *global_args, "run", job.behavior, "--out", str(job.run_dir)]

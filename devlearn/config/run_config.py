@@ -220,7 +220,10 @@ def fresh_config(
     given = overrides.items() if isinstance(overrides, dict) else (overrides or [])
     explicit |= {str(o[0] if isinstance(o, tuple) else o).split("=", 1)[0].strip() for o in given}
     # values that scale with the run's length, unless --set or the preset gave them
-    scaled = behavior_cls(cfg.behavior).run_length_defaults(int(cfg.total_steps))
+    try:  # the behaviour checks its own fields when built: say so in one line
+        scaled = behavior_cls(cfg.behavior).run_length_defaults(int(cfg.total_steps))
+    except ValueError as err:
+        raise UsageError(f"{behavior_cls.name}: {err}") from None
     apply_overrides(cfg, {k: v for k, v in scaled.items() if k not in explicit})
     return cfg
 

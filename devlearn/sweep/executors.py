@@ -31,6 +31,21 @@ def _failed(job: RunJob, error: str) -> dict[str, Any]:
     return record
 
 
+def local_cores(cores_per_run: int) -> list[int]:
+    """The cores this machine gives the sweep, if one run's ``cores_per_run`` fit in them.
+
+    Raises:
+        UsageError: A run needs more cores than the machine gives.
+    """
+    cores = available_cores()
+    if cores_per_run > len(cores):
+        raise UsageError(
+            f"each run needs {cores_per_run} cores but this machine gives {len(cores)}; "
+            "use fewer --workers or --cores"
+        )
+    return cores
+
+
 class LocalExecutor:
     """Runs on this machine, ``jobs`` at a time, each pinned to its own ``cores_per_run`` cores.
 
@@ -41,12 +56,7 @@ class LocalExecutor:
     name = "local"
 
     def __init__(self, cores_per_run: int, jobs: int | None = None) -> None:
-        cores = available_cores()
-        if cores_per_run > len(cores):
-            raise UsageError(
-                f"each run needs {cores_per_run} cores but this machine gives {len(cores)}; "
-                "use fewer --workers or --cores"
-            )
+        cores = local_cores(cores_per_run)
         self.jobs = jobs or max(1, len(cores) // cores_per_run)
         self.pinned = self.jobs * cores_per_run <= len(cores)
         self.cores_per_run = cores_per_run

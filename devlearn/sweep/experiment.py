@@ -16,6 +16,9 @@ from devlearn.sweep.job import RunJob
 from devlearn.sweep.progress import Progress
 from devlearn.sweep.spec import SweepSpec, Variant, variants
 
+NAME_MAX = 255
+"""Longest file name (bytes) of the common Linux file systems: a run folder's name."""
+
 if TYPE_CHECKING:
     from devlearn.plugins import PluginRegistry
 
@@ -72,6 +75,12 @@ def plan_sweep(
             spec.behavior, overrides, train.preset or "", {**top, "seed": variant.seed}
         )
         run_dir = spec.out.resolve() / "runs" / variant.name
+        if len(variant.name.encode()) > NAME_MAX:
+            raise UsageError(
+                f"run {variant.name[:40]}...: its folder name would be "
+                f"{len(variant.name.encode())} bytes, over the file system's {NAME_MAX}; "
+                "give shorter --grid values"
+            )
         try:
             cfg = resolve_config(request, registry)
             registry.create(spec.behavior, cfg.behavior)

@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from devlearn.api.errors import UsageError
+from devlearn.config.checks import SEED_MAX
 
 RESERVED_KEYS = {
     "seed": "--seeds",
@@ -150,6 +151,10 @@ def parse_grid(items: list[str]) -> dict[str, list[str]]:
     return grid
 
 
+SEEDS_MAX = 10_000
+"""Most seeds one sweep lists (each is a run; beyond this a typo, not an experiment)."""
+
+
 def parse_seeds(text: str) -> list[int]:
     """``1,2,3`` or ``1-5`` (or both: ``1-3,7``) -> a list of distinct seeds >= 0."""
     seeds: list[int] = []
@@ -162,6 +167,10 @@ def parse_seeds(text: str) -> list[int]:
                 f"1-5), got '{text}'"
             )
         low, high = int(match.group(1)), int(match.group(2) or match.group(1))
+        if len(seeds) + high - low + 1 > SEEDS_MAX:
+            raise UsageError(f"--seeds '{text}' lists more than {SEEDS_MAX:,} seeds")
+        if high > SEED_MAX:
+            raise UsageError(f"--seeds must be at most {SEED_MAX}, got {high}")
         seeds += range(low, high + 1)
     if len(set(seeds)) != len(seeds):
         raise UsageError(f"--seeds lists a seed twice: '{text}'")

@@ -9,6 +9,7 @@ import os
 import pickle
 import re
 import shutil
+import stat
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -204,7 +205,11 @@ def _pickle_globals(path: Path, limit: int = 1 << 30) -> set[str]:
                 elif op.name in ("GET", "BINGET", "LONG_BINGET"):
                     recent.append(memo.get(int(arg)))
                 elif op.name == "STACK_GLOBAL" and len(recent) >= 2:
-                    names.add(f"{recent[-2]}.{recent[-1]}")
+                    # a module or name built at load time (not a plain string) is named as such
+                    module, name = (
+                        v if isinstance(v, str) else "<computed at load time>" for v in recent[-2:]
+                    )
+                    names.add(f"{module}.{name}")
                 elif op.name != "MEMOIZE":
                     recent.append(None)
         except Exception:
@@ -233,6 +238,28 @@ def _refused(path: Path, names: list[str]) -> UsageError:
     )
 
 
+def not_a_file(path: Path) -> str:
+    """Why ``path`` is not a regular file, in words: ``does not exist``, ``is a symbolic link
+    loop``, ``is a folder``, ``is a FIFO (not a file)``..."""
+    try:
+        mode = path.stat().st_mode
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            return "is a symbolic link loop"
+        if path.is_symlink():
+            return f"is a symbolic link to a missing file ({os.readlink(path)})"
+        return "does not exist"
+    kinds = {
+        stat.S_ISDIR: "a folder",
+        stat.S_ISFIFO: "a FIFO",
+        stat.S_ISSOCK: "a socket",
+        stat.S_ISCHR: "a character device",
+        stat.S_ISBLK: "a block device",
+    }
+    kind = next((name for test, name in kinds.items() if test(mode)), "not a regular file")
+    return f"is {kind}, not a checkpoint file"
+
+
 def load_checkpoint(path: str | Path, required: tuple[str, ...] = POLICY_KEYS) -> dict[str, Any]:
     """Load a devlearn checkpoint (on the CPU) as data: ``torch.load(weights_only=True)`` with
     :func:`allowed_globals`; a file naming any other class or function is refused unrun.
@@ -246,7 +273,7 @@ def load_checkpoint(path: str | Path, required: tuple[str, ...] = POLICY_KEYS) -
     """
     path = Path(path)
     if not path.is_file():
-        raise UsageError(f"checkpoint {path} does not exist")
+        raise UsageError(f"checkpoint {path} {not_a_file(path)}")
     try:
         # A scan of the pickle's opcodes (nothing executed) names every foreign type at once.
         unsafe = set(torch.serialization.get_unsafe_globals_in_checkpoint(path))

@@ -631,3 +631,42 @@ def test_export_to_an_unusable_place_is_one_line_and_leaves_nothing(
     err = error(cli, capsys, *base, str(full / "p.ts"))
     assert "cannot write " in err and "file write failed" in err
     assert list(full.iterdir()) == []  # no partial file
+
+
+def test_an_obfuscated_pickle_is_refused_naming_what_it_computes(cli, tmp_path, capsys):
+    obfuscated = tmp_path / "obf.pt"  # the module's name comes from a call: str('os')
+    obfuscated.write_bytes(
+        b"\x80\x04\x8c\x08builtins\x94\x8c\x03str\x94\x93\x94\x8c\x02os\x94\x85\x94R\x94"
+        b"\x8c\x06system\x94\x93\x94\x8c\x04echo\x94\x85\x94R\x94."
+    )
+    err = error(cli, capsys, "eval", "tiny", "--checkpoint", str(obfuscated))
+    assert "refused: it needs <computed at load time>.system, builtins.str" in err
+    assert "None." not in err
+
+
+def test_a_fifo_or_a_link_loop_is_named_as_such(cli, tmp_path, capsys):
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)
+    loop = tmp_path / "loop1"
+    loop.symlink_to(tmp_path / "loop2")
+    (tmp_path / "loop2").symlink_to(loop)
+    dangling = tmp_path / "dangling"
+    dangling.symlink_to(tmp_path / "gone.pt")
+    cases = {
+        fifo: "is a FIFO, not a checkpoint file",
+        loop: "is a symbolic link loop",
+        dangling: f"is a symbolic link to a missing file ({tmp_path / 'gone.pt'})",
+        tmp_path / "nothing.pt": "does not exist",
+    }
+    for path, expected in cases.items():
+        assert f"checkpoint {path} {expected}" in error(cli, capsys, "eval", "tiny",
+                                                        "--checkpoint", str(path))  # fmt: skip
+
+
+def test_argparse_errors_are_one_line(cli, capsys):
+    with pytest.raises(SystemExit) as stop:
+        cli(["eval", "tiny", "--start", "nowhere"])
+    assert stop.value.code == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("devlearn: error: argument --start: invalid choice: 'nowhere'")
+    assert "\n" not in err and err.endswith("(see `devlearn eval --help`)")

@@ -243,3 +243,15 @@ def test_grid_varies_a_learned_reward_option_and_checks_it_up_front(tmp_path):
     unknown = {**options, "grid": ["learnd.rnd.weight=0"]}
     with pytest.raises(UsageError, match="unknown config key 'learnd.rnd.weight'"):
         plan_sweep(build_spec("self_touch", unknown, None), registry, [])
+
+
+def test_dry_run_checks_what_the_sweep_would_refuse(cli, capsys, tmp_path):
+    out = tmp_path / "sweep"
+    base = ["sweep", "tiny", "--out", str(out), "--steps", "128", "--dry-run"]
+    assert "needs 99 cores but this machine gives" in error(cli, capsys, *base, "--cores", "99")
+    long = "0." + "1" * 300
+    err = error(cli, capsys, *base, "--grid", f"behavior.target={long}")
+    assert "its folder name would be" in err and "over the file system's 255" in err
+    err = error(cli, capsys, *base, "--seeds", "0-100000000")
+    assert "--seeds '0-100000000' lists more than 10,000 seeds" in err
+    assert not out.exists()

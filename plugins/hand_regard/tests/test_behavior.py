@@ -242,3 +242,22 @@ def test_stage_lengths_scale_with_the_run_unless_set():
     assert stages(preset="paper") == (175_000, 175_000, 1_500_000)
     set_left = ["behavior.left_arm_steps=5000"]
     assert stages(top={"total_steps": 614_400}, overrides=set_left) == (5_000, 61_440, 491_520)
+
+
+def test_an_unusable_detector_file_is_one_line(tmp_path):
+    import pytest
+
+    from devlearn import UsageError
+
+    not_a_detector = tmp_path / "other.json"
+    not_a_detector.write_text('{"a": 1}')
+    broken = tmp_path / "broken.json"
+    broken.write_text("[1")
+    for path, reason in (
+        (tmp_path / "missing.json", "No such file or directory"),
+        (not_a_detector, "hand detector format None"),
+        (broken, "Expecting"),
+    ):
+        behavior = HandRegard(HandRegardConfig(detector_file=str(path)))
+        with pytest.raises(UsageError, match=f"behavior.detector_file {path}: .*{reason}"):
+            behavior.detector  # noqa: B018 (loads the file)

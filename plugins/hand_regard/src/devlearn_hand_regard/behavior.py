@@ -192,7 +192,13 @@ class HandRegard(Behavior):
         if self._detector is None:
             params = None
             if self.config.detector_file:
-                params = DetectorParams.load(self.config.detector_file)
+                try:
+                    params = DetectorParams.load(self.config.detector_file)
+                except (OSError, ValueError, TypeError) as err:  # missing, not JSON, not ours
+                    reason = getattr(err, "strerror", None) or err
+                    raise UsageError(
+                        f"hand_regard: behavior.detector_file {self.config.detector_file}: {reason}"
+                    ) from None
             else:
                 warnings.warn(
                     "hand_regard: no calibrated hand detector (config.detector_file is empty); "
