@@ -22,6 +22,9 @@ from typing import Any
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))
+
+from cpu_kind import to_record  # noqa: E402
 DATA = ROOT / "tests" / "data" / "published"
 
 
@@ -102,7 +105,7 @@ def main(argv: list[str]) -> int:
         if argv and slug(path) not in argv:
             continue
         recorded = replay(path)
-        np.savez_compressed(DATA / f"{slug(path)}.npz", **recorded)
+        np.savez_compressed(to_record(DATA / f"{slug(path)}.npz"), **recorded)
         print(slug(path), recorded["rewards"].sum(), recorded["episode_info"])
     return 0
 

@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
+import signal
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -140,3 +143,26 @@ def _interrupt_on_signals() -> Any:
     from devlearn.training.process import StopRequests
 
     return StopRequests.installed()
+
+
+@contextlib.contextmanager
+def interrupt_at_once() -> Iterator[None]:
+    """Within the block, SIGTERM acts as Ctrl-C at once (``KeyboardInterrupt`` wherever it
+    lands), and Ctrl-C works even where the shell started us with it ignored: for a process
+    that runs no compiled kernel of its own (a sweep, which waits on its runs)."""
+
+    def interrupt(signum: int, frame: Any) -> None:
+        raise KeyboardInterrupt
+
+    try:
+        before = {
+            s: signal.signal(s, h)
+            for s, h in ((signal.SIGTERM, interrupt), (signal.SIGINT, signal.default_int_handler))
+        }
+    except ValueError:  # not the main thread (an embedding program): leave its handlers
+        before = {}
+    try:
+        yield
+    finally:
+        for signum, handler in before.items():
+            signal.signal(signum, handler)

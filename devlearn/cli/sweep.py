@@ -77,7 +77,7 @@ def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) 
 
 def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     """Build the sweep, check it, run it (or list it with --dry-run)."""
-    from devlearn.cli.run import _interrupt_on_signals
+    from devlearn.cli.run import interrupt_at_once
     from devlearn.sweep import build_spec, plan_sweep, run_sweep
 
     options = {
@@ -116,7 +116,7 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
             print(f"{job.name}: {shlex.join(argv)}  # {' '.join(job.settings)}")
         print(f"{len(runs)} runs in {spec.out}; nothing started (--dry-run)")
         return 0
-    with _interrupt_on_signals():
+    with interrupt_at_once():
         return run_sweep(spec, registry, global_args=global_args, command=shlex.join(sys.argv))
 
 

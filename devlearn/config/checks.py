@@ -53,6 +53,10 @@ INTERVAL_MAX = 10**9
 """Largest ``save_interval`` (iterations)."""
 PPO_COUNT_MAX = 10**6
 """Largest rollout length, epochs and mini-batches per iteration."""
+OVERSHOOT_MAX = 10
+"""A run trains whole iterations, so a budget below one iteration trains one; beyond this many
+times the budget (``env.action_repeat=1000`` with ``--steps 1024`` trained 128,000 steps) the
+config is refused as a mistake."""
 WEIGHT_MAX = 1e6
 """Largest magnitude of a reward term's weight (a larger one times a term's value overflows or
 drowns every other term; rewards are normalised anyway)."""
@@ -113,11 +117,12 @@ def _check_batches(cfg: RunConfig) -> None:
         )
     rollout = cfg.num_envs * cfg.ppo.num_steps_per_env
     iteration = rollout * repeat
-    if cfg.total_steps < iteration:
+    if iteration > OVERSHOOT_MAX * cfg.total_steps:
         raise UsageError(
-            f"--steps {cfg.total_steps} is less than one iteration: {cfg.num_envs} envs x "
-            f"{cfg.ppo.num_steps_per_env} decisions x env.action_repeat {repeat} = {iteration} "
-            "physics steps; give more steps, fewer envs or a shorter rollout"
+            f"--steps {cfg.total_steps} is less than a tenth of one iteration ({cfg.num_envs} "
+            f"envs x {cfg.ppo.num_steps_per_env} decisions x env.action_repeat {repeat} = "
+            f"{iteration} physics steps), which a run trains whole; give more steps, fewer envs "
+            "or a shorter rollout"
         )
     if rollout < 2:
         raise UsageError(

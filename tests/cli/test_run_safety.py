@@ -137,7 +137,7 @@ def test_a_rejected_resume_leaves_config_json_as_it_was(cli, run_dir, capsys):
         # values that passed their bounds, then crashed, hung or trained past the budget
         (["--set", "env.action_repeat=7"], "env.action_repeat=7 must divide the episode (1000"),
         (["--set", "env.action_repeat=1e9"], "env.action_repeat must be at most 1000"),
-        (["--envs", "2", "--set", "env.action_repeat=1000"], "--steps 16 is less than one iteration"),
+        (["--envs", "2", "--set", "env.action_repeat=1000"], "--steps 16 is less than a tenth of one iteration"),
         (["--envs", "2", "--set", "ppo.num_mini_batches=1000000"], "fewer than 2 samples per mini"),
         (["--envs", "1", "--steps", "64", "--set", "ppo.num_steps_per_env=1"], "a rollout of 1 sample"),
     ],
