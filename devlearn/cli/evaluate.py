@@ -189,7 +189,8 @@ def _baselines(behavior: str, compare: list[str]) -> dict[str, dict]:
                 raise UsageError(f"--compare {folder}: no readable eval.json there") from None
             continue
         if isinstance(data, dict) and data.get("behavior") == behavior:
-            found[str(data.get("policy") if not compare else folder)] = data
+            name = str(data.get("policy") or folder)
+            found[name if name not in found else str(folder)] = data
     return found
 
 
