@@ -95,6 +95,7 @@ class ScriptedInfant(FakeInfant):
     action_dim = 4
     episode_steps = 20
     control_timestep = 0.005
+    physics_timestep = 0.005
 
     def __init__(self, scene: str = "crib", senses=(), left: int = 12, right: int = 10) -> None:
         super().__init__()

@@ -168,3 +168,33 @@ def test_training_evaluator_keeps_no_history():
     assert ev.end_episode()["coverage_left"] == 1.0
     assert ev.end_episode()["coverage_left"] == 0.0
     assert ev.episodes == []
+
+
+def test_likeness_measures_of_a_scripted_episode():
+    """Touches are contact onsets after the settle period: a contact held from it is none."""
+    from types import SimpleNamespace
+
+    categories = np.array(["arm"] * 68, dtype=object)
+    categories[[0, 40, 60]] = ["face", "torso", "foot"]
+    stub = SimpleNamespace(
+        regions=SimpleNamespace(categories=categories, part_names=[f"p{i}" for i in range(34)],
+                                names=[f"r{i}" for i in range(68)]),
+        physics_timestep=0.005,
+    )  # fmt: skip
+    script = {0: [(0, 5)], 1: [(0, 5)], 2: [(0, 5), (1, 40)], 4: [(0, 0)], 5: [(0, 0), (0, 60)]}
+    ev = SelfTouchEvaluator(training=False, settle_steps=2)
+    for step in range(12):
+        ctx = make_ctx(hand_contacts=script.get(step, []), step=step)
+        ctx.infant = stub
+        ev.record(ctx)
+    ev.end_episode()
+    likeness = ev.summary()["likeness"]
+    minutes = 10 * 0.005 / 60  # 10 counted steps
+    assert likeness["touches"] == 3  # right on 40, left on 0, left on 60; not left on 5
+    assert likeness["touches_per_minute"] == pytest.approx(3 / minutes)
+    assert likeness["distinct_regions_per_minute"] == pytest.approx(4 / minutes)  # 5, 40, 0, 60
+    assert likeness["contact_time_share"] == pytest.approx(0.3)  # steps 2, 4 and 5 of 10
+    assert likeness["mean_seconds_between_touches"] == pytest.approx((0.010 + 0.005) / 2)
+    assert likeness["touch_share_by_area"] == pytest.approx(
+        {"face": 1 / 3, "torso": 1 / 3, "arm": 0.0, "leg": 0.0, "foot": 1 / 3}
+    )

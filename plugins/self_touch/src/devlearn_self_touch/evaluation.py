@@ -71,6 +71,80 @@ def union_score_interval(
     return {"score_boot_low": float(low), "score_boot_high": float(high)}
 
 
+AREAS = ("face", "torso", "arm", "leg", "foot")
+"""Body areas of the likeness measures' share of touches (the region table's categories)."""
+PHYSICS_TIMESTEP = 0.005
+"""Seconds per recorded step when no infant says otherwise (BabyBench's 200 Hz physics)."""
+
+
+class Likeness:
+    """How infant-like one evaluation's touching is (issue #43), from each hand's contacts
+    with the 68 body regions after the settle period (``facts["hand_contacts"]``, one record
+    per physics step).
+
+    A touch is a contact onset: a hand's palm or fingers starting to touch a region it did not
+    touch the step before (a contact held across the settle period's end is not an onset).
+    Per episode: touches per simulated minute, distinct regions touched per minute, the share
+    of time a hand touches the body, and the mean time between touches; over all touches, the
+    share by body area (face, torso, arm, leg, foot). Set beside DiMercurio, Connell, Clark
+    and Corbetta (2018) in ``results/self_touch/README.md``.
+    """
+
+    def __init__(self) -> None:
+        self.previous = np.zeros((len(HANDS), NUM_REGIONS), dtype=bool)
+        self.steps = self.contact_steps = 0
+        self.onset_steps: list[int] = []
+        self.regions = np.zeros(NUM_REGIONS, dtype=bool)
+        self.by_region = np.zeros(NUM_REGIONS, dtype=np.int64)  # touches over all episodes
+        self.episodes: list[dict[str, float]] = []
+
+    def record(self, contacts: np.ndarray, counted: bool) -> None:
+        """One step's (2, 68) contacts; ``counted``: after the settle period."""
+        onsets = contacts & ~self.previous
+        self.previous = contacts.copy()
+        if not counted:
+            return
+        n = int(onsets.sum())
+        if n:
+            self.onset_steps += [self.steps] * n
+            self.by_region += onsets.sum(axis=0)
+        self.steps += 1
+        self.contact_steps += int(contacts.any())
+        self.regions |= contacts.any(axis=0)
+
+    def end_episode(self, dt: float) -> None:
+        minutes = self.steps * dt / 60 if self.steps else float("nan")
+        gaps = np.diff(self.onset_steps) * dt if len(self.onset_steps) > 1 else np.array([])
+        self.episodes.append(
+            {
+                "touches_per_minute": len(self.onset_steps) / minutes,
+                "distinct_regions_per_minute": int(self.regions.sum()) / minutes,
+                "contact_time_share": self.contact_steps / max(self.steps, 1),
+                "mean_seconds_between_touches": float(gaps.mean()) if gaps.size else float("nan"),
+            }
+        )
+        self.previous[:] = False
+        self.steps = self.contact_steps = 0
+        self.onset_steps = []
+        self.regions[:] = False
+
+    def summary(self, categories: np.ndarray | None) -> dict[str, Any]:
+        """Means over episodes (the time between touches over episodes with two or more) and
+        the share of all touches by area (empty without the infant's region table)."""
+        out: dict[str, Any] = {}
+        for key in self.episodes[0] if self.episodes else ():
+            values = [e[key] for e in self.episodes if np.isfinite(e[key])]
+            out[key] = float(np.mean(values)) if values else None
+        total = int(self.by_region.sum())
+        shares = {}
+        if categories is not None and total:
+            shares = {
+                area: float(self.by_region[np.asarray(categories) == area].sum() / total)
+                for area in AREAS
+            }
+        return {**out, "touches": total, "touch_share_by_area": shares}
+
+
 class SelfTouchEvaluator(Evaluator):
     """Per-hand coverage of the 34 side-free body parts, and the self-touch score.
 
@@ -106,10 +180,16 @@ class SelfTouchEvaluator(Evaluator):
         self.last_parts = np.zeros((len(HANDS), NUM_PARTS), dtype=bool)
         """The touched parts of the episode :meth:`end_episode` closed last, (2, 34)."""
         self.regions: Any = None  # the infant's region table, taken from the first real step
+        self.likeness = Likeness()
+        self.dt = PHYSICS_TIMESTEP
 
     def record(self, ctx: StepContext) -> None:
         if self.regions is None and ctx.infant is not None:
             self.regions = ctx.infant.regions
+            self.dt = float(ctx.infant.physics_timestep)
+        if not self.training:
+            contacts = np.asarray(ctx.facts["hand_contacts"], dtype=bool)
+            self.likeness.record(contacts, counted=ctx.step >= self.settle_steps)
         if ctx.step < self.settle_steps:
             return  # the reset pose settling under gravity, not the policy
         parts = np.asarray(ctx.facts["hand_parts"], dtype=bool)
@@ -134,6 +214,7 @@ class SelfTouchEvaluator(Evaluator):
         metrics = self._coverage(self.episode_parts)
         self.ever_parts |= self.episode_parts
         if not self.training:
+            self.likeness.end_episode(self.dt)
             self.episodes.append(metrics)
             self.touched.append(
                 {
@@ -178,6 +259,9 @@ class SelfTouchEvaluator(Evaluator):
             "parts_never_touched": [
                 names[p] for p in range(NUM_PARTS) if not self.ever_parts[:, p].any()
             ],
+            "likeness": self.likeness.summary(
+                None if self.regions is None else self.regions.categories
+            ),
         }
 
     def protocol(self) -> dict[str, Any]:
