@@ -8,11 +8,10 @@ reads OUT/runs/seed=N/{eval,rest}/eval.json and OUT/baseline_{zero,random}[_rest
 from __future__ import annotations
 
 import json
-import math
 import sys
 from pathlib import Path
 
-from scipy import stats
+from devlearn.api.stats import mean_ci
 
 SKIP = {"episodes", "steps", "checkpoint_env_steps", "training_seed"}
 """Summary numbers that describe the protocol, not the behaviour."""
@@ -28,13 +27,12 @@ def measures(summary: dict) -> dict[str, float]:
 
 
 def interval(values: list[float]) -> str:
-    """``mean [low, high]``: a 95% t-interval over seeds (the mean alone for one seed)."""
-    mean = sum(values) / len(values)
-    if len(values) < 2:
-        return f"{mean:.3f}"
-    sd = math.sqrt(sum((v - mean) ** 2 for v in values) / (len(values) - 1))
-    half = stats.t.ppf(0.975, len(values) - 1) * sd / math.sqrt(len(values))
-    return f"{mean:.3f} [{mean - half:.3f}, {mean + half:.3f}]"
+    """``mean [low, high]``: the 95% t-interval over seeds (devlearn's ``mean_ci``, as
+    ``devlearn report`` computes it); the mean alone for one value."""
+    stats = mean_ci(values)
+    if stats["ci_low"] is None:
+        return f"{stats['mean']:.3f}"
+    return f"{stats['mean']:.3f} [{stats['ci_low']:.3f}, {stats['ci_high']:.3f}]"
 
 
 def main(out: Path) -> None:

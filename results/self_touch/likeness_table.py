@@ -6,11 +6,10 @@ seeds) and the baselines beside the infant figures. Usage:
 from __future__ import annotations
 
 import json
-import math
 import sys
 from pathlib import Path
 
-from scipy import stats
+from devlearn.api.stats import mean_ci
 
 MEASURES = (
     ("touches_per_minute", "touches / min"),
@@ -22,12 +21,12 @@ AREAS = ("face", "torso", "arm", "leg", "foot")
 
 
 def ci(values: list[float]) -> str:
-    mean = sum(values) / len(values)
-    if len(values) < 2:
-        return f"{mean:.3g}"
-    sd = math.sqrt(sum((v - mean) ** 2 for v in values) / (len(values) - 1))
-    half = stats.t.ppf(0.975, len(values) - 1) * sd / math.sqrt(len(values))
-    return f"{mean:.3g} [{mean - half:.3g}, {mean + half:.3g}]"
+    """``mean [low, high]``: the 95% t-interval over seeds (devlearn's ``mean_ci``, as
+    ``devlearn report`` computes it); the mean alone for one value."""
+    stats = mean_ci(values)
+    if stats["ci_low"] is None:
+        return f"{stats['mean']:.3g}"
+    return f"{stats['mean']:.3g} [{stats['ci_low']:.3g}, {stats['ci_high']:.3g}]"
 
 
 def main(out: Path) -> None:

@@ -34,14 +34,19 @@ from devlearn.training import checkpoint as checkpoint_module  # noqa: E402
 SMALL = ["--envs", "2", "--seed", "1", "--workers", "0", "--set", "save_interval=1"]
 
 
-@pytest.fixture
-def cli(monkeypatch):
-    """Run ``devlearn ...`` in process with the tiny behaviours installed and a fake infant."""
-    registry = registry_for(TinyBehavior, OtherBehavior)
+def in_process(monkeypatch, *behaviors):
+    """``devlearn ...`` in process with ``behaviors`` installed and a fake infant."""
+    registry = registry_for(*behaviors)
     monkeypatch.setattr(devlearn.plugins, "PluginRegistry", lambda *a, **k: registry)
     fake = functools.partial(fake_infant_factory, episode_steps=10)
     monkeypatch.setattr("devlearn.env.behavior_env.build_default_infant", fake)
     return main
+
+
+@pytest.fixture
+def cli(monkeypatch):
+    """Run ``devlearn ...`` in process with the tiny behaviours installed and a fake infant."""
+    return in_process(monkeypatch, TinyBehavior, OtherBehavior)
 
 
 @pytest.fixture
@@ -478,11 +483,7 @@ def hostile(monkeypatch, tmp_path):
 
 @pytest.fixture
 def terms_cli(monkeypatch):
-    registry = registry_for(TermsBehavior)
-    monkeypatch.setattr(devlearn.plugins, "PluginRegistry", lambda *a, **k: registry)
-    fake = functools.partial(fake_infant_factory, episode_steps=10)
-    monkeypatch.setattr("devlearn.env.behavior_env.build_default_infant", fake)
-    return main
+    return in_process(monkeypatch, TermsBehavior)
 
 
 @pytest.fixture
