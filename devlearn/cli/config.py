@@ -7,6 +7,7 @@ import json
 import textwrap
 from typing import TYPE_CHECKING
 
+from devlearn.cli.options import add_behavior, add_overrides, add_preset
 from devlearn.config.checks import check_config
 from devlearn.config.help import describe_keys
 from devlearn.config.run_config import apply_preset, default_config, new_config
@@ -25,20 +26,15 @@ def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) 
         "PPO's and the behaviour's own, with type, the value a run would use and its docstring. "
         "Values set by the behaviour's train_defaults() are marked.",
     )
-    p.add_argument("behavior", help="behaviour name (see `devlearn plugins`)")
+    add_behavior(p)
     p.add_argument("--json", action="store_true", help="print a JSON list of keys")
-    p.add_argument(
-        "--set",
-        dest="overrides",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="show the values after these overrides (checked as `devlearn run` would)",
+    add_overrides(
+        p,
+        "show the values after these overrides (checked as `devlearn run` would)",
     )
-    p.add_argument(
-        "--preset",
-        metavar="NAME",
-        help="show the values of one of the behaviour's presets (as `devlearn run --preset`)",
+    add_preset(
+        p,
+        "show the values of one of the behaviour's presets (as `devlearn run --preset`)",
     )
     return ["config"]
 

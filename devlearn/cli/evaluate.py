@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Any
 
 from devlearn.api.errors import UsageError
 from devlearn.cli.folders import removed_on_failure
+from devlearn.cli.options import add_behavior, add_overrides
 
 if TYPE_CHECKING:
     from devlearn.plugins import PluginRegistry
@@ -25,7 +26,7 @@ def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) 
         "writes "
         "eval.json (with the protocol) and the behaviour's pictures to --out.",
     )
-    p.add_argument("behavior", help="behaviour name (see `devlearn plugins`)")
+    add_behavior(p)
     source = p.add_mutually_exclusive_group(required=True)
     source.add_argument(
         "--checkpoint",
@@ -58,13 +59,9 @@ def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) 
         help="a checkpoint's action: mean (deterministic, default) or sample (drawn from the "
         "policy's distribution, seeded by --seed, as in training)",
     )
-    p.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        dest="overrides",
-        help="a baseline's config value, e.g. behavior.detector_file=runs/hr/hand_detector.json "
+    add_overrides(
+        p,
+        "a baseline's config value, e.g. behavior.detector_file=runs/hr/hand_detector.json "
         "(hand regard's baselines then score with a calibrated detector); repeatable",
     )
     p.add_argument(

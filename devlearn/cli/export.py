@@ -6,6 +6,8 @@ import argparse
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from devlearn.cli.options import add_behavior
+
 if TYPE_CHECKING:
     from devlearn.plugins import PluginRegistry
 
@@ -21,7 +23,7 @@ def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) 
         "images, float32 otherwise); normalisation happens inside. ONNX needs the optional "
         "packages: pip install 'devlearn[export]'.",
     )
-    p.add_argument("behavior", help="behaviour name (see `devlearn plugins`)")
+    add_behavior(p)
     p.add_argument("--checkpoint", required=True, metavar="PATH", help="checkpoint file (.pt)")
     p.add_argument("--format", default="onnx", metavar="FORMAT", help="onnx or torchscript")
     p.add_argument("--out", required=True, metavar="FILE", help="file to write")

@@ -6,6 +6,7 @@ import argparse
 import json
 from typing import TYPE_CHECKING
 
+from devlearn.cli.options import add_behavior
 from devlearn.evaluation.describe import describe_behavior
 
 if TYPE_CHECKING:
@@ -15,7 +16,7 @@ if TYPE_CHECKING:
 def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> list[str]:
     """Register the ``info`` sub-command."""
     p = subparsers.add_parser("info", help="describe a behaviour's observations, actions, skin")
-    p.add_argument("behavior", help="behaviour name (see `devlearn plugins`)")
+    add_behavior(p)
     p.add_argument("--json", action="store_true", help="print a JSON object")
     return ["info"]
 

@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from devlearn.api.errors import UsageError
+from devlearn.cli.options import add_behavior, add_overrides, add_preset
 
 if TYPE_CHECKING:
     from devlearn.plugins import PluginRegistry
@@ -25,7 +26,7 @@ def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) 
         "TensorBoard logs to the run directory. Ctrl-C or SIGTERM saves a checkpoint; "
         "--resume continues.",
     )
-    p.add_argument("behavior", help="behaviour name (see `devlearn plugins`)")
+    add_behavior(p)
     p.add_argument("--steps", metavar="N", help="total environment steps (e.g. 8e6)")
     p.add_argument("--envs", metavar="N", help="environments per process")
     p.add_argument(
@@ -39,20 +40,8 @@ def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) 
     p.add_argument(
         "--logger", choices=("tensorboard", "wandb"), help="also log to W&B (default tensorboard)"
     )
-    p.add_argument(
-        "--set",
-        dest="overrides",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="override a config field, e.g. ppo.learning_rate=3e-4 (repeatable)",
-    )
-    p.add_argument(
-        "--preset",
-        metavar="NAME",
-        help="start from a named set of the behaviour's values (e.g. paper); "
-        "`devlearn config BEHAVIOR` lists them",
-    )
+    add_overrides(p)
+    add_preset(p)
     p.add_argument("--resume", metavar="RUN_DIR", help="continue a run from its latest checkpoint")
     p.add_argument(
         "--from",

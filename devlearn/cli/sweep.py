@@ -8,6 +8,7 @@ import sys
 from typing import TYPE_CHECKING
 
 from devlearn.api.errors import UsageError
+from devlearn.cli.options import add_behavior, add_overrides, add_preset
 
 if TYPE_CHECKING:
     from devlearn.plugins import PluginRegistry
@@ -24,7 +25,7 @@ def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) 
         "continues unfinished ones from their checkpoints. Settings can come from a TOML sweep "
         "file (--file); options given here win.",
     )
-    p.add_argument("behavior", help="behaviour name (see `devlearn plugins`)")
+    add_behavior(p)
     p.add_argument("--file", metavar="TOML", help="sweep file with the same settings")
     p.add_argument("--out", metavar="DIR", help="the sweep folder (required here or in the file)")
     p.add_argument(
@@ -41,17 +42,13 @@ def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) 
         "--workers", metavar="N", help="env worker processes per run (default 0: in process)"
     )
     p.add_argument("--cores", metavar="N", help="cores each run holds (default: max(1, workers))")
-    p.add_argument(
-        "--set",
-        dest="overrides",
-        action="append",
-        metavar="KEY=VALUE",
-        help="config override of every run (repeatable)",
+    add_overrides(
+        p,
+        "config override of every run (repeatable)",
     )
-    p.add_argument(
-        "--preset",
-        metavar="NAME",
-        help="every run starts from this preset of the behaviour (e.g. paper; `devlearn "
+    add_preset(
+        p,
+        "every run starts from this preset of the behaviour (e.g. paper; `devlearn "
         "config BEHAVIOR` lists them); --steps, --envs, --set and the grid apply over it",
     )
     p.add_argument("--episodes", metavar="N", help="evaluation episodes per run (default 10)")
