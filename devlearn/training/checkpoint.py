@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import io
 import os
@@ -10,6 +11,7 @@ import pickle
 import re
 import shutil
 import stat
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -103,24 +105,18 @@ def _write_error(path: Path, exc: OSError) -> UsageError:
     return UsageError(f"cannot write {path}: {exc.strerror or exc}")
 
 
-def save_atomic(state: dict[str, Any], path: Path) -> None:
-    """Write ``state`` with torch.save to a temporary file, fsync it, then rename over ``path``.
-
-    A crash (even kill -9) at any moment leaves either the previous file or the new one, never
-    a partial file under ``path``.
+@contextlib.contextmanager
+def _replaced_atomically(path: Path) -> Iterator[Path]:
+    """Yield a temporary path beside ``path``; what the block writes there then replaces
+    ``path`` in one rename (the folder synced), so that a crash at any moment, kill -9
+    included, leaves the previous file or the new one, never a partial file under ``path``.
 
     Raises:
         UsageError: The file cannot be written (disk full, read-only, ...); ``path`` is unchanged.
     """
-    path = Path(path)
     tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
     try:
-        with open(tmp, "wb") as f:
-            buffer = io.BytesIO()  # pickle in memory: a full disk is then a plain OSError
-            torch.save(state, buffer)
-            f.write(buffer.getbuffer())
-            f.flush()
-            os.fsync(f.fileno())
+        yield tmp
         os.replace(tmp, path)
     except OSError as exc:
         raise _write_error(path, exc) from None
@@ -130,11 +126,26 @@ def save_atomic(state: dict[str, Any], path: Path) -> None:
     _fsync_dir(path.parent)
 
 
+def save_atomic(state: dict[str, Any], path: Path) -> None:
+    """Write ``state`` with torch.save to ``path`` atomically (:func:`_replaced_atomically`),
+    the bytes synced before the rename.
+
+    Raises:
+        UsageError: The file cannot be written (disk full, read-only, ...); ``path`` is unchanged.
+    """
+    path = Path(path)
+    with _replaced_atomically(path) as tmp, open(tmp, "wb") as f:
+        buffer = io.BytesIO()  # pickle in memory: a full disk is then a plain OSError
+        torch.save(state, buffer)
+        f.write(buffer.getbuffer())
+        f.flush()
+        os.fsync(f.fileno())
+
+
 def link_atomic(source: Path, path: Path) -> None:
     """Make ``path`` a hard link to ``source`` atomically (a byte copy where links are
     unsupported; nothing is unpickled)."""
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    try:
+    with _replaced_atomically(Path(path)) as tmp:
         try:
             os.link(source, tmp)
         except OSError:
@@ -142,13 +153,6 @@ def link_atomic(source: Path, path: Path) -> None:
                 shutil.copyfileobj(src, dst)
                 dst.flush()
                 os.fsync(dst.fileno())
-        os.replace(tmp, path)
-    except OSError as exc:
-        raise _write_error(path, exc) from None
-    finally:
-        if tmp.exists():
-            tmp.unlink()
-    _fsync_dir(path.parent)
 
 
 def remove_temporaries(run_dir: Path) -> list[Path]:
