@@ -153,6 +153,14 @@ def human_summary(
                 f"  baselines none from {summary.get('start')} starts; other starts: "
                 f"{', '.join(other)} (devlearn eval --policy P --start ...)"
             )
+    criteria = summary.get("criteria")
+    if isinstance(criteria, dict):  # the same measure under each criterion (hand regard's)
+        found = {
+            n: headline_of(c, behavior_headline) for n, c in criteria.items() if isinstance(c, dict)
+        }
+        beside = [f"{n} {h[1]:.4g}" for n, h in found.items() if h]
+        if beside:
+            lines.append(f"  criteria  {', '.join(beside)} (the headline's measure under each)")
     rest = [
         (k, v)
         for k, v in summary.items()

@@ -203,3 +203,20 @@ def test_a_signal_inside_an_env_step_is_taken_between_decisions(cli, tmp_path, m
     assert cli(["run", "tiny", "--steps", "100000", "--out", str(out), *small]) == 130
     assert finished == [1]
     assert load_checkpoint(out / "checkpoint_latest.pt")["env_steps"] == 32  # the last boundary
+
+
+def test_the_summary_puts_every_criterion_of_the_headline_beside_it():
+    """Hand regard: the paper's measure (the detector) first, ground-truth pixels beside it."""
+    from devlearn.cli.evaluate import human_summary
+
+    criterion = {"average": 0.5, "episode_average_mean": 0.5, "episode_average_ci_low": 0.4,
+                 "episode_average_ci_high": 0.6}  # fmt: skip
+    summary = {
+        "behavior": "hand_regard", "policy": "zero", "start": "babybench", "episodes": 10,
+        "average": 0.5, "episode_average_mean": 0.5, "episode_average_ci_low": 0.4,
+        "episode_average_ci_high": 0.6, "protocol": {"headline": "detector", "seed": 0},
+        "criteria": {"detector": criterion, "pixels": {**criterion, "episode_average_mean": 0.25}},
+    }  # fmt: skip
+    lines = human_summary(summary, "average", {}, None)
+    assert lines[2] == "  headline  episode_average_mean = 0.5 [0.4, 0.6] (95% interval over episodes)"
+    assert lines[3].startswith("  criteria  detector 0.5, pixels 0.25")
