@@ -107,8 +107,9 @@ def train(
         progress: Show a progress bar.
         force: Start a new run in ``cfg.out_dir`` even if it holds one (its contents are
             deleted once the new run has started); without it such a folder is refused.
-        started: Called with the run folder once every check has passed, before anything is
-            written (``devlearn run`` prints it there, so a refusal prints only its error).
+        started: Called with the run folder once every check has passed and the envs and
+            networks are built, before training (``devlearn run`` prints it there, so a refusal
+            or a start-up failure prints only its error).
 
     Everything that can be checked (config values, the checkpoint's env count, memory, the
     folder) is checked before anything is written; a start that fails anyway (e.g. the envs
@@ -154,8 +155,6 @@ def train(
     cfg.workers = resolve_workers(cfg.workers, cfg.num_envs)  # config.json records the number
     learned = LearnedRewards.from_config(cfg, registry)  # names checked before the slow set-up
     check_memory(cfg.num_envs, cfg.workers)
-    if started is not None and rank == 0:
-        started(run_dir)
     with start_up(run_dir, replace=force and resume is None, owner=rank == 0):
         env, runner = _build(
             cfg,
@@ -171,6 +170,8 @@ def train(
             start_from,
             ckpt_path,
         )
+    if started is not None and rank == 0:  # built: a start-up error was one line, this is none
+        started(run_dir)
     try:
         # Learn; the runner saves checkpoints periodically, at the end and on Ctrl-C.
         runner.learn(cfg.total_steps)

@@ -671,3 +671,14 @@ def test_argparse_errors_are_one_line(cli, capsys):
     err = capsys.readouterr().err.strip()
     assert err.startswith("devlearn: error: argument --start: invalid choice: 'nowhere'")
     assert "\n" not in err and err.endswith("(see `devlearn eval --help`)")
+
+
+def test_a_start_up_failure_prints_only_its_error(cli, run_dir, capsys):
+    """A checkpoint that fails while the run is built (its weights, restored after every
+    config check) is one line on stderr, and stdout says nothing (no 'run directory')."""
+    damage(run_dir, nan_actor)
+    capsys.readouterr()
+    assert cli(["run", "tiny", "--resume", str(run_dir), "--steps", "64"]) == 2
+    printed = capsys.readouterr()
+    assert printed.out == ""
+    assert printed.err.strip().count("\n") == 0 and "NaN or infinite" in printed.err
