@@ -35,3 +35,23 @@ def to_record(path: Path) -> Path:
     """Where a recording made now goes: beside the reference, named for this kind of CPU (the
     reference itself when there is none yet)."""
     return path.with_name(f"{path.stem}.{cpu_kind()}{path.suffix}") if path.exists() else path
+
+
+REFERENCE_KIND: dict[str, str] = {
+    "plugins__hand_to_mouth__runs__seed-3.npz": "genuineintel-avx512",
+}
+"""The CPU kind a reference recording was made on, where it is known and not the AMD machine of
+the first recordings: a machine of another kind has no recording to compare with."""
+
+
+def recorded_elsewhere(path: Path) -> str | None:
+    """Why ``path`` cannot be compared on this machine (its only recording was made on another
+    kind of CPU, named), or None."""
+    kind = REFERENCE_KIND.get(path.name)
+    if for_this_cpu(path) == path and kind is not None and kind != cpu_kind():
+        return (
+            f"{path.name} was recorded on {kind} only; record it on this {cpu_kind()} machine "
+            f"with the code it was published with: python tests/published_policies.py "
+            f"{path.name.removesuffix('.npz')}"
+        )
+    return None
