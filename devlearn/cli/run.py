@@ -105,10 +105,15 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
             print(message)
             return 0
 
-    def started(run_dir: Path) -> None:  # once every check has passed
+    def started(run_dir: Path) -> None:  # once the run is built
         print(f"run directory: {run_dir}", flush=True)
 
-    with _interrupt_on_signals():
+    # SIGTERM (cluster schedulers, ``kill``) acts as Ctrl-C: a checkpoint is saved at the next
+    # decision, never inside a compiled kernel (StopRequests); Ctrl-C works even where the
+    # shell started us with it ignored (``cmd &`` in a script)
+    from devlearn.training.process import StopRequests
+
+    with StopRequests.installed():
         result = train(
             cfg,
             registry,
@@ -121,17 +126,6 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     metric = behavior_cls.headline_metric
     print(run_summary(result, cfg.behavior_name, metric, cfg.total_steps, cfg.num_envs, budget))
     return 0
-
-
-def _interrupt_on_signals() -> Any:
-    """Within the block, SIGTERM (cluster schedulers, ``kill``) acts as Ctrl-C, which saves a
-    checkpoint, and Ctrl-C works even where the shell started us with it ignored (``cmd &`` in
-    a script); both are taken at the runner's next safe point, between decisions
-    (:class:`~devlearn.training.process.StopRequests`), never inside a compiled kernel; the
-    previous handlers come back afterwards."""
-    from devlearn.training.process import StopRequests
-
-    return StopRequests.installed()
 
 
 @contextlib.contextmanager

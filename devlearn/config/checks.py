@@ -205,15 +205,22 @@ def check_out_dir(out_dir: str | Path) -> None:
         existing = existing.parent
     if existing.exists() and not existing.is_dir():
         raise UsageError(f"--out {path} lies under {existing}, which is a file, not a folder")
+    reason = unwritable(existing)
+    if reason:
+        raise UsageError(
+            f"--out {path} is not writable: cannot create files in {existing} ({reason})"
+        )
+
+
+def unwritable(folder: Path) -> str | None:
+    """Why no file can be created in ``folder`` (tried: a file made and deleted), or None."""
     try:
-        fd, probe = tempfile.mkstemp(prefix=".devlearn-probe-", dir=existing)
+        fd, probe = tempfile.mkstemp(prefix=".devlearn-probe-", dir=folder)
         os.close(fd)
         os.unlink(probe)
     except OSError as exc:
-        raise UsageError(
-            f"--out {path} is not writable: cannot create files in {existing} "
-            f"({exc.strerror or exc})"
-        ) from None
+        return str(exc.strerror or exc)
+    return None
 
 
 def holds_run(run_dir: Path) -> bool:

@@ -5,7 +5,6 @@ from __future__ import annotations
 import contextlib
 import logging
 import os
-import tempfile
 import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -15,9 +14,11 @@ import torch
 import torch.nn as nn
 
 from devlearn.api.errors import UsageError
+from devlearn.config.checks import unwritable
 
 if TYPE_CHECKING:
     from devlearn.plugins import PluginRegistry
+    from devlearn.training.checkpoint import Checkpoint
     from devlearn.training.networks import MultiSenseModel
 
 FORMATS = ("onnx", "torchscript")
@@ -62,24 +63,36 @@ def load_policy(
         UsageError: Missing, corrupt or foreign checkpoint, or an environment that cannot be
             built from the checkpoint's config.
     """
-    from devlearn.env import BehaviorEnv
     from devlearn.training.checkpoint import Checkpoint
 
     opened = Checkpoint.open(checkpoint, registry, behavior_name)
-    behavior = opened.behavior()
+    actor, obs = actor_on_one_observation(opened)
+    return DeterministicPolicy(actor), obs
+
+
+def actor_on_one_observation(opened: Checkpoint) -> tuple[Any, dict[str, np.ndarray]]:
+    """The checkpoint's policy network, built (and its weights checked: shapes, tensors, finite
+    values) on one observation of its behaviour's environment, and that observation.
+
+    Raises:
+        UsageError: The weights do not fit, or the environment cannot be built.
+    """
+    from devlearn.env import BehaviorEnv
+
     try:
-        env = BehaviorEnv(behavior, 0, training=False)
+        env = BehaviorEnv(
+            opened.behavior(), 0, training=False, action_repeat=opened.config.env.action_repeat
+        )
     except OSError as exc:
         raise UsageError(
-            f"cannot build the '{behavior_name}' environment of checkpoint {checkpoint} "
+            f"cannot build the '{opened.behavior_name}' environment of checkpoint {opened.path} "
             f"(needed for its observation shapes): {exc}"
         ) from None
     try:
         obs = env.reset()
-        actor = opened.actor(obs, env.action_dim)
+        return opened.actor(obs, env.action_dim), obs
     finally:
         env.close()
-    return DeterministicPolicy(actor), obs
 
 
 def example_inputs(
@@ -138,12 +151,9 @@ def check_out_file(out: Path) -> None:
         )
     if not out.parent.is_dir():
         raise UsageError(f"cannot write {out}: directory {out.parent} does not exist")
-    try:
-        fd, probe = tempfile.mkstemp(prefix=".devlearn-probe-", dir=out.parent)
-        os.close(fd)
-        os.unlink(probe)
-    except OSError as exc:
-        raise UsageError(f"cannot write {out}: {exc.strerror or exc}") from None
+    reason = unwritable(out.parent)
+    if reason:
+        raise UsageError(f"cannot write {out}: {reason}")
 
 
 HARMLESS_WARNINGS = (

@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from devlearn.evaluation.export import actor_on_one_observation
 from devlearn.training.checkpoint import FORMAT, Checkpoint, save_atomic
 
 if TYPE_CHECKING:
@@ -40,24 +41,10 @@ def slim_checkpoint(
         raise UsageError(f"slim {source}: --out must differ from the checkpoint itself")
     opened = Checkpoint.open(source, registry)
     state = opened.state
-    _check_actor(opened)  # a file eval would refuse is not written
+    actor_on_one_observation(opened)  # a file eval would refuse is not written
     slim = {"format": FORMAT, "policy_only": True}
     slim.update({k: state[k] for k in KEPT if k in state})
     slim["artifacts"] = opened.behavior().policy_artifacts()
     target.parent.mkdir(parents=True, exist_ok=True)
     save_atomic(slim, target)
     return slim
-
-
-def _check_actor(opened: Checkpoint) -> None:
-    """Build the checkpoint's policy on one observation of its behaviour, as ``devlearn eval``
-    does, so that weights of the wrong shape, non-tensor entries or NaN weights are refused
-    (UsageError) before a policy file is written."""
-    from devlearn.env.behavior_env import BehaviorEnv
-
-    behavior = opened.behavior()
-    env = BehaviorEnv(behavior, 0, training=False, action_repeat=opened.config.env.action_repeat)
-    try:
-        opened.actor(env.reset(), env.action_dim)
-    finally:
-        env.close()
