@@ -16,8 +16,6 @@ from llvmlite import ir
 from numba.core import types
 from numba.extending import intrinsic
 
-from devlearn.infant.senses import LIMIT_ZONE
-
 # Every loop below repeats, operation for operation, what the numpy reference path
 # (ContactReader.sides, Skin.candidates / nearest / spread_sparse, contacts.hand_contacts)
 # computes, in the same order where the order changes a float: sums over a candidate row follow
@@ -261,17 +259,18 @@ def _max(a: float, b: float) -> float:
 def gather(
     qpos: np.ndarray, qvel: np.ndarray, qfrc_actuator: np.ndarray, qfrc_passive: np.ndarray,
     qfrc_constraint: np.ndarray, ctrl: np.ndarray, qpos_index: np.ndarray, dof: np.ndarray,
-    lo: np.ndarray, hi: np.ndarray, out: np.ndarray,
+    lo: np.ndarray, hi: np.ndarray, limit_zone: float, out: np.ndarray,
 ) -> None:  # fmt: skip
     """``Proprioception.reference`` (:mod:`devlearn.infant.senses`) into ``out`` (6 J,) float32,
     element by element: the same float64 operations in the same order (no fast-math), each
-    rounded once to float32."""
+    rounded once to float32. ``limit_zone`` is the caller's ``LIMIT_ZONE`` (passed, not imported,
+    so that senses, which imports this module lazily, is not imported back)."""
     n = dof.shape[0]
     for i in range(n):
         q = qpos[qpos_index[i]]
         d = dof[i]
         to_limit = _min(q - lo[i], hi[i] - q)
-        limit = _min(_max(1.0 - to_limit / LIMIT_ZONE, 0.0), 1.0)
+        limit = _min(_max(1.0 - to_limit / limit_zone, 0.0), 1.0)
         motor = qfrc_actuator[d]
         out[i] = q
         out[n + i] = qvel[d]

@@ -48,7 +48,7 @@ class Proprioception:
         out = np.empty(self.size, dtype=np.float32)
         self._gather(
             data.qpos, data.qvel, data.qfrc_actuator, data.qfrc_passive, data.qfrc_constraint,
-            ctrl, self.qpos, self.dof, self.lo, self.hi, out,
+            ctrl, self.qpos, self.dof, self.lo, self.hi, LIMIT_ZONE, out,
         )  # fmt: skip
         return out
 
