@@ -154,10 +154,10 @@ def touch_old_and_new(steps: int, seed: int = 0) -> dict[str, Any]:
         crib.step(a)
         reader.touch_and_hands(data, crib.hand_of_body)
 
-    def reference_touch():
+    def reference_touch() -> None:
         contacts.sparse_touch_from_contacts(skin, reader.sides(data, True))
 
-    def reference_both():
+    def reference_both() -> None:
         sides = reader.sides(data, True)
         contacts.sparse_touch_from_contacts(skin, sides)
         contacts.hand_contacts(skin, sides, crib.hand_of_body)

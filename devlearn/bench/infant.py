@@ -50,7 +50,7 @@ def bench_infant(steps: int = 2000, frames: int = 100) -> dict[str, float]:
     it = iter(actions)
     contacts = []
 
-    def step_and_count():
+    def step_and_count() -> None:
         crib.step(next(it))
         contacts.append(int(crib.physics.data.ncon))
 

@@ -10,6 +10,7 @@ import os
 import signal
 import sys
 import traceback
+from collections.abc import Iterator
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -181,7 +182,7 @@ training process's inference and update threads."""
 
 
 @contextlib.contextmanager
-def _worker_environment():
+def _worker_environment() -> Iterator[None]:
     """Set :data:`WORKER_THREADS` while workers are spawned (they inherit ``os.environ``)."""
     saved = {key: os.environ.get(key) for key in WORKER_THREADS}
     os.environ.update(WORKER_THREADS)

@@ -6,6 +6,7 @@ import contextlib
 import logging
 import os
 import warnings
+from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -167,7 +168,7 @@ hidden during an export; errors still show."""
 
 
 @contextlib.contextmanager
-def _known_exporter_noise_silenced():
+def _known_exporter_noise_silenced() -> Iterator[None]:
     """Within the block, the known harmless exporter warnings are hidden; any other shows."""
     loggers = [logging.getLogger(name) for name in HARMLESS_LOGGERS]
     levels = [logger.level for logger in loggers]

@@ -8,6 +8,7 @@ computes exactly what its numpy reference does (the equivalence tests compare th
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numba
@@ -31,11 +32,11 @@ _JIT: dict[str, Any] = {"cache": True, "nogil": True}
 
 
 @intrinsic
-def _fma(typingctx, a, b, c):
+def _fma(typingctx: Any, a: Any, b: Any, c: Any) -> tuple[Any, Callable[..., Any]]:
     """a * b + c with one rounding (LLVM's llvm.fma: fused even where the CPU lacks FMA)."""
     sig = types.float64(types.float64, types.float64, types.float64)
 
-    def codegen(context, builder, signature, args):
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
         double = ir.DoubleType()
         fnty = ir.FunctionType(double, [double, double, double])
         fn = builder.module.declare_intrinsic("llvm.fma", [double], fnty)
@@ -76,7 +77,10 @@ def _pairwise_sum(a: np.ndarray, n: int) -> float:
 
 
 @numba.njit(**_JIT)
-def _nearest(q, body, point, cand, dist, k_max, num_sensors, sensor_body, sensor_pos):
+def _nearest(
+    q: int, body: np.ndarray, point: np.ndarray, cand: np.ndarray, dist: np.ndarray, k_max: int,
+    num_sensors: int, sensor_body: np.ndarray, sensor_pos: np.ndarray,
+) -> int:  # fmt: skip
     """Skin.nearest for row q: nearest candidate, else the nearest sensor of the body."""
     best_k = 0
     for k in range(1, k_max):

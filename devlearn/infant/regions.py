@@ -104,7 +104,7 @@ def assign_parts(
     n = len(p_body)
     out = np.full(n, -1, dtype=np.int64)
 
-    def pick(*pairs):
+    def pick(*pairs: tuple[np.ndarray, str]) -> np.ndarray:
         for mask, part in pairs:
             free = (out < 0) & mask
             out[free] = _P[part]

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
+from types import ModuleType
 from typing import Any
 
 from devlearn.api.errors import UsageError
@@ -53,7 +54,7 @@ SECTIONS = {
 EXECUTORS = ("local", "ray")
 
 
-def _toml():
+def _toml() -> ModuleType:
     if sys.version_info >= (3, 11):
         import tomllib
 

@@ -194,19 +194,19 @@ def train(
 
 
 def _build(
-    cfg,
-    registry,
-    run_dir,
-    checkpoint,
-    infant_factory,
-    progress,
-    rank,
-    world_size,
-    device,
-    learned,
-    start_from=None,
-    ckpt_path=None,
-):
+    cfg: RunConfig,
+    registry: PluginRegistry,
+    run_dir: Path,
+    checkpoint: dict[str, Any] | None,
+    infant_factory: InfantFactory | None,
+    progress: bool,
+    rank: int,
+    world_size: int,
+    device: str,
+    learned: LearnedRewards,
+    start_from: str | Path | None = None,
+    ckpt_path: str | Path | None = None,
+) -> tuple[DevVecEnv, DevRunner]:
     """Start-up after the checks: seed, prepare the behaviour, write config.json, build the
     envs and the runner (restored from ``checkpoint``, with the ``learned`` rewards; from
     another run's when ``start_from`` names it); return ``(env, runner)``."""

@@ -20,8 +20,10 @@ from devlearn_self_touch.body_map import HANDS, NUM_PARTS, NUM_REGIONS
 
 @numba.njit(cache=True, nogil=True)
 def _touch_row(
-    sensors, forces, sensor_region, region_sizes, hands, region_parts, g, contacts, parts
-):
+    sensors: np.ndarray, forces: np.ndarray, sensor_region: np.ndarray,
+    region_sizes: np.ndarray, hands: np.ndarray, region_parts: np.ndarray, g: np.ndarray,
+    contacts: np.ndarray, parts: np.ndarray,
+) -> None:  # fmt: skip
     """One infant's facts into its rows: ``g`` (68,) float32 the body map of
     :func:`~devlearn_self_touch.body_map.sparse_body_map`, ``contacts`` (2, 68) a copy of
     ``hands`` and ``parts`` (2, 34) bool :func:`~devlearn_self_touch.body_map.hand_touched_parts`.
