@@ -1,5 +1,6 @@
-"""DevRunner: rsl-rl's OnPolicyRunner with a curriculum, metrics.jsonl and atomic checkpoints
-(held objects: :class:`~devlearn.training.runner_checkpoints.RunCheckpoints`,
+"""DevRunner: our training loop over rsl-rl's parts (its PPO, storage and logger, through their
+public API), with a curriculum, metrics.jsonl and atomic checkpoints (held objects:
+:class:`~devlearn.training.runner_checkpoints.RunCheckpoints`,
 :class:`~devlearn.training.runner_metrics.MetricsLog`)."""
 
 from __future__ import annotations
@@ -15,8 +16,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import torch
-from rsl_rl.runners import OnPolicyRunner
-from rsl_rl.utils import check_nan
+from rsl_rl.algorithms import PPO
+from rsl_rl.utils import check_nan, resolve_callable
+from rsl_rl.utils.logger import Logger
 from tqdm import tqdm
 
 from devlearn.api.behavior import RunMetrics
@@ -59,8 +61,13 @@ class Rollout:
     """The learner's figures over the rollout (:func:`~devlearn.training.health.rollout_health`)."""
 
 
-class DevRunner(OnPolicyRunner):
-    """Trains one behaviour; the loop is rsl-rl's: collect, update, log, checkpoint.
+class DevRunner:
+    """Trains one behaviour: collect, update, log, checkpoint, in our own loop.
+
+    It composes rsl-rl's parts through their public API (``PPO.construct_algorithm``, the
+    algorithm's ``act`` / ``process_env_step`` / ``compute_returns`` / ``update``, its rollout
+    storage and its ``Logger``) instead of subclassing its ``OnPolicyRunner``, whose private
+    multi-GPU set-up hard-codes NCCL and cuda (we set up gloo on the CPU ourselves).
 
     Additions: the curriculum advances from the global env-step counter
     (``iterations * num_steps_per_env * num_envs * world_size``) before each iteration; a tqdm
@@ -79,11 +86,11 @@ class DevRunner(OnPolicyRunner):
     (:mod:`devlearn.training.learned_rewards`). ``current_learning_iteration`` counts
     *completed* iterations, so a resumed run logs each iteration index once.
 
-    ``learn`` re-implements rsl-rl's ``OnPolicyRunner.learn`` loop (same calls in the same
-    order: ``act``, ``env.step``, ``process_env_step``, ``compute_returns``, ``update``,
-    ``logger.log``, with rsl-rl's intrinsic-reward (RND) values passed to its logger) because
-    it counts environment steps rather than iterations (the curriculum and ``total_steps``
-    are in steps), sets the torch threads of each rollout and update
+    ``learn`` makes rsl-rl's calls in the order its own runner makes them (``act``,
+    ``env.step``, ``process_env_step``, ``compute_returns``, ``update``, ``logger.log``, with
+    rsl-rl's intrinsic-reward (RND) values passed to its logger), but counts environment steps
+    rather than iterations (the curriculum and ``total_steps`` are in steps), sets the torch
+    threads of each rollout and update
     (:class:`~devlearn.training.process.ThreadPlan`), writes the progress bar and
     ``metrics.jsonl`` and saves devlearn checkpoints instead of rsl-rl's ``model_<it>.pt``.
 
@@ -123,9 +130,25 @@ class DevRunner(OnPolicyRunner):
         self.curriculum = curriculum
         self.show_progress = progress
         self.env_steps = 0
+        self.env = env
+        self.cfg = train_cfg
+        self.device = device
+        self.current_learning_iteration = 0
+        self._configure_distributed()
         report = io.StringIO()
-        with contextlib.redirect_stdout(report):
-            super().__init__(env, train_cfg, log_dir=str(self.run_dir), device=device)
+        with contextlib.redirect_stdout(report):  # rsl-rl prints the networks: networks.txt
+            alg_class: type[PPO] = resolve_callable(train_cfg["algorithm"]["class_name"])
+            self.alg = alg_class.construct_algorithm(env.get_observations(), env, train_cfg, device)
+            self.logger = Logger(
+                log_dir=str(self.run_dir),
+                cfg=train_cfg,
+                env_cfg=env.cfg,
+                num_envs=env.num_envs,
+                is_distributed=self.is_distributed,
+                gpu_world_size=self.gpu_world_size,
+                gpu_global_rank=self.gpu_global_rank,
+                device=device,
+            )
         self.ranks = Ranks(self.gpu_global_rank, self.gpu_world_size)
         self.is_main = self.ranks.is_main
         self.learned = (learned or LearnedRewards()).build(
@@ -169,8 +192,9 @@ class DevRunner(OnPolicyRunner):
         )
 
     # --- distributed ----------------------------------------------------------------------
-    def _configure_multi_gpu(self) -> None:
-        """rsl-rl hard-codes NCCL and cuda; use gloo on the CPU (torchrun's env vars)."""
+    def _configure_distributed(self) -> None:
+        """Ranks from torchrun's env vars; gloo on the CPU (rsl-rl's own set-up hard-codes NCCL
+        and cuda). ``cfg["multi_gpu"]`` is what rsl-rl's PPO reads to all-reduce gradients."""
         self.gpu_world_size = int(os.getenv("WORLD_SIZE", "1"))
         self.is_distributed = self.gpu_world_size > 1
         self.gpu_local_rank = int(os.getenv("LOCAL_RANK", "0"))
