@@ -117,6 +117,7 @@ class DevlearnEnv(gymnasium.Env):
         self.observation_space = self._space
         self.action_space = action_space(self.env.action_dim)
         self.term_names = [term.name for term in self.env.terms]
+        """The behaviour's reward terms (``info["reward/<term>"]``)."""
         decision_s = self.env.step_dt * self.env.action_repeat
         self.metadata = {**self.metadata, "render_fps": round(1.0 / decision_s)}
         self._next_obs: dict[str, np.ndarray] | None = None

@@ -105,6 +105,8 @@ class DevlearnVectorEnv(VectorEnv):
         self.envs.set_stage(self.clock.stage.options)
         arrays = self.envs.arrays
         self.names = list(self.envs.observation_shapes)
+        self.term_names = list(self.envs.term_names)
+        """The behaviour's reward terms (``info["reward/<term>"]``)."""
         first = {name: arrays[f"obs/{name}"][0] for name in self.names}
         self.single_observation_space = observation_space(first)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
@@ -161,11 +163,11 @@ class DevlearnVectorEnv(VectorEnv):
         terms = arrays["term_rewards"].copy()
         info: dict[str, Any] = {}
         every = np.ones(self.num_envs, dtype=bool)
-        for k, name in enumerate(self.envs.term_names):
+        for k, name in enumerate(self.term_names):
             info[f"reward/{name}"], info[f"_reward/{name}"] = terms[:, k], every
         info.update(self._stage_info())
         for i, summary in ended:
-            final_info = step_info(self.envs.term_names, terms[i], stage)
+            final_info = step_info(self.term_names, terms[i], stage)
             final_info.update(episode_info(summary))
             final_obs = {name: arrays[f"final/{name}"][i].copy() for name in self.names}
             self._add_info(info, {"final_obs": final_obs, "final_info": final_info}, i)
