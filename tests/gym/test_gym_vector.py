@@ -146,3 +146,26 @@ def test_workers_merge_their_run_memory_at_a_runs_iteration_boundary():
         assert widest() == [2, 2, 2]  # merged at the boundary, as a run merges them
     finally:
         envs.close()
+
+
+def test_make_vec_builds_devlearns_vector_env_for_an_installed_behaviour():
+    import gymnasium
+
+    import devlearn.gym
+
+    envs = devlearn.gym.make_vec("devlearn/SelfTouch-v0", 2, overrides={"seed": 1})
+    try:
+        assert isinstance(envs, DevlearnVectorEnv) and envs.spec.id == "devlearn/SelfTouch-v0"
+        assert envs.setup.config.seed == 1 and envs.setup.config.num_envs == 2
+        assert set(envs.single_observation_space.spaces) == {"body_map", "proprioception"}
+        obs, _ = envs.reset()
+        obs, rewards, _, _, info = envs.step(envs.action_space.sample())
+        assert obs["proprioception"].shape == (2, 180) and rewards.shape == (2,)
+        assert "reward/touch_novelty" in info
+    finally:
+        envs.close()
+    plain = gymnasium.make_vec("devlearn/SelfTouch-v0", num_envs=2)  # its vector entry point
+    try:
+        assert isinstance(plain, DevlearnVectorEnv)
+    finally:
+        plain.close()
