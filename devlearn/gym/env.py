@@ -113,8 +113,9 @@ class DevlearnEnv(gymnasium.Env):
             self.setup.behavior.curriculum(), cfg.env.action_repeat, cfg.ppo.num_steps_per_env
         )
         self.env.set_stage(self.clock.stage.options)
-        self._space = observation_space(self.env.reset())  # spaces from one observation
-        self.observation_space = self._space
+        self.observation_dict = observation_space(self.env.reset())  # from one observation
+        """The observation space, typed as the Dict of groups it is."""
+        self.observation_space = self.observation_dict
         self.action_space = action_space(self.env.action_dim)
         self.term_names = [term.name for term in self.env.terms]
         """The behaviour's reward terms (``info["reward/<term>"]``)."""
@@ -147,7 +148,7 @@ class DevlearnEnv(gymnasium.Env):
             if self.env.episode_step:
                 self.env.evaluator.end_episode()  # unfinished: its metrics are not reported
             self._next_obs = self.env.reset()
-        obs = as_space(self._next_obs, self._space)
+        obs = as_space(self._next_obs, self.observation_dict)
         self._next_obs = None
         return obs, {"stage": self.clock.stage.name}
 
@@ -172,7 +173,7 @@ class DevlearnEnv(gymnasium.Env):
         _, changed = self.clock.tick()
         if changed:  # as a run's envs, from their next reset
             self.env.set_stage(self.clock.stage.options)
-        return as_space(obs, self._space), float(reward), False, bool(done), info
+        return as_space(obs, self.observation_dict), float(reward), False, bool(done), info
 
     def render(self) -> np.ndarray | None:
         """With ``render_mode="rgb_array"``: left eye, right eye and the third-person view of

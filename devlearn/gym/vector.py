@@ -108,7 +108,9 @@ class DevlearnVectorEnv(VectorEnv):
         self.term_names = list(self.envs.term_names)
         """The behaviour's reward terms (``info["reward/<term>"]``)."""
         first = {name: arrays[f"obs/{name}"][0] for name in self.names}
-        self.single_observation_space = observation_space(first)
+        self.observation_dict = observation_space(first)
+        """One env's observation space, typed as the Dict of groups it is."""
+        self.single_observation_space = self.observation_dict
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.single_action_space = action_space(self.envs.num_actions)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
