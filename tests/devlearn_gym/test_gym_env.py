@@ -1,6 +1,8 @@
-"""devlearn.gym's single env (this folder is not named ``gym``: with ``tests/`` on the path it
-would shadow the old ``gym`` package that Stable-Baselines3 probes for): the ids, one config path, a run's rewards and episodes, the
-curriculum's clock, seeding, rendering (on the fake infant; the real ones: the plugins' tests)."""
+"""devlearn.gym's single env: the ids, one config path, a run's rewards and episodes, the
+curriculum's clock, seeding, rendering (on the fake infant; the real ones: the plugins' tests).
+
+This folder is not named ``gym``: with ``tests/`` on the path it would shadow the old ``gym``
+package that Stable-Baselines3 probes for."""
 
 from __future__ import annotations
 
