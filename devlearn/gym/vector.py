@@ -132,8 +132,10 @@ class DevlearnVectorEnv(VectorEnv):
         *shape), and ``{"stage": ...}``.
 
         ``seed``: env ``i``'s generator is reseeded ``seed + i``; the first reset without one
-        uses the config's ``seed``, as a run seeds its envs. Reward terms keep their lifetime
-        memory, as in a run.
+        uses the config's ``seed``, as a run seeds its envs. Episodes under way are abandoned
+        (the envs reset themselves at every episode's end, so a learner need not call this
+        again; an abandoned episode's evaluator figures run into the next one's). Reward terms
+        keep their lifetime memory, as in a run.
         """
         if seed is None and self._fresh:
             seed = self.seed_base
