@@ -15,6 +15,7 @@ import torch.nn as nn
 
 from devlearn.api.errors import UsageError
 from devlearn.config.run_config import from_dict
+from devlearn.training.checkpoint import behavior_with_artifacts
 
 if TYPE_CHECKING:
     from devlearn.api.behavior import Behavior
@@ -169,11 +170,9 @@ class ScriptedPolicy:
     def behavior(self) -> Behavior:
         """Its behaviour under its config, with the artifacts the file carries; built once."""
         if self._behavior is None:
-            behavior = self.registry.create(self.behavior_name, self.config.behavior)
-            behavior.load_policy_artifacts(
-                dict(self.state.get("artifacts") or {}), self.path.parent
+            self._behavior = behavior_with_artifacts(
+                self.registry, self.config, self.state, self.path
             )
-            self._behavior = behavior
         return self._behavior
 
     def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:

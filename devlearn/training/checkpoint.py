@@ -549,11 +549,9 @@ class Checkpoint:
         """Its behaviour under its config, with the policy artifacts the checkpoint carries
         loaded (or found by name next to it, ``Behavior.load_policy_artifacts``); built once."""
         if self._behavior is None:
-            behavior = self.registry.create(self.behavior_name, self.config.behavior)
-            behavior.load_policy_artifacts(
-                dict(self.state.get("artifacts") or {}), self.path.parent
+            self._behavior = behavior_with_artifacts(
+                self.registry, self.config, self.state, self.path
             )
-            self._behavior = behavior
         return self._behavior
 
     def actor(self, obs: dict[str, np.ndarray], action_dim: int) -> MultiSenseModel:
@@ -564,6 +562,18 @@ class Checkpoint:
             UsageError: The saved weights do not fit the network its config builds.
         """
         return load_actor(self.config, self.state, self.behavior(), obs, action_dim)
+
+
+def behavior_with_artifacts(
+    registry: PluginRegistry, config: RunConfig, state: dict[str, Any], path: Path
+) -> Behavior:
+    """The behaviour a policy file at ``path`` names (``state["behavior"]``: a checkpoint, a
+    policy file, a scripted policy) under ``config``, with the policy artifacts it carries
+    (``state["artifacts"]``) loaded, or found by name next to it
+    (``Behavior.load_policy_artifacts``)."""
+    behavior = registry.create(str(state["behavior"]), config.behavior)
+    behavior.load_policy_artifacts(dict(state.get("artifacts") or {}), path.parent)
+    return behavior
 
 
 def build_actor(
