@@ -18,8 +18,13 @@ from devlearn.api.behavior import evaluation_stage
 from devlearn.api.errors import UsageError
 from devlearn.config.run_config import to_dict
 from devlearn.env.behavior_env import BehaviorEnv
-from devlearn.evaluation.scripted_policy import ScriptedPolicy, is_scripted_policy
-from devlearn.training.checkpoint import LATEST, Checkpoint, observation_batch
+from devlearn.evaluation.scripted_policy import ScriptedPolicy
+from devlearn.training.checkpoint import (
+    LATEST,
+    Checkpoint,
+    is_scripted_policy,
+    observation_batch,
+)
 from devlearn.training.resolve import RunRequest, resolve_config
 
 if TYPE_CHECKING:

@@ -4,7 +4,6 @@ TorchScript plus what ``devlearn eval`` needs to evaluate it under the same prot
 from __future__ import annotations
 
 import json
-import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -15,7 +14,7 @@ import torch.nn as nn
 
 from devlearn.api.errors import UsageError
 from devlearn.config.run_config import from_dict
-from devlearn.training.checkpoint import behavior_with_artifacts
+from devlearn.training.checkpoint import SCRIPTED_METADATA, behavior_with_artifacts
 
 if TYPE_CHECKING:
     from devlearn.api.behavior import Behavior
@@ -24,7 +23,7 @@ if TYPE_CHECKING:
 
 SCRIPTED_FORMAT = "devlearn-scripted-policy/1"
 """The ``format`` of a scripted policy's metadata."""
-METADATA = "devlearn_policy.json"
+METADATA = SCRIPTED_METADATA
 """The TorchScript extra file holding the metadata (``torch.jit.load(_extra_files=...)``)."""
 
 
@@ -92,16 +91,6 @@ def save_scripted_policy(
     }
     extra = {METADATA: json.dumps(metadata)}
     return export_policy(policy, observation, "torchscript", Path(path), extra_files=extra)
-
-
-def is_scripted_policy(path: str | Path) -> bool:
-    """Whether ``path`` is a scripted policy file (a TorchScript archive with our metadata;
-    a devlearn checkpoint, also a zip archive, has none)."""
-    path = Path(path)
-    if not path.is_file() or not zipfile.is_zipfile(path):
-        return False
-    with zipfile.ZipFile(path) as archive:
-        return any(name.endswith(f"/extra/{METADATA}") for name in archive.namelist())
 
 
 @dataclass

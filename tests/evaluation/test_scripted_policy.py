@@ -12,10 +12,11 @@ import torch
 import devlearn.gym
 from devlearn.api.errors import UsageError
 from devlearn.evaluation.evaluate import evaluate
-from devlearn.evaluation.scripted_policy import ScriptedPolicy, is_scripted_policy
+from devlearn.evaluation.scripted_policy import ScriptedPolicy
 from devlearn.gym.env import DevlearnEnv
 from devlearn.testing import registry_for
 from devlearn.testing.fake_infant import TinyBehavior, fake_infant_factory
+from devlearn.training.checkpoint import is_scripted_policy, load_checkpoint
 
 REGISTRY = registry_for(TinyBehavior)
 
@@ -97,6 +98,8 @@ def test_what_cannot_be_evaluated_is_one_line(env, tmp_path):
     path = devlearn.gym.save_policy(Still(), env, tmp_path / "policy.pt", learner="mine")
     with pytest.raises(UsageError, match="a scripted policy .* gives one deterministic action"):
         run(path, action="sample")
+    with pytest.raises(UsageError, match="is a scripted policy .*: devlearn eval evaluates it"):
+        load_checkpoint(path)  # devlearn slim, export, run --from
     other = registry_for(TinyBehavior)
     with pytest.raises(UsageError, match="trained for 'tiny', not 'other'"):
         ScriptedPolicy.open(path, other, "other")
