@@ -8,9 +8,10 @@ if [ ! -x .venv/bin/python ]; then
   "$PY" -m venv .venv
 fi
 # The test extra brings the pinned ruff, import-linter and mypy (.ci/run) and the wandb extra W&B
-# logging, so CI tests `--logger wandb` (offline). Install the pinned torch first so nothing else pulls a CUDA build.
+# logging, so CI tests `--logger wandb` (offline); the sb3 extra Stable-Baselines3, so CI trains
+# examples/sb3. Install the pinned torch first so nothing else pulls a CUDA build.
 .venv/bin/python -m pip install -q --disable-pip-version-check -c constraints.txt torch
 .venv/bin/python -m pip install -q --disable-pip-version-check -c constraints.txt \
-  -e ".[test,wandb,export,ray]" -e plugins/self_touch -e plugins/hand_regard -e plugins/curiosity \
+  -e ".[test,wandb,export,ray,sb3]" -e plugins/self_touch -e plugins/hand_regard -e plugins/curiosity \
   -e examples/hand_to_mouth
 echo "devlearn is set up in .venv (activate with: source .venv/bin/activate)"

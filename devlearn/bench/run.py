@@ -26,6 +26,7 @@ from devlearn.bench.infant import bench_infant
 from devlearn.bench.learner import bench_learner
 from devlearn.bench.speed import (
     bench_behavior_env,
+    bench_gym_vec_env,
     bench_training,
     bench_vec_env,
     decision_rate,
@@ -105,6 +106,10 @@ def run_bench(
         result["self_touch_vec_2_workers_fraction_of_ceiling"] = result[
             "self_touch_vec_steps_per_s_2_workers"
         ] / (2 * result["physics_crib_steps_per_s"])
+        progress("self_touch: the Gymnasium vector env beside DevVecEnv, 16 envs, 2 workers")
+        result.update(
+            bench_gym_vec_env("self_touch", 16, 2, 20 if quick else 200, registry=registry)
+        )
         progress("self_touch: end-to-end training (devlearn run defaults)")
         result["self_touch_train_steps_per_s"] = bench_training(
             "self_touch", 8192 if quick else 32768, [], progress

@@ -93,6 +93,54 @@ def bench_vec_env(behavior: Behavior, num_envs: int, workers: int, steps: int) -
         env.close()
 
 
+def bench_gym_vec_env(
+    behavior: str,
+    num_envs: int,
+    workers: int,
+    steps: int,
+    registry: PluginRegistry | None = None,
+) -> dict[str, float]:
+    """Physics steps per second (summed over envs) of the Gymnasium vector env
+    (:class:`~devlearn.gym.vector.DevlearnVectorEnv`: numpy in and out, Gymnasium's info built
+    every step) beside :func:`bench_vec_env`'s DevVecEnv (the runner's: torch in and out), with
+    the same behaviour config, envs and workers, a decision every physics step
+    (``env.action_repeat=1``, where a step's own overhead weighs most) and random actions. Each
+    figure is the better of two turns, the two alternating, so that a burst of other work on
+    the machine does not favour either.
+
+    Returns:
+        ``gym_vec_steps_per_s``, ``gym_vec_devlearn_steps_per_s`` (DevVecEnv, the same turns)
+        and ``gym_vec_fraction_of_devlearn`` (their ratio; issue #45's target: at least 0.85).
+    """
+    from devlearn.gym.vector import DevlearnVectorEnv
+
+    rates: dict[str, list[float]] = {"gym": [], "devlearn": []}
+    for _ in range(2):
+        envs = DevlearnVectorEnv(
+            behavior, num_envs, workers, {"env.action_repeat": 1, "seed": 0}, registry=registry
+        )
+        prepared = envs.setup.behavior  # the same config (and prepared files) for DevVecEnv
+        try:
+            envs.reset()
+            rng = np.random.default_rng(0)
+            shape = (num_envs, envs.envs.num_actions)
+            for _ in range(10):
+                envs.step(rng.uniform(-1, 1, shape).astype(np.float32))
+            start = time.perf_counter()
+            for _ in range(steps):
+                envs.step(rng.uniform(-1, 1, shape).astype(np.float32))
+            rates["gym"].append(steps * num_envs / (time.perf_counter() - start))
+            rates["devlearn"].append(bench_vec_env(prepared, num_envs, workers, steps))
+        finally:
+            envs.close()
+    gym, ours = max(rates["gym"]), max(rates["devlearn"])
+    return {
+        "gym_vec_steps_per_s": gym,
+        "gym_vec_devlearn_steps_per_s": ours,
+        "gym_vec_fraction_of_devlearn": gym / ours,
+    }
+
+
 def bench_training(
     behavior: str, steps: int, extra: list[str], progress: Callable[[str], None]
 ) -> float | None:

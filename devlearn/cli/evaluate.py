@@ -123,9 +123,10 @@ def human_summary(
     protocol = summary.get("protocol") or {}
     who = summary.get("checkpoint") or f"{summary.get('policy')} actions (baseline)"
     trained = summary.get("checkpoint_env_steps")
+    learner = f" by {summary['learner']}" if summary.get("learner") else ""  # a scripted policy
     lines = [
         f"{summary.get('behavior')}: {who}"
-        + (f" ({trained:,} training steps)" if summary.get("checkpoint") else ""),
+        + (f" ({trained:,} training steps{learner})" if summary.get("checkpoint") else ""),
         f"  {protocol.get('episodes', summary.get('episodes'))} episodes from "
         f"{summary.get('start')} starts, eval seed {protocol.get('seed')}, "
         f"{protocol.get('action', '')} action",

@@ -101,6 +101,13 @@ class BehaviorEnv:
         self.step_dt = float(self.infant.control_timestep)
         self.episode_step = 0
         self._sums = {term.name: 0.0 for term in self.terms}
+        self.decision_rewards = [0.0] * len(self.terms)
+        """Each term's weighted reward in the last decision (:func:`step_batch`), term order:
+        summed over its physics steps as the decision's reward is (what
+        :mod:`devlearn.gym` reports per step)."""
+        self.final_observation: dict[str, np.ndarray] | None = None
+        """A copy of the last observation of the latest episode that ended (the env has reset
+        since, so :meth:`step` returned the next episode's first); None before any ended."""
         self.action_repeat = int(action_repeat)
         if self.action_repeat < 1 or self.episode_steps % self.action_repeat:
             raise ValueError(
@@ -149,14 +156,18 @@ class BehaviorEnv:
         """Second half of a step: sum the weighted term values (T,), each paid ``steps`` times
         (a decision whose facts ran once), record, maybe reset."""
         reward = 0.0
-        for term, value in zip(self.terms, weighted.tolist()):
+        decision = self.decision_rewards
+        for k, (term, value) in enumerate(zip(self.terms, weighted.tolist())):
             value *= steps
             self._sums[term.name] += value
+            decision[k] += value
             reward += value
         self.evaluator.record(ctx)
         self.episode_step += 1
         if not ctx.last_step:
             return ctx.observations, reward, False, False, None
+        # copied: a batched behaviour's observations are views of arrays it may reuse
+        self.final_observation = {k: np.array(v) for k, v in ctx.observations.items()}
         info = {f"reward/{name}": total for name, total in self._sums.items()}
         info.update({f"metrics/{k}": float(v) for k, v in self.evaluator.end_episode().items()})
         # Evaluators that do not subclass Evaluator keep no record.
@@ -288,6 +299,8 @@ def step_batch(
     Returns:
         One ``(obs, reward, done, time_out, episode_info)`` per env, as :meth:`BehaviorEnv.step`.
     """
+    for env in envs:
+        env.decision_rewards = [0.0] * len(env.terms)
     repeat = envs[0].action_repeat
     if repeat == 1:
         return step_physics(envs, actions, obs_out)

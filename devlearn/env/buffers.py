@@ -12,9 +12,11 @@ if TYPE_CHECKING:
 
 
 def env_spec(env: BehaviorEnv, obs: dict[str, np.ndarray]) -> dict[str, Any]:
-    """Describe an env's batch layout: observation shapes/dtypes, action size, episode length."""
+    """Describe an env's batch layout: observation shapes/dtypes, reward-term names, action
+    size, episode length."""
     return {
         "obs": {k: (tuple(np.shape(v)), _buffer_dtype(v)) for k, v in obs.items()},
+        "terms": [term.name for term in env.terms],
         "action_dim": env.action_dim,
         "episode_steps": env.episode_steps,
         "step_dt": env.step_dt,
@@ -28,7 +30,9 @@ def _buffer_dtype(value: np.ndarray) -> str:
 
 class EnvBuffers:
     """The batch's arrays: ``obs/<name>`` (N, *shape), ``actions`` (N, A) float32,
-    ``rewards`` (N,) float32, ``dones`` and ``time_outs`` (N,) bool.
+    ``rewards`` (N,) float32, ``dones`` and ``time_outs`` (N,) bool, ``term_rewards`` (N, T)
+    float64 (each reward term's share of the last decision) and ``final/<name>`` (N, *shape)
+    (the last observation of an env's episode, in the rows of envs whose episode just ended).
 
     With ``shared=True`` every array lives in a ``multiprocessing.shared_memory`` block that
     worker processes attach to by name, so steps move no array through pipes.
@@ -40,6 +44,9 @@ class EnvBuffers:
         layout["rewards"] = ((num_envs,), "float32")
         layout["dones"] = ((num_envs,), "bool")
         layout["time_outs"] = ((num_envs,), "bool")
+        layout["term_rewards"] = ((num_envs, len(spec["terms"])), "float64")
+        for k, (shape, dt) in spec["obs"].items():
+            layout[f"final/{k}"] = ((num_envs, *shape), dt)
         self.layout = layout
         self.blocks: list[shared_memory.SharedMemory] = []
         self.arrays: dict[str, np.ndarray] = {}
@@ -77,7 +84,10 @@ def attach(handle: dict[str, Any]) -> tuple[dict[str, np.ndarray], list]:
     return arrays, blocks
 
 
-def write_obs(arrays: dict[str, np.ndarray], index: int, obs: dict[str, np.ndarray]) -> None:
-    """Copy one env's observations into row ``index`` of the batch arrays."""
+def write_obs(
+    arrays: dict[str, np.ndarray], index: int, obs: dict[str, np.ndarray], prefix: str = "obs/"
+) -> None:
+    """Copy one env's observations into row ``index`` of the batch arrays (``prefix``
+    ``final/``: of its episode's last observations)."""
     for key, value in obs.items():
-        arrays[f"obs/{key}"][index] = value
+        arrays[f"{prefix}{key}"][index] = value

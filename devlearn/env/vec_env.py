@@ -91,6 +91,8 @@ class DevVecEnv(VecEnv):
         self.max_episode_length = int(spec["episode_steps"])
         self.step_dt = float(spec["step_dt"])
         self.observation_shapes = {k: shape for k, (shape, _) in spec["obs"].items()}
+        self.term_names: list[str] = list(spec["terms"])
+        """The behaviour's reward terms, in the order of ``arrays["term_rewards"]``'s columns."""
         self.device = device
         self.episode_length_buf = torch.zeros(num_envs, dtype=torch.long, device=device)
         self.cfg: Any = {"behavior": behavior.name, "num_envs": num_envs, "seed": seed}
@@ -120,12 +122,8 @@ class DevVecEnv(VecEnv):
             the episodes that ended this step (empty if none) and ``extras["episode_infos"]``
             the list of those episodes' summaries.
         """
+        infos = self.step_arrays(actions.detach().to("cpu", torch.float32).numpy())
         arrays = self._buffers.arrays
-        arrays["actions"][:] = actions.detach().to("cpu", torch.float32).numpy()
-        if self._pool is None:
-            infos: EpisodeInfos = step_envs(self._envs, 0, arrays)
-        else:
-            infos = [item for reply in self._pool.call("step") for item in reply]
         rewards = torch.from_numpy(arrays["rewards"].copy()).to(self.device)
         dones = torch.from_numpy(arrays["dones"].copy()).to(self.device)
         time_outs = torch.from_numpy(arrays["time_outs"].copy()).to(self.device)
@@ -135,6 +133,25 @@ class DevVecEnv(VecEnv):
         extras = {"time_outs": time_outs, "log": mean_episode_info(episodes)}
         extras["episode_infos"] = episodes
         return self.get_observations(), rewards, dones.to(torch.long), extras
+
+    @property
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The batch's arrays (:class:`~devlearn.env.buffers.EnvBuffers`: ``obs/<name>``,
+        ``rewards``, ``dones``, ``time_outs``, ``term_rewards``, ``final/<name>``...), which
+        every step overwrites: copy what you keep."""
+        return self._buffers.arrays
+
+    def step_arrays(self, actions: np.ndarray) -> EpisodeInfos:
+        """:meth:`step` without torch: step every env with ``actions`` (num_envs,
+        num_actions); the results are in :attr:`arrays` until the next step.
+
+        Returns:
+            ``(env index, episode_info)`` of every episode that ended this step.
+        """
+        self._buffers.arrays["actions"][:] = actions
+        if self._pool is None:
+            return step_envs(self._envs, 0, self._buffers.arrays)
+        return [item for reply in self._pool.call("step") for item in reply]
 
     def set_stage(self, options: dict[str, Any]) -> None:
         """Send a curriculum stage's options to every env."""

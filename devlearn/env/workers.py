@@ -48,19 +48,26 @@ def step_envs(envs: list[BehaviorEnv], offset: int, arrays: dict[str, np.ndarray
     """Step envs ``offset..offset+len(envs)`` with their rows of ``arrays["actions"]``.
 
     The envs are stepped as one batch (:func:`~devlearn.env.behavior_env.step_batch`), so
-    batched reward terms run once for all of them.
+    batched reward terms run once for all of them. ``term_rewards`` and ``final/<name>``
+    (:class:`~devlearn.env.buffers.EnvBuffers`) are written where ``arrays`` has them.
     """
     infos = []
     rows = slice(offset, offset + len(envs))
     obs_out = {key[4:]: a[rows] for key, a in arrays.items() if key.startswith("obs/")}
     results = step_batch(envs, arrays["actions"][rows], obs_out)
-    for i, (_, reward, done, time_out, info) in enumerate(results):
+    terms = arrays.get("term_rewards")
+    finals = any(key.startswith("final/") for key in arrays)
+    for i, (env, (_, reward, done, time_out, info)) in enumerate(zip(envs, results)):
         j = offset + i
         arrays["rewards"][j] = reward
         arrays["dones"][j] = done
         arrays["time_outs"][j] = time_out
+        if terms is not None:
+            terms[j] = env.decision_rewards
         if info is not None:
             infos.append((j, info))
+            if finals and env.final_observation is not None:
+                write_obs(arrays, j, env.final_observation, prefix="final/")
     return infos
 
 

@@ -18,7 +18,13 @@ from devlearn.api.behavior import evaluation_stage
 from devlearn.api.errors import UsageError
 from devlearn.config.run_config import to_dict
 from devlearn.env.behavior_env import BehaviorEnv
-from devlearn.training.checkpoint import LATEST, Checkpoint, observation_batch
+from devlearn.evaluation.scripted_policy import ScriptedPolicy
+from devlearn.training.checkpoint import (
+    LATEST,
+    Checkpoint,
+    is_scripted_policy,
+    observation_batch,
+)
 from devlearn.training.resolve import RunRequest, resolve_config
 
 if TYPE_CHECKING:
@@ -197,8 +203,9 @@ def evaluate(
 
     Args:
         behavior_name: The behaviour the checkpoint must belong to.
-        checkpoint: Path of a devlearn checkpoint or policy file, or a run folder (its
-            ``checkpoint_latest.pt`` or ``policy.pt``); None for a baseline.
+        checkpoint: Path of a devlearn checkpoint or policy file, a scripted policy file
+            (another learner's, :mod:`~devlearn.evaluation.scripted_policy`), or a run folder
+            (its ``checkpoint_latest.pt`` or ``policy.pt``); None for a baseline.
         episodes: Number of full episodes.
         registry: Plugin registry.
         video: Write an MP4 of the first episode here (needs imageio-ffmpeg).
@@ -222,7 +229,8 @@ def evaluate(
         ``checkpoint_env_steps`` (x axis of ``devlearn curve``), ``training_seed``, ``config``
         (the checkpoint's, for ``devlearn report``'s grouping), ``start`` (the start episodes
         took: babybench, rest or random) and ``protocol`` (episodes, seed, start, settle
-        steps, criteria, training steps, code commit). When files were written,
+        steps, criteria, training steps, code commit); for a scripted policy ``learner``
+        (who trained it). When files were written,
         ``written`` lists them (not part of eval.json).
     Raises:
         UsageError: Missing, corrupt or foreign checkpoint; bad policy; unwritable out_dir.
@@ -243,9 +251,18 @@ def evaluate(
     if overrides and checkpoint is not None:
         raise UsageError("--set applies to baselines only: a checkpoint evaluates with its config")
     out = prepare_out_dir(out_dir) if out_dir is not None else None
-    opened = None
+    opened: Checkpoint | ScriptedPolicy | None = None
     if checkpoint is not None:
-        opened = Checkpoint.open(resolve_checkpoint(checkpoint), registry, behavior_name)
+        path = resolve_checkpoint(checkpoint)
+        if is_scripted_policy(path):  # another learner's (devlearn.gym.save_policy)
+            if action != "mean":
+                raise UsageError(
+                    f"--action {action}: a scripted policy ({path}) gives one deterministic "
+                    "action; sampling needs a devlearn checkpoint"
+                )
+            opened = ScriptedPolicy.open(path, registry, behavior_name)
+        else:
+            opened = Checkpoint.open(path, registry, behavior_name)
         checkpoint, state, cfg = opened.path, opened.state, opened.config
         behavior = opened.behavior()
     else:
@@ -278,8 +295,12 @@ def evaluate(
         env.set_stage(stage)
         started = "random" if stage.get("random_pose") else getattr(env.infant, "start", "rest")
         obs = env.reset()
-        actor = opened.actor(obs, env.action_dim) if opened is not None else None
-        act = _policy(policy, actor, env.action_dim, seed, repeat, sample=action == "sample")
+        act: Callable[[dict[str, np.ndarray]], np.ndarray]
+        if isinstance(opened, ScriptedPolicy):
+            act = opened.act
+        else:
+            actor = opened.actor(obs, env.action_dim) if opened is not None else None
+            act = _policy(policy, actor, env.action_dim, seed, repeat, sample=action == "sample")
         if video is not None:
             import imageio.v2 as imageio
 
@@ -327,6 +348,8 @@ def evaluate(
                 "code": code_version(),
             },
         )
+        if isinstance(opened, ScriptedPolicy):
+            summary["learner"] = opened.learner  # devlearn report tells learners apart
         if out is not None:
             written = []
             try:

@@ -18,6 +18,7 @@ from devlearn.api.errors import UsageError
 from devlearn.config.checks import unwritable
 
 if TYPE_CHECKING:
+    from devlearn.evaluation.scripted_policy import ObservationOrder
     from devlearn.plugins import PluginRegistry
     from devlearn.training.checkpoint import Checkpoint
     from devlearn.training.networks import MultiSenseModel
@@ -97,7 +98,7 @@ def actor_on_one_observation(opened: Checkpoint) -> tuple[Any, dict[str, np.ndar
 
 
 def example_inputs(
-    policy: DeterministicPolicy, obs: dict[str, Any], batch: int = 4
+    policy: DeterministicPolicy | ObservationOrder, obs: dict[str, Any], batch: int = 4
 ) -> tuple[torch.Tensor, ...]:
     """``obs`` repeated into a batch, in the policy's input order: tensors (batch, *shape).
 
@@ -110,9 +111,16 @@ def example_inputs(
     )
 
 
-def export_policy(policy: DeterministicPolicy, obs: dict[str, Any], fmt: str, out: Path) -> Path:
+def export_policy(
+    policy: DeterministicPolicy | ObservationOrder,
+    obs: dict[str, Any],
+    fmt: str,
+    out: Path,
+    extra_files: dict[str, str] | None = None,
+) -> Path:
     """Write ``policy`` to ``out`` as ONNX (inputs named after the observations, batch axis
-    dynamic, output ``action``) or TorchScript (``torch.jit.load(out)(*observations)``).
+    dynamic, output ``action``) or TorchScript (``torch.jit.load(out)(*observations)``;
+    ``extra_files`` stored beside it, name -> text, as a scripted policy's metadata).
 
     Raises:
         UsageError: Unknown format, missing ONNX packages, or an unwritable ``out``.
@@ -125,9 +133,10 @@ def export_policy(policy: DeterministicPolicy, obs: dict[str, Any], fmt: str, ou
     # written beside, then renamed: a failed write (a full disk) leaves no partial file
     partial = out.with_name(f".{out.name}.partial-{os.getpid()}")
     try:
-        with torch.no_grad(), _known_exporter_noise_silenced():
+        with torch.no_grad(), known_exporter_noise_silenced():
             if fmt == "torchscript":
-                torch.jit.trace(policy, inputs, check_trace=False).save(str(partial))
+                traced = torch.jit.trace(policy, inputs, check_trace=False)
+                traced.save(str(partial), _extra_files=extra_files or {})
             else:
                 _export_onnx(policy, inputs, partial)
         os.replace(partial, out)
@@ -160,6 +169,9 @@ def check_out_file(out: Path) -> None:
 HARMLESS_WARNINGS = (
     r".*isinstance\(treespec, LeafSpec\)` is deprecated",  # torch's own pytree use
     r"# The axis name: .* will not be used",  # one dynamic batch axis named for all inputs
+    # torch 2.13 deprecates TorchScript (still written and read as before): the format of
+    # devlearn export --format torchscript and of scripted policies, until they move
+    r"`torch\.jit\.(trace|trace_method|load)` is deprecated",
 )
 """Messages torch's exporters print on every successful export that say nothing about it."""
 HARMLESS_LOGGERS = ("torch.onnx._internal.exporter._registration",)
@@ -168,7 +180,7 @@ hidden during an export; errors still show."""
 
 
 @contextlib.contextmanager
-def _known_exporter_noise_silenced() -> Iterator[None]:
+def known_exporter_noise_silenced() -> Iterator[None]:
     """Within the block, the known harmless exporter warnings are hidden; any other shows."""
     loggers = [logging.getLogger(name) for name in HARMLESS_LOGGERS]
     levels = [logger.level for logger in loggers]
@@ -184,7 +196,9 @@ def _known_exporter_noise_silenced() -> Iterator[None]:
                 logger.setLevel(level)
 
 
-def _export_onnx(policy: DeterministicPolicy, inputs: tuple[torch.Tensor, ...], out: Path) -> None:
+def _export_onnx(
+    policy: DeterministicPolicy | ObservationOrder, inputs: tuple[torch.Tensor, ...], out: Path
+) -> None:
     try:
         import onnx  # noqa: F401
         import onnxscript  # noqa: F401

@@ -58,6 +58,11 @@ NOT_METRIC = frozenset(
     }
 )
 """Eval-JSON keys that are not metrics (settings, references, bookkeeping)."""
+LEARNER = "learner"
+"""The variant key of who trained a policy: an eval JSON's ``learner`` (a scripted policy's,
+e.g. ``sb3_ppo``), :data:`DEVLEARN_LEARNER` for a devlearn checkpoint."""
+DEVLEARN_LEARNER = "devlearn_ppo"
+"""The learner of a devlearn checkpoint (its eval JSON names none)."""
 SINGLE_VARIANT = "trained"
 """Column name of the checkpoints when their configs differ only in seed (one variant)."""
 
@@ -175,7 +180,8 @@ def collect(paths: Sequence[str | Path]) -> tuple[list[tuple[Path, dict]], list[
 def group(
     evaluations: list[tuple[Path, dict]], as_loaded: ConfigLoader | None = None
 ) -> tuple[dict[str, list], list[str]]:
-    """Group checkpoint evaluations by variant (differing config keys), baselines by policy.
+    """Group checkpoint evaluations by variant (differing config keys, and ``learner``: who
+    trained the policy), baselines by policy.
 
     A run evaluated at several checkpoints counts once, with its latest checkpoint. With
     ``as_loaded``, configs are compared as runs load them (a config saved with
@@ -193,6 +199,8 @@ def group(
     configs = [
         {k: json.dumps(v) for k, v in _flatten(c).items() if k not in NOT_VARIANT} for c in saved
     ]
+    for config, (_, data) in zip(configs, runs):  # another learner, same config: a variant
+        config[LEARNER] = json.dumps(data.get(LEARNER, DEVLEARN_LEARNER))
     keys = sorted({k for c in configs for k in c if len({x.get(k) for x in configs}) > 1})
     columns: dict[str, dict] = {}
     for (path, data), config in zip(runs, configs):

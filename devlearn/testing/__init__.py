@@ -10,6 +10,8 @@ Use :func:`check_behavior` in a plugin's tests::
 It raises :class:`ConformanceError` naming the first broken part of the contract (a term, an
 observation, an evaluator metric, an attribute that does not pickle).
 
+:func:`check_gymnasium` checks the behaviour as a Gymnasium env (Gymnasium's own ``check_env``
+and the vector env, :mod:`devlearn.gym`): ``check_gymnasium(MyBehavior)``.
 :func:`check_learned_reward` for a learned reward (``check_learned_reward(MyTerm)``),
 and :func:`registry_for` to build a plugin registry from classes, without installing anything.
 :func:`place_hand_on_body` poses an infant with a hand on its body (a scripted contact), and
@@ -22,7 +24,8 @@ faults on demand) through :func:`fake_infant_factory`, the tiny behaviour that l
 (:class:`TinyBehavior`, :class:`TinyConfig`), and :class:`HookTracker`, which reports the order
 of the episode hooks devlearn calls.
 
-Modules: :mod:`~devlearn.testing.behavior` (the behaviour check), :mod:`~devlearn.testing.learned`
+Modules: :mod:`~devlearn.testing.behavior` (the behaviour check), :mod:`~devlearn.testing.gym_env`
+(the Gymnasium check), :mod:`~devlearn.testing.learned`
 (the learned-reward check), :mod:`~devlearn.testing.values` (value checks and
 :class:`ConformanceError`), :mod:`~devlearn.testing.fixtures`,
 :mod:`~devlearn.testing.fake_infant`, :mod:`~devlearn.testing.hook_tracker`.
@@ -41,6 +44,7 @@ from devlearn.testing.behavior import (
 )
 from devlearn.testing.fake_infant import FakeInfant, TinyBehavior, TinyConfig, fake_infant_factory
 from devlearn.testing.fixtures import crib_infant, registry_for, sitting_infant
+from devlearn.testing.gym_env import check_gymnasium
 from devlearn.testing.hook_tracker import HookTracker
 from devlearn.testing.learned import check_learned_reward, random_transitions
 from devlearn.testing.values import ConformanceError
@@ -55,6 +59,7 @@ __all__ = [
     "check_behavior",
     "check_behavior_class",
     "check_curriculum",
+    "check_gymnasium",
     "check_learned_reward",
     "check_network",
     "check_reward_terms",

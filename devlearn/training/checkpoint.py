@@ -11,6 +11,7 @@ import pickle
 import re
 import shutil
 import stat
+import zipfile
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -264,6 +265,21 @@ def not_a_file(path: Path) -> str:
     return f"is {kind}, not a checkpoint file"
 
 
+SCRIPTED_METADATA = "devlearn_policy.json"
+"""The TorchScript extra file that makes an archive a scripted policy (another learner's policy,
+:mod:`devlearn.evaluation.scripted_policy`), which only ``devlearn eval`` reads."""
+
+
+def is_scripted_policy(path: str | Path) -> bool:
+    """Whether ``path`` is a scripted policy file (a TorchScript archive holding
+    :data:`SCRIPTED_METADATA`; a devlearn checkpoint, also a zip archive, holds none)."""
+    path = Path(path)
+    if not path.is_file() or not zipfile.is_zipfile(path):
+        return False
+    with zipfile.ZipFile(path) as archive:
+        return any(name.endswith(f"/extra/{SCRIPTED_METADATA}") for name in archive.namelist())
+
+
 def load_checkpoint(path: str | Path, required: tuple[str, ...] = POLICY_KEYS) -> dict[str, Any]:
     """Load a devlearn checkpoint (on the CPU) as data: ``torch.load(weights_only=True)`` with
     :func:`allowed_globals`; a file naming any other class or function is refused unrun.
@@ -273,11 +289,17 @@ def load_checkpoint(path: str | Path, required: tuple[str, ...] = POLICY_KEYS) -
         required: Keys the checkpoint must hold (:data:`POLICY_KEYS`, :data:`RESUME_KEYS`).
     Raises:
         UsageError: The file is missing, truncated or unreadable, needs a type outside the
-            allow-list (named), is not a devlearn checkpoint or lacks a required key.
+            allow-list (named), is not a devlearn checkpoint (a scripted policy is named as
+            such) or lacks a required key.
     """
     path = Path(path)
     if not path.is_file():
         raise UsageError(f"checkpoint {path} {not_a_file(path)}")
+    if is_scripted_policy(path):
+        raise UsageError(
+            f"{path} is a scripted policy (another learner's, docs/gymnasium.md): devlearn eval "
+            "evaluates it; it holds no devlearn networks to slim, export or continue"
+        )
     try:
         # A scan of the pickle's opcodes (nothing executed) names every foreign type at once.
         unsafe = set(torch.serialization.get_unsafe_globals_in_checkpoint(path))
@@ -549,11 +571,9 @@ class Checkpoint:
         """Its behaviour under its config, with the policy artifacts the checkpoint carries
         loaded (or found by name next to it, ``Behavior.load_policy_artifacts``); built once."""
         if self._behavior is None:
-            behavior = self.registry.create(self.behavior_name, self.config.behavior)
-            behavior.load_policy_artifacts(
-                dict(self.state.get("artifacts") or {}), self.path.parent
+            self._behavior = behavior_with_artifacts(
+                self.registry, self.config, self.state, self.path
             )
-            self._behavior = behavior
         return self._behavior
 
     def actor(self, obs: dict[str, np.ndarray], action_dim: int) -> MultiSenseModel:
@@ -564,6 +584,18 @@ class Checkpoint:
             UsageError: The saved weights do not fit the network its config builds.
         """
         return load_actor(self.config, self.state, self.behavior(), obs, action_dim)
+
+
+def behavior_with_artifacts(
+    registry: PluginRegistry, config: RunConfig, state: dict[str, Any], path: Path
+) -> Behavior:
+    """The behaviour a policy file at ``path`` names (``state["behavior"]``: a checkpoint, a
+    policy file, a scripted policy) under ``config``, with the policy artifacts it carries
+    (``state["artifacts"]``) loaded, or found by name next to it
+    (``Behavior.load_policy_artifacts``)."""
+    behavior = registry.create(str(state["behavior"]), config.behavior)
+    behavior.load_policy_artifacts(dict(state.get("artifacts") or {}), path.parent)
+    return behavior
 
 
 def build_actor(

@@ -92,3 +92,18 @@ def test_bench_reports_cli_start_up():
     assert cli_startup_s(["--help"], repeats=1) > 0
     table = format_table({"startup_help_s": 0.84})
     assert "| start-up: devlearn --help | 0.84 s | - | < 1.5 |" in table
+
+
+def test_the_gymnasium_vector_env_is_measured_beside_devvecenv():
+    from devlearn.bench.speed import bench_gym_vec_env
+
+    figures = bench_gym_vec_env("self_touch", num_envs=2, workers=0, steps=3)
+    assert set(figures) == {
+        "gym_vec_steps_per_s",
+        "gym_vec_devlearn_steps_per_s",
+        "gym_vec_fraction_of_devlearn",
+    }
+    ratio = figures["gym_vec_steps_per_s"] / figures["gym_vec_devlearn_steps_per_s"]
+    assert figures["gym_vec_fraction_of_devlearn"] == ratio > 0
+    table = format_table({**figures, "gym_vec_fraction_of_devlearn": 0.93})
+    assert "| Gymnasium vector env / DevVecEnv | 93% | - | >= 85% |" in table

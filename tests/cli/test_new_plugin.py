@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib
 import json
 import os
 import subprocess
@@ -35,6 +36,20 @@ def test_writes_a_distribution_with_entry_point_behavior_and_tests(tmp_path):
     behavior = (tmp_path / "p" / "src/devlearn_my_reach/behavior.py").read_text()
     assert "class MyReach(devlearn.Behavior)" in behavior and "$" not in behavior
     compile(behavior, "behavior.py", "exec")
+
+
+def test_the_generated_plugin_passes_the_gymnasium_check(tmp_path, monkeypatch):
+    """A third-party behaviour made by `devlearn new` is a Gymnasium env as the built-in ones."""
+    from devlearn.testing import check_gymnasium
+
+    write_plugin("my_reach", tmp_path / "p")
+    monkeypatch.syspath_prepend(str(tmp_path / "p" / "src"))
+    module = importlib.import_module("devlearn_my_reach.behavior")
+    try:
+        check_gymnasium(module.MyReach)
+    finally:
+        for name in [n for n in sys.modules if n.startswith("devlearn_my_reach")]:
+            del sys.modules[name]
 
 
 @pytest.mark.parametrize("name", ["My-Reach", "1st", "class", "self_touch"])

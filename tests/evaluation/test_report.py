@@ -88,6 +88,18 @@ def test_variants_are_the_config_keys_that_differ(tmp_path):
     assert "single seed" in (tmp_path / "report" / "report.md").read_text()
 
 
+def test_policies_of_another_learner_are_a_variant_of_their_own(tmp_path):
+    paths = [fake_eval(tmp_path / f"ours{s}", 0.5, s) for s in (1, 2)]
+    for s in (1, 2):  # the same config, trained by SB3 (a scripted policy's eval JSON)
+        folder = fake_eval(tmp_path / f"sb3{s}", 0.2, s)
+        summary = json.loads((folder / "eval.json").read_text())
+        (folder / "eval.json").write_text(json.dumps({**summary, "learner": "sb3_ppo"}))
+        paths.append(folder)
+    result = write_report(paths, tmp_path / "report")
+    assert set(result["columns"]) == {"learner=devlearn_ppo", "learner=sb3_ppo"}
+    assert result["table"]["score"]["learner=sb3_ppo"]["mean"] == 0.2
+
+
 def test_bad_input(tmp_path, three_seeds, capsys):
     empty = tmp_path / "empty"
     empty.mkdir()

@@ -291,3 +291,24 @@ class BatchedNanProbe(Probe):
 def test_batched_term_nan_on_contact_names_the_term():
     with pytest.raises(ConformanceError, match=r"batched reward term 'batched_broken'.*hand placed"):
         check_behavior(BatchedNanProbe, **FAST)
+
+
+def test_the_gymnasium_check_passes_a_correct_behaviour_and_names_a_broken_one():
+    from devlearn.testing import TinyBehavior, check_gymnasium, fake_infant_factory
+
+    check_gymnasium(TinyBehavior, infant_factory=fake_infant_factory)
+
+    class Jittery(TinyBehavior):
+        """Observes noise that no seed governs: the same seed and action differ."""
+
+        name = "jittery"
+
+        def observe(self, infant, facts):
+            noise = np.random.default_rng().normal(size=3).astype(np.float32)
+            return {"proprioception": infant.proprioception() + noise}
+
+    with pytest.raises(ConformanceError, match="gymnasium check_env on devlearn-check/Jittery"):
+        check_gymnasium(Jittery, infant_factory=fake_infant_factory)
+    import gymnasium
+
+    assert "devlearn-check/Jittery-v0" not in gymnasium.registry  # the temporary id is gone

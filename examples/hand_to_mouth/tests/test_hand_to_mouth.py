@@ -12,7 +12,7 @@ from devlearn_hand_to_mouth import HandToMouth
 from devlearn_hand_to_mouth.behavior import ActionCost, MouthContact
 
 from devlearn import StepContext
-from devlearn.testing import check_behavior, registry_for
+from devlearn.testing import check_behavior, check_gymnasium, registry_for
 
 
 def _ctx(contact: bool, energy: float = 0.0) -> StepContext:
@@ -70,3 +70,8 @@ def test_tiny_training_run(tmp_path):
     assert (out / "checkpoint_latest.pt").exists()
     lines = (out / "metrics.jsonl").read_text().splitlines()
     assert json.loads(lines[-1])["step"] >= 512
+
+
+def test_gymnasium_conformance():
+    # devlearn/HandToMouth-v0 passes Gymnasium's check_env, and its vector env steps
+    check_gymnasium(HandToMouth)

@@ -10,6 +10,7 @@ from devlearn.testing import (
     check_behavior,
     check_behavior_class,
     check_curriculum,
+    check_gymnasium,
     check_reward_terms,
 )
 
@@ -60,3 +61,12 @@ def test_conformance_with_the_real_infant():
     # shapes and contracts; test_calibration covers the calibrated detector on real renders.
     shapes = check_behavior(HandRegard, steps=10)
     assert shapes["hands_seen"] == (16,) and shapes["proprioception"] == (102,)
+
+
+@pytest.mark.skipif(not HAS_INFANT, reason="devlearn.infant has not landed")
+@pytest.mark.parametrize("policy", ["proprio", "cnn"])
+def test_gymnasium_conformance(detector_file, policy):
+    # a calibrated detector given, as a run shares one (no babbling); cnn: the eye images
+    # as uint8 observation groups
+    settings = {"behavior.detector_file": str(detector_file), "behavior.policy": policy}
+    check_gymnasium(HandRegard, settings, vector_steps=1)

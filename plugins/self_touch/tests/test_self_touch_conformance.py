@@ -13,6 +13,7 @@ from devlearn.testing import (
     check_behavior,
     check_behavior_class,
     check_curriculum,
+    check_gymnasium,
     check_reward_terms,
     registry_for,
 )
@@ -61,3 +62,10 @@ def test_tiny_training_run(tmp_path):
     assert 0.0 <= summary["score"] <= 1.0
     assert summary["score"] == (summary["coverage_left"] + summary["coverage_right"]) / 68
     assert (evaluation / "self_touch_body_map.png").stat().st_size > 0
+
+
+def test_gymnasium_conformance():
+    # Gymnasium's check_env on devlearn/SelfTouch-v0 (eyes and view rendered), then its
+    # vector env; the fixed_only variant too (another curriculum, the same contract)
+    check_gymnasium(SelfTouch)
+    check_gymnasium(SelfTouch, {"behavior.curriculum": "fixed_only"}, vector_steps=1)

@@ -1,0 +1,133 @@
+"""devlearn.gym's single env: the ids, one config path, a run's rewards and episodes, the
+curriculum's clock, seeding, rendering (on the fake infant; the real ones: the plugins' tests).
+
+This folder is not named ``gym``: with ``tests/`` on the path it would shadow the old ``gym``
+package that Stable-Baselines3 probes for."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import devlearn.gym
+from devlearn.api.errors import UsageError
+from devlearn.config.run_config import to_dict
+from devlearn.env import BehaviorEnv
+from devlearn.gym.env import DevlearnEnv
+from devlearn.testing import registry_for
+from devlearn.testing.fake_infant import TinyBehavior, fake_infant_factory
+from devlearn.training.resolve import RunRequest, resolve_config
+
+REGISTRY = registry_for(TinyBehavior)
+
+
+def make(overrides=None, **kwargs) -> DevlearnEnv:
+    return DevlearnEnv(
+        "tiny", overrides, registry=REGISTRY, infant_factory=fake_infant_factory, **kwargs
+    )
+
+
+def test_every_installed_behaviour_has_an_id():
+    assert devlearn.gym.env_id("hand_to_mouth") == "devlearn/HandToMouth-v0"
+    assert devlearn.gym.IDS["devlearn/SelfTouch-v0"] == "self_touch"
+    assert devlearn.gym.IDS["devlearn/HandRegard-v0"] == "hand_regard"
+    assert devlearn.gym.register_behaviors(REGISTRY) == {"devlearn/Tiny-v0": "tiny"}
+    import gymnasium
+
+    spec = gymnasium.spec("devlearn/Tiny-v0")
+    assert spec.kwargs == {"behavior": "tiny"}
+    assert spec.vector_entry_point == devlearn.gym.VECTOR_ENTRY_POINT
+    del gymnasium.registry["devlearn/Tiny-v0"]
+
+
+def test_the_config_is_devlearn_runs():
+    env = make({"seed": 3, "env.action_repeat": 2, "behavior.target": 0.25}, preset="")
+    try:
+        request = RunRequest("tiny", ["seed=3", "env.action_repeat=2", "behavior.target=0.25"])
+        assert to_dict(env.setup.config) == to_dict(resolve_config(request, REGISTRY))
+        assert env.env.action_repeat == 2 and env.setup.behavior.config.target == 0.25
+    finally:
+        env.close()
+    with pytest.raises(UsageError, match="env.action_repeat must be at least 1"):
+        make({"env.action_repeat": 0})
+    with pytest.raises(UsageError, match="unknown config key 'behavior.targt'.*behavior.target"):
+        make(["behavior.targt=1"])
+    with pytest.raises(UsageError, match="curiosity=rnd: learned rewards"):
+        make(["curiosity=rnd"])
+
+
+def test_rewards_observations_and_episodes_are_a_runs_env():
+    env = make({"seed": 5, "env.action_repeat": 2})
+    cfg = env.setup.config
+    same = BehaviorEnv(TinyBehavior(cfg.behavior), 5, fake_infant_factory, action_repeat=2)
+    rng = np.random.default_rng(0)
+    try:
+        obs, info = env.reset()
+        assert info == {"stage": "fixed"}
+        assert np.array_equal(obs["proprioception"], same.reset()["proprioception"])
+        for t in range(7):  # 10 physics steps an episode: 5 decisions
+            action = rng.uniform(-1, 1, 3).astype(np.float32)
+            obs, reward, terminated, truncated, info = env.step(action)
+            expected = same.step(action)
+            assert reward == expected[1] and not terminated and truncated == (t == 4)
+            terms = [info["reward/reach"], info["reward/counter"]]
+            assert terms == pytest.approx([expected[1], 0.0]) and info["stage"] == "fixed"
+            if t != 4:
+                assert np.array_equal(obs["proprioception"], expected[0]["proprioception"])
+                assert not any(key.startswith("episode/") for key in info)
+                continue
+            # the episode's last observation, then reset() gives the next one's first
+            assert np.array_equal(obs["proprioception"], same.final_observation["proprioception"])
+            assert not np.array_equal(obs["proprioception"], expected[0]["proprioception"])
+            summary = expected[4]
+            assert info["episode/reward/reach"] == summary["reward/reach"]
+            assert info["episode/metrics/close"] == summary["metrics/close"]
+            obs, _ = env.reset()
+            assert np.array_equal(obs["proprioception"], expected[0]["proprioception"])
+    finally:
+        env.close()
+        same.close()
+
+
+def test_the_curriculum_advances_at_a_runs_iteration_boundaries():
+    # stage 1 after 6 physics steps; a run looks at the count every 4 decisions (8 steps)
+    settings = {"behavior.stage_steps": 6, "ppo.num_steps_per_env": 4, "env.action_repeat": 2}
+    env = make(settings)
+    try:
+        env.reset()
+        stages = [env.step(np.zeros(3))[4]["stage"] for _ in range(6)]
+        assert stages == ["fixed"] * 4 + ["random"] * 2
+        assert env.clock.physics_steps == 12 and env.env.stage == {"random_pose": True}
+    finally:
+        env.close()
+
+
+def test_seeds_repeat_and_differ():
+    env = make({"behavior.stage_steps": 0})  # random poses from the start
+    try:
+        first, _ = env.reset(seed=11)
+        again, _ = env.reset(seed=11)
+        other, _ = env.reset(seed=12)
+        assert np.array_equal(first["proprioception"], again["proprioception"])
+        assert not np.array_equal(first["proprioception"], other["proprioception"])
+        seeded = make({"behavior.stage_steps": 0, "seed": 11})  # the config's seed
+        try:
+            assert np.array_equal(seeded.reset()[0]["proprioception"], first["proprioception"])
+        finally:
+            seeded.close()
+    finally:
+        env.close()
+
+
+def test_rgb_array_renders_the_eyes_and_the_view():
+    # (check_env: devlearn.testing.check_gymnasium, tests/testing/test_conformance.py)
+    env = make(render_mode="rgb_array")
+    try:
+        env.reset()
+        frame = env.render()
+        assert frame.shape == (256, 2 * 256 + 384, 3) and frame.dtype == np.uint8
+        assert "eyes" in env.env.infant.senses  # added for the picture, not observed
+        assert set(env.observation_space.spaces) == {"proprioception"}
+    finally:
+        env.close()
+    assert make().render() is None
