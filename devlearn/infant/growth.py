@@ -29,6 +29,7 @@ from dataclasses import dataclass, replace
 from functools import partial
 from typing import Any, ClassVar, cast
 
+from devlearn.ages import check_age
 from devlearn.infant.body_table import BODY_TABLE, BodySpec, GeomSpec, JointSpec, Vec3
 from devlearn.infant.growth_data import (
     WHO_HEAD_CM,
@@ -39,9 +40,6 @@ from devlearn.infant.growth_data import (
     who_age_of,
     who_median,
 )
-
-AGE_RANGE = (0.0, 24.0)
-"""Ages (months) the body can be built at: those of the WHO tables and MIMo v2's growth."""
 
 DEFAULT_BODY_NAME = "MIMo v1's 18-month-old"
 """What the default body (``infant.age_months`` unset) is: 77.8 cm and 10.96 kg, the WHO boys'
@@ -117,20 +115,6 @@ LENGTHS = frozenset(
     }
 )
 """Measures that the length calibration scales (every length but the head's)."""
-
-
-def check_age(age_months: float) -> float:
-    """Return ``age_months`` as a float if the body can be built at it.
-
-    Raises:
-        ValueError: It is outside :data:`AGE_RANGE` (or not a number).
-    """
-    lo, hi = AGE_RANGE
-    if not (isinstance(age_months, int | float) and lo <= age_months <= hi):
-        raise ValueError(
-            f"infant.age_months must be between {lo:g} and {hi:g} months, got {age_months!r}"
-        )
-    return float(age_months)
 
 
 def _measure(name: str, age: float) -> float:
@@ -369,7 +353,7 @@ def grown_body(age_months: float) -> GrownBody:
     curves' extrapolation.
 
     Raises:
-        ValueError: The age is outside :data:`AGE_RANGE`.
+        ValueError: The age is outside :data:`~devlearn.ages.AGE_RANGE`.
     """
     age = check_age(age_months)
     if age in _GROWN:

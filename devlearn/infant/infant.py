@@ -9,9 +9,10 @@ import mujoco
 import numpy as np
 from dm_control import mjcf
 
+from devlearn.ages import check_age
 from devlearn.infant import contacts, starts, vision
 from devlearn.infant.body_table import BODY_TABLE
-from devlearn.infant.growth import check_age, grown_body
+from devlearn.infant.growth import grown_body
 from devlearn.infant.regions import NUM_PARTS, NUM_REGIONS, RegionTable, region_table
 from devlearn.infant.scenes import (
     APPEARANCES,
@@ -172,6 +173,24 @@ class Infant:
                 starts.kick(self.model, self.data, rng, starts.KICK_STEPS)
         self._cache.clear()
         self.steps = 0
+
+    def continue_from(self, other: Infant) -> None:
+        """Take over ``other``'s physical state: joint angles, velocities, controls, time and
+        step count (``other`` is this scene's infant at another age: the same joints), so that
+        a body rebuilt at a new age carries on its episode where the old one was."""
+        if other.model.nq != self.model.nq or other.scene != self.scene:
+            raise ValueError(
+                f"cannot continue a {other.scene} infant ({other.model.nq} joint coordinates) "
+                f"as a {self.scene} one ({self.model.nq})"
+            )
+        self.data.qpos[:] = other.data.qpos
+        self.data.qvel[:] = other.data.qvel
+        self.data.ctrl[:] = other.data.ctrl
+        self.data.time = other.data.time
+        mujoco.mj_forward(self.model, self.data)
+        self.start = other.start
+        self.steps = other.steps
+        self._cache.clear()
 
     def _reset_to_rest(self) -> None:
         """The scene's initial state: its settled state if it has one, else the rest pose."""

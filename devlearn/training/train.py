@@ -14,6 +14,7 @@ import torch
 
 from devlearn.api.errors import UsageError
 from devlearn.config.checks import check_memory, check_out_dir, holds_run
+from devlearn.config.growth import start_age
 from devlearn.config.run_config import RunConfig, to_rsl_rl
 from devlearn.env import DevVecEnv
 from devlearn.training.checkpoint import (
@@ -244,6 +245,7 @@ def _build(
         infant_factory,
         rank,
         action_repeat=cfg.env.action_repeat,
+        age_months=start_age(cfg, int(checkpoint["env_steps"]) if checkpoint else 0),
     )
     try:
         env.cfg = cfg

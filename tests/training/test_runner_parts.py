@@ -39,11 +39,16 @@ class FakeAlg:
 
 
 class FakeEnv:
-    """What RunCheckpoints uses of DevVecEnv: state_dict, load_state_dict, sync_run_memory."""
+    """What RunCheckpoints uses of DevVecEnv: state_dict, load_state_dict, sync_run_memory,
+    the body's age."""
 
     def __init__(self) -> None:
         self.state = {"envs": [{"count": 1}, {"count": 2}]}
         self.synced = 0
+        self.age_months: float | None = None
+
+    def set_age(self, age_months: float | None) -> None:
+        self.age_months = age_months
 
     def state_dict(self) -> dict:
         return self.state
@@ -77,6 +82,7 @@ def checkpoints(tmp_path, alg=None, env=None) -> RunCheckpoints:
 def test_checkpoints_save_a_snapshot_and_restore_it(tmp_path):
     parts = checkpoints(tmp_path)
     parts.curriculum.update(96)  # the random stage
+    parts.env.age_months = 7.5  # a growing body's age at the boundary
     torch.manual_seed(5)
     good = parts.snapshot(iteration=3, env_steps=96)
     expected = torch.rand(3)  # what the restored generator draws next
@@ -92,6 +98,7 @@ def test_checkpoints_save_a_snapshot_and_restore_it(tmp_path):
     assert (state["iteration"], state["env_steps"], state["behavior"]) == (3, 96, "tiny")
     assert state["env"] == {"ranks": [{"envs": [{"count": 1}, {"count": 2}]}]}
     assert state["config"]["total_steps"] == 128
+    assert state["age_months"] == 7.5
 
     fresh = checkpoints(tmp_path, env=FakeEnv())
     fresh.env.state = {"envs": []}
@@ -100,6 +107,7 @@ def test_checkpoints_save_a_snapshot_and_restore_it(tmp_path):
     assert torch.equal(fresh.alg.weights, torch.arange(4.0))
     assert fresh.env.state == {"envs": [{"count": 1}, {"count": 2}]} and fresh.env.synced == 1
     assert fresh.curriculum.stage.name == "random"
+    assert fresh.env.age_months == 7.5  # a resumed run goes on at its body's age
     assert torch.equal(torch.rand(3), expected)
 
 
@@ -108,8 +116,10 @@ def test_a_branch_keeps_its_own_curriculum_and_a_fault_saves_the_last_boundary(t
     state = parts.checkpoint_state(parts.snapshot(1, 32))
     state["curriculum"] = {"index": 1}  # the source had switched...
     branch = checkpoints(tmp_path / "b")
+    state["age_months"] = 12.0
     branch.restore(state, curriculum=False)  # ...the branch's stage follows its steps
     assert branch.curriculum.stage.name == "fixed"
+    assert branch.env.age_months is None  # and its body is its own config's
     message = parts.save_after_fault(None)
     assert "no checkpoint could be written" in message
     message = parts.save_after_fault(parts.snapshot(2, 64))
