@@ -197,12 +197,9 @@ def _geom_extent_z(geom: GeomSpec) -> tuple[float, float]:
     return geom.pos[2] - r, geom.pos[2] + r
 
 
-def crown_heel_length(table: tuple[BodySpec, ...] = BODY_TABLE) -> float:
-    """Crown-heel length (m) of a body table: the top of the head to the lowest sole, standing
-    with every joint at 0 (legs straight), as a recumbent length is measured lying.
-
-    :func:`measure_body` measures the same in a compiled model.
-    """
+def standing_extent(table: tuple[BodySpec, ...] = BODY_TABLE) -> tuple[float, float]:
+    """The lowest sole and the crown (m) along the body's long axis, in the hip's frame,
+    standing with every joint at 0 (legs straight)."""
     top, bottom = -math.inf, math.inf
     for spec in table:
         if not spec.collides:
@@ -211,6 +208,14 @@ def crown_heel_length(table: tuple[BodySpec, ...] = BODY_TABLE) -> float:
         for geom in spec.geoms:
             lo, hi = _geom_extent_z(geom)
             top, bottom = max(top, z0 + hi), min(bottom, z0 + lo)
+    return bottom, top
+
+
+def crown_heel_length(table: tuple[BodySpec, ...] = BODY_TABLE) -> float:
+    """Crown-heel length (m) of a body table: the top of the head to the lowest sole, standing
+    with every joint at 0 (legs straight), as a recumbent length is measured lying
+    (:func:`standing_extent`)."""
+    bottom, top = standing_extent(table)
     return top - bottom
 
 

@@ -100,7 +100,7 @@ class Infant:
             g: np.array([i for i, x in enumerate(groups) if x == g], dtype=np.int64)
             for g in ACTUATOR_GROUPS
         }
-        self.skin = Skin(self.model, None if body is None else grown_layout(body.table))
+        self.skin = _shared_skin(self.model, scene, self.age_months)
         self.regions: RegionTable = region_table()
         self._contacts = contacts.ContactReader(self.model, self.skin, compiled=compiled)
         self.hand_of_body = np.full(self.model.nbody, -1, dtype=np.int64)
@@ -328,6 +328,21 @@ class Infant:
     def close(self) -> None:
         """Free renderers (GL contexts); rendering again opens new ones."""
         _free_gl(self._gl)
+
+
+_SKINS: dict[tuple[str, float | None], Skin] = {}
+
+
+def _shared_skin(model: mujoco.MjModel, scene: str, age_months: float | None) -> Skin:
+    """The skin of this scene's infant at this age, built once per process: a Skin is
+    read-only, so the envs of a worker share one, and an age change builds one per worker."""
+    key = (scene, age_months)
+    if key not in _SKINS:
+        if len(_SKINS) >= 8:  # a growing run passes through many ages: keep the latest few
+            _SKINS.pop(next(iter(_SKINS)))
+        layout = None if age_months is None else grown_layout(grown_body(age_months).table)
+        _SKINS[key] = Skin(model, layout)
+    return _SKINS[key]
 
 
 def _densify(num_sensors: int, sensors: np.ndarray, values: np.ndarray) -> np.ndarray:

@@ -249,7 +249,7 @@ def grown_layout(table: tuple[BodySpec, ...]) -> SkinLayout:
     the same number of sensors at every age; each body's spacing is the grown one (the
     default's times the square root of its skin's growth in area). Where the growth changes a
     body's proportions, a few sensors can end up inside a neighbouring geom of the same body
-    (at birth, 14 of the upper trunk's 126 per side, under the shorter trunk's overlapping
+    (at birth, 14 of the upper trunk's 126, under the shorter trunk's overlapping
     capsules); they still feel contacts near them, through the force spreading.
 
     Args:
