@@ -7,6 +7,9 @@ import argparse
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
+    from collections.abc import Callable
+    from pathlib import Path
+
     from devlearn.plugins import PluginRegistry
 
 PICTURES = ("body-map", "eyes", "growth")
@@ -33,6 +36,10 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     del registry
     from devlearn.infant.pictures import body_map_picture, eyes_picture, growth_picture
 
-    draw = {"body-map": body_map_picture, "eyes": eyes_picture, "growth": growth_picture}
+    draw: dict[str, Callable[[str], Path]] = {
+        "body-map": body_map_picture,
+        "eyes": eyes_picture,
+        "growth": growth_picture,
+    }
     print(draw[args.what](args.out))
     return 0
