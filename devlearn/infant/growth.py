@@ -13,8 +13,9 @@ default body has:
 
 Then two calibrations make the whole body the WHO median's: one factor on every length but the
 head's, so that the crown-heel length (:func:`crown_heel_length`) is the WHO median length, and
-one density, so that the mass is the WHO median weight (MuJoCo computes every body's mass and
-inertia from its geoms at that density). Motor torques and the joints' passive spring-damper
+one on every girth and breadth but the head's, so that the mass at :data:`DENSITY` is the WHO
+median weight (MuJoCo computes every body's mass and inertia from its geoms at that density;
+docs/growth.md has the figures). Motor torques and the joints' passive spring-damper
 scale with the volume of the body each joint moves (MIMo v2's rule: strength follows muscle
 volume). The skin keeps its sensors: each one moves with its geom's surface
 (:func:`devlearn.infant.skin_layout.grown_layout`), so the 68 regions hold as many sensors at
