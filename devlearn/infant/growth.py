@@ -36,7 +36,6 @@ from devlearn.infant.growth_data import (
     WHO_HEAD_CM,
     WHO_LENGTH_CM,
     WHO_WEIGHT_KG,
-    YOUNGEST_MEASURED_MONTHS,
     anthrokids_size,
     who_age_of,
     who_median,
@@ -130,9 +129,7 @@ def _measure(name: str, age: float) -> float:
         return 0.5 * (_measure("hand_length", age) + _measure("hand_breadth", age))
     if name == "foot_height":  # likewise for the foot
         return 0.5 * (_measure("foot_length", age) + _measure("foot_breadth", age))
-    if name in LENGTHS:
-        return anthrokids_size(name, age)
-    return anthrokids_size(name, max(age, YOUNGEST_MEASURED_MONTHS))
+    return anthrokids_size(name, age)
 
 
 # -- volumes and areas ---------------------------------------------------------------------

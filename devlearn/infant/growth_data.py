@@ -63,13 +63,14 @@ ANTHROKIDS_CURVES: dict[str, tuple[float, float, float]] = {
 }
 """Body-part size s(age) = a * ln(age + b) + c (cm; the finger's diameter in mm) for age in
 months, as (a, b, c). The youngest AnthroKids group's mean age is about a month, so the curves
-are extrapolated to birth; the girths fitted with b at its lower bound (0.1) fall steeply
-there, which :data:`YOUNGEST_MEASURED_MONTHS` keeps out."""
+are extrapolated to birth; those fitted with b below a month (arm, forearm and calf
+circumference, hip breadth: b at or near the fit's lower bound, 0.1) fall steeply there, which
+:data:`YOUNGEST_MEASURED_MONTHS` keeps out."""
 
 YOUNGEST_MEASURED_MONTHS = 1.0
-"""Mean age (months) of AnthroKids' youngest group: below it the curves' girths are not
-extrapolated (a newborn's arm girth would otherwise drop 25% in its first month, an artefact
-of the log fit), they keep their value at this age."""
+"""Mean age (months) of AnthroKids' youngest group: below it a curve with b under a month is
+not extrapolated (a newborn's arm girth would otherwise drop 25% in its first month, an
+artefact of the log fit), it keeps its value at this age."""
 
 
 def who_median(table: tuple[float, ...], age_months: float) -> float:
@@ -94,6 +95,9 @@ def who_age_of(table: tuple[float, ...], value: float) -> float:
 
 
 def anthrokids_size(measure: str, age_months: float) -> float:
-    """A body-part size from :data:`ANTHROKIDS_CURVES` at ``age_months`` (its unit)."""
+    """A body-part size from :data:`ANTHROKIDS_CURVES` at ``age_months`` (its unit); a steep
+    curve (b under a month) is held at :data:`YOUNGEST_MEASURED_MONTHS` below that age."""
     a, b, c = ANTHROKIDS_CURVES[measure]
+    if b < YOUNGEST_MEASURED_MONTHS:
+        age_months = max(age_months, YOUNGEST_MEASURED_MONTHS)
     return a * math.log(age_months + b) + c
