@@ -145,8 +145,9 @@ class InfantConfig:
     (the run in equal parts at these ages, e.g. ``6,12,18``); empty: no growth. At an
     iteration boundary where the age changes, every env rebuilds its physics at the new age
     and carries on with the same joint angles and velocities; the policy, optimiser and
-    reward memories carry over, checkpoints record the age and a resumed run continues at it.
-    Excludes ``age_months``."""
+    reward memories carry over, checkpoints record the age and a resumed run continues at its
+    schedule's age (``--steps`` changed on resume stretches the schedule). Excludes
+    ``age_months``."""
     growth_every: int = 0
     """Steps per piece of an ``A->B`` growth schedule (0: 24 pieces over the run)."""
 

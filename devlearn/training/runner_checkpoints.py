@@ -159,8 +159,6 @@ class RunCheckpoints:
         if self.run_metrics is not None and state.get("run_metrics"):
             self.run_metrics.load_state_dict(state["run_metrics"])
         ranks = state["env"]["ranks"]
-        if curriculum and "age_months" in state:  # a resumed run goes on at its body's age
-            self.env.set_age(state["age_months"])
         if self.ranks.rank < len(ranks):
             self.env.load_state_dict(ranks[self.ranks.rank])
         # every env's saved state holds the run memory it had: merge across workers (and

@@ -69,7 +69,7 @@ def test_a_growing_run_resumed_after_kill_goes_on_at_its_age(tmp_path):
     assert len(set(ages.values())) == len(ages)
 
 
-def test_stages_of_growth_and_a_fixed_age(tmp_path):
+def test_stages_of_growth_and_a_fixed_age(tmp_path, capsys):
     cfg = tiny_run.config(tmp_path / "grow", 6 * PER_ITERATION, "infant.growth=3,9,15")
     train(cfg, tiny_run.registry(), infant_factory=tiny_run.factory, progress=False)
     assert [r["age_months"] for r in rows(tmp_path / "grow")] == [3, 3, 9, 9, 15, 15]
@@ -79,6 +79,15 @@ def test_stages_of_growth_and_a_fixed_age(tmp_path):
     cfg = tiny_run.config(tmp_path / "fixed", 2 * PER_ITERATION, "infant.age_months=4.5")
     train(cfg, tiny_run.registry(), infant_factory=tiny_run.factory, progress=False)
     assert [r["age_months"] for r in rows(tmp_path / "fixed")] == [4.5, 4.5]
+    # resumed with another age: its config's body, and a note saying so
+    cfg = tiny_run.config(tmp_path / "fixed", 3 * PER_ITERATION, "infant.age_months=6")
+    registry = tiny_run.registry()
+    capsys.readouterr()
+    train(cfg, registry, resume=tmp_path / "fixed", infant_factory=tiny_run.factory, progress=False)
+    assert [r["age_months"] for r in rows(tmp_path / "fixed")] == [4.5, 4.5, 6.0]
+    assert "the checkpoint's body was the body at 4.5 months; this run goes on with the body " in (
+        capsys.readouterr().err
+    )
 
     cfg = tiny_run.config(tmp_path / "default", PER_ITERATION)
     train(cfg, tiny_run.registry(), infant_factory=tiny_run.factory, progress=False)

@@ -47,9 +47,6 @@ class FakeEnv:
         self.synced = 0
         self.age_months: float | None = None
 
-    def set_age(self, age_months: float | None) -> None:
-        self.age_months = age_months
-
     def state_dict(self) -> dict:
         return self.state
 
@@ -107,7 +104,7 @@ def test_checkpoints_save_a_snapshot_and_restore_it(tmp_path):
     assert torch.equal(fresh.alg.weights, torch.arange(4.0))
     assert fresh.env.state == {"envs": [{"count": 1}, {"count": 2}]} and fresh.env.synced == 1
     assert fresh.curriculum.stage.name == "random"
-    assert fresh.env.age_months == 7.5  # a resumed run goes on at its body's age
+    assert fresh.env.age_months is None  # the body is the run's config's (train() built it)
     assert torch.equal(torch.rand(3), expected)
 
 
@@ -116,10 +113,8 @@ def test_a_branch_keeps_its_own_curriculum_and_a_fault_saves_the_last_boundary(t
     state = parts.checkpoint_state(parts.snapshot(1, 32))
     state["curriculum"] = {"index": 1}  # the source had switched...
     branch = checkpoints(tmp_path / "b")
-    state["age_months"] = 12.0
     branch.restore(state, curriculum=False)  # ...the branch's stage follows its steps
     assert branch.curriculum.stage.name == "fixed"
-    assert branch.env.age_months is None  # and its body is its own config's
     message = parts.save_after_fault(None)
     assert "no checkpoint could be written" in message
     message = parts.save_after_fault(parts.snapshot(2, 64))
