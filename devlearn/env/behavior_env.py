@@ -194,7 +194,7 @@ class BehaviorEnv:
 
     def state_dict(self) -> dict[str, Any]:
         """Return the resumable state: every reward term's state, the rng and the stage (the
-        body's age is the run's: the runner records it, :meth:`set_age` restores it)."""
+        body's age is the run's: its config's, which the runner records in checkpoints)."""
         terms = {term.name: term.state_dict(self.batch_index) for term in self.terms}
         return {"terms": terms, "rng": self.rng.bit_generator.state, "stage": dict(self.stage)}
 
