@@ -21,7 +21,7 @@ from tqdm import tqdm
 
 from devlearn.api.behavior import RunMetrics
 from devlearn.api.curriculum import Curriculum
-from devlearn.api.errors import RunStopped
+from devlearn.api.errors import RunStopped, UsageError
 from devlearn.config.growth import growth_schedule
 from devlearn.config.run_config import RunConfig
 from devlearn.env.guards import GuardError
@@ -126,6 +126,13 @@ class DevRunner(OnPolicyRunner):
         self.curriculum = curriculum
         self.growth = growth_schedule(cfg)
         """The body's age over the run (``infant.growth``; None: it keeps its age)."""
+        if self.growth is not None and self.growth.by_stage:
+            if len(self.growth.ages) > len(curriculum.stages):
+                raise UsageError(
+                    f"infant.growth '{cfg.infant.growth}' names {len(self.growth.ages)} ages, "
+                    f"but {cfg.behavior_name}'s curriculum has {len(curriculum.stages)} "
+                    f"stage(s): {', '.join(s.name for s in curriculum.stages)}"
+                )
         self.show_progress = progress
         self.env_steps = 0
         report = io.StringIO()
@@ -302,7 +309,8 @@ class DevRunner(OnPolicyRunner):
         """Give the envs the growth schedule's age at this step; they rebuild their physics
         only when it changed (once per env, carrying their episodes on)."""
         if self.growth is not None:
-            self.env.set_age(self.growth.age_at(self.env_steps, total_steps))
+            age = self.growth.age_at(self.env_steps, total_steps, self.curriculum.index)
+            self.env.set_age(age)
 
     def _collect(self, obs: Any) -> tuple[Any, Rollout]:
         """One rollout of ``num_steps_per_env`` decisions into PPO's storage, the learned

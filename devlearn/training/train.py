@@ -239,7 +239,8 @@ def _build(
     # Environments (seeded seed + rank * num_envs + index) and the runner.
     # The body at the run's age at its step: a resumed growing run goes on at its schedule's
     # age, a fixed one at its config's (a checkpoint records the body it last trained with).
-    age = start_age(cfg, int(checkpoint["env_steps"]) if checkpoint else 0)
+    steps = int(checkpoint["env_steps"]) if checkpoint else 0
+    age = start_age(cfg, steps, behavior.curriculum().stage_index_at(steps))
     if checkpoint is not None and rank == 0 and growth_schedule(cfg) is None:
         trained = checkpoint.get("age_months", age)
         if trained != age:

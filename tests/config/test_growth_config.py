@@ -50,6 +50,13 @@ def test_a_list_schedule_cuts_the_run_into_equal_parts():
     assert parse_growth("", 0, 3_000) is None and parse_growth("  ", 0, 3_000) is None
 
 
+def test_a_stage_schedule_gives_each_curriculum_stage_its_age():
+    schedule = parse_growth("stages:6, 18", 0, 3_000)
+    assert schedule is not None and schedule.by_stage and schedule.ages == (6.0, 18.0)
+    assert [schedule.age_at(0, 3_000, stage) for stage in (0, 1, 2)] == [6.0, 18.0, 18.0]
+    assert schedule.age_at(2_999, 3_000) == 6.0  # the steps alone do not move it
+
+
 @pytest.mark.parametrize(
     ("overrides", "message"),
     [
@@ -59,6 +66,8 @@ def test_a_list_schedule_cuts_the_run_into_equal_parts():
         (["infant.growth=six->18"], "infant.growth 'six->18' is not a schedule; valid: ''"),
         (["infant.growth=6-18"], "is not a schedule; valid: '' (none), 'A->B'"),
         (["infant.growth=6,,18"], "is not a schedule"),
+        (["infant.growth=stages:6->18"], "is not a schedule; valid: '' (none), 'A->B'"),
+        (["infant.growth=stages:6,25"], "its ages must be between 0 and 24 months, got 25"),
         (["infant.growth_every=-5"], "infant.growth_every must be at least 0"),
         (
             ["infant.growth=6->18", "infant.age_months=6"],

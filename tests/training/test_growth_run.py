@@ -10,8 +10,10 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
 import tiny_run
 
+from devlearn.api.errors import UsageError
 from devlearn.config.growth import parse_growth
 from devlearn.training import train
 from devlearn.training.checkpoint import load_checkpoint, resume_checkpoint
@@ -93,3 +95,18 @@ def test_stages_of_growth_and_a_fixed_age(tmp_path, capsys):
     train(cfg, tiny_run.registry(), infant_factory=tiny_run.factory, progress=False)
     assert "age_months" not in rows(tmp_path / "default")[0]
     assert load_checkpoint(tmp_path / "default" / "checkpoint_latest.pt")["age_months"] is None
+
+
+def test_one_age_per_curriculum_stage(tmp_path):
+    stages = ("behavior.stage_steps=64", "infant.growth=stages:2,20")  # tiny: fixed, random
+    cfg = tiny_run.config(tmp_path / "run", 4 * PER_ITERATION, *stages)
+    train(cfg, tiny_run.registry(), infant_factory=tiny_run.factory, progress=False)
+    assert [(r["stage"], r["age_months"]) for r in rows(tmp_path / "run")] == [
+        ("fixed", 2.0),
+        ("fixed", 2.0),
+        ("random", 20.0),
+        ("random", 20.0),
+    ]
+    cfg = tiny_run.config(tmp_path / "more", 64, "infant.growth=stages:1,2,3")
+    with pytest.raises(UsageError, match=r"names 3 ages, but tiny's curriculum has 2 stage"):
+        train(cfg, tiny_run.registry(), infant_factory=tiny_run.factory, progress=False)
