@@ -144,7 +144,7 @@ class InfantConfig:
     pieces of ``growth_every`` steps at ages evenly between, e.g. ``6->18``), ``A,B,...``
     (the run in equal parts at these ages, e.g. ``6,12,18``) or ``stages:A,B,...`` (one age
     per curriculum stage, e.g. ``stages:6,18``: self_touch's fixed-pose and random-pose
-    stages); empty: no growth. At an
+    stages); empty: no growth. Quote it in a shell (``--set 'infant.growth=6->18'``). At an
     iteration boundary where the age changes, every env rebuilds its physics at the new age
     and carries on with the same joint angles and velocities; the policy, optimiser and
     reward memories carry over, checkpoints record the age and a resumed run continues at its
