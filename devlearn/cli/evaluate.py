@@ -62,7 +62,9 @@ def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) 
     add_overrides(
         p,
         "a baseline's config value, e.g. behavior.detector_file=runs/hr/hand_detector.json "
-        "(hand regard's baselines then score with a calibrated detector); repeatable",
+        "(hand regard's baselines then score with a calibrated detector); repeatable. With "
+        "a checkpoint only infant.age_months=A: the body's age (0-24 months; default: the "
+        "age it last trained at), written to eval_A_months/ unless --out",
     )
     p.add_argument(
         "--json", action="store_true", help="print every figure as JSON (eval.json's content)"
@@ -212,7 +214,12 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
 
     The summary is printed even when writing the files failed (then exit code 2).
     """
-    from devlearn.evaluation.evaluate import EvalWriteError, evaluate, resolve_checkpoint
+    from devlearn.evaluation.evaluate import (
+        AGE_KEY,
+        EvalWriteError,
+        evaluate,
+        resolve_checkpoint,
+    )
 
     registry.behavior(args.behavior)  # unknown behaviour: one clear line
     from devlearn.config.checks import SEED_MAX
@@ -220,12 +227,15 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     episodes = _count(args.episodes, "--episodes", 1, EPISODES_MAX)
     seed = _count(args.seed, "--seed", 0, SEED_MAX)
     checkpoint = resolve_checkpoint(args.checkpoint) if args.checkpoint else None
+    # an evaluation at another age goes beside the others, not over them
+    ages = [o.split("=", 1)[1].strip() for o in args.overrides if o.startswith(AGE_KEY + "=")]
+    at = f"_{ages[-1]}_months" if ages else ""
     if args.out:
         out_dir = Path(args.out)
     elif checkpoint is not None:
-        out_dir = checkpoint.parent / "eval"
+        out_dir = checkpoint.parent / f"eval{at}"
     else:
-        out_dir = Path(f"eval_{args.behavior}_{args.policy}")
+        out_dir = Path(f"eval_{args.behavior}_{args.policy}{at}")
     headline = registry.behavior(args.behavior).headline_metric
     baselines = _baselines(args.behavior, args.compare) if not args.json else {}
 

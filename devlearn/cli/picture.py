@@ -1,4 +1,5 @@
-"""``devlearn picture body-map|eyes --out PATH``: pictures of the infant's body map and view."""
+"""``devlearn picture body-map|eyes|growth --out PATH``: pictures of the infant's body map, its
+view and its body at 0, 6, 12, 18 and 24 months."""
 
 from __future__ import annotations
 
@@ -6,17 +7,26 @@ import argparse
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
+    from collections.abc import Callable
+    from pathlib import Path
+
     from devlearn.plugins import PluginRegistry
 
-PICTURES = ("body-map", "eyes")
+PICTURES = ("body-map", "eyes", "growth")
 
 
 def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> list[str]:
     """Register the ``picture`` sub-command."""
     p = subparsers.add_parser(
-        "picture", help="draw the 68-region body map or what the two eyes see (PNG)"
+        "picture",
+        help="draw the 68-region body map, what the two eyes see, or the body at 0-24 months (PNG)",
     )
-    p.add_argument("what", choices=PICTURES, help="body-map: skin regions; eyes: both eye images")
+    p.add_argument(
+        "what",
+        choices=PICTURES,
+        help="body-map: skin regions; eyes: both eye images; growth: the infant at 0, 6, 12, 18 "
+        "and 24 months side by side, at one scale",
+    )
     p.add_argument("--out", required=True, metavar="PATH", help="PNG file to write")
     return ["picture"]
 
@@ -24,8 +34,12 @@ def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) 
 def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     """Write the picture and print its path (``registry`` is unused)."""
     del registry
-    from devlearn.infant.pictures import body_map_picture, eyes_picture
+    from devlearn.infant.pictures import body_map_picture, eyes_picture, growth_picture
 
-    draw = body_map_picture if args.what == "body-map" else eyes_picture
-    print(draw(args.out))
+    draw: dict[str, Callable[[str], Path]] = {
+        "body-map": body_map_picture,
+        "eyes": eyes_picture,
+        "growth": growth_picture,
+    }
+    print(draw[args.what](args.out))
     return 0

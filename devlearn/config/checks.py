@@ -10,8 +10,10 @@ import tempfile
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from devlearn.ages import check_age
 from devlearn.api.errors import UsageError
 from devlearn.api.rewards import reward_term_cfg
+from devlearn.config.growth import growth_schedule
 from devlearn.timing import EPISODE_STEPS
 
 if TYPE_CHECKING:
@@ -101,7 +103,19 @@ def check_config(cfg: RunConfig) -> None:
     if cfg.ppo.desired_kl is not None:
         _positive(cfg, "desired_kl")
     _check_batches(cfg)
+    _check_infant(cfg)
     check_reward_terms(cfg.behavior)
+
+
+def _check_infant(cfg: RunConfig) -> None:
+    """The body's age and growth schedule (:mod:`devlearn.config.growth`)."""
+    if cfg.infant.age_months is not None:
+        try:
+            check_age(cfg.infant.age_months)
+        except ValueError as err:
+            raise UsageError(str(err)) from None
+    _whole(cfg.infant.growth_every, "infant.growth_every", 0, STEPS_MAX, "0: 24 pieces")
+    growth_schedule(cfg)
 
 
 def _check_batches(cfg: RunConfig) -> None:

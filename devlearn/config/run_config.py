@@ -127,6 +127,34 @@ class EnvConfig:
 
 
 @dataclass
+class InfantConfig:
+    """The infant's body: its age, fixed or growing over the run (issue #41)."""
+
+    age_months: float | None = None
+    """Build the body at this age, 0 to 24 months: its crown-heel length and weight the WHO
+    boys' medians, its proportions (the head's share of its length falls with age), masses,
+    inertias, motor torques and skin from growth curves (``devlearn/infant/growth.py``; the
+    same 68 skin regions with the same sensors, spread over the larger body, so observations
+    keep their shape). Unset (null, the default): the default body, MIMo v1's 18-month-old
+    (77.8 cm, 10.96 kg: the WHO median length at 13.8 months, weight at 18.1), exactly as every
+    published run was trained. ``devlearn eval --set infant.age_months=A`` evaluates a policy
+    at age A."""
+    growth: str = ""
+    """Grow while learning: ``A->B`` (A months at the start, B at the end, the run cut into
+    pieces of ``growth_every`` steps at ages evenly between, e.g. ``6->18``), ``A,B,...``
+    (the run in equal parts at these ages, e.g. ``6,12,18``) or ``stages:A,B,...`` (one age
+    per curriculum stage, e.g. ``stages:6,18``: self_touch's fixed-pose and random-pose
+    stages); empty: no growth. Quote it in a shell (``--set 'infant.growth=6->18'``). At an
+    iteration boundary where the age changes, every env rebuilds its physics at the new age
+    and carries on with the same joint angles and velocities; the policy, optimiser and
+    reward memories carry over, checkpoints record the age and a resumed run continues at its
+    schedule's age (``--steps`` changed on resume stretches the schedule). Excludes
+    ``age_months``."""
+    growth_every: int = 0
+    """Steps per piece of an ``A->B`` growth schedule (0: 24 pieces over the run)."""
+
+
+@dataclass
 class RunConfig:
     """Everything one ``devlearn run`` needs; saved as ``config.json`` in the run directory."""
 
@@ -171,6 +199,8 @@ class RunConfig:
     """Network layout, policy head and input scale."""
     env: EnvConfig = field(default_factory=EnvConfig)
     """The decision rate."""
+    infant: InfantConfig = field(default_factory=InfantConfig)
+    """The infant's age, fixed or growing."""
     curiosity: list[str] = field(default_factory=list)
     """Learned intrinsic rewards added to the behaviour's reward, by registered name
     (``--set curiosity=rnd,forward_model``; ``devlearn plugins --json`` lists them). Each is a

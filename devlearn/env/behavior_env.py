@@ -71,6 +71,8 @@ class BehaviorEnv:
         index: This env's index on its rank (named by the reward and observation guards).
         action_repeat: Physics steps per decision (:func:`step_batch`); must divide the
             episode length, so every episode ends on a decision's last physics step.
+        age_months: The body's age (``infant.age_months``; None: the default body), passed to
+            the factory only when set, so factories that know no ages keep working.
     """
 
     def __init__(
@@ -81,12 +83,14 @@ class BehaviorEnv:
         training: bool = True,
         index: int = 0,
         action_repeat: int = 1,
+        age_months: float | None = None,
     ) -> None:
         self.behavior = behavior
         self.index = index
-        factory = infant_factory or build_default_infant
-        options = behavior.infant_options()
-        self.infant = factory(behavior.scene, senses=tuple(behavior.senses), **options)
+        self._factory = infant_factory or build_default_infant
+        self.age_months = age_months
+        """The body's age (months; None: the default body); :meth:`set_age` changes it."""
+        self.infant = self._build_infant()
         self.rng = np.random.default_rng(seed)
         self.terms = batched_reward_terms(behavior)
         """Reward terms in the behaviour's order, batched; may be shared with other envs."""
@@ -114,6 +118,25 @@ class BehaviorEnv:
                 f"env.action_repeat={action_repeat} must be at least 1 and divide the episode "
                 f"length of {self.episode_steps} physics steps"
             )
+
+    def _build_infant(self) -> Any:
+        options = self.behavior.infant_options()
+        if self.age_months is not None:
+            options["age_months"] = self.age_months
+        return self._factory(self.behavior.scene, senses=tuple(self.behavior.senses), **options)
+
+    def set_age(self, age_months: float | None) -> None:
+        """Rebuild the infant's physics at ``age_months`` without ending the episode: the new
+        body takes the old one's joint angles, velocities and controls (the infant's
+        ``continue_from``), reward terms, evaluator and episode go on. The next decision acts
+        on the observation the old body gave of the same pose."""
+        if age_months == self.age_months:
+            return
+        old = self.infant
+        self.age_months = age_months
+        self.infant = self._build_infant()
+        self.infant.continue_from(old)
+        old.close()
 
     def reset(self) -> dict[str, np.ndarray]:
         """Start a new episode; return its first observations (name -> array)."""
@@ -181,7 +204,8 @@ class BehaviorEnv:
         self.stage = dict(options)
 
     def state_dict(self) -> dict[str, Any]:
-        """Return the resumable state: every reward term's state, the rng and the stage."""
+        """Return the resumable state: every reward term's state, the rng and the stage (the
+        body's age is the run's: its config's, which the runner records in checkpoints)."""
         terms = {term.name: term.state_dict(self.batch_index) for term in self.terms}
         return {"terms": terms, "rng": self.rng.bit_generator.state, "stage": dict(self.stage)}
 

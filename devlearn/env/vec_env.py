@@ -48,6 +48,8 @@ class DevVecEnv(VecEnv):
         rank: Distributed rank for seeding (default: ``$RANK`` or 0).
         action_repeat: Physics steps per ``step`` call, one action held over them (see
             :func:`~devlearn.env.behavior_env.step_batch`); rewards are their sum.
+        age_months: The body's age (months; None: the default body); :meth:`set_age`
+            changes it.
     """
 
     def __init__(
@@ -60,6 +62,7 @@ class DevVecEnv(VecEnv):
         infant_factory: InfantFactory | None = None,
         rank: int | None = None,
         action_repeat: int = 1,
+        age_months: float | None = None,
     ) -> None:
         if num_envs < 1:
             raise ValueError(f"num_envs must be at least 1, got {num_envs}")
@@ -69,11 +72,15 @@ class DevVecEnv(VecEnv):
         self._pool: WorkerPool | None = None
         self._envs: list = []
         if workers > 0:
-            self._pool = WorkerPool(behavior, seeds, workers, infant_factory, action_repeat)
+            self._pool = WorkerPool(
+                behavior, seeds, workers, infant_factory, action_repeat, age_months=age_months
+            )
             spec = self._pool.spec
             self._merge_terms = batched_reward_terms(behavior)  # merge rules of the run memory
         else:
-            self._envs = make_envs(behavior, seeds, infant_factory, action_repeat=action_repeat)
+            self._envs = make_envs(
+                behavior, seeds, infant_factory, action_repeat=action_repeat, age_months=age_months
+            )
             first = [env.reset() for env in self._envs]
             spec = env_spec(self._envs[0], first[0])
             self._merge_terms = self._envs[0].terms
@@ -86,6 +93,8 @@ class DevVecEnv(VecEnv):
             for i, obs in enumerate(first):
                 write_obs(self._buffers.arrays, i, obs)
 
+        self.age_months = age_months
+        """The body's age in every env (months; None: the default body)."""
         self.num_envs = num_envs
         self.num_actions = int(spec["action_dim"])
         self.max_episode_length = int(spec["episode_steps"])
@@ -160,6 +169,18 @@ class DevVecEnv(VecEnv):
                 env.set_stage(options)
         else:
             self._pool.call("set_stage", [options] * len(self._pool.conns))
+
+    def set_age(self, age_months: float | None) -> None:
+        """Rebuild every env's physics at ``age_months`` (each worker rebuilds its envs once),
+        carrying on their episodes (:meth:`~devlearn.env.behavior_env.BehaviorEnv.set_age`)."""
+        if age_months == self.age_months:
+            return
+        if self._pool is None:
+            for env in self._envs:
+                env.set_age(age_months)
+        else:
+            self._pool.call("set_age", [age_months] * len(self._pool.conns))
+        self.age_months = age_months
 
     def sync_run_memory(self, gather: Callable[[Any], list] | None = None) -> None:
         """Make every worker's run-wide reward memory the merge of all of them.

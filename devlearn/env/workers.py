@@ -77,10 +77,11 @@ def make_envs(
     infant_factory: InfantFactory | None,
     offset: int = 0,
     action_repeat: int = 1,
+    age_months: float | None = None,
 ) -> list:
     """Build one BehaviorEnv per seed (indices ``offset...``), each with its own copy of the
-    behaviour and the decision rate ``action_repeat``; the envs share their batched reward
-    terms (one instance over all of them)."""
+    behaviour, the decision rate ``action_repeat`` and the body at ``age_months``; the envs
+    share their batched reward terms (one instance over all of them)."""
     envs = [
         BehaviorEnv(
             copy.deepcopy(behavior),
@@ -88,6 +89,7 @@ def make_envs(
             infant_factory,
             index=offset + i,
             action_repeat=action_repeat,
+            age_months=age_months,
         )
         for i, s in enumerate(seeds)
     ]
@@ -111,6 +113,7 @@ def worker_main(
     offset: int,
     infant_factory: InfantFactory | None,
     action_repeat: int = 1,
+    age_months: float | None = None,
 ) -> None:
     """Entry point of one worker process: serve commands from the parent until told to close.
 
@@ -124,7 +127,7 @@ def worker_main(
     blocks: list = []
     arrays: dict[str, np.ndarray] = {}
     try:
-        envs = make_envs(behavior, seeds, infant_factory, offset, action_repeat)
+        envs = make_envs(behavior, seeds, infant_factory, offset, action_repeat, age_months)
         first = [env.reset() for env in envs]
         conn.send(("ok", env_spec(envs[0], first[0])))
         while True:
@@ -142,6 +145,10 @@ def worker_main(
                 for env in envs:
                     env.set_stage(arg)
                 reply = [None] * len(envs)
+            elif cmd == "set_age":
+                for env in envs:
+                    env.set_age(arg)
+                reply = None
             elif cmd == "state":
                 reply = [env.state_dict() for env in envs]
             elif cmd == "memory":
@@ -212,6 +219,7 @@ class WorkerPool:
         workers: Number of processes (at most one per env).
         infant_factory: Picklable infant factory (None: the real infant).
         action_repeat: Physics steps per step command (the decision rate).
+        age_months: The body's age (None: the default body).
         context: multiprocessing start method; ``spawn`` (default) imports everything afresh, so
             no parent state (threads, torch, open files) leaks into workers.
     """
@@ -224,6 +232,7 @@ class WorkerPool:
         infant_factory: InfantFactory | None = None,
         action_repeat: int = 1,
         context: str = "spawn",
+        age_months: float | None = None,
     ) -> None:
         ctx = mp.get_context(context)
         self._pending: set[int] = set()
@@ -243,6 +252,7 @@ class WorkerPool:
                         int(chunk[0]),
                         infant_factory,
                         action_repeat,
+                        age_months,
                     ),
                     daemon=True,
                     name=f"devlearn-env-worker-{len(self.procs)}",

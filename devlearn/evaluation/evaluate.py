@@ -14,6 +14,7 @@ import numpy as np
 import torch
 from tqdm import tqdm
 
+from devlearn.ages import check_age
 from devlearn.api.behavior import evaluation_stage
 from devlearn.api.errors import UsageError
 from devlearn.config.run_config import to_dict
@@ -32,6 +33,8 @@ if TYPE_CHECKING:
     from devlearn.plugins import PluginRegistry
     from devlearn.training.networks import MultiSenseModel
 
+AGE_KEY = "infant.age_months"
+"""The one ``--set`` key a checkpoint's evaluation takes: the body's age."""
 VIDEO_FPS = 25
 """Frame rate of evaluation videos (every k-th control step is rendered to match it)."""
 POLICY_FILE = "policy.pt"
@@ -166,6 +169,21 @@ def _policy(
     return act
 
 
+def _evaluated_age(overrides: list[str], trained: float | None) -> float | None:
+    """The age a checkpoint is evaluated at: the last ``infant.age_months=A`` given (``null``:
+    the default body), else the age it last trained at."""
+    if not overrides:
+        return trained
+    value = str(overrides[-1]).split("=", 1)[1].strip()
+    if value.lower() in ("null", "none", ""):
+        return None
+    try:
+        return check_age(float(value))
+    except ValueError as err:
+        message = str(err) if "months" in str(err) else f"{AGE_KEY} must be a number, got {value!r}"
+        raise UsageError(message) from None
+
+
 def _set_infant_start(infant: Any, start: str) -> None:
     """Make the env's infant start its episodes with ``start`` (babybench or rest).
 
@@ -219,15 +237,17 @@ def evaluate(
             ``random_pose`` and the infant's start.
         overrides: ``key=value`` settings of a baseline's config (``--set``), e.g. a
             calibrated detector for hand regard's baselines
-            (``behavior.detector_file=runs/hr/hand_detector.json``); not with a checkpoint,
-            whose config is its own.
+            (``behavior.detector_file=runs/hr/hand_detector.json``); with a checkpoint, whose
+            config is its own, only ``infant.age_months=A``: evaluate the policy in the body
+            at age A (by default a checkpoint is evaluated at the age it last trained at).
         action: A checkpoint's action: ``mean`` (deterministic, the default protocol) or
             ``sample`` (drawn from the policy's distribution, as in training: a behaviour whose
             skill lives in the policy's noise shows it only so).
     Returns:
         ``evaluator.summary()`` plus ``behavior``, ``policy``, ``checkpoint``,
         ``checkpoint_env_steps`` (x axis of ``devlearn curve``), ``training_seed``, ``config``
-        (the checkpoint's, for ``devlearn report``'s grouping), ``start`` (the start episodes
+        (the checkpoint's, for ``devlearn report``'s grouping), ``age_months`` (the body's age,
+        None: the default body), ``start`` (the start episodes
         took: babybench, rest or random) and ``protocol`` (episodes, seed, start, settle
         steps, criteria, training steps, code commit); for a scripted policy ``learner``
         (who trained it). When files were written,
@@ -248,8 +268,12 @@ def evaluate(
         raise UsageError(
             "give a checkpoint, or a baseline policy (zero, random, held_random), not both"
         )
-    if overrides and checkpoint is not None:
-        raise UsageError("--set applies to baselines only: a checkpoint evaluates with its config")
+    ages = [o for o in overrides or [] if str(o).split("=", 1)[0].strip() == AGE_KEY]
+    if checkpoint is not None and len(ages) < len(overrides or []):
+        raise UsageError(
+            f"--set applies to baselines only, and {AGE_KEY}: a checkpoint evaluates with "
+            "its config"
+        )
     out = prepare_out_dir(out_dir) if out_dir is not None else None
     opened: Checkpoint | ScriptedPolicy | None = None
     if checkpoint is not None:
@@ -265,6 +289,7 @@ def evaluate(
             opened = Checkpoint.open(path, registry, behavior_name)
         checkpoint, state, cfg = opened.path, opened.state, opened.config
         behavior = opened.behavior()
+        age = _evaluated_age(ages, opened.age_months)
     else:
         # a baseline: the config a saved config without values means (the behaviour's
         # LEGACY_DEFAULTS), acting at the decision rate a new run of the behaviour would use
@@ -274,13 +299,16 @@ def evaluate(
         request = RunRequest(behavior_name, [*rate, *(overrides or [])], saved={})
         cfg = resolve_config(request, registry)
         behavior = registry.create(behavior_name, cfg.behavior)
+        age = cfg.infant.age_months
     torch.manual_seed(seed)
     threads = torch.get_num_threads()
     # A batch of one gains nothing from more threads, and several threads on a core that
     # another program uses are many times slower (measured: a 64x64 eye CNN 85 ms vs 11 ms).
     torch.set_num_threads(1)
     repeat = cfg.env.action_repeat
-    env = BehaviorEnv(behavior, seed, infant_factory, training=False, action_repeat=repeat)
+    env = BehaviorEnv(
+        behavior, seed, infant_factory, training=False, action_repeat=repeat, age_months=age
+    )
     writer = None
     try:
         stage = evaluation_stage(behavior, int(state.get("env_steps", cfg.total_steps)))
@@ -332,6 +360,7 @@ def evaluate(
             checkpoint_env_steps=steps,
             training_seed=int(cfg.seed) if checkpoint is not None else None,
             config=state["config"] if checkpoint is not None else to_dict(cfg),
+            age_months=age,
             start=started,
             protocol={
                 "episodes": episodes,
@@ -343,6 +372,7 @@ def evaluate(
                 "start_option": start,
                 "settle_steps": 0,
                 "action_repeat": repeat,
+                "age_months": age,
                 **env.evaluator.protocol(),
                 "checkpoint_env_steps": steps,
                 "code": code_version(),

@@ -11,7 +11,7 @@ from devlearn.training.checkpoint import FORMAT, Checkpoint, save_atomic
 if TYPE_CHECKING:
     from devlearn.plugins import PluginRegistry
 
-KEPT = ("behavior", "config", "iteration", "env_steps", "actor_state_dict")
+KEPT = ("behavior", "config", "iteration", "env_steps", "age_months", "actor_state_dict")
 """Training-checkpoint keys a policy file keeps; the critic, optimiser, curriculum, env and rng
 states (what only resuming needs) are left out."""
 

@@ -63,6 +63,10 @@ LEARNER = "learner"
 e.g. ``sb3_ppo``), :data:`DEVLEARN_LEARNER` for a devlearn checkpoint."""
 DEVLEARN_LEARNER = "devlearn_ppo"
 """The learner of a devlearn checkpoint (its eval JSON names none)."""
+EVALUATED_AGE = "eval.age_months"
+"""The variant key of the body's age an evaluation ran at (``devlearn eval --set
+infant.age_months=A``; null: the default body): a policy evaluated at several ages is a column
+per age, and so is a baseline."""
 SINGLE_VARIANT = "trained"
 """Column name of the checkpoints when their configs differ only in seed (one variant)."""
 
@@ -199,8 +203,10 @@ def group(
     configs = [
         {k: json.dumps(v) for k, v in _flatten(c).items() if k not in NOT_VARIANT} for c in saved
     ]
-    for config, (_, data) in zip(configs, runs):  # another learner, same config: a variant
+    for config, (_, data) in zip(configs, runs):
+        # another learner, same config: a variant; one policy at several ages: a column per age
         config[LEARNER] = json.dumps(data.get(LEARNER, DEVLEARN_LEARNER))
+        config[EVALUATED_AGE] = json.dumps(data.get("age_months"))
     keys = sorted({k for c in configs for k in c if len({x.get(k) for x in configs}) > 1})
     columns: dict[str, dict] = {}
     for (path, data), config in zip(runs, configs):
@@ -223,9 +229,15 @@ def group(
     out = {name: list(seeds.values()) for name, seeds in columns.items()}
     for policy in BASELINES:
         chosen = [(p, d) for p, d in evaluations if d.get("policy") == policy]
-        if chosen:
-            out[f"{policy} baseline"] = chosen
+        ages = list(dict.fromkeys(d.get("age_months") for _, d in chosen))
+        for age in sorted(ages, key=lambda a: -1.0 if a is None else a):
+            name = f"{policy} baseline" if len(ages) == 1 else f"{policy} ({_body(age)}) baseline"
+            out[name] = [(p, d) for p, d in chosen if d.get("age_months") == age]
     return out, notes
+
+
+def _body(age: float | None) -> str:
+    return "default body" if age is None else f"{age:g} months"
 
 
 def paper_columns(

@@ -81,6 +81,8 @@ def add_infant(
     vestibular: bool,
     hand_rgba: tuple[float, float, float, float] = MITTEN_RGBA,
     right_hand_rgba: tuple[float, float, float, float] | None = None,
+    table: tuple[BodySpec, ...] = BODY_TABLE,
+    density: float | None = None,
 ) -> list[str]:
     """Add the infant's bodies, joints, motors and contact exclusions to ``root``.
 
@@ -92,12 +94,17 @@ def add_infant(
     body rotated by the held angle (``held``, keyed by full joint name "left_knee"; default 0).
     The root body ("hip") is fixed in the world (no free joint).
 
+    ``table`` is the body to build (default: :data:`BODY_TABLE`; a grown body's is
+    :attr:`devlearn.infant.growth.GrownBody.table`) and ``density`` the density of its geoms
+    (kg/m^3; None: MuJoCo's default, 1000), from which MuJoCo computes masses and inertias.
+
     Returns:
         The actuated joint names, in actuator order.
     """
     bodies: dict[str, mjcf.Element] = {}
     actuated: list[str] = []
-    for spec in BODY_TABLE:
+    mass = {} if density is None else {"density": density}
+    for spec in table:
         for side in SIDES if spec.paired else (None,):
             right = side == "right"
             name = _full(spec, side)
@@ -154,11 +161,16 @@ def add_infant(
                     conaffinity=collide,
                     rgba=_colour(spec, right_hand_rgba if right and right_hand_rgba else hand_rgba),
                     **kwargs,
+                    **mass,
                 )
             if spec.camera:
                 # MuJoCo cameras look along their -z axis with +y up: look forward (+x), z up.
                 body.add(
-                    "camera", name=name, pos=(0.0115, 0.0, 0.0), fovy=60, xyaxes=(0, -1, 0, 0, 0, 1)
+                    "camera",
+                    name=name,
+                    pos=(spec.camera_offset, 0.0, 0.0),
+                    fovy=60,
+                    xyaxes=(0, -1, 0, 0, 0, 1),
                 )
             if spec.name == "head":
                 head_centre = spec.geoms[0].pos
@@ -168,7 +180,7 @@ def add_infant(
         root.sensor.add("gyro", name="head_gyro", site="vestibular")
     # MuJoCo filters parent-child contacts only between moving bodies; in these scenes the hip
     # (and, sitting, the trunk and legs) are welded to the world, so exclude every such pair.
-    family = [(spec.parent, spec.name) for spec in BODY_TABLE if spec.parent and spec.collides]
+    family = [(spec.parent, spec.name) for spec in table if spec.parent and spec.collides]
     for a, b in family + list(EXCLUDED_PAIRS):
         pa, pb = spec_by_name(a).paired, spec_by_name(b).paired
         for side in SIDES:

@@ -73,6 +73,8 @@ class BodySpec:
         paired: True for left/right bodies (defined here for the left side, y > 0).
         collides: False for the eyes (they never touch anything).
         camera: True for the eyes: a camera looking forward along +x.
+        camera_offset: How far in front of the body's origin the camera sits (m): just
+            outside the eye's surface.
     """
 
     name: str
@@ -84,6 +86,7 @@ class BodySpec:
     paired: bool = False
     collides: bool = True
     camera: bool = False
+    camera_offset: float = 0.0115
 
 
 # Passive properties per joint group: (stiffness N m/rad, damping N m s/rad, armature kg m^2,

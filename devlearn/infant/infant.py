@@ -9,8 +9,10 @@ import mujoco
 import numpy as np
 from dm_control import mjcf
 
+from devlearn.ages import check_age
 from devlearn.infant import contacts, starts, vision
 from devlearn.infant.body_table import BODY_TABLE
+from devlearn.infant.growth import grown_body
 from devlearn.infant.regions import NUM_PARTS, NUM_REGIONS, RegionTable, region_table
 from devlearn.infant.scenes import (
     APPEARANCES,
@@ -21,6 +23,7 @@ from devlearn.infant.scenes import (
 )
 from devlearn.infant.senses import Proprioception, vestibular
 from devlearn.infant.skin import Skin
+from devlearn.infant.skin_layout import grown_layout
 
 SENSES = ("touch", "proprioception", "vestibular", "eyes")
 ACTUATOR_GROUPS = ("left_arm", "right_arm", "head", "trunk", "legs")
@@ -42,7 +45,8 @@ def _group_of(joint: str) -> str:
 
 
 class Infant:
-    """The simulated 18-month-old in one scene (see docs/architecture.md, "The infant").
+    """The simulated infant in one scene (see docs/architecture.md, "The infant"): MIMo v1's
+    18-month-old, or the body at ``age_months`` (:mod:`devlearn.infant.growth`).
 
     Build with :func:`build_infant`. Senses are computed on first request after a ``step`` or
     ``reset`` and cached; returned arrays are read-only.
@@ -60,6 +64,7 @@ class Infant:
         appearance: str = "mittens",
         start: str = "rest",
         compiled: bool = True,
+        age_months: float | None = None,
     ) -> None:
         unknown = sorted(set(senses) - set(SENSES))
         if unknown:
@@ -78,8 +83,12 @@ class Infant:
         self.senses = tuple(senses)
         self.eye_size = int(eye_size)
         self.appearance = appearance
+        self.age_months = None if age_months is None else check_age(age_months)
+        """The body's age (months), or None: the default body
+        (:data:`~devlearn.infant.growth.DEFAULT_BODY_NAME`)."""
+        body = None if self.age_months is None else grown_body(self.age_months)
         root, self.actuator_names = build_scene_model(
-            scene, vestibular="vestibular" in senses, appearance=appearance
+            scene, vestibular="vestibular" in senses, appearance=appearance, body=body
         )
         self.mjcf_model = root
         self.physics = mjcf.Physics.from_mjcf_model(root)
@@ -91,7 +100,7 @@ class Infant:
             g: np.array([i for i, x in enumerate(groups) if x == g], dtype=np.int64)
             for g in ACTUATOR_GROUPS
         }
-        self.skin = Skin(self.model)
+        self.skin = _shared_skin(self.model, scene, self.age_months)
         self.regions: RegionTable = region_table()
         self._contacts = contacts.ContactReader(self.model, self.skin, compiled=compiled)
         self.hand_of_body = np.full(self.model.nbody, -1, dtype=np.int64)
@@ -164,6 +173,24 @@ class Infant:
                 starts.kick(self.model, self.data, rng, starts.KICK_STEPS)
         self._cache.clear()
         self.steps = 0
+
+    def continue_from(self, other: Infant) -> None:
+        """Take over ``other``'s physical state: joint angles, velocities, controls, time and
+        step count (``other`` is this scene's infant at another age: the same joints), so that
+        a body rebuilt at a new age carries on its episode where the old one was."""
+        if other.model.nq != self.model.nq or other.scene != self.scene:
+            raise ValueError(
+                f"cannot continue a {other.scene} infant ({other.model.nq} joint coordinates) "
+                f"as a {self.scene} one ({self.model.nq})"
+            )
+        self.data.qpos[:] = other.data.qpos
+        self.data.qvel[:] = other.data.qvel
+        self.data.ctrl[:] = other.data.ctrl
+        self.data.time = other.data.time
+        mujoco.mj_forward(self.model, self.data)
+        self.start = other.start
+        self.steps = other.steps
+        self._cache.clear()
 
     def _reset_to_rest(self) -> None:
         """The scene's initial state: its settled state if it has one, else the rest pose."""
@@ -284,6 +311,7 @@ class Infant:
             "scene": self.scene,
             "start": self.start,
             "appearance": self.appearance,
+            "age_months": self.age_months,
             "senses": list(self.senses),
             "action_dim": self.action_dim,
             "touch_sensors": self.skin.num_sensors,
@@ -300,6 +328,21 @@ class Infant:
     def close(self) -> None:
         """Free renderers (GL contexts); rendering again opens new ones."""
         _free_gl(self._gl)
+
+
+_SKINS: dict[tuple[str, float | None], Skin] = {}
+
+
+def _shared_skin(model: mujoco.MjModel, scene: str, age_months: float | None) -> Skin:
+    """The skin of this scene's infant at this age, built once per process: a Skin is
+    read-only, so the envs of a worker share one, and an age change builds one per worker."""
+    key = (scene, age_months)
+    if key not in _SKINS:
+        if len(_SKINS) >= 8:  # a growing run passes through many ages: keep the latest few
+            _SKINS.pop(next(iter(_SKINS)))
+        layout = None if age_months is None else grown_layout(grown_body(age_months).table)
+        _SKINS[key] = Skin(model, layout)
+    return _SKINS[key]
 
 
 def _densify(num_sensors: int, sensors: np.ndarray, values: np.ndarray) -> np.ndarray:
@@ -325,6 +368,7 @@ def build_infant(
     appearance: str = "mittens",
     start: str = "rest",
     compiled: bool = True,
+    age_months: float | None = None,
 ) -> Infant:
     """Build the infant in a scene.
 
@@ -344,11 +388,15 @@ def build_infant(
             (:mod:`devlearn.infant.kernels`, numba, loaded on first use); False: their numpy
             references, the same numbers, slower per step but with no compilation or numba import
             (what describing an infant needs).
+        age_months: Build the body at this age, 0 to 24 months, from growth curves
+            (:func:`devlearn.infant.growth.grown_body`: WHO median length and weight, body
+            proportions that change with age, torques, and the same skin sensors spread over
+            it); None: the default body, MIMo v1's 18-month-old (77.8 cm, 10.96 kg).
 
     Returns:
         The infant, reset to its rest pose.
     """
     return Infant(
         scene, senses=senses, eye_size=eye_size, appearance=appearance, start=start,
-        compiled=compiled,
+        compiled=compiled, age_months=age_months,
     )  # fmt: skip

@@ -1,7 +1,9 @@
-"""Pictures of the infant: the 68-region body map (docs/images/body_map.png) and the eyes' view."""
+"""Pictures of the infant: the 68-region body map (docs/images/body_map.png), the eyes' view and
+the body from birth to 24 months (docs/images/growth.png)."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -35,17 +37,38 @@ def region_colours() -> np.ndarray:
     return np.concatenate([part, 0.75 * part])
 
 
-def _sensor_view(infant: Infant, camera: mujoco.MjvCamera, size: tuple[int, int]) -> np.ndarray:
-    """Render the infant without its surroundings, each sensor a dot in its region's colour."""
-    model, data, skin = infant.model, infant.data, infant.skin
+def _alone(
+    infant: Infant,
+    camera: mujoco.MjvCamera,
+    size: tuple[int, int],
+    decorate: Callable[[mujoco.MjvScene], None] | None = None,
+    extra_geoms: int = 0,
+) -> np.ndarray:
+    """Render the infant without its surroundings, on white; ``decorate(scene)`` may change
+    the scene's geoms or add up to ``extra_geoms`` before the render. Returns (H, W, 3) RGB."""
     option = mujoco.MjvOption()
     option.geomgroup[SCENE_GROUP] = 0
     renderer = mujoco.Renderer(
-        model, height=size[1], width=size[0], max_geom=skin.num_sensors + 500
+        infant.model, height=size[1], width=size[0], max_geom=extra_geoms + 500
     )
     try:
-        renderer.update_scene(data, camera=camera, scene_option=option)
-        scene = renderer.scene
+        renderer.update_scene(infant.data, camera=camera, scene_option=option)
+        if decorate is not None:
+            decorate(renderer.scene)
+        image = renderer.render()
+        renderer.enable_depth_rendering()
+        depth = renderer.render()
+        image[depth >= depth.max() * 0.999] = 255  # white background
+        return image
+    finally:
+        renderer.close()
+
+
+def _sensor_view(infant: Infant, camera: mujoco.MjvCamera, size: tuple[int, int]) -> np.ndarray:
+    """Render the infant without its surroundings, each sensor a dot in its region's colour."""
+    data, skin = infant.data, infant.skin
+
+    def dots(scene: mujoco.MjvScene) -> None:
         for i in range(scene.ngeom):  # the body itself pale grey under the dots
             scene.geoms[i].rgba[:] = (0.82, 0.82, 0.82, 1.0)
         rot = data.xmat[skin.sensor_body].reshape(-1, 3, 3)
@@ -61,13 +84,8 @@ def _sensor_view(infant: Infant, camera: mujoco.MjvCamera, size: tuple[int, int]
             geom.category, geom.transparent = mujoco.mjtCatBit.mjCAT_DECOR, 0
             geom.objtype, geom.objid, geom.segid, geom.camdist = 0, -1, -1, 0.0
             scene.ngeom += 1
-        image = renderer.render()
-        renderer.enable_depth_rendering()
-        depth = renderer.render()
-        image[depth >= depth.max() * 0.999] = 255  # white background
-        return image
-    finally:
-        renderer.close()
+
+    return _alone(infant, camera, size, dots, extra_geoms=skin.num_sensors)
 
 
 def _legend(height: int, width: int) -> np.ndarray:
@@ -111,6 +129,73 @@ def body_map_picture(path: str | Path, width: int = 420, height: int = 900) -> P
     finally:
         infant.close()
     return _write_png(path, picture)
+
+
+GROWTH_AGES = (0.0, 6.0, 12.0, 18.0, 24.0)
+"""Ages (months) ``devlearn picture growth`` draws."""
+GROWTH_POSE = {"left_shoulder_abduction": 0.25, "right_shoulder_abduction": 0.25}
+"""Every other joint at 0 (legs straight, as length is measured), the arms a little away from
+the trunk so that they show."""
+
+
+def growth_picture(
+    path: str | Path, ages: tuple[float, ...] = GROWTH_AGES, width: int = 250, height: int = 520
+) -> Path:
+    """Write the infant at each of ``ages`` side by side, from the front, at one scale: soles
+    on one line, a grey line every 10 cm, each labelled with its age, crown-heel length and
+    mass (:mod:`devlearn.infant.growth`; WHO's medians).
+
+    Args:
+        path: Output PNG.
+        ages: Ages in months (0 to 24).
+        width, height: Size of each infant's panel in pixels.
+
+    Returns:
+        The path written.
+    """
+    from devlearn.infant.growth import grown_body, standing_extent
+
+    distance, margin = 1.35, 0.04  # camera above the hip (m); space below the soles (m)
+    panels = []
+    for age in ages:
+        infant = build_infant("crib", senses=(), age_months=age)
+        try:
+            model, data = infant.model, infant.data
+            mujoco.mj_resetData(model, data)
+            for joint, angle in GROWTH_POSE.items():
+                data.qpos[model.joint(joint).qposadr[0]] = angle
+            mujoco.mj_forward(model, data)
+            # lying in the crib, the body's long axis is world x (head at +x): the soles at
+            # the bottom of every panel, in the same place
+            body = grown_body(age)
+            hip = data.xpos[model.body("hip").id]
+            sole = hip[0] + standing_extent(body.table)[0]
+            span = 2 * distance * np.tan(np.radians(model.vis.global_.fovy) / 2)  # m per panel
+            camera = mujoco.MjvCamera()
+            camera.lookat[:] = (sole - margin + span / 2, 0.0, hip[2])
+            camera.distance, camera.azimuth, camera.elevation = distance, 0.0, -89.9
+            image = np.ascontiguousarray(_alone(infant, camera, (width, height))[..., ::-1])
+        finally:
+            infant.close()
+        per_metre = height / span
+        for cm in range(0, 101, 10):  # the scale: a line every 10 cm above the soles
+            row = int(round(height - (margin + cm / 100) * per_metre))
+            if 0 <= row < height:
+                line = image[row]
+                line[np.all(line == 255, axis=1)] = (215, 215, 215)
+        for text, row, size in (
+            (f"{age:g} months", 26, 0.7),
+            (f"{100 * body.length:.1f} cm, {body.mass:.1f} kg", 50, 0.5),
+        ):
+            cv2.putText(image, text, (10, row), cv2.FONT_HERSHEY_SIMPLEX, size, (30,) * 3, 2)
+        panels.append(image)
+    note = "a line every 10 cm"
+    cv2.putText(panels[0], note, (10, 74), cv2.FONT_HERSHEY_SIMPLEX, 0.45, (90,) * 3, 1)
+    gap = np.full((height, 4, 3), 255, dtype=np.uint8)
+    parts = [panels[0]]
+    for panel in panels[1:]:
+        parts += [gap, panel]
+    return _write_png(path, np.concatenate(parts, axis=1))
 
 
 def eyes_picture(
@@ -167,5 +252,5 @@ def _write_png(path: str | Path, picture: np.ndarray) -> Path:
     """Write a BGR uint8 picture to ``path`` (parent folders made); return the path."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    cv2.imwrite(str(path), picture)
+    cv2.imwrite(str(path), picture, [cv2.IMWRITE_PNG_COMPRESSION, 9])
     return path

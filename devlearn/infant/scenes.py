@@ -10,7 +10,8 @@ from dataclasses import dataclass, field
 from dm_control import mjcf
 
 from devlearn.infant.body import WORLD_CONTYPE, add_infant
-from devlearn.infant.body_table import MITTEN_RGBA, RIGHT_MITTEN_RGBA, SKIN_RGBA
+from devlearn.infant.body_table import BODY_TABLE, MITTEN_RGBA, RIGHT_MITTEN_RGBA, SKIN_RGBA
+from devlearn.infant.growth import GrownBody
 from devlearn.timing import EPISODE_STEPS, PHYSICS_TIMESTEP  # noqa: F401 (re-exported)
 
 SCENE_GROUP = 2  # geom group of everything that is not the infant (hidden in body-map pictures)
@@ -298,7 +299,10 @@ def _props(root: mjcf.RootElement, scene: str, toy_colours: Sequence[Sequence[fl
 
 
 def build_scene_model(
-    scene: str, vestibular: bool = True, appearance: str = "mittens"
+    scene: str,
+    vestibular: bool = True,
+    appearance: str = "mittens",
+    body: GrownBody | None = None,
 ) -> tuple[mjcf.RootElement, list[str]]:
     """Build the MJCF model of a scene.
 
@@ -306,6 +310,9 @@ def build_scene_model(
         scene: A key of :data:`SCENES`.
         vestibular: Add the head's accelerometer and gyro.
         appearance: A key of :data:`APPEARANCES` (hand and toy colours).
+        body: The infant at an age (:func:`devlearn.infant.growth.grown_body`); None: the
+            default body. The hip is placed as high above the mattress or floor as the
+            default's, times the ratio of their hip radii (in the crib: at its own radius).
 
     Returns:
         (root element, actuated joint names in actuator order).
@@ -323,15 +330,22 @@ def build_scene_model(
     _props(root, scene, look.toy_colours)
     pos, xyaxes = spec.overview
     root.worldbody.add("camera", name="overview", pos=pos, xyaxes=xyaxes, fovy=50)
+    root_pos, table, density = spec.root_pos, BODY_TABLE, None
+    if body is not None:
+        table, density = body.table, body.density
+        hip = body.table[0].geoms[0].size[0] / BODY_TABLE[0].geoms[0].size[0]
+        root_pos = (root_pos[0], root_pos[1], root_pos[2] * hip)
     actuated = add_infant(
         root,
-        root_pos=spec.root_pos,
+        root_pos=root_pos,
         root_quat=spec.root_quat,
         actuated_groups=set(spec.actuated_groups),
         held=spec.held,
         vestibular=vestibular,
         hand_rgba=look.hand_rgba,
         right_hand_rgba=look.right_hand_rgba,
+        table=table,
+        density=density,
     )
     for joint, angle in spec.equality.items():
         # joint1 = polycoef[0]: the angle held; the motor on it pushes against the constraint.

@@ -6,7 +6,7 @@ import mujoco
 import numpy as np
 
 from devlearn.infant.regions import NUM_REGIONS
-from devlearn.infant.skin_layout import skin_layout
+from devlearn.infant.skin_layout import SkinLayout, skin_layout
 
 _FAR = 1e3  # position of the padding "sensor": never within range of anything
 _SUBDIV = 2  # grid cells per sensing radius (2 * spacing)
@@ -30,8 +30,10 @@ class Skin:
         body_spacing: (nbody,) float64 sensor spacing per body (0: no skin).
     """
 
-    def __init__(self, model: mujoco.MjModel) -> None:
-        layout = skin_layout(model)
+    def __init__(self, model: mujoco.MjModel, layout: SkinLayout | None = None) -> None:
+        """``layout``: where the sensors sit (default: the default body's, from ``model``; a
+        grown body's is :func:`~devlearn.infant.skin_layout.grown_layout`)."""
+        layout = skin_layout(model) if layout is None else layout
         ids = {n: mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, n) for n in set(layout.body)}
         self.sensor_body = np.array([ids[name] for name in layout.body], dtype=np.int64)
         self.sensor_pos = layout.pos.copy()

@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import mujoco
 import numpy as np
 
-from devlearn.infant.body_table import BODY_TABLE, table_hash
+from devlearn.infant.body_table import BODY_TABLE, BodySpec, GeomSpec, table_hash
 from devlearn.infant.regions import NUM_PARTS, assign_parts
 
 # Points on a hexagonal grid with neighbour distance s cover 2 / (sqrt(3) s^2) per unit area.
@@ -100,12 +100,14 @@ class SkinLayout:
         pos: (N, 3) float64 positions in the body's frame.
         region: (N,) int64 body-map region in [0, 68).
         spacing: body name -> sensor spacing (metres).
+        geom: (N,) str, side-free name of the geom each sensor lies on ("ribs").
     """
 
     body: np.ndarray
     pos: np.ndarray
     region: np.ndarray
     spacing: dict[str, float]
+    geom: np.ndarray
 
 
 def _geom_frame(model: mujoco.MjModel, g: int) -> tuple[np.ndarray, np.ndarray]:
@@ -116,8 +118,9 @@ def _geom_frame(model: mujoco.MjModel, g: int) -> tuple[np.ndarray, np.ndarray]:
 
 def _half_body(
     model: mujoco.MjModel, body: str, side_free: str, spacing: float, midline: bool
-) -> tuple[np.ndarray, np.ndarray]:
-    """Sensors of one left or midline body (midline: the y > 0 half only)."""
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Sensors of one left or midline body (midline: the y > 0 half only): positions, parts
+    and geom names."""
     bid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, body)
     geoms = [
         g
@@ -125,7 +128,7 @@ def _half_body(
         if model.geom_contype[g]
     ]
     frames = {g: _geom_frame(model, g) for g in geoms}
-    positions, parts = [], []
+    positions, parts, names = [], [], []
     for g in geoms:
         rot, pos = frames[g]
         local = surface_points(model.geom_type[g], model.geom_size[g], spacing)
@@ -145,37 +148,42 @@ def _half_body(
         gname = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, g).removeprefix("left_")
         positions.append(p[keep])
         parts.append(assign_parts(side_free, gname, p[keep], local[keep], model.geom_size[g]))
-    return np.concatenate(positions), np.concatenate(parts)
+        names.append(np.full(int(keep.sum()), gname, dtype=object))
+    return np.concatenate(positions), np.concatenate(parts), np.concatenate(names)
 
 
 _CACHE: dict[str, SkinLayout] = {}
 
 
 def _compute_layout(model: mujoco.MjModel) -> SkinLayout:
-    names, positions, regions, spacing = [], [], [], {}
+    names, positions, regions, geoms, spacing = [], [], [], [], {}
     for spec in BODY_TABLE:
         if spec.spacing is None:
             continue
         body = f"left_{spec.name}" if spec.paired else spec.name
-        pos, parts = _half_body(model, body, spec.name, spec.spacing, not spec.paired)
+        pos, parts, on = _half_body(model, body, spec.name, spec.spacing, not spec.paired)
         mirrored = pos * [1.0, -1.0, 1.0]
-        halves: tuple[tuple[str, np.ndarray, np.ndarray], ...]
+        halves: tuple[tuple[str, np.ndarray, np.ndarray, np.ndarray], ...]
         if spec.paired:
-            halves = ((body, pos, parts), (f"right_{spec.name}", mirrored, parts + NUM_PARTS))
-        else:
             halves = (
-                (body, np.concatenate([pos, mirrored]), np.concatenate([parts, parts + NUM_PARTS])),
+                (body, pos, parts, on),
+                (f"right_{spec.name}", mirrored, parts + NUM_PARTS, on),
             )
-        for name, p, r in halves:
+        else:
+            both = np.concatenate([parts, parts + NUM_PARTS])
+            halves = ((body, np.concatenate([pos, mirrored]), both, np.concatenate([on, on])),)
+        for name, p, r, g in halves:
             names.append(np.full(len(p), name, dtype=object))
             positions.append(p)
             regions.append(r)
+            geoms.append(g)
             spacing[name] = spec.spacing
     return SkinLayout(
         np.concatenate(names),
         np.concatenate(positions),
         np.concatenate(regions).astype(np.int64),
         spacing,
+        np.concatenate(geoms),
     )
 
 
@@ -190,3 +198,76 @@ def skin_layout(model: mujoco.MjModel) -> SkinLayout:
     if key not in _CACHE:
         _CACHE[key] = _compute_layout(model)
     return _CACHE[key]
+
+
+def _default_layout() -> SkinLayout:
+    """The default body's skin, from a bare model of it if no scene has been built yet."""
+    if table_hash() not in _CACHE:
+        from dm_control import mjcf
+
+        from devlearn.infant.body import add_infant
+
+        root = mjcf.RootElement(model="infant_skin")
+        add_infant(
+            root,
+            root_pos=(0.0, 0.0, 0.0),
+            root_quat=(1.0, 0.0, 0.0, 0.0),
+            actuated_groups=set(),
+            held={},
+            vestibular=False,
+        )
+        skin_layout(mjcf.Physics.from_mjcf_model(root).model.ptr)
+    return _CACHE[table_hash()]
+
+
+def _stretch(points: np.ndarray, before: GeomSpec, after: GeomSpec) -> np.ndarray:
+    """Move points on a geom's surface onto the same geom resized, (n, 3) body frame.
+
+    Along a capsule's axis a point keeps its fraction of the way, across it its direction, at
+    the new radius (on an end cap: from the cap's new centre); on a sphere or box each offset
+    from the centre scales with the radius or with each half size. A point on the surface
+    before is on the surface after.
+    """
+    if before.kind == "capsule":
+        assert before.fromto is not None and after.fromto is not None
+        a0, b0 = np.array(before.fromto[:3]), np.array(before.fromto[3:])
+        a1, b1 = np.array(after.fromto[:3]), np.array(after.fromto[3:])
+        axis = b0 - a0
+        t = np.clip((points - a0) @ axis / (axis @ axis), 0.0, 1.0)[:, None]
+        radial = points - (a0 + t * axis)
+        return a1 + t * (b1 - a1) + radial * (after.size[0] / before.size[0])
+    scale = np.array(after.size) / np.array(before.size)
+    if before.kind == "sphere":
+        scale = np.repeat(scale[:1], 3)
+    return np.array(after.pos) + (points - np.array(before.pos)) * scale
+
+
+def grown_layout(table: tuple[BodySpec, ...]) -> SkinLayout:
+    """The default body's skin moved onto a grown body (:mod:`devlearn.infant.growth`).
+
+    Every sensor stays on its geom (:func:`_stretch`), in its region, so the 68 regions hold
+    the same number of sensors at every age; each body's spacing is the grown one (the
+    default's times the square root of its skin's growth in area). Where the growth changes a
+    body's proportions, a few sensors can end up inside a neighbouring geom of the same body
+    (at birth, 14 of the upper trunk's 126, under the shorter trunk's overlapping
+    capsules); they still feel contacts near them, through the force spreading.
+
+    Args:
+        table: The grown body's table: the default's parts and geoms, resized.
+    """
+    base = _default_layout()
+    pos = base.pos.copy()
+    grown = {spec.name: spec for spec in table}
+    spacing = {}
+    for spec in BODY_TABLE:
+        for side in ("left_", "right_") if spec.paired else ("",):
+            body = side + spec.name
+            on_body = base.body == body
+            if not on_body.any():
+                continue
+            spacing[body] = float(grown[spec.name].spacing or 0.0)
+            mirror = np.array([1.0, -1.0 if side == "right_" else 1.0, 1.0])
+            for before, after in zip(spec.geoms, grown[spec.name].geoms):
+                rows = np.flatnonzero(on_body & (base.geom == before.name))
+                pos[rows] = _stretch(pos[rows] * mirror, before, after) * mirror
+    return replace(base, pos=pos, spacing=spacing)

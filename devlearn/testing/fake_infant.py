@@ -25,7 +25,11 @@ if TYPE_CHECKING:
 
 
 class FakeInfant:
-    """A point that moves by its actions: proprioception is its position, (action_dim,)."""
+    """A point that moves by its actions: proprioception is its position, (action_dim,).
+
+    ``age_months`` is recorded only (a growing run's envs rebuild it at each new age and
+    :meth:`continue_from` carries the point over), so growth can be tested without MuJoCo.
+    """
 
     physics_timestep = 0.005
     control_timestep = 0.005
@@ -40,8 +44,10 @@ class FakeInfant:
         fail_after: int | None = None,
         interrupt_after: int | None = None,
         die_after: int | None = None,
+        age_months: float | None = None,
     ) -> None:
         self.scene = scene
+        self.age_months = age_months
         self.senses = tuple(senses)
         self.eye_size = eye_size
         self.episode_steps = episode_steps
@@ -70,6 +76,11 @@ class FakeInfant:
 
             os.kill(os.getpid(), signal.SIGKILL)  # as if the OOM killer struck
         self.position = np.clip(self.position + 0.1 * np.clip(action, -1, 1), -2, 2)
+
+    def continue_from(self, other: FakeInfant) -> None:
+        """Take over ``other``'s position and step count (the real infant's joint state)."""
+        self.position = other.position.copy()
+        self.steps_taken = other.steps_taken
 
     def proprioception(self) -> np.ndarray:
         return self.position.astype(np.float32)

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import torch
 
+from devlearn.ages import check_age
 from devlearn.api.errors import UsageError
 from devlearn.config.checks import STEPS_MAX
 from devlearn.config.run_config import from_dict, to_rsl_rl
@@ -566,6 +567,19 @@ class Checkpoint:
     def env_steps(self) -> int:
         """Environment steps it was trained for (0 where it does not say)."""
         return int(self.state.get("env_steps", 0))
+
+    @property
+    def age_months(self) -> float | None:
+        """The body's age it last trained at (a growing run's final age; None: the default
+        body; a checkpoint from before ages: its config's)."""
+        if "age_months" not in self.state:
+            return self.config.infant.age_months
+        if self.state["age_months"] is None:
+            return None
+        try:
+            return check_age(self.state["age_months"], "its age_months")
+        except ValueError as err:
+            raise UsageError(f"checkpoint {self.path} is damaged: {err}") from None
 
     def behavior(self) -> Behavior:
         """Its behaviour under its config, with the policy artifacts the checkpoint carries

@@ -23,7 +23,8 @@ from tqdm import tqdm
 
 from devlearn.api.behavior import RunMetrics
 from devlearn.api.curriculum import Curriculum
-from devlearn.api.errors import RunStopped
+from devlearn.api.errors import RunStopped, UsageError
+from devlearn.config.growth import growth_schedule
 from devlearn.config.run_config import RunConfig
 from devlearn.env.guards import GuardError
 from devlearn.env.workers import EnvWorkerError
@@ -80,7 +81,9 @@ class DevRunner:
     iteration of a new curriculum stage (the stage-switch checkpoint another run may start
     from with ``devlearn run --from``), at the end and on Ctrl-C or SIGTERM; the run-wide
     reward memory merged across env workers and ranks at every iteration boundary
-    (:meth:`~devlearn.env.DevVecEnv.sync_run_memory`); CPU distributed training over gloo;
+    (:meth:`~devlearn.env.DevVecEnv.sync_run_memory`); a body that grows (``infant.growth``:
+    the schedule's age given to the envs before each iteration, recorded in checkpoints);
+    CPU distributed training over gloo;
     learned rewards (``RunConfig.curiosity``), added to the rollout's rewards and trained
     after each rollout, logged under ``reward/<name>/...`` and saved in checkpoints
     (:mod:`devlearn.training.learned_rewards`). ``current_learning_iteration`` counts
@@ -128,6 +131,15 @@ class DevRunner:
         self.run_cfg = cfg
         self.run_dir = Path(run_dir)
         self.curriculum = curriculum
+        self.growth = growth_schedule(cfg)
+        """The body's age over the run (``infant.growth``; None: it keeps its age)."""
+        if self.growth is not None and self.growth.by_stage:
+            if len(self.growth.ages) > len(curriculum.stages):
+                raise UsageError(
+                    f"infant.growth '{cfg.infant.growth}' names {len(self.growth.ages)} ages, "
+                    f"but {cfg.behavior_name}'s curriculum has {len(curriculum.stages)} "
+                    f"stage(s): {', '.join(s.name for s in curriculum.stages)}"
+                )
         self.show_progress = progress
         self.env_steps = 0
         self.env = env
@@ -233,6 +245,7 @@ class DevRunner:
             purge_tensorboard_from(self.logger.writer, start_it)
         self.curriculum.update(self.env_steps)
         env.set_stage(self.curriculum.stage.options)
+        self._grow(total_steps)
         bar = tqdm(
             total=total_steps,
             initial=self.env_steps,
@@ -247,6 +260,7 @@ class DevRunner:
             while self.env_steps < total_steps:
                 if self.curriculum.update(self.env_steps):
                     env.set_stage(self.curriculum.stage.options)
+                self._grow(total_steps)
                 collect_threads, learn_threads = threads.next_iteration()
 
                 # Collect: a rollout with the workers stepping while the policy acts.
@@ -314,6 +328,13 @@ class DevRunner:
             self.logger.stop_logging_writer()
             if self.logger.writer is not None:
                 self.logger.writer.close()
+
+    def _grow(self, total_steps: int) -> None:
+        """Give the envs the growth schedule's age at this step; they rebuild their physics
+        only when it changed (once per env, carrying their episodes on)."""
+        if self.growth is not None:
+            age = self.growth.age_at(self.env_steps, total_steps, self.curriculum.index)
+            self.env.set_age(age)
 
     def _collect(self, obs: Any) -> tuple[Any, Rollout]:
         """One rollout of ``num_steps_per_env`` decisions into PPO's storage, the learned
@@ -390,6 +411,7 @@ class DevRunner:
             bar,
             self.logger.writer,
             health,
+            self.env.age_months,
         )
         for warning in self.health.check(row):
             if self.is_main:

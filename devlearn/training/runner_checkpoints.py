@@ -29,7 +29,8 @@ class RunCheckpoints:
     """Snapshot, save and restore everything a run needs to continue.
 
     A checkpoint holds the model and optimiser (``alg.save()``), iteration, env steps,
-    curriculum, every env's reward-term state, the learned rewards, the reward normaliser,
+    curriculum, the body's age (``age_months``, None: the default body), every env's
+    reward-term state, the learned rewards, the reward normaliser,
     the run metrics (e.g. self-touch's training-score window), rng states, behaviour name and
     config (``docs/checkpoints.md``).
 
@@ -78,6 +79,7 @@ class RunCheckpoints:
             curriculum=copy.deepcopy(self.curriculum.state_dict()),
             env=copy.deepcopy(self.env.state_dict()),
             learning_rate=self.alg.learning_rate,
+            age_months=self.env.age_months,
             learned=copy.deepcopy(self.learned.state_dict()),  # live tensors otherwise
             reward_norm=(
                 copy.deepcopy(self.reward_norm.state_dict()) if self.reward_norm is not None else {}

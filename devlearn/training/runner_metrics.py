@@ -89,6 +89,7 @@ class MetricsLog:
         bar: tqdm,
         writer: SummaryWriter | None,
         health: dict[str, float] | None = None,
+        age_months: float | None = None,
     ) -> dict[str, Any]:
         """Add the iteration's finished episodes, append one line to metrics.jsonl, write the
         extra TensorBoard scalars and refresh the progress bar (rank 0); return the row.
@@ -106,12 +107,15 @@ class MetricsLog:
             writer: rsl-rl's writer (TensorBoard, W&B...; None: none).
             health: The learner's figures (:mod:`devlearn.training.health`), also shown on the
                 progress bar.
+            age_months: The body's age during the iteration (a row has ``age_months`` only
+                where it is set: a run at an age or growing).
         """
         self.episodes.extend(finished)
         row: dict[str, Any] = {
             "step": env_steps,
             "iteration": it,
             "stage": self.curriculum.stage.name,
+            **({} if age_months is None else {"age_months": age_months}),
             "steps_per_s": rate,
             **times,
             "episodes": len(finished),

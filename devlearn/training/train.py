@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import errno
 import os
+import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -14,6 +15,7 @@ import torch
 
 from devlearn.api.errors import UsageError
 from devlearn.config.checks import check_memory, check_out_dir, holds_run
+from devlearn.config.growth import growth_schedule, start_age
 from devlearn.config.run_config import RunConfig, to_rsl_rl
 from devlearn.env import DevVecEnv
 from devlearn.training.checkpoint import (
@@ -235,6 +237,18 @@ def _build(
         write_config_file(cfg, run_dir / CONFIG_FILE)
 
     # Environments (seeded seed + rank * num_envs + index) and the runner.
+    # The body at the run's age at its step: a resumed growing run goes on at its schedule's
+    # age, a fixed one at its config's (a checkpoint records the body it last trained with).
+    steps = int(checkpoint["env_steps"]) if checkpoint else 0
+    age = start_age(cfg, steps, behavior.curriculum().stage_index_at(steps))
+    if checkpoint is not None and rank == 0 and growth_schedule(cfg) is None:
+        trained = checkpoint.get("age_months", age)
+        if trained != age:
+            print(
+                f"devlearn: note: the checkpoint's body was {_body(trained)}; this run goes on "
+                f"with {_body(age)} (infant.age_months)",
+                file=sys.stderr,
+            )
     env = DevVecEnv(
         behavior,
         cfg.num_envs,
@@ -244,6 +258,7 @@ def _build(
         infant_factory,
         rank,
         action_repeat=cfg.env.action_repeat,
+        age_months=age,
     )
     try:
         env.cfg = cfg
@@ -274,6 +289,10 @@ def _build(
         env.close()
         raise
     return env, runner
+
+
+def _body(age: float | None) -> str:
+    return "the default body" if age is None else f"the body at {age:g} months"
 
 
 def _restore(runner: DevRunner, checkpoint: dict[str, Any], curriculum: bool, source: str) -> None:

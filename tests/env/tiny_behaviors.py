@@ -62,3 +62,23 @@ class NoveltyBehavior(TinyBehavior):
 
     def reward_terms(self) -> list:
         return [StepNovelty()]
+
+
+class BodyAge(devlearn.IntrinsicReward):
+    """Pays the age (months) of the body that took the step: shows which body every env,
+    in process or in a worker, stepped (issue #41's growth)."""
+
+    name = "body_age"
+
+    def __call__(self, ctx: devlearn.StepContext) -> float:
+        age = getattr(ctx.infant, "age_months", None)
+        return -1.0 if age is None else float(age)
+
+
+class AgeBehavior(TinyBehavior):
+    """The tiny behaviour paid only the age of its body (:class:`BodyAge`)."""
+
+    name = "aged"
+
+    def reward_terms(self) -> list[devlearn.IntrinsicReward]:
+        return [BodyAge(1.0)]

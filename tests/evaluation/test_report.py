@@ -12,7 +12,7 @@ from devlearn.cli import main
 from devlearn.evaluation.report import write_report
 
 
-def fake_eval(folder, score, seed, behavior="self_touch", policy="checkpoint", max_std=1.0):
+def fake_eval(folder, score, seed, behavior="self_touch", policy="checkpoint", max_std=1.0, **more):
     folder.mkdir(parents=True)
     config = {
         "seed": seed,
@@ -39,6 +39,7 @@ def fake_eval(folder, score, seed, behavior="self_touch", policy="checkpoint", m
             "headline": "score",
             "criteria": {"hand_touch": "..."},
         },
+        **more,
     }
     (folder / "eval.json").write_text(json.dumps(summary))
     return folder
@@ -98,6 +99,25 @@ def test_policies_of_another_learner_are_a_variant_of_their_own(tmp_path):
     result = write_report(paths, tmp_path / "report")
     assert set(result["columns"]) == {"learner=devlearn_ppo", "learner=sb3_ppo"}
     assert result["table"]["score"]["learner=sb3_ppo"]["mean"] == 0.2
+
+
+def test_a_policy_and_a_baseline_evaluated_at_several_ages_are_a_column_per_age(tmp_path):
+    # issue #41: each seed's policy evaluated at its own age and at another one
+    paths = [
+        fake_eval(tmp_path / f"seed{s}" / folder, score, s, age_months=age)
+        for s in (1, 2)
+        for folder, score, age in (("eval", 0.6, 18.0), ("eval_6_months", 0.3, 6.0))
+    ]
+    for age in (6.0, 18.0):
+        fake_eval(tmp_path / f"random_{age:g}", age / 100, 0, policy="random", age_months=age)
+    result = write_report(paths, tmp_path / "report")
+    assert result["notes"] == []  # two ages of one seed are not one seed evaluated twice
+    table = result["table"]["score"]
+    assert table["eval.age_months=18.0"]["values"] == [0.6, 0.6]
+    assert table["eval.age_months=6.0"]["values"] == [0.3, 0.3]
+    assert table["random (6 months) baseline"]["values"] == [0.06]
+    assert table["random (18 months) baseline"]["values"] == [0.18]
+    assert result["columns"]["random (6 months) baseline"]["kind"] == "baseline"
 
 
 def test_bad_input(tmp_path, three_seeds, capsys):

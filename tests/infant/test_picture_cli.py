@@ -6,6 +6,7 @@ import argparse
 import gc
 
 import cv2
+import numpy as np
 import pytest
 
 from devlearn.cli import picture
@@ -27,7 +28,10 @@ def _parse(argv):
     return parser.parse_args(argv)
 
 
-@pytest.mark.parametrize("what, shape", [("eyes", (256, 865, 3)), ("body-map", (900, 1100, 3))])
+@pytest.mark.parametrize(
+    "what, shape",
+    [("eyes", (256, 865, 3)), ("body-map", (900, 1100, 3)), ("growth", (520, 5 * 250 + 4 * 4, 3))],
+)
 def test_picture_writes_png(tmp_path, capsys, what, shape):
     out = tmp_path / f"{what}.png"
     args = _parse(["picture", what, "--out", str(out)])
@@ -48,3 +52,20 @@ def test_body_map_is_the_same_picture_every_time(tmp_path):
     first = body_map_picture(tmp_path / "a.png", width=120, height=240).read_bytes()
     again = body_map_picture(tmp_path / "b.png", width=120, height=240).read_bytes()
     assert first == again  # mjv_initGeom left uninitialised fields: every render differed
+
+
+def test_the_growth_picture_shows_the_infant_growing(tmp_path):
+    from devlearn.infant.pictures import growth_picture
+
+    image = cv2.imread(str(growth_picture(tmp_path / "growth.png")))
+    assert image.shape == (520, 1266, 3)
+    crowns = []
+    for k in range(5):  # each panel: the highest row of the body (not white, grey or text)
+        panel = image[60:, k * 254 : k * 254 + 250].astype(int)
+        coloured = (panel.max(axis=2) - panel.min(axis=2)) > 20  # skin, not the grey lines
+        crowns.append(int(np.flatnonzero(coloured.any(axis=1))[0]))
+    assert all(a > b for a, b in zip(crowns, crowns[1:])), crowns  # taller at every age
+    again = growth_picture(tmp_path / "again.png", ages=(0.0, 24.0), width=80, height=160)
+    assert again.read_bytes() == growth_picture(
+        tmp_path / "same.png", ages=(0.0, 24.0), width=80, height=160
+    ).read_bytes()

@@ -21,9 +21,10 @@ from devlearn.testing.fake_infant import FakeInfant, TinyBehavior  # noqa: E402
 
 
 class RecordingInfant(FakeInfant):
-    """A fake infant that keeps every action it was given."""
+    """A fake infant that keeps every action it was given (and every age it was built at)."""
 
     log: list = []
+    ages: list = []
 
     def step(self, action):
         RecordingInfant.log.append(np.array(action))
@@ -31,7 +32,8 @@ class RecordingInfant(FakeInfant):
 
 
 def recording(scene, senses=("proprioception",), **kwargs):
-    return RecordingInfant(scene, senses, episode_steps=10)
+    RecordingInfant.ages.append(kwargs.get("age_months"))
+    return RecordingInfant(scene, senses, episode_steps=10, age_months=kwargs.get("age_months"))
 
 
 @pytest.fixture
@@ -319,3 +321,35 @@ def test_an_undeclared_protocol_evaluates_in_the_stage_the_policy_trained_in(reg
     # a baseline evaluates in the stage a default run ends in (tiny: 150,000 steps: random)
     summary = evaluate("tiny", None, 1, registry, policy="zero", progress=False)
     assert summary["protocol"]["stage"] == {"random_pose": True} and summary["start"] == "random"
+
+
+def test_a_checkpoint_is_evaluated_at_its_last_age_or_the_age_given(registry, tmp_path, capsys):
+    run = tmp_path / "grew"
+    args = ["run", "tiny", "--steps", "32", "--envs", "2", "--out", str(run)]
+    assert main([*args, "--set", "infant.growth=3,9"]) == 0  # two iterations: 3, then 9 months
+    checkpoint = run / "checkpoint_latest.pt"
+
+    def evaluated(*overrides):
+        RecordingInfant.ages = []
+        summary = evaluate("tiny", checkpoint, 1, registry, progress=False, overrides=[*overrides])
+        age = summary["age_months"]
+        assert RecordingInfant.ages == [age] and summary["protocol"]["age_months"] == age
+        return age
+
+    assert evaluated() == 9.0  # where it ended
+    assert evaluated("infant.age_months=1.5") == 1.5
+    assert evaluated("infant.age_months=null") is None  # the default body
+    with pytest.raises(UsageError, match="infant.age_months must be between 0 and 24 months"):
+        evaluated("infant.age_months=30")
+    with pytest.raises(UsageError, match="--set applies to baselines only, and infant.age_m"):
+        evaluated("infant.age_months=3", "ppo.gamma=0.9")
+    zero = evaluate("tiny", None, 1, registry, progress=False, policy="zero")
+    assert zero["age_months"] is None
+    zero = evaluate(
+        "tiny", None, 1, registry, progress=False, policy="zero", overrides=["infant.age_months=2"]
+    )
+    assert zero["age_months"] == 2.0
+    capsys.readouterr()
+    at = ["eval", "tiny", "--checkpoint", str(run), "--episodes", "1"]
+    assert main([*at, "--set", "infant.age_months=6"]) == 0
+    assert f"written to {run / 'eval_6_months'}" in capsys.readouterr().out

@@ -39,11 +39,13 @@ class FakeAlg:
 
 
 class FakeEnv:
-    """What RunCheckpoints uses of DevVecEnv: state_dict, load_state_dict, sync_run_memory."""
+    """What RunCheckpoints uses of DevVecEnv: state_dict, load_state_dict, sync_run_memory,
+    the body's age."""
 
     def __init__(self) -> None:
         self.state = {"envs": [{"count": 1}, {"count": 2}]}
         self.synced = 0
+        self.age_months: float | None = None
 
     def state_dict(self) -> dict:
         return self.state
@@ -77,6 +79,7 @@ def checkpoints(tmp_path, alg=None, env=None) -> RunCheckpoints:
 def test_checkpoints_save_a_snapshot_and_restore_it(tmp_path):
     parts = checkpoints(tmp_path)
     parts.curriculum.update(96)  # the random stage
+    parts.env.age_months = 7.5  # a growing body's age at the boundary
     torch.manual_seed(5)
     good = parts.snapshot(iteration=3, env_steps=96)
     expected = torch.rand(3)  # what the restored generator draws next
@@ -92,6 +95,7 @@ def test_checkpoints_save_a_snapshot_and_restore_it(tmp_path):
     assert (state["iteration"], state["env_steps"], state["behavior"]) == (3, 96, "tiny")
     assert state["env"] == {"ranks": [{"envs": [{"count": 1}, {"count": 2}]}]}
     assert state["config"]["total_steps"] == 128
+    assert state["age_months"] == 7.5
 
     fresh = checkpoints(tmp_path, env=FakeEnv())
     fresh.env.state = {"envs": []}
@@ -100,6 +104,7 @@ def test_checkpoints_save_a_snapshot_and_restore_it(tmp_path):
     assert torch.equal(fresh.alg.weights, torch.arange(4.0))
     assert fresh.env.state == {"envs": [{"count": 1}, {"count": 2}]} and fresh.env.synced == 1
     assert fresh.curriculum.stage.name == "random"
+    assert fresh.env.age_months is None  # the body is the run's config's (train() built it)
     assert torch.equal(torch.rand(3), expected)
 
 

@@ -1,7 +1,8 @@
 """Helpers for training tests: a registry with the tiny behaviour and a config factory.
 
-Run as a script (``python tiny_run.py OUT_DIR TOTAL_STEPS``) it trains the tiny behaviour in
-process, so tests can kill it at any moment.
+Run as a script (``python tiny_run.py OUT_DIR TOTAL_STEPS [KEY=VALUE...]``) it trains the tiny
+behaviour in process, so tests can kill it at any moment; ``python tiny_run.py --resume
+OUT_DIR`` continues such a run.
 """
 
 from __future__ import annotations
@@ -39,5 +40,8 @@ def config(out_dir, total_steps: int = 256, *overrides: str, **top):
 if __name__ == "__main__":
     from devlearn.training import train
 
-    out, steps, *rest = sys.argv[1:]
-    train(config(out, int(steps), *rest), registry(), infant_factory=factory, progress=False)
+    if sys.argv[1] == "--resume":
+        train(None, registry(), resume=sys.argv[2], infant_factory=factory, progress=False)
+    else:
+        out, steps, *rest = sys.argv[1:]
+        train(config(out, int(steps), *rest), registry(), infant_factory=factory, progress=False)
