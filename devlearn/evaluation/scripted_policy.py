@@ -13,6 +13,7 @@ import torch
 import torch.nn as nn
 
 from devlearn.api.errors import UsageError
+from devlearn.config.growth import start_age
 from devlearn.config.run_config import from_dict
 from devlearn.training.checkpoint import SCRIPTED_METADATA, behavior_with_artifacts
 
@@ -150,6 +151,18 @@ class ScriptedPolicy:
     def behavior_name(self) -> str:
         """The behaviour it was trained for."""
         return str(self.state["behavior"])
+
+    @property
+    def env_steps(self) -> int:
+        """Physics steps it was trained for (0 where it does not say)."""
+        return int(self.state.get("env_steps", 0))
+
+    @property
+    def age_months(self) -> float | None:
+        """The body's age it last trained at: its config's growth schedule at its steps, else
+        ``infant.age_months`` (None: the default body)."""
+        stage = self.behavior().curriculum().stage_index_at(self.env_steps)
+        return start_age(self.config, self.env_steps, stage)
 
     @property
     def learner(self) -> str:

@@ -99,19 +99,23 @@ class DevlearnEnv(gymnasium.Env):
         self.setup = RunSetup(behavior, overrides, preset, registry=registry)
         cfg = self.setup.config
         factory = infant_factory or build_default_infant
+        self.clock = CurriculumClock(
+            self.setup.behavior.curriculum(),
+            cfg.env.action_repeat,
+            cfg.ppo.num_steps_per_env,
+            cfg,
+        )
         try:
             self.env = BehaviorEnv(
                 self.setup.behavior,
                 cfg.seed,
                 with_eyes(factory) if render_mode else factory,
                 action_repeat=cfg.env.action_repeat,
+                age_months=self.clock.age_months,
             )
         except BaseException:
             self.setup.close()
             raise
-        self.clock = CurriculumClock(
-            self.setup.behavior.curriculum(), cfg.env.action_repeat, cfg.ppo.num_steps_per_env
-        )
         self.env.set_stage(self.clock.stage.options)
         self.observation_dict = observation_space(self.env.reset())  # from one observation
         """The observation space, typed as the Dict of groups it is."""
@@ -170,9 +174,11 @@ class DevlearnEnv(gymnasium.Env):
             assert self.env.final_observation is not None and summary is not None
             self._next_obs, obs = obs, self.env.final_observation
             info.update(episode_info(summary))
-        _, changed = self.clock.tick()
+        boundary, changed = self.clock.tick()
         if changed:  # as a run's envs, from their next reset
             self.env.set_stage(self.clock.stage.options)
+        if boundary:  # a growing body: the schedule's age, as a run's envs before an iteration
+            self.env.set_age(self.clock.age_months)
         return as_space(obs, self.observation_dict), float(reward), False, bool(done), info
 
     def render(self) -> np.ndarray | None:

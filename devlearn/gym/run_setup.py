@@ -14,6 +14,7 @@ import numpy as np
 from gymnasium import spaces
 
 from devlearn.api.errors import UsageError
+from devlearn.config.growth import start_age
 from devlearn.env.guards import OBSERVATION_BOUND
 from devlearn.training.resolve import RunRequest, resolve_config
 
@@ -136,23 +137,30 @@ def as_space(observation: Mapping[str, np.ndarray], space: spaces.Dict) -> dict[
 
 
 class CurriculumClock:
-    """The curriculum advanced as a devlearn run advances it.
+    """The curriculum (and the body's age) advanced as a devlearn run advances them.
 
     A run counts physics steps summed over its environments and, at every iteration boundary
     (``ppo.num_steps_per_env`` decisions), moves the curriculum to that count and merges the
     workers' run-wide reward memory; the Gymnasium envs keep the same rhythm, counting the
-    decisions they are stepped. So a foreign learner meets every stage at the step count a
-    devlearn run of the same ``num_envs`` and ``env.action_repeat`` would.
+    decisions they are stepped. So a foreign learner meets every stage, and every age of a
+    growing body (``infant.growth``), at the step count a devlearn run of the same ``num_envs``
+    and ``env.action_repeat`` would.
 
     Args:
         curriculum: The behaviour's curriculum.
         steps_per_decision: Physics steps one decision adds (``num_envs * action_repeat``).
         decisions_per_iteration: ``ppo.num_steps_per_env``.
+        config: The run config (its ``infant`` section gives the body's age over the run).
     """
 
     def __init__(
-        self, curriculum: Curriculum, steps_per_decision: int, decisions_per_iteration: int
+        self,
+        curriculum: Curriculum,
+        steps_per_decision: int,
+        decisions_per_iteration: int,
+        config: RunConfig,
     ) -> None:
+        self.config = config
         self.curriculum = curriculum
         self.steps_per_decision = int(steps_per_decision)
         self.decisions_per_iteration = int(decisions_per_iteration)
@@ -165,6 +173,13 @@ class CurriculumClock:
     def stage(self) -> Stage:
         """The active stage."""
         return self.curriculum.stage
+
+    @property
+    def age_months(self) -> float | None:
+        """The body's age now (``infant.growth``'s at this step and stage, else
+        ``infant.age_months``; None: the default body), as a run gives it to its envs before
+        each iteration."""
+        return start_age(self.config, self.physics_steps, self.curriculum.index)
 
     def tick(self) -> tuple[bool, bool]:
         """Count one decision of every env.

@@ -82,6 +82,12 @@ class DevlearnVectorEnv(VectorEnv):
         top = {"num_envs": num_envs, "workers": workers}
         self.setup = RunSetup(behavior, overrides, preset, top, registry)
         cfg = self.setup.config
+        self.clock = CurriculumClock(
+            self.setup.behavior.curriculum(),
+            cfg.num_envs * cfg.env.action_repeat,
+            cfg.ppo.num_steps_per_env,
+            cfg,
+        )
         try:
             self.envs = DevVecEnv(
                 self.setup.behavior,
@@ -91,17 +97,13 @@ class DevlearnVectorEnv(VectorEnv):
                 infant_factory=infant_factory,
                 rank=0,
                 action_repeat=cfg.env.action_repeat,
+                age_months=self.clock.age_months,
             )
         except BaseException:
             self.setup.close()
             raise
         self.num_envs = cfg.num_envs
         self.seed_base = cfg.seed
-        self.clock = CurriculumClock(
-            self.setup.behavior.curriculum(),
-            cfg.num_envs * cfg.env.action_repeat,
-            cfg.ppo.num_steps_per_env,
-        )
         self.envs.set_stage(self.clock.stage.options)
         arrays = self.envs.arrays
         self.names = list(self.envs.observation_shapes)
@@ -187,6 +189,7 @@ class DevlearnVectorEnv(VectorEnv):
             self.envs.sync_run_memory()
             if changed:
                 self.envs.set_stage(self.clock.stage.options)
+            self.envs.set_age(self.clock.age_months)  # a growing body: the schedule's age
         return result
 
     def close_extras(self, **kwargs: Any) -> None:

@@ -131,3 +131,30 @@ def test_rgb_array_renders_the_eyes_and_the_view():
     finally:
         env.close()
     assert make().render() is None
+
+
+def test_the_body_has_a_runs_age_at_every_iteration_boundary():
+    """infant.age_months builds the body at that age; infant.growth changes it where a run
+    would: at its iteration boundaries (ppo.num_steps_per_env decisions)."""
+    fixed = make({"infant.age_months": 6})
+    try:
+        assert fixed.env.age_months == 6 and fixed.env.infant.age_months == 6
+    finally:
+        fixed.close()
+    cfg = make().setup.config
+    decisions = cfg.ppo.num_steps_per_env
+    steps = decisions * cfg.env.action_repeat  # one env: physics steps of an iteration
+    # 6 -> 18 months in three pieces of one iteration each: 6, 12, 18 months
+    growing = make(
+        {"infant.growth": "6->18", "infant.growth_every": steps, "total_steps": 3 * steps}
+    )
+    try:
+        growing.reset(seed=0)
+        ages = [growing.env.infant.age_months]
+        for _ in range(2):
+            for _ in range(decisions):
+                growing.step(np.zeros(growing.action_space.shape, np.float32))
+            ages.append(growing.env.infant.age_months)
+        assert ages == [6.0, 12.0, 18.0]
+    finally:
+        growing.close()

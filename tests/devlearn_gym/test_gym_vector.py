@@ -169,3 +169,31 @@ def test_make_vec_builds_devlearns_vector_env_for_an_installed_behaviour():
         assert isinstance(plain, DevlearnVectorEnv)
     finally:
         plain.close()
+
+
+@pytest.mark.parametrize("workers", [0, 2])
+def test_the_body_has_a_runs_age_at_every_iteration_boundary(workers):
+    """infant.age_months builds the body at that age; infant.growth changes it at a run's
+    iteration boundaries, to the schedule's age at the run's step count (issue #41); the
+    rebuild inside workers is tests/env/test_growth_env.py's."""
+    fixed = make(2, workers, {"infant.age_months": 6})
+    try:
+        assert fixed.envs.age_months == 6
+        cfg = fixed.setup.config
+    finally:
+        fixed.close()
+    decisions = cfg.ppo.num_steps_per_env
+    steps = 2 * decisions * cfg.env.action_repeat  # two envs: physics steps of an iteration
+    # 6 -> 18 months in three pieces of one iteration each: 6, 12, 18 months
+    overrides = {"infant.growth": "6->18", "infant.growth_every": steps, "total_steps": 3 * steps}
+    growing = make(2, workers, overrides)
+    try:
+        growing.reset(seed=0)
+        ages = [growing.envs.age_months]
+        for _ in range(2):
+            for _ in range(decisions):
+                growing.step(np.zeros((2, growing.single_action_space.shape[0]), np.float32))
+            ages.append(growing.envs.age_months)
+        assert ages == [6.0, 12.0, 18.0]
+    finally:
+        growing.close()
