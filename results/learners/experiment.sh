@@ -22,10 +22,10 @@ ours() {  # ours SEED: devlearn's PPO, resumed if interrupted
   local dir=$OUT/devlearn_ppo/seed=$1
   [ -f "$dir/checkpoint_$STEPS.pt" ] && return
   if [ -f "$dir/checkpoint_latest.pt" ]; then
-    "$DEVLEARN" run self_touch --resume "$dir" --no-progress
+    "$DEVLEARN" run self_touch --resume "$dir"
   else
     "$DEVLEARN" run self_touch --steps "$STEPS" --seed "$1" --workers 0 --set torch_threads=1 \
-      --out "$dir" --force --no-progress
+      --out "$dir" --force
   fi
 }
 
