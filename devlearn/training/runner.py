@@ -154,7 +154,7 @@ class DevRunner:
             self.logger = Logger(
                 log_dir=str(self.run_dir),
                 cfg=train_cfg,
-                env_cfg=env.cfg,
+                env_cfg=cfg,  # the run config, which W&B records
                 num_envs=env.num_envs,
                 is_distributed=self.is_distributed,
                 gpu_world_size=self.gpu_world_size,

@@ -62,6 +62,38 @@ class TrainResult:
     """The learner-health warnings the run gave (:mod:`devlearn.training.health`)."""
 
 
+@dataclass
+class RunContext:
+    """What a run's start-up settled, read by the parts it builds (one object instead of a dozen
+    parameters): the checked config, where it runs and as which rank, and what it continues."""
+
+    cfg: RunConfig
+    """The run config, checked, with ``out_dir`` and ``workers`` resolved."""
+    registry: PluginRegistry
+    """Where its behaviour comes from."""
+    run_dir: Path
+    """The run folder."""
+    rank: int
+    """This process's rank (torchrun's ``RANK``; 0 alone)."""
+    world_size: int
+    """Ranks in the run (torchrun's ``WORLD_SIZE``; 1 alone)."""
+    device: str
+    """Torch device of the networks."""
+    learned: LearnedRewards
+    """The learned rewards (``curiosity``), names checked."""
+    checkpoint: dict[str, Any] | None = None
+    """The state it continues from (its own latest when resuming, another run's with
+    ``start_from``); None: a fresh start."""
+    checkpoint_path: str | Path | None = None
+    """Where ``checkpoint`` was read (for messages)."""
+    start_from: str | Path | None = None
+    """Another run's checkpoint this new run starts from (``devlearn run --from``)."""
+    infant_factory: InfantFactory | None = None
+    """Infant builder for the envs (tests); None: the real infant."""
+    progress: bool = True
+    """Show the progress bar."""
+
+
 def default_run_dir(behavior_name: str) -> Path:
     """``runs/<behavior>-<YYYYmmdd-HHMMSS>``."""
     return Path("runs") / f"{behavior_name}-{time.strftime('%Y%m%d-%H%M%S')}"
@@ -157,21 +189,12 @@ def train(
     cfg.workers = resolve_workers(cfg.workers, cfg.num_envs)  # config.json records the number
     learned = LearnedRewards.from_config(cfg, registry)  # names checked before the slow set-up
     check_memory(cfg.num_envs, cfg.workers)
+    ctx = RunContext(
+        cfg, registry, run_dir, rank, world_size, device, learned,
+        checkpoint, ckpt_path, start_from, infant_factory, progress,
+    )  # fmt: skip
     with start_up(run_dir, replace=force and resume is None, owner=rank == 0):
-        env, runner = _build(
-            cfg,
-            registry,
-            run_dir,
-            checkpoint,
-            infant_factory,
-            progress,
-            rank,
-            world_size,
-            device,
-            learned,
-            start_from,
-            ckpt_path,
-        )
+        env, runner = _build(ctx)
     if started is not None and rank == 0:  # built: a start-up error was one line, this is none
         started(run_dir)
     try:
@@ -195,23 +218,11 @@ def train(
     )
 
 
-def _build(
-    cfg: RunConfig,
-    registry: PluginRegistry,
-    run_dir: Path,
-    checkpoint: dict[str, Any] | None,
-    infant_factory: InfantFactory | None,
-    progress: bool,
-    rank: int,
-    world_size: int,
-    device: str,
-    learned: LearnedRewards,
-    start_from: str | Path | None = None,
-    ckpt_path: str | Path | None = None,
-) -> tuple[DevVecEnv, DevRunner]:
+def _build(ctx: RunContext) -> tuple[DevVecEnv, DevRunner]:
     """Start-up after the checks: seed, prepare the behaviour, write config.json, build the
-    envs and the runner (restored from ``checkpoint``, with the ``learned`` rewards; from
-    another run's when ``start_from`` names it); return ``(env, runner)``."""
+    envs and the runner (restored from ``ctx.checkpoint``, with the learned rewards; from
+    another run's when ``ctx.start_from`` names it); return ``(env, runner)``."""
+    cfg, run_dir, rank, checkpoint = ctx.cfg, ctx.run_dir, ctx.rank, ctx.checkpoint
 
     # Seed. The runner sets the torch threads of each rollout and update (ThreadPlan); a
     # fixed torch_threads keeps CPU results bit-for-bit repeatable.
@@ -221,14 +232,14 @@ def _build(
 
     # Behaviour: one-off preparation, then the resolved config is written next to the logs.
     # With several ranks, rank 0 prepares first; the others then reuse what it saved.
-    behavior = registry.create(cfg.behavior_name, cfg.behavior)
+    behavior = ctx.registry.create(cfg.behavior_name, cfg.behavior)
     run_dir.mkdir(parents=True, exist_ok=True)
     if rank == 0:
         remove_temporaries(run_dir)
-    init_distributed(device)
+    init_distributed(ctx.device)
     if rank == 0:
         behavior.prepare(run_dir)
-    if world_size > 1:
+    if ctx.world_size > 1:
         torch.distributed.barrier()
     if rank != 0:
         behavior.prepare(run_dir)
@@ -255,13 +266,12 @@ def _build(
         cfg.seed,
         cfg.workers,
         "cpu",
-        infant_factory,
+        ctx.infant_factory,
         rank,
         action_repeat=cfg.env.action_repeat,
         age_months=age,
     )
     try:
-        env.cfg = cfg
         train_cfg = to_rsl_rl(cfg, behavior, list(env.observation_shapes))
         train_cfg["logger"] = logger_config(cfg)
         runner = DevRunner(
@@ -271,15 +281,16 @@ def _build(
             run_dir,
             behavior.curriculum(),
             behavior.headline_metric,
-            device,
-            progress,
-            learned,
+            ctx.device,
+            ctx.progress,
+            ctx.learned,
             behavior.run_metrics(),
         )
         if checkpoint is not None:
-            if start_from is not None and rank == 0:
-                copy_metrics(Path(start_from).parent, run_dir, int(checkpoint["env_steps"]))
-            _restore(runner, checkpoint, start_from is None, f"checkpoint {ckpt_path}")
+            if ctx.start_from is not None and rank == 0:
+                copy_metrics(Path(ctx.start_from).parent, run_dir, int(checkpoint["env_steps"]))
+            source = f"checkpoint {ctx.checkpoint_path}"
+            _restore(runner, checkpoint, ctx.start_from is None, source)
         if rank > 0:
             # Every rank built its networks from the same seed (rank 0's are broadcast anyway);
             # from here on each rank draws its own action noise, also after a resume, which
