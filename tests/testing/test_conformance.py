@@ -291,3 +291,38 @@ class BatchedNanProbe(Probe):
 def test_batched_term_nan_on_contact_names_the_term():
     with pytest.raises(ConformanceError, match=r"batched reward term 'batched_broken'.*hand placed"):
         check_behavior(BatchedNanProbe, **FAST)
+
+
+class MergingCount(CountEvaluator):
+    """Counts contact steps and merges (``devlearn eval --envs N``)."""
+
+    def merge(self, later):
+        self.contacts += later.contacts
+        self.episodes += later.episodes
+
+
+class ForgetfulMerge(MergingCount):
+    """Its merge forgets the later evaluator's episodes."""
+
+    def merge(self, later):
+        self.contacts += later.contacts
+
+
+class MergingProbe(Probe):
+    """Its evaluator merges."""
+
+    def evaluator(self, training):
+        return MergingCount()
+
+
+class ForgetfulMergeProbe(Probe):
+    """Its evaluator's merge forgets episodes."""
+
+    def evaluator(self, training):
+        return ForgetfulMerge()
+
+
+def test_an_evaluator_that_merges_must_merge_into_the_whole_summary():
+    check_behavior(MergingProbe, **{**FAST, "episodes": 2})
+    with pytest.raises(ConformanceError, match=r"merge\(\) of 2 runs of episodes summarises"):
+        check_behavior(ForgetfulMergeProbe, **{**FAST, "episodes": 2})
