@@ -321,10 +321,18 @@ def evaluate(
             episodes, envs, workers, merges(behavior.evaluator(training=False))
         )
         with Players(behavior, envs, workers, seed, infant_factory, repeat) as players:
-            # One env here gives the observation the network is built for and the episode
-            # length; the players' envs play the episodes.
-            env = BehaviorEnv(
-                copy.deepcopy(behavior), seed, infant_factory, training=False, action_repeat=repeat
+            # An env here gives the observation the network is built for and the episode
+            # length: the first player in this process, else one of its own.
+            env = (
+                players.envs[0]
+                if players.envs
+                else BehaviorEnv(
+                    copy.deepcopy(behavior),
+                    seed,
+                    infant_factory,
+                    training=False,
+                    action_repeat=repeat,
+                )
             )
             try:
                 prepare_env(env, stage, infant_start)
@@ -333,7 +341,8 @@ def evaluate(
                 )
                 episode_steps, step_dt = env.episode_steps, env.step_dt
             finally:
-                env.close()
+                if not players.envs:
+                    env.close()
             if video is not None:
                 Path(video).parent.mkdir(parents=True, exist_ok=True)
             plan = EpisodePlan(
