@@ -23,6 +23,7 @@ from devlearn.bench.ceiling import (
     touch_old_and_new,
 )
 from devlearn.bench.infant import bench_infant
+from devlearn.bench.iteration import bench_cnn_path
 from devlearn.bench.learner import bench_learner
 from devlearn.bench.speed import (
     bench_behavior_env,
@@ -123,6 +124,8 @@ def run_bench(
             decision_rate(registry, "hand_regard", 1024 if quick else 4096, extra, progress)
         )
     result.update(bench_learner(behaviors, quick, progress))
+    if "hand_regard" in behaviors:
+        result.update(bench_cnn_path(behaviors["hand_regard"], quick, progress))
     usage_self = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     usage_children = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
     # the largest resident set of any one process (this one, a training run or a worker)
