@@ -27,6 +27,7 @@ from devlearn.bench.iteration import bench_cnn_path
 from devlearn.bench.learner import bench_learner
 from devlearn.bench.speed import (
     bench_behavior_env,
+    bench_evaluation,
     bench_training,
     bench_vec_env,
     decision_rate,
@@ -111,6 +112,11 @@ def run_bench(
             "self_touch", 8192 if quick else 32768, [], progress
         )
         result.update(decision_rate(registry, "self_touch", 8192 if quick else 32768, [], progress))
+        result["self_touch_eval_episodes"] = episodes = 16 if quick else 100
+        for suffix, extra in (("_sequential", ["--envs", "1", "--workers", "0"]), ("", [])):
+            how = "one env in order" if suffix else "automatic envs and workers"
+            progress(f"self_touch: devlearn eval, {episodes} random-policy episodes, {how}")
+            result[f"self_touch_eval_s{suffix}"] = bench_evaluation("self_touch", episodes, extra)
     if "hand_regard" in behaviors:
         progress("hand_regard: end-to-end training (short babbling, any correlation accepted)")
         # prepare() babbles before training (10,000 rendered steps by default); a short babble

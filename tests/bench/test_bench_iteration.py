@@ -33,3 +33,17 @@ def test_the_table_shows_each_parts_share():
     line = table.splitlines()[-1]
     assert line.startswith("hand_regard_cnn, seconds per training iteration (5.50 in all)")
     assert "render 0.50 (9%)" in line and "update_backward 0.50 (9%)" in line
+
+
+def test_the_evaluation_and_the_cnn_path_have_rows():
+    table = format_table(
+        {
+            "self_touch_eval_s_sequential": 40.0,
+            "self_touch_eval_s": 18.5,
+            "hand_regard_cnn_train_steps_per_s": 150.0,
+            "hand_regard_cnn_update_us_per_sample": 29_000.0,
+        }
+    )
+    assert "one env | 40 s |" in table and "automatic envs and workers | 18.5 s |" in table
+    assert "| hand-regard training, the paper's CNN (1 thread) | 150 /s |" in table
+    assert "| hand-regard CNN update/sample (1 thread) | 29,000 us |" in table
