@@ -104,7 +104,8 @@ def iteration_profile(
         overrides: The run's ``--set`` values beyond the behaviour's defaults.
         env_steps: Instrumented environment steps behind the collection's parts.
         update_steps: Steps per env of the timed update's rollout (default: the run's
-            ``ppo.num_steps_per_env``; fewer for a quick figure, scaled up to the run's).
+            ``ppo.num_steps_per_env``; fewer for a quick figure: its forward and backward
+            passes are scaled up to the run's rollout).
         threads: torch threads of the inference and the update (the CNN runs used 1).
         prepare: Called with the learner before it is timed (a code path to compare).
     Returns:
@@ -134,9 +135,12 @@ def iteration_profile(
             parts = timed_update(alg)
             if k:
                 best, inference = parts, ms
-    scale = decisions / steps  # the update's cost grows with its rollout
+    # forward and backward passes grow with the rollout; the optimiser steps once per
+    # mini-batch whatever its size
+    scale = decisions / steps
     result["inference"] = inference * decisions / 1000.0
     result.update({part: seconds * scale for part, seconds in best.items()})
+    result["update_optimizer"] = best["update_optimizer"]
     result["total"] = sum(result[part] for part in ITERATION_PARTS)
     update = sum(best.values())
     result["update_us_per_sample"] = 1e6 * update / (envs * steps)
