@@ -11,7 +11,8 @@ episode ``k`` as the reference does: a fresh generator, ``k`` resets, and the po
 reset, as in the reference. Each slot acts on one observation at a time, with the same calls
 as the reference (a batch of several rows can round differently in float32). Its evaluator
 sees its episodes only; the slots' evaluators are merged in slot order
-(:meth:`~devlearn.api.behavior.Evaluator.merge`).
+(:meth:`~devlearn.api.behavior.Evaluator.merge`). No env computes reward terms: an evaluation
+reports none.
 
 That a slot's skip reaches the reference's state rests on a property of the behaviour: the env's
 generator is drawn at resets only, in amounts that do not depend on the episode before, and the
@@ -26,7 +27,7 @@ from __future__ import annotations
 import copy
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import partial
 from typing import TYPE_CHECKING, Any
 
@@ -221,7 +222,7 @@ class SlotResult:
     evaluator: Any
     started: str
     begins: tuple[Any, Any]
-    ends: tuple[Any, Any] = field(default=(None, None))
+    ends: tuple[Any, Any]
 
 
 def set_infant_start(infant: Any, start: str) -> None:
@@ -357,9 +358,8 @@ def play_in_worker(
 
 class Players:
     """The envs that play an evaluation's slots: in this process, or split over env worker
-    processes (:class:`~devlearn.env.workers.WorkerPool`), which start at once so that their
-    start-up (importing torch and MuJoCo, building infants) overlaps the rest of the
-    evaluation's preparation. Close it (or use it as a context manager).
+    processes (:class:`~devlearn.env.workers.WorkerPool`; started in this thread: a worker
+    ends with the thread that started it). Close it (or use it as a context manager).
 
     Args:
         behavior: The behaviour (every env gets its own copy).
@@ -416,7 +416,7 @@ def merged_results(results: list[SlotResult]) -> tuple[Any, list[dict[str, float
     start the episodes took.
 
     Raises:
-        RuntimeError: A slot's run did not begin where the slot before it ended: the
+        UsageError: A slot's run did not begin where the slot before it ended: the
             behaviour draws from the env's generator during episodes, or a reset draws
             amounts that depend on the episode before, or the policy draws unevenly; the
             episodes then differ from one env playing them in order (use ``--envs 1``).
@@ -426,11 +426,11 @@ def merged_results(results: list[SlotResult]) -> tuple[Any, list[dict[str, float
             ("env's generator", "policy's randomness"), before.ends, after.begins
         ):
             if end != begin:
-                raise RuntimeError(
-                    f"evaluation slot {i + 1} began with the {what} elsewhere than slot {i} "
-                    "left it: this behaviour's episodes cannot be played in several "
-                    "environments with the results of one (it draws from the env's generator "
-                    "during episodes?); evaluate it with --envs 1"
+                raise UsageError(
+                    f"evaluation env {i + 1} began with the {what} elsewhere than env {i} "
+                    "left it: this behaviour's episodes cannot be played in several envs "
+                    "with the results of one (does it draw from the env's generator during "
+                    "episodes?); evaluate it with --envs 1"
                 )
     evaluator = results[0].evaluator
     for later in results[1:]:

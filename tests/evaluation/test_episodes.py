@@ -170,7 +170,7 @@ def test_a_behaviour_drawing_during_episodes_is_refused_in_several_envs(registry
         )  # fmt: skip
 
     assert run(1)["episodes"] == 4
-    with pytest.raises(RuntimeError, match="evaluate it with --envs 1"):
+    with pytest.raises(UsageError, match="evaluate it with --envs 1"):
         run(2)
 
 
