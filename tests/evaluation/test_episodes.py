@@ -181,7 +181,8 @@ def test_an_evaluator_that_does_not_merge_plays_in_one_env(registry):
             workers=workers, infant_factory=factory,
         )  # fmt: skip
 
-    assert run(None, None)["execution"] == {"envs": 1, "workers": 0, "wall_seconds": 0.0}
+    execution = run(None, None)["execution"]
+    assert (execution["envs"], execution["workers"]) == (1, 0)
     with pytest.raises(UsageError, match="does not merge"):
         run(2, 0)
 
