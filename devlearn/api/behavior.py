@@ -59,6 +59,23 @@ class Evaluator:
         runner with the episode's metrics); never logged itself."""
         return None
 
+    def merge(self, later: Evaluator) -> None:
+        """Take in the episodes ``later`` (an evaluator of the same behaviour and protocol)
+        recorded, as if this one had recorded them after its own.
+
+        ``devlearn eval --envs N`` plays the evaluation's episodes in N environments at once,
+        each with its own evaluator over a run of consecutive episodes (in worker processes
+        too: evaluators travel pickled), then merges them in episode order. Afterwards
+        :meth:`summary` and :meth:`write_artifacts` must be exactly what one evaluator that
+        recorded every episode in order reports (``devlearn.testing.check_evaluator_merge``
+        checks it). Neither evaluator has an episode open.
+
+        Raises:
+            NotImplementedError: The default: ``devlearn eval`` then plays the episodes one
+                after another in one environment.
+        """
+        raise NotImplementedError(f"{type(self).__name__} does not merge")
+
 
 class RunMetrics:
     """Metrics over all of a run's finished training episodes (every env, worker and rank),

@@ -23,9 +23,11 @@ from devlearn.bench.ceiling import (
     touch_old_and_new,
 )
 from devlearn.bench.infant import bench_infant
+from devlearn.bench.iteration import bench_cnn_path
 from devlearn.bench.learner import bench_learner
 from devlearn.bench.speed import (
     bench_behavior_env,
+    bench_evaluation,
     bench_gym_vec_env,
     bench_training,
     bench_vec_env,
@@ -115,6 +117,11 @@ def run_bench(
             "self_touch", 8192 if quick else 32768, [], progress
         )
         result.update(decision_rate(registry, "self_touch", 8192 if quick else 32768, [], progress))
+        result["self_touch_eval_episodes"] = episodes = 16 if quick else 100
+        for suffix, extra in (("_sequential", ["--envs", "1", "--workers", "0"]), ("", [])):
+            how = "one env in order" if suffix else "automatic envs and workers"
+            progress(f"self_touch: devlearn eval, {episodes} random-policy episodes, {how}")
+            result[f"self_touch_eval_s{suffix}"] = bench_evaluation("self_touch", episodes, extra)
     if "hand_regard" in behaviors:
         progress("hand_regard: end-to-end training (short babbling, any correlation accepted)")
         # prepare() babbles before training (10,000 rendered steps by default); a short babble
@@ -128,6 +135,8 @@ def run_bench(
             decision_rate(registry, "hand_regard", 1024 if quick else 4096, extra, progress)
         )
     result.update(bench_learner(behaviors, quick, progress))
+    if "hand_regard" in behaviors:
+        result.update(bench_cnn_path(behaviors["hand_regard"], quick, progress))
     usage_self = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     usage_children = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
     # the largest resident set of any one process (this one, a training run or a worker)

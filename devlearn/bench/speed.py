@@ -186,3 +186,16 @@ def decision_rate(
             behavior, steps, [*extra, "--set", "env.action_repeat=1"], progress
         )
     return result
+
+
+def bench_evaluation(behavior: str, episodes: int, extra: list[str]) -> float | None:
+    """Wall-clock seconds of ``devlearn eval BEHAVIOR --policy random --episodes N`` as a user
+    runs it (a fresh process: imports, environments, workers and episodes), with ``extra``
+    options (``--envs``, ``--workers``). None when the command fails."""
+    with tempfile.TemporaryDirectory() as tmp:
+        cmd = [sys.executable, "-m", "devlearn.cli", "eval", behavior, "--policy", "random"]
+        cmd += ["--episodes", str(episodes), "--out", str(Path(tmp) / "eval"), *extra]
+        start = time.perf_counter()
+        done = subprocess.run(cmd, capture_output=True, text=True, timeout=3600)
+        took = time.perf_counter() - start
+    return took if done.returncode == 0 else None

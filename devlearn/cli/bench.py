@@ -126,7 +126,39 @@ ROWS = [
     ("hand_regard_update_us_per_sample_old", "hand-regard update/sample, old", "us", "-", "-", 0),
     ("hand_regard_update_us_per_sample", "hand-regard update/sample", "us", "-", "-", 0),
     ("self_touch_train_steps_per_s_old", "self-touch training, before", "/s", "-", "-", 1),
+    (
+        "hand_regard_cnn_train_steps_per_s",
+        "hand-regard training, the paper's CNN (1 thread)",
+        "/s",
+        "-",
+        ">= 300 per core",
+        1,
+    ),
+    (
+        "hand_regard_cnn_update_us_per_sample",
+        "hand-regard CNN update/sample (1 thread)",
+        "us",
+        "-",
+        "-",
+        0,
+    ),
     ("hand_regard_train_steps_per_s_old", "hand-regard training, before", "/s", "-", "-", 1),
+    (
+        "self_touch_eval_s_sequential",
+        "devlearn eval self_touch (random policy; episodes: self_touch_eval_episodes), one env",
+        "s",
+        "-",
+        "-",
+        0,
+    ),
+    (
+        "self_touch_eval_s",
+        "devlearn eval self_touch, the same, automatic envs and workers",
+        "s",
+        "-",
+        "<= 1/4 of one env",
+        0,
+    ),
     ("build_s", "environment build", "s", "19", "< 3", 0),
     ("startup_help_s", "start-up: devlearn --help", "s", "-", "< 1.5", 0),
     ("startup_plugins_s", "start-up: devlearn plugins", "s", "-", "< 1.5", 0),
@@ -166,6 +198,13 @@ def format_table(result: dict) -> str:
         parts = ", ".join(f"{p} {ms:.3f}" for p, ms in result[key].items() if p != "total")
         name = key.removesuffix("_ms").replace("_breakdown", "")
         lines += ["", f"{name}, ms per step ({result[key]['total']:.3f} in all): {parts}"]
+    for key in sorted(k for k in result if k.endswith("_iteration_s")):
+        total = result[key]["total"]
+        parts = ", ".join(
+            f"{p} {s:.2f} ({100 * s / total:.0f}%)" for p, s in result[key].items() if p != "total"
+        )
+        name = key.removesuffix("_iteration_s")
+        lines += ["", f"{name}, seconds per training iteration ({total:.2f} in all): {parts}"]
     return "\n".join(lines)
 
 

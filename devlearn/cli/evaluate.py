@@ -42,6 +42,18 @@ def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) 
     p.add_argument("--episodes", default="10", metavar="N", help="episodes to run (default 10)")
     p.add_argument("--seed", default="0", metavar="S", help="seed of the initial poses")
     p.add_argument(
+        "--envs",
+        metavar="N",
+        help="environments playing episodes at once (default: 4 per worker, 1 without "
+        "workers); the results are those of one environment playing every episode in order",
+    )
+    p.add_argument(
+        "--workers",
+        metavar="N",
+        help="worker processes the environments are split over (0: this process; default: "
+        "one per core when there are episodes enough to repay their start-up)",
+    )
+    p.add_argument(
         "--start",
         choices=("stage", "babybench", "rest", "random"),
         default="stage",
@@ -88,6 +100,8 @@ def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) 
 
 EPISODES_MAX = 1_000_000
 """Largest ``--episodes``."""
+ENVS_MAX = 1024
+"""Largest ``--envs`` and ``--workers``."""
 
 
 def _count(text: str, option: str, minimum: int, maximum: int) -> int:
@@ -104,7 +118,8 @@ def _count(text: str, option: str, minimum: int, maximum: int) -> int:
 
 BOOKKEEPING = {
     "episodes", "steps", "behavior", "policy", "checkpoint", "checkpoint_env_steps",
-    "training_seed", "start", "protocol", "config", "written", "settle_steps",
+    "training_seed", "start", "protocol", "config", "written", "settle_steps", "execution",
+    "episode_metrics",
 }  # fmt: skip
 """Summary keys the human summary's header says in words (or leaves to --json)."""
 SHOWN_MAX = 8
@@ -226,6 +241,8 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
 
     episodes = _count(args.episodes, "--episodes", 1, EPISODES_MAX)
     seed = _count(args.seed, "--seed", 0, SEED_MAX)
+    envs = None if args.envs is None else _count(args.envs, "--envs", 1, ENVS_MAX)
+    workers = None if args.workers is None else _count(args.workers, "--workers", 0, ENVS_MAX)
     checkpoint = resolve_checkpoint(args.checkpoint) if args.checkpoint else None
     # an evaluation at another age goes beside the others, not over them
     ages = [o.split("=", 1)[1].strip() for o in args.overrides if o.startswith(AGE_KEY + "=")]
@@ -256,11 +273,14 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
                 start=args.start,
                 overrides=args.overrides,
                 action=args.action,
+                envs=envs,
+                workers=workers,
             )
     except EvalWriteError as exc:
         _print(exc.summary, args.json, human(exc.summary, None))
         raise
     written = summary.pop("written", [])
+    summary.pop("episode_metrics", None)  # not part of eval.json
     _print(summary, args.json, human(summary, out_dir / "eval.json"))
     files = ", ".join(Path(p).name for p in written)
     # stderr with --json, so that stdout stays one JSON document

@@ -10,7 +10,8 @@ import os
 import signal
 import sys
 import traceback
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
+from multiprocessing.connection import wait
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -78,15 +79,18 @@ def make_envs(
     offset: int = 0,
     action_repeat: int = 1,
     age_months: float | None = None,
+    training: bool = True,
 ) -> list:
     """Build one BehaviorEnv per seed (indices ``offset...``), each with its own copy of the
-    behaviour, the decision rate ``action_repeat`` and the body at ``age_months``; the envs
-    share their batched reward terms (one instance over all of them)."""
+    behaviour, the decision rate ``action_repeat``, the body at ``age_months`` and an evaluator
+    for ``training`` (False: ``devlearn eval``'s); the envs share their batched reward terms
+    (one instance over all of them)."""
     envs = [
         BehaviorEnv(
             copy.deepcopy(behavior),
             s,
             infant_factory,
+            training=training,
             index=offset + i,
             action_repeat=action_repeat,
             age_months=age_months,
@@ -114,10 +118,13 @@ def worker_main(
     infant_factory: InfantFactory | None,
     action_repeat: int = 1,
     age_months: float | None = None,
+    training: bool = True,
 ) -> None:
     """Entry point of one worker process: serve commands from the parent until told to close.
 
-    Replies ``("ok", payload)`` or, on any exception, ``("error", traceback text)`` and exits.
+    Replies ``("ok", payload)`` or, on any exception, ``("error", traceback text)`` and exits;
+    the ``call`` command (``arg(envs, send)``: a picklable function run on this worker's envs,
+    e.g. evaluation episodes) may send ``("progress", payload)`` messages before its reply.
     The worker ignores SIGINT so that Ctrl-C reaches only the parent, which can then still ask
     for the envs' state to write its interrupt checkpoint.
     """
@@ -127,7 +134,9 @@ def worker_main(
     blocks: list = []
     arrays: dict[str, np.ndarray] = {}
     try:
-        envs = make_envs(behavior, seeds, infant_factory, offset, action_repeat, age_months)
+        envs = make_envs(
+            behavior, seeds, infant_factory, offset, action_repeat, age_months, training
+        )
         first = [env.reset() for env in envs]
         conn.send(("ok", env_spec(envs[0], first[0])))
         while True:
@@ -156,6 +165,8 @@ def worker_main(
             elif cmd == "load_memory":
                 load_run_memories(envs, arg)
                 reply = None
+            elif cmd == "call":
+                reply = arg(envs, lambda payload: conn.send(("progress", payload)))
             elif cmd == "load":
                 for i, (env, state) in enumerate(zip(envs, arg)):
                     env.load_state_dict(state)
@@ -222,6 +233,7 @@ class WorkerPool:
         age_months: The body's age (None: the default body).
         context: multiprocessing start method; ``spawn`` (default) imports everything afresh, so
             no parent state (threads, torch, open files) leaks into workers.
+        training: The envs' evaluators are training ones (False: ``devlearn eval``'s).
     """
 
     def __init__(
@@ -233,6 +245,7 @@ class WorkerPool:
         action_repeat: int = 1,
         context: str = "spawn",
         age_months: float | None = None,
+        training: bool = True,
     ) -> None:
         ctx = mp.get_context(context)
         self._pending: set[int] = set()
@@ -253,6 +266,7 @@ class WorkerPool:
                         infant_factory,
                         action_repeat,
                         age_months,
+                        training,
                     ),
                     daemon=True,
                     name=f"devlearn-env-worker-{len(self.procs)}",
@@ -267,43 +281,64 @@ class WorkerPool:
             self.close()
             raise
 
-    def _gather(self) -> list:
+    def _gather(self, progress: Callable[[Any], None] | None = None) -> list:
+        """Every worker's reply, in worker order; ``progress`` gets the ``("progress", payload)``
+        messages a ``call`` sends before its reply, from whichever worker sends them."""
         # Workers still owed a reply are remembered, so a call interrupted by Ctrl-C (the
         # interrupt checkpoint then asks for state) first drains the stale replies.
         self._pending = set(range(len(self.conns)))
-        replies = []
-        for k, (conn, proc) in enumerate(zip(self.conns, self.procs)):
-            try:
-                status, payload = conn.recv()
-            except (EOFError, OSError):
-                proc.join(timeout=1.0)
-                code = proc.exitcode
-                self.close()
-                how = f"exit code {code}"
-                if code is not None and code < 0:
-                    try:
-                        how = f"killed by {signal.Signals(-code).name}"
-                    except ValueError:
-                        how = f"killed by signal {-code}"
-                    how += " (out of memory?)" if code == -signal.SIGKILL else ""
-                error = EnvWorkerError(f"env worker {k} (pid {proc.pid}) died unexpectedly, {how}")
-                error.died = True
-                raise error from None
-            if status == "guard":
-                self.close()
-                raise payload
-            if status == "error":
-                self.close()
-                raise EnvWorkerError(f"env worker {k} (pid {proc.pid}) failed:\n{payload}")
-            self._pending.discard(k)
-            replies.append(payload)
+        replies: list = [None] * len(self.conns)
+        while self._pending:
+            ready = wait([self.conns[k] for k in sorted(self._pending)])
+            for k in sorted(self._pending):
+                if self.conns[k] not in ready:
+                    continue
+                status, payload = self._receive(k)
+                if status == "progress":
+                    if progress is not None:
+                        progress(payload)
+                    continue
+                self._pending.discard(k)
+                replies[k] = payload
         return replies
 
-    def call(self, cmd: str, args: list | None = None) -> list:
-        """Send ``cmd`` (with ``args[k]`` to worker k, or None) to every worker; return replies."""
+    def _receive(self, k: int) -> tuple[str, Any]:
+        """Worker ``k``'s next message; its failure (a traceback, a guard, death) is raised here
+        after the pool is closed."""
+        conn, proc = self.conns[k], self.procs[k]
+        try:
+            status, payload = conn.recv()
+        except (EOFError, OSError):
+            proc.join(timeout=1.0)
+            code = proc.exitcode
+            self.close()
+            how = f"exit code {code}"
+            if code is not None and code < 0:
+                try:
+                    how = f"killed by {signal.Signals(-code).name}"
+                except ValueError:
+                    how = f"killed by signal {-code}"
+                how += " (out of memory?)" if code == -signal.SIGKILL else ""
+            error = EnvWorkerError(f"env worker {k} (pid {proc.pid}) died unexpectedly, {how}")
+            error.died = True
+            raise error from None
+        if status == "guard":
+            self.close()
+            raise payload
+        if status == "error":
+            self.close()
+            raise EnvWorkerError(f"env worker {k} (pid {proc.pid}) failed:\n{payload}")
+        return status, payload
+
+    def call(
+        self, cmd: str, args: list | None = None, progress: Callable[[Any], None] | None = None
+    ) -> list:
+        """Send ``cmd`` (with ``args[k]`` to worker k, or None) to every worker; return replies
+        (``progress`` takes a ``call`` command's progress messages, see :func:`worker_main`)."""
         for k in sorted(self._pending):
             try:
-                self.conns[k].recv()
+                while self.conns[k].recv()[0] == "progress":
+                    pass
             except (EOFError, OSError):
                 pass  # reported by the send or receive below
         self._pending = set()
@@ -313,7 +348,7 @@ class WorkerPool:
             except (BrokenPipeError, OSError):
                 self.close()
                 raise EnvWorkerError(f"env worker {k} is gone (pipe closed)") from None
-        return self._gather()
+        return self._gather(progress)
 
     def split(self, items: list) -> list[list]:
         """Split a per-env list into per-worker lists."""

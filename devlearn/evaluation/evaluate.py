@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
+import copy
 import json
 import os
 import subprocess
 import sys
-from collections.abc import Callable
+import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -19,37 +20,41 @@ from devlearn.api.behavior import evaluation_stage
 from devlearn.api.errors import UsageError
 from devlearn.config.run_config import to_dict
 from devlearn.env.behavior_env import BehaviorEnv
-from devlearn.evaluation.scripted_policy import ScriptedPolicy
-from devlearn.training.checkpoint import (
-    LATEST,
-    Checkpoint,
-    is_scripted_policy,
-    observation_batch,
+from devlearn.evaluation.episodes import (
+    VIDEO_FPS,
+    ActorPolicy,
+    EpisodePlan,
+    HeldPolicy,
+    Players,
+    Policy,
+    ScriptedActions,
+    UniformPolicy,
+    ZeroPolicy,
+    merged_results,
+    merges,
+    prepare_env,
 )
+from devlearn.evaluation.scripted_policy import ScriptedPolicy
+from devlearn.training.checkpoint import LATEST, Checkpoint, is_scripted_policy
 from devlearn.training.resolve import RunRequest, resolve_config
 
 if TYPE_CHECKING:
     from devlearn.env.behavior_env import InfantFactory
     from devlearn.plugins import PluginRegistry
-    from devlearn.training.networks import MultiSenseModel
 
 AGE_KEY = "infant.age_months"
 """The one ``--set`` key a checkpoint's evaluation takes: the body's age."""
-VIDEO_FPS = 25
-"""Frame rate of evaluation videos (every k-th control step is rendered to match it)."""
 POLICY_FILE = "policy.pt"
 """Name of a slimmed policy file (``devlearn slim``) in a published run folder."""
 POLICIES = ("checkpoint", "zero", "random", "held_random")
 """What ``evaluate`` can run: a checkpoint's mean action, or a baseline: zero action, actions
 uniform in [-1, 1] drawn afresh every step (i.i.d.), or ``held_random``: uniform actions each
-held for :data:`HOLD_STEPS` physics steps on average (each actuator redraws with probability
-1 / HOLD_STEPS per physics step, as motor babbling does; with a decision rate K, K / HOLD_STEPS
-per decision), which moves the damped limbs much further
-than i.i.d. noise. All seeded by the evaluation seed."""
+held for :data:`~devlearn.evaluation.episodes.HOLD_STEPS` (8) physics steps on average (each
+actuator redraws with probability 1 / HOLD_STEPS per physics step, as motor babbling does;
+with a decision rate K, K / HOLD_STEPS per decision), which moves the damped limbs much
+further than i.i.d. noise. All seeded by the evaluation seed."""
 ACTIONS = ("mean", "sample")
 """How a checkpoint acts in ``evaluate``: its mean action, or one sampled from its policy."""
-HOLD_STEPS = 8
-"""Mean steps a ``held_random`` baseline action is held (40 ms at 200 Hz)."""
 STARTS = ("stage", "babybench", "rest", "random")
 """Where episodes start: ``stage``, as the behaviour's evaluation stage says (self-touch:
 seeded random poses; hand regard: its ``eval_start``, BabyBench's start); ``babybench``, the
@@ -59,6 +64,12 @@ alone, every episode (a deterministic policy then repeats one episode, so one ep
 enough: a diagnostic that asks whether a policy has the skill where it trained); ``random``,
 joint angles uniform in their ranges (and toys placed at random), a generalisation test.
 ``devlearn.infant.starts.STARTS`` are the infant's."""
+PARALLEL_MIN_EPISODES = 8
+"""Episodes per core from which an automatic evaluation starts env workers: a worker's
+start-up costs seconds, about ten self-touch episodes (a third of a second each on one core)."""
+ENVS_PER_WORKER = 4
+"""Envs per worker when ``--envs`` is automatic: a worker steps its envs together (batched
+facts and reward terms), and its runs of episodes stay long enough to balance the workers."""
 
 
 class EvalWriteError(UsageError):
@@ -134,39 +145,30 @@ def code_version() -> dict[str, Any]:
     return {"commit": sha, "dirty": bool(status.strip())}
 
 
-def _policy(
+def make_policy(
     policy: str,
-    actor: MultiSenseModel | None,
+    opened: Checkpoint | ScriptedPolicy | None,
+    obs: dict[str, np.ndarray],
     action_dim: int,
     seed: int,
-    repeat: int = 1,
-    sample: bool = False,
-) -> Callable[[dict[str, np.ndarray]], np.ndarray]:
-    """``act(obs) -> (action_dim,)``: the actor's mean action (``sample``: an action drawn
-    from its distribution, from torch's generator seeded by the evaluation seed), zeros, or
-    seeded uniform noise."""
+    repeat: int,
+    sample: bool,
+) -> Policy:
+    """The policy ``policy`` names: the checkpoint's network (built for ``obs``; torch's global
+    generator, seeded with the evaluation seed, draws its initialisation and then, with
+    ``sample``, its actions), a scripted policy's deterministic action, or a baseline seeded by
+    the evaluation seed."""
     if policy == "zero":
-        return lambda obs: np.zeros(action_dim)
+        return ZeroPolicy(action_dim)
     if policy == "random":
-        rng = np.random.default_rng([seed, 1])  # a stream apart from the env's (seed)
-        return lambda obs: rng.uniform(-1.0, 1.0, action_dim)
+        return UniformPolicy(action_dim, seed)
     if policy == "held_random":
-        rng = np.random.default_rng([seed, 2])
-        held = rng.uniform(-1.0, 1.0, action_dim)
-
-        def hold(obs: dict[str, np.ndarray]) -> np.ndarray:
-            redraw = rng.random(action_dim) < min(1.0, repeat / HOLD_STEPS)
-            held[redraw] = rng.uniform(-1.0, 1.0, int(redraw.sum()))
-            return held.copy()
-
-        return hold
-
-    def act(obs: dict[str, np.ndarray]) -> np.ndarray:
-        assert actor is not None, "the checkpoint policy needs a checkpoint's actor"
-        with torch.inference_mode():
-            return actor(observation_batch(obs), stochastic_output=sample)[0].numpy()
-
-    return act
+        return HeldPolicy(action_dim, seed, repeat)
+    assert opened is not None, "the checkpoint policy needs a checkpoint"
+    if isinstance(opened, ScriptedPolicy):
+        return ScriptedActions(opened)
+    actor = opened.actor(obs, action_dim)
+    return ActorPolicy(actor, action_dim, sample, torch.get_rng_state())
 
 
 def _evaluated_age(overrides: list[str], trained: float | None) -> float | None:
@@ -184,16 +186,46 @@ def _evaluated_age(overrides: list[str], trained: float | None) -> float | None:
         raise UsageError(message) from None
 
 
-def _set_infant_start(infant: Any, start: str) -> None:
-    """Make the env's infant start its episodes with ``start`` (babybench or rest).
+def available_cores() -> int:
+    """The CPU cores this process may run on."""
+    if hasattr(os, "sched_getaffinity"):
+        return len(os.sched_getaffinity(0))
+    return os.cpu_count() or 1
+
+
+def parallelism(
+    episodes: int,
+    envs: int | None,
+    workers: int | None,
+    merges: bool,
+    cores: int | None = None,
+) -> tuple[int, int]:
+    """How many envs (slots) play the episodes and in how many worker processes.
+
+    Automatic (None): one worker per core this process may use from
+    :data:`PARALLEL_MIN_EPISODES` episodes per core on (fewer would not repay a worker's
+    start-up), else none; :data:`ENVS_PER_WORKER` envs per worker, one without workers. There
+    are never more envs than episodes nor more workers than envs; one env plays in this
+    process.
 
     Raises:
-        UsageError: The infant has no starts (a stand-in) and ``start`` is not its rest.
+        UsageError: Several envs asked of a behaviour whose evaluator does not merge.
     """
-    if hasattr(infant, "start"):
-        infant.start = start
-    elif start != "rest":
-        raise UsageError(f"--start {start}: this infant has no such start (it has only rest)")
+    if not merges:
+        if (envs or 1) > 1 or (workers or 0) > 0:
+            raise UsageError(
+                "this behaviour's evaluator does not merge the episodes of several envs "
+                "(Evaluator.merge): evaluate it with --envs 1 --workers 0"
+            )
+        return 1, 0
+    cores = available_cores() if cores is None else cores
+    if workers is None:
+        workers = cores if cores > 1 and episodes >= PARALLEL_MIN_EPISODES * cores else 0
+    if envs is None:
+        envs = max(1, workers * ENVS_PER_WORKER)
+    envs = min(envs, episodes)
+    workers = min(workers, envs) if envs > 1 else 0
+    return envs, workers
 
 
 def evaluate(
@@ -210,6 +242,8 @@ def evaluate(
     start: str = "stage",
     overrides: list[str] | None = None,
     action: str = "mean",
+    envs: int | None = 1,
+    workers: int | None = 0,
 ) -> dict[str, Any]:
     """Run ``episodes`` episodes of a policy and summarise them under the evaluation protocol.
 
@@ -218,6 +252,8 @@ def evaluate(
     ``behavior.evaluator(training=False)``.
     A checkpoint acts with its mean action (deterministic); the baselines ``zero`` and
     ``random`` run through exactly the same loop with the behaviour's default config.
+    The episodes are those of one env playing them in order whatever ``envs`` and ``workers``
+    (:mod:`devlearn.evaluation.episodes`): several envs only play them sooner.
 
     Args:
         behavior_name: The behaviour the checkpoint must belong to.
@@ -243,15 +279,19 @@ def evaluate(
         action: A checkpoint's action: ``mean`` (deterministic, the default protocol) or
             ``sample`` (drawn from the policy's distribution, as in training: a behaviour whose
             skill lives in the policy's noise shows it only so).
+        envs: Envs playing episodes at once (None: automatic, see :func:`parallelism`).
+        workers: Env worker processes they are split over (0: this process; None:
+            automatic). With workers, ``infant_factory`` must be picklable.
     Returns:
         ``evaluator.summary()`` plus ``behavior``, ``policy``, ``checkpoint``,
         ``checkpoint_env_steps`` (x axis of ``devlearn curve``), ``training_seed``, ``config``
         (the checkpoint's, for ``devlearn report``'s grouping), ``age_months`` (the body's age,
-        None: the default body), ``start`` (the start episodes
-        took: babybench, rest or random) and ``protocol`` (episodes, seed, start, settle
-        steps, criteria, training steps, code commit); for a scripted policy ``learner``
-        (who trained it). When files were written,
-        ``written`` lists them (not part of eval.json).
+        None: the default body), ``start`` (the start episodes took: babybench, rest or
+        random), ``protocol`` (episodes, seed, start, settle steps, criteria, training steps,
+        code commit), for a scripted policy ``learner`` (who trained it), and ``execution``
+        (envs, workers, wall seconds: how it ran, not part of the protocol). Not part of eval.json:
+        ``episode_metrics``, every episode's ``end_episode`` metrics in order, and, when files
+        were written, ``written``, their paths.
     Raises:
         UsageError: Missing, corrupt or foreign checkpoint; bad policy; unwritable out_dir.
         EvalWriteError: The episodes ran but writing files failed (carries the summary).
@@ -306,52 +346,77 @@ def evaluate(
     # another program uses are many times slower (measured: a 64x64 eye CNN 85 ms vs 11 ms).
     torch.set_num_threads(1)
     repeat = cfg.env.action_repeat
-    env = BehaviorEnv(
-        behavior, seed, infant_factory, training=False, action_repeat=repeat, age_months=age
-    )
-    writer = None
+    began = time.monotonic()
     try:
         stage = evaluation_stage(behavior, int(state.get("env_steps", cfg.total_steps)))
+        infant_start = None
         if start != "stage":
             stage = {**stage, "random_pose": start == "random"}
             if start != "random":
-                _set_infant_start(env.infant, start)
+                infant_start = start
         elif not stage.get("random_pose") and hasattr(behavior, "eval_start"):
             # a behaviour may evaluate from another start than it trains from (hand regard's
             # eval_start); the infant was built with the training start
-            _set_infant_start(env.infant, behavior.eval_start())
-        env.set_stage(stage)
-        started = "random" if stage.get("random_pose") else getattr(env.infant, "start", "rest")
-        obs = env.reset()
-        act: Callable[[dict[str, np.ndarray]], np.ndarray]
-        if isinstance(opened, ScriptedPolicy):
-            act = opened.act
-        else:
-            actor = opened.actor(obs, env.action_dim) if opened is not None else None
-            act = _policy(policy, actor, env.action_dim, seed, repeat, sample=action == "sample")
-        if video is not None:
-            import imageio.v2 as imageio
-
-            Path(video).parent.mkdir(parents=True, exist_ok=True)
-            writer = imageio.get_writer(str(video), fps=VIDEO_FPS, macro_block_size=1)
-            stride = max(1, round(1.0 / (env.step_dt * repeat * VIDEO_FPS)))
-        bar = tqdm(
-            total=episodes * env.episode_steps,
-            unit="step",
-            disable=not progress,
-            desc=f"eval {behavior_name}",
-            file=sys.stderr,
-            dynamic_ncols=True,
+            infant_start = behavior.eval_start()
+        envs, workers = parallelism(
+            episodes, envs, workers, merges(behavior.evaluator(training=False))
         )
-        for episode in range(episodes):
-            bar.set_postfix(episode=f"{episode + 1}/{episodes}")
-            for t in range(env.episode_steps // repeat):  # decisions; bar and counts: physics
-                bar.update(repeat)
-                if writer is not None and episode == 0 and t % stride == 0:
-                    writer.append_data(env.behavior.render_frame(env.infant))
-                obs, _, _, _, _ = env.step(act(obs))
-        bar.close()
-        summary = env.evaluator.summary()
+        with Players(behavior, envs, workers, seed, infant_factory, repeat, age) as players:
+            # An env here gives the observation the network is built for and the episode
+            # length: the first player in this process, else one of its own.
+            env = (
+                players.envs[0]
+                if players.envs
+                else BehaviorEnv(
+                    copy.deepcopy(behavior),
+                    seed,
+                    infant_factory,
+                    training=False,
+                    action_repeat=repeat,
+                    age_months=age,
+                )
+            )
+            try:
+                prepare_env(env, stage, infant_start)
+                chosen = make_policy(
+                    policy, opened, env.reset(), env.action_dim, seed, repeat, action == "sample"
+                )
+                episode_steps, step_dt = env.episode_steps, env.step_dt
+            finally:
+                if not players.envs:
+                    env.close()
+            if video is not None:
+                Path(video).parent.mkdir(parents=True, exist_ok=True)
+            plan = EpisodePlan(
+                blocks=tuple(
+                    (int(b[0]), int(b[-1]) + 1) for b in np.array_split(np.arange(episodes), envs)
+                ),
+                seed=seed,
+                stage=stage,
+                start=infant_start,
+                decisions=episode_steps // repeat,
+                policy=chosen,
+                video=None if video is None else str(video),
+                video_stride=max(1, round(1.0 / (step_dt * repeat * VIDEO_FPS))),
+            )
+            with tqdm(
+                total=episodes * episode_steps,
+                unit="step",
+                disable=not progress,
+                desc=f"eval {behavior_name}",
+                file=sys.stderr,
+                dynamic_ncols=True,
+            ) as bar:
+                ended = [0]
+
+                def report(steps: int, finished: int) -> None:
+                    ended[0] += finished
+                    bar.set_postfix(episodes=f"{ended[0]}/{episodes}", refresh=False)
+                    bar.update(steps)
+
+                results = players.play(plan, report)
+        evaluator, episode_metrics, started = merged_results(results)
+        summary = evaluator.summary()
         steps = int(state.get("env_steps", 0))
         summary.update(
             behavior=behavior_name,
@@ -373,9 +438,14 @@ def evaluate(
                 "settle_steps": 0,
                 "action_repeat": repeat,
                 "age_months": age,
-                **env.evaluator.protocol(),
+                **evaluator.protocol(),
                 "checkpoint_env_steps": steps,
                 "code": code_version(),
+            },
+            execution={
+                "envs": envs,
+                "workers": workers,
+                "wall_seconds": round(time.monotonic() - began, 1),
             },
         )
         if isinstance(opened, ScriptedPolicy):
@@ -384,15 +454,13 @@ def evaluate(
             written = []
             try:
                 (out / "eval.json").write_text(json.dumps(summary, indent=2, default=float) + "\n")
-                written = [out / "eval.json", *env.evaluator.write_artifacts(out)]
+                written = [out / "eval.json", *evaluator.write_artifacts(out)]
             except OSError as exc:
                 raise EvalWriteError(
                     f"evaluated, but writing to {out} failed: {exc.strerror or exc}", summary
                 ) from None
             summary["written"] = [str(p) for p in written]
+        summary["episode_metrics"] = episode_metrics
         return summary
     finally:
-        if writer is not None:
-            writer.close()
-        env.close()
         torch.set_num_threads(threads)

@@ -55,6 +55,7 @@ NOT_METRIC = frozenset(
         "settle_steps",
         "checkpoint_env_steps",
         "training_seed",
+        "execution",
     }
 )
 """Eval-JSON keys that are not metrics (settings, references, bookkeeping)."""

@@ -169,6 +169,20 @@ class ScriptedPolicy:
         """Who trained it (``sb3_ppo``, ``sb3_sac``...)."""
         return str(self.state.get("learner", ""))
 
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickled (to an env worker of ``devlearn eval``) as its file, config and metadata:
+        the TorchScript program is loaded again on the other side; the registry and the
+        behaviour stay here."""
+        return {"path": self.path, "state": self.state, "config": self.config}
+
+    def __setstate__(self, saved: dict[str, Any]) -> None:
+        from devlearn.evaluation.export import known_exporter_noise_silenced
+
+        self.path, self.state, self.config = saved["path"], saved["state"], saved["config"]
+        self.registry, self._behavior = None, None  # type: ignore[assignment]
+        with known_exporter_noise_silenced():
+            self.module = torch.jit.load(str(self.path), map_location="cpu").eval()
+
     def behavior(self) -> Behavior:
         """Its behaviour under its config, with the artifacts the file carries; built once."""
         if self._behavior is None:

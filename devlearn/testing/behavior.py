@@ -5,6 +5,7 @@ and evaluator checked (the instrumented wrappers are at the end of this module).
 from __future__ import annotations
 
 import dataclasses
+import json
 import pickle
 from collections.abc import Callable, Sequence
 from typing import Any
@@ -122,7 +123,10 @@ def check_behavior(
     uint8) arrays; every reward term must return a finite Python float (the message names the
     term). A training and an evaluation evaluator (``evaluator(training=...)``) record every
     step; their ``end_episode()`` metrics must be finite numbers and their ``summary()``
-    JSON-serialisable, and ``write_artifacts`` must return files that exist. A behaviour that
+    JSON-serialisable, and ``write_artifacts`` must return files that exist; an evaluation
+    evaluator that merges (``Evaluator.merge``, for ``devlearn eval --envs N``) must merge
+    evaluators of single episodes into the summary of one that saw them all
+    (:func:`check_evaluator_merge`). A behaviour that
     batches its facts or observations (``batch_facts``, ``batch_observe``) must give on every
     step exactly what ``facts`` and ``observe`` give (:func:`check_batched_observations`).
 
@@ -154,7 +158,12 @@ def check_behavior(
     env = BehaviorEnv(behavior, seed=seed)
     try:
         env.terms = checked_terms(env.terms, phase)
-        checked = CheckedEvaluator(env.evaluator, behavior.evaluator(training=False), phase)
+        checked = CheckedEvaluator(
+            env.evaluator,
+            behavior.evaluator(training=False),
+            phase,
+            fresh=lambda: behavior.evaluator(training=False),
+        )
         env.evaluator = checked  # type: ignore[assignment]  # duck-typed: records and checks
         env.episode_steps = max(1, min(env.episode_steps, episode_steps))
         first = env.reset()
@@ -391,17 +400,35 @@ def checked_terms(terms: list[BatchedIntrinsicReward], phase: list[str]) -> list
 
 
 class CheckedEvaluator:
-    """Feeds a training and an evaluation evaluator the same steps; checks what they return."""
+    """Feeds a training and an evaluation evaluator the same steps; checks what they return.
 
-    def __init__(self, training: Any, evaluation: Any, phase: list[str]) -> None:
+    With ``fresh`` (a new evaluation evaluator) and an evaluator that merges, every episode is
+    also recorded by an evaluator of its own, and after each episode they must merge (pickled,
+    as from env workers) into the summary of the evaluator that saw every episode
+    (:func:`check_evaluator_merge`).
+    """
+
+    def __init__(
+        self,
+        training: Any,
+        evaluation: Any,
+        phase: list[str],
+        fresh: Callable[[], Any] | None = None,
+    ) -> None:
+        from devlearn.evaluation.episodes import merges
+
         self.training = training
         self.evaluation = evaluation
         self.phase = phase
         self.episodes = 0
+        self.fresh = fresh if fresh is not None and merges(evaluation) else None
+        self.parts = [] if self.fresh is None else [self.fresh()]
 
     def record(self, ctx: Any) -> None:
         self.training.record(ctx)
         self.evaluation.record(ctx)
+        if self.parts:
+            self.parts[-1].record(ctx)
 
     def end_episode(self) -> dict[str, float]:
         self.episodes += 1
@@ -415,6 +442,10 @@ class CheckedEvaluator:
                 value = check_number(value, f"{what} metric '{key}'", self.phase[0])
                 if label == "training":
                     out[key] = value
+        if self.fresh is not None:
+            self.parts[-1].end_episode()
+            check_evaluator_merge(self.parts, self.evaluation, self.phase[0])
+            self.parts.append(self.fresh())
         return out
 
     def episode_record(self) -> Any:
@@ -428,6 +459,28 @@ class CheckedEvaluator:
 
     def summary(self) -> dict[str, Any]:
         return self.training.summary()
+
+
+def check_evaluator_merge(parts: list[Any], whole: Any, where: str = "") -> None:
+    """Require evaluators that each recorded a run of episodes, merged in order
+    (``Evaluator.merge``, each pickled first as from an env worker), to summarise exactly as
+    ``whole``, which recorded every episode in order (``devlearn eval --envs N`` relies on it).
+
+    Args:
+        parts: Evaluators of consecutive runs of episodes, none with an episode open.
+        whole: The evaluator of all of them.
+        where: Which phase of the check this is, for messages.
+    """
+    merged = pickle.loads(pickle.dumps(parts[0]))
+    for part in parts[1:]:
+        merged.merge(pickle.loads(pickle.dumps(part)))
+    got = json.dumps(merged.summary(), sort_keys=True, default=float)
+    want = json.dumps(whole.summary(), sort_keys=True, default=float)
+    require(
+        got == want,
+        f"the evaluation evaluator's merge() of {len(parts)} runs of episodes summarises "
+        f"otherwise than one evaluator recording them all {where}",
+    )
 
 
 def check_summaries(checked: CheckedEvaluator) -> dict[str, Any]:

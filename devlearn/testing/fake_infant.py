@@ -177,6 +177,12 @@ class CloseEvaluator(devlearn.Evaluator):
     def summary(self) -> dict[str, Any]:
         return {"episodes": self.episodes, "close": self.close_steps / max(self.steps, 1)}
 
+    def merge(self, later: devlearn.Evaluator) -> None:
+        assert isinstance(later, CloseEvaluator)
+        self.close_steps += later.close_steps
+        self.steps += later.steps
+        self.episodes += later.episodes
+
     def write_artifacts(self, out_dir: Path) -> list[Path]:
         path = out_dir / "close.txt"
         path.write_text(f"{self.close_steps}/{self.steps}\n")

@@ -106,3 +106,14 @@ def test_what_cannot_be_evaluated_is_one_line(env, tmp_path):
     opened = ScriptedPolicy.open(path, REGISTRY, "tiny")
     with pytest.raises(UsageError, match=r"takes observation 'proprioception' \(3,\).*\(4,\)"):
         opened.act({"proprioception": np.zeros(4, np.float32)})
+
+
+def test_a_scripted_policy_plays_across_env_workers_as_in_one_env(env, tmp_path):
+    """It travels to the workers as its file (TorchScript does not pickle) and acts there as
+    it acts here: the episodes of one env playing them in order."""
+    path = devlearn.gym.save_policy(Reach(), env, tmp_path / "policy.pt", learner="mine")
+    one = run(path)
+    spread = run(path, envs=2, workers=2)
+    assert spread["execution"]["workers"] == 2
+    assert spread["episode_metrics"] == one["episode_metrics"]
+    assert spread["close"] == one["close"] and spread["learner"] == "mine"

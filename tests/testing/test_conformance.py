@@ -312,3 +312,38 @@ def test_the_gymnasium_check_passes_a_correct_behaviour_and_names_a_broken_one()
     import gymnasium
 
     assert "devlearn-check/Jittery-v0" not in gymnasium.registry  # the temporary id is gone
+
+
+class MergingCount(CountEvaluator):
+    """Counts contact steps and merges (``devlearn eval --envs N``)."""
+
+    def merge(self, later):
+        self.contacts += later.contacts
+        self.episodes += later.episodes
+
+
+class ForgetfulMerge(MergingCount):
+    """Its merge forgets the later evaluator's episodes."""
+
+    def merge(self, later):
+        self.contacts += later.contacts
+
+
+class MergingProbe(Probe):
+    """Its evaluator merges."""
+
+    def evaluator(self, training):
+        return MergingCount()
+
+
+class ForgetfulMergeProbe(Probe):
+    """Its evaluator's merge forgets episodes."""
+
+    def evaluator(self, training):
+        return ForgetfulMerge()
+
+
+def test_an_evaluator_that_merges_must_merge_into_the_whole_summary():
+    check_behavior(MergingProbe, **{**FAST, "episodes": 2})
+    with pytest.raises(ConformanceError, match=r"merge\(\) of 2 runs of episodes summarises"):
+        check_behavior(ForgetfulMergeProbe, **{**FAST, "episodes": 2})

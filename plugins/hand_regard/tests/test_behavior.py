@@ -159,8 +159,19 @@ def test_behavior_pickles_without_runtime_state(behavior):
     infant.reset(None)
     behavior.facts(infant)
     clone = pickle.loads(pickle.dumps(behavior))
-    assert clone._detector is None and clone._flow.previous is None
+    assert clone._flow.previous is None
     assert clone.config == behavior.config
+
+
+def test_a_stored_detector_travels_to_workers(synthetic_params, tmp_path):
+    """A policy file's detector has no file to be reloaded from in an env worker."""
+    from devlearn_hand_regard import detector_store
+
+    behavior = HandRegard(HandRegardConfig(detector_file=str(tmp_path / "moved_away.json")))
+    stored = {"hand_detector": detector_store.as_artifact(synthetic_params)}
+    behavior.load_policy_artifacts(stored, tmp_path)
+    clone = pickle.loads(pickle.dumps(behavior))
+    assert clone.detector.params == synthetic_params
 
 
 def test_cnn_policy_sees_the_eyes(behavior):

@@ -113,6 +113,14 @@ class MouthEvaluator(devlearn.Evaluator):
             "contact_fraction": self.contact_steps / max(self.steps, 1),
         }
 
+    def merge(self, later: devlearn.Evaluator) -> None:
+        """Add the counts of ``later``'s episodes (``devlearn eval --envs N``)."""
+        assert isinstance(later, MouthEvaluator)
+        self.steps += later.steps
+        self.contact_steps += later.contact_steps
+        self.episodes += later.episodes
+        self.episodes_with_contact += later.episodes_with_contact
+
 
 class HandToMouth(devlearn.Behavior):
     """Bring a hand to the mouth, in the crib, from proprioception and touch contacts."""

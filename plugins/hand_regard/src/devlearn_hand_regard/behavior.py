@@ -111,9 +111,11 @@ class HandRegard(Behavior):
         self._arm_actuators: dict[str, np.ndarray] | None = None
 
     def __getstate__(self) -> dict[str, Any]:
-        # Travel light to worker processes: the detector is reloaded from its file there.
+        # Travel light to worker processes: no previous frame. The detector travels (its
+        # calibrated parameters, a few numbers): a policy file's stored detector has no file
+        # to be reloaded from there (devlearn eval --workers).
         state = dict(self.__dict__)
-        state.update(_detector=None, _flow=HandFlow())
+        state.update(_flow=HandFlow())
         return state
 
     # --- set-up -----------------------------------------------------------------------------

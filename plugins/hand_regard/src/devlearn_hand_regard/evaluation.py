@@ -135,6 +135,20 @@ class HandRegardEvaluator(Evaluator):
         self._episode_steps = 0
         return metrics
 
+    def merge(self, later: Evaluator) -> None:
+        """Add ``later``'s episodes after this one's (``devlearn eval --envs N``): step
+        counts summed, per-episode averages joined in order."""
+        assert isinstance(later, HandRegardEvaluator)
+        self.episodes += later.episodes
+        self.steps += later.steps
+        for k in self.counts:
+            self.counts[k] += later.counts[k]
+            self.episode_averages[k] += later.episode_averages[k]
+        self.detected += later.detected
+        for k in self.confusion:
+            self.confusion[k] += later.confusion[k]
+        self.pixel_counts += later.pixel_counts
+
     def _count_pixels(self, infant: Any, masks: np.ndarray) -> None:
         """Add one step's pixel counts: masks (2 eyes, 2 hands, H, W) against the segmentation."""
         seg = np.asarray(infant.eyes_segmentation())  # (2 eyes, H, W), cached by the infant

@@ -128,6 +128,11 @@ class Likeness:
         self.onset_steps = []
         self.regions[:] = False
 
+    def merge(self, later: Likeness) -> None:
+        """Add ``later``'s episodes after this one's (neither has an episode open)."""
+        self.by_region += later.by_region
+        self.episodes += later.episodes
+
     def summary(self, categories: np.ndarray | None) -> dict[str, Any]:
         """Means over episodes (the time between touches over episodes with two or more) and
         the share of all touches by area (empty without the infant's region table)."""
@@ -230,6 +235,19 @@ class SelfTouchEvaluator(Evaluator):
         """In training, the closed episode's touched parts, (2, 34) bool (hands x parts), for
         the run's :class:`TrainingScore`; None in evaluation (its summary keeps them)."""
         return self.last_parts if self.training else None
+
+    def merge(self, later: Evaluator) -> None:
+        """Add ``later``'s evaluation episodes after this one's (``devlearn eval --envs N``):
+        counts summed, touched parts united, per-episode lists joined in order."""
+        assert isinstance(later, SelfTouchEvaluator)
+        self.region_steps += later.region_steps
+        self.part_steps += later.part_steps
+        self.ever_parts |= later.ever_parts
+        self.episodes += later.episodes
+        self.touched += later.touched
+        self.likeness.merge(later.likeness)
+        if self.regions is None:
+            self.regions, self.dt = later.regions, later.dt
 
     def part_names(self) -> list[str]:
         """Names of the 34 parts (generic ``part_NN`` before a real infant was seen)."""

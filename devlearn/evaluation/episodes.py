@@ -1,0 +1,467 @@
+"""Evaluation episodes played in several environments at once, in this process or in env worker
+processes, with exactly the results of one environment playing them one after another.
+
+One environment evaluating ``E`` episodes in order is the reference: its generator, seeded with
+the evaluation seed, draws every episode's start at that episode's reset (the infant's pose or
+kick, ``Behavior.on_episode_start``), and a baseline's or a sampling policy's generator draws
+every decision's randomness in turn. ``devlearn eval --envs N`` gives each of N slots a run of
+consecutive episodes (``np.array_split``: slot 0 the first ones). A slot reaches its first
+episode ``k`` as the reference does: a fresh generator, ``k`` resets, and the policy's draws of
+``k`` episodes made without acting. Its later episodes then follow by the environment's own
+reset, as in the reference. Each slot acts on one observation at a time, with the same calls
+as the reference (a batch of several rows can round differently in float32). Its evaluator
+sees its episodes only; the slots' evaluators are merged in slot order
+(:meth:`~devlearn.api.behavior.Evaluator.merge`). No env computes reward terms: an evaluation
+reports none.
+
+That a slot's skip reaches the reference's state rests on a property of the behaviour: the env's
+generator is drawn at resets only, in amounts that do not depend on the episode before, and the
+policy draws the same amount every decision. Every slot reports its generators' states where its
+run begins and where it ends, and :func:`merged_results` refuses results whose runs do not meet
+(slot i's end differs from slot i + 1's beginning), so a behaviour without the property is
+refused rather than evaluated differently.
+"""
+
+from __future__ import annotations
+
+import copy
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import partial
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import torch
+
+from devlearn.api.behavior import Evaluator
+from devlearn.api.errors import UsageError
+from devlearn.env.behavior_env import step_batch
+from devlearn.env.workers import WorkerPool, make_envs
+from devlearn.training.checkpoint import observation_batch
+
+if TYPE_CHECKING:
+    from devlearn.api.behavior import Behavior
+    from devlearn.env.behavior_env import BehaviorEnv, InfantFactory
+    from devlearn.training.networks import MultiSenseModel
+
+VIDEO_FPS = 25
+"""Frame rate of evaluation videos (every k-th decision is rendered to match it)."""
+HOLD_STEPS = 8
+"""Mean steps a ``held_random`` baseline action is held (40 ms at 200 Hz)."""
+PROGRESS_SECONDS = 0.5
+"""How often a worker reports its progress (physics steps, episodes) to the progress bar."""
+
+
+def merges(evaluator: Any) -> bool:
+    """Whether ``evaluator`` implements :meth:`~devlearn.api.behavior.Evaluator.merge` (so its
+    episodes can be played in several environments)."""
+    method = getattr(type(evaluator), "merge", None)
+    return method is not None and method is not Evaluator.merge
+
+
+# --- policies: how each decision's action is chosen, with their own randomness ---------------
+
+
+class Policy:
+    """A policy of ``devlearn eval``: ``act(obs) -> (action_dim,)``.
+
+    A slot starting at episode k first calls :meth:`skip` with k episodes' decisions, so that
+    its randomness is where the reference's (one env, every episode in order) is then.
+    """
+
+    def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
+        """The action for one observation (name -> unbatched array), (action_dim,)."""
+        raise NotImplementedError
+
+    def skip(self, decisions: int) -> None:
+        """Draw what ``decisions`` decisions would draw, without acting. Baselines do not read
+        the observation, so they act on none."""
+        for _ in range(decisions):
+            self.act({})
+
+    def rng_state(self) -> Any:
+        """The state of the policy's own randomness (None: it has none)."""
+        return None
+
+    def for_slot(self) -> Policy:
+        """A copy in this initial state for one slot."""
+        return copy.deepcopy(self)
+
+
+class ZeroPolicy(Policy):
+    """The zero action."""
+
+    def __init__(self, action_dim: int) -> None:
+        self.action_dim = action_dim
+
+    def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
+        return np.zeros(self.action_dim)
+
+    def skip(self, decisions: int) -> None:
+        pass
+
+
+class UniformPolicy(Policy):
+    """Actions uniform in [-1, 1], drawn afresh every decision from the evaluation seed's
+    stream ``[seed, 1]`` (apart from the env's)."""
+
+    def __init__(self, action_dim: int, seed: int) -> None:
+        self.action_dim = action_dim
+        self.rng = np.random.default_rng([seed, 1])
+
+    def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
+        return self.rng.uniform(-1.0, 1.0, self.action_dim)
+
+    def rng_state(self) -> Any:
+        return self.rng.bit_generator.state
+
+
+class HeldPolicy(Policy):
+    """Uniform actions each held for :data:`HOLD_STEPS` physics steps on average: every
+    actuator redraws with probability ``repeat / HOLD_STEPS`` per decision (stream
+    ``[seed, 2]``)."""
+
+    def __init__(self, action_dim: int, seed: int, repeat: int) -> None:
+        self.action_dim = action_dim
+        self.rng = np.random.default_rng([seed, 2])
+        self.held = self.rng.uniform(-1.0, 1.0, action_dim)
+        self.redraw = min(1.0, repeat / HOLD_STEPS)
+
+    def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
+        redraw = self.rng.random(self.action_dim) < self.redraw
+        self.held[redraw] = self.rng.uniform(-1.0, 1.0, int(redraw.sum()))
+        return self.held.copy()
+
+    def rng_state(self) -> Any:
+        return self.rng.bit_generator.state
+
+
+class ActorPolicy(Policy):
+    """A checkpoint's policy network: its mean action, or (``sample``) an action drawn from its
+    distribution with torch's generator in ``generator_state`` (the state torch's global
+    generator had after the network was built, as in one env evaluating in order), kept per
+    slot."""
+
+    def __init__(
+        self, actor: MultiSenseModel, action_dim: int, sample: bool, generator_state: torch.Tensor
+    ) -> None:
+        self.actor = actor
+        self.action_dim = action_dim
+        self.sample = sample
+        self.state = generator_state.clone()
+
+    def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
+        if self.sample:
+            torch.set_rng_state(self.state)
+        with torch.inference_mode():
+            action = self.actor(observation_batch(obs), stochastic_output=self.sample)[0].numpy()
+        if self.sample:
+            self.state = torch.get_rng_state()
+        return action
+
+    def skip(self, decisions: int) -> None:
+        """A sampled action is ``torch.normal(mean, std)`` of shape (1, action_dim): one
+        standard normal fill of that shape per decision, whatever the mean and spread."""
+        if not self.sample or not decisions:
+            return
+        torch.set_rng_state(self.state)
+        noise = torch.empty(1, self.action_dim)
+        for _ in range(decisions):
+            noise.normal_()
+        self.state = torch.get_rng_state()
+
+    def rng_state(self) -> Any:
+        return self.state.numpy().tobytes() if self.sample else None
+
+    def for_slot(self) -> Policy:
+        return copy.deepcopy(self, {id(self.actor): self.actor})  # one network, shared
+
+
+class ScriptedActions(Policy):
+    """A scripted policy's deterministic action (another learner's policy file,
+    :class:`~devlearn.evaluation.scripted_policy.ScriptedPolicy`): nothing to draw, nothing to
+    skip; it travels to env workers as its file and is loaded again there."""
+
+    def __init__(self, scripted: Any) -> None:
+        self.scripted = scripted
+
+    def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
+        return np.asarray(self.scripted.act(obs))
+
+    def skip(self, decisions: int) -> None:
+        pass
+
+    def for_slot(self) -> Policy:
+        return self
+
+
+# --- the plan and one process's slots -------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class EpisodePlan:
+    """What every slot needs to play its episodes (picklable: it travels to env workers).
+
+    Attributes:
+        blocks: Per slot, its episodes ``(first, stop)``, consecutive, slot 0 first.
+        seed: The evaluation seed (the env's generator).
+        stage: The evaluation stage's options.
+        start: The infant start to set (``babybench``, ``rest``), or None: the infant's own.
+        decisions: Decisions per episode (physics steps / decision rate).
+        policy: The policy in its initial state (each slot plays a copy).
+        video: Write the first episode's frames here (MP4), or None.
+        video_stride: Render every this many decisions.
+    """
+
+    blocks: tuple[tuple[int, int], ...]
+    seed: int
+    stage: dict[str, Any]
+    start: str | None
+    decisions: int
+    policy: Policy
+    video: str | None = None
+    video_stride: int = 1
+
+
+@dataclass
+class SlotResult:
+    """What one slot played.
+
+    Attributes:
+        episodes: Each episode's ``end_episode`` metrics, in episode order.
+        evaluator: The slot's evaluator, over its episodes only.
+        started: The start its episodes took (babybench, rest or random).
+        begins: (env generator, policy randomness) states at its first episode's first decision.
+        ends: The same after its last episode (the env's after the reset that follows it).
+    """
+
+    episodes: list[dict[str, float]]
+    evaluator: Any
+    started: str
+    begins: tuple[Any, Any]
+    ends: tuple[Any, Any]
+
+
+def set_infant_start(infant: Any, start: str) -> None:
+    """Make an env's infant start its episodes with ``start`` (babybench or rest).
+
+    Raises:
+        UsageError: The infant has no starts (a stand-in) and ``start`` is not its rest.
+    """
+    if hasattr(infant, "start"):
+        infant.start = start
+    elif start != "rest":
+        raise UsageError(f"--start {start}: this infant has no such start (it has only rest)")
+
+
+def prepare_env(env: BehaviorEnv, stage: dict[str, Any], start: str | None) -> str:
+    """Put ``env`` under the evaluation stage and start; return the start its episodes take."""
+    if start is not None:
+        set_infant_start(env.infant, start)
+    env.set_stage(stage)
+    return "random" if stage.get("random_pose") else str(getattr(env.infant, "start", "rest"))
+
+
+class _Slot:
+    """One env playing its run of episodes: reaches the first as the reference does."""
+
+    def __init__(self, env: BehaviorEnv, plan: EpisodePlan) -> None:
+        self.env = env
+        # An evaluation pays no rewards (eval.json holds none): its envs compute no reward
+        # terms, a fifth of a self-touch step.
+        env.terms = []
+        first, stop = plan.blocks[env.index]
+        self.first, self.left = first, stop - first
+        self.started = prepare_env(env, plan.stage, plan.start)
+        env.rng = np.random.default_rng(plan.seed)
+        for _ in range(first):
+            env.reset()
+        self.obs = env.reset()
+        self.policy = plan.policy.for_slot()
+        self.policy.skip(first * plan.decisions)
+        self.begins = (env.rng.bit_generator.state, self.policy.rng_state())
+        self.episodes: list[dict[str, float]] = []
+
+    def step(self, obs: dict[str, np.ndarray], info: dict[str, Any] | None) -> bool:
+        """Take one decision's outcome; True when it ended an episode."""
+        self.obs = obs
+        if info is None:
+            return False
+        metrics = {k: v for k, v in info.items() if k.startswith("metrics/")}
+        self.episodes.append({k.removeprefix("metrics/"): float(v) for k, v in metrics.items()})
+        self.left -= 1
+        return True
+
+    def result(self) -> SlotResult:
+        ends = (self.env.rng.bit_generator.state, self.policy.rng_state())
+        return SlotResult(self.episodes, self.env.evaluator, self.started, self.begins, ends)
+
+
+def play(
+    envs: list[BehaviorEnv],
+    plan: EpisodePlan,
+    report: Callable[[int, int], None] | None = None,
+) -> list[SlotResult]:
+    """Play the episodes of ``envs``' slots (env ``index`` = slot), stepping them together.
+
+    Episodes all last the infant's episode length, so the slots' episodes begin together; a
+    slot whose run is over (runs are one episode shorter in the last slots) stops stepping.
+
+    Args:
+        envs: This process's envs, made with ``training=False``.
+        plan: The evaluation's plan.
+        report: ``report(physics_steps, episodes_ended)`` after every decision.
+    Returns:
+        One result per env, in env order.
+    """
+    slots = [_Slot(env, plan) for env in envs]
+    filmed = next((s.env for s in slots if s.first == 0), None) if plan.video else None
+    writer = None
+    try:
+        if plan.video is not None and filmed is not None:  # this process plays episode 0
+            import imageio.v2 as imageio
+
+            writer = imageio.get_writer(plan.video, fps=VIDEO_FPS, macro_block_size=1)
+        while playing := [s for s in slots if s.left]:
+            batch = [s.env for s in playing]
+            for t in range(plan.decisions):
+                if writer is not None and filmed is not None and t % plan.video_stride == 0:
+                    writer.append_data(filmed.behavior.render_frame(filmed.infant))
+                actions = [s.policy.act(s.obs) for s in playing]
+                outcomes = step_batch(batch, actions)
+                ended = sum(s.step(obs, info) for s, (obs, *_, info) in zip(playing, outcomes))
+                if report is not None:
+                    report(len(batch) * batch[0].action_repeat, ended)
+            if writer is not None:  # the first episode is over
+                writer.close()
+                writer = None
+    finally:
+        if writer is not None:
+            writer.close()
+    return [s.result() for s in slots]
+
+
+class _Throttled:
+    """Sums ``(steps, episodes)`` and sends them at most every :data:`PROGRESS_SECONDS`."""
+
+    def __init__(self, send: Callable[[Any], None]) -> None:
+        self.send = send
+        self.steps = self.episodes = 0
+        self.last = time.monotonic()
+
+    def add(self, steps: int, episodes: int) -> None:
+        self.steps += steps
+        self.episodes += episodes
+        if time.monotonic() - self.last >= PROGRESS_SECONDS:
+            self.flush()
+
+    def flush(self) -> None:
+        if self.steps or self.episodes:
+            self.send((self.steps, self.episodes))
+        self.steps = self.episodes = 0
+        self.last = time.monotonic()
+
+
+def play_in_worker(
+    plan: EpisodePlan, envs: list[BehaviorEnv], send: Callable[[Any], None]
+) -> list[SlotResult]:
+    """:func:`play` in an env worker (its ``call`` command), progress sent to the parent."""
+    progress = _Throttled(send)
+    try:
+        return play(envs, plan, progress.add)
+    finally:
+        progress.flush()
+
+
+class Players:
+    """The envs that play an evaluation's slots: in this process, or split over env worker
+    processes (:class:`~devlearn.env.workers.WorkerPool`; started in this thread: a worker
+    ends with the thread that started it). Close it (or use it as a context manager).
+
+    Args:
+        behavior: The behaviour (every env gets its own copy).
+        slots: Envs, one per slot.
+        workers: Env worker processes (0: in this process).
+        seed: The evaluation seed.
+        infant_factory: Infant builder (picklable with workers); None: the real infant.
+        action_repeat: Physics steps per decision.
+        age_months: The body's age (None: the default body).
+    """
+
+    def __init__(
+        self,
+        behavior: Behavior,
+        slots: int,
+        workers: int,
+        seed: int,
+        infant_factory: InfantFactory | None,
+        action_repeat: int,
+        age_months: float | None = None,
+    ) -> None:
+        seeds = [seed] * slots  # every slot seeds its generator afresh anyway
+        self.envs: list[BehaviorEnv] = []
+        self.pool: WorkerPool | None = None
+        if workers == 0:
+            self.envs = make_envs(
+                behavior, seeds, infant_factory, 0, action_repeat, age_months, training=False
+            )
+        else:
+            self.pool = WorkerPool(
+                behavior,
+                seeds,
+                workers,
+                infant_factory,
+                action_repeat,
+                age_months=age_months,
+                training=False,
+            )
+
+    def play(self, plan: EpisodePlan, report: Callable[[int, int], None]) -> list[SlotResult]:
+        """Play ``plan``; the slots' results in slot order (``report`` as in :func:`play`)."""
+        if self.pool is None:
+            return play(self.envs, plan, report)
+        job = partial(play_in_worker, plan)
+        replies = self.pool.call("call", [job] * len(self.pool.conns), lambda p: report(*p))
+        return [result for reply in replies for result in reply]
+
+    def close(self) -> None:
+        """Stop the workers, or close the envs."""
+        if self.pool is not None:
+            self.pool.close()
+        for env in self.envs:
+            env.close()
+
+    def __enter__(self) -> Players:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def merged_results(results: list[SlotResult]) -> tuple[Any, list[dict[str, float]], str]:
+    """The slots' evaluators merged in slot order, every episode's metrics in order, and the
+    start the episodes took.
+
+    Raises:
+        UsageError: A slot's run did not begin where the slot before it ended: the
+            behaviour draws from the env's generator during episodes, or a reset draws
+            amounts that depend on the episode before, or the policy draws unevenly; the
+            episodes then differ from one env playing them in order (use ``--envs 1``).
+    """
+    for i, (before, after) in enumerate(zip(results, results[1:])):
+        for what, end, begin in zip(
+            ("env's generator", "policy's randomness"), before.ends, after.begins
+        ):
+            if end != begin:
+                raise UsageError(
+                    f"evaluation env {i + 1} began with the {what} elsewhere than env {i} "
+                    "left it: this behaviour's episodes cannot be played in several envs "
+                    "with the results of one (does it draw from the env's generator during "
+                    "episodes?); evaluate it with --envs 1"
+                )
+    evaluator = results[0].evaluator
+    for later in results[1:]:
+        evaluator.merge(later.evaluator)
+    episodes = [metrics for result in results for metrics in result.episodes]
+    return evaluator, episodes, results[0].started
