@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import sys
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -20,6 +20,11 @@ PROGRESS_SECONDS = 5.0
 """Babbling prints a progress line at most this often (it takes minutes on a CPU)."""
 
 SIDES = ("left", "right")
+PLACING_JOINTS = ("shoulder", "elbow")
+"""Joints whose angles place a hand (actuator names containing these words): the shoulder
+and the elbow carry the hand across the view; the wrist turns the mitten but barely moves it,
+and fewer inputs need fewer babbling frames (issue #39: with the wrist's three joints added the
+side attribution's pair precision fell from 0.94 to 0.91 on the same frames)."""
 ARMS = ("both", "alternate")
 """Valid ``arms`` of :func:`babble`."""
 
@@ -36,6 +41,10 @@ class BabblingData:
             arm joints' velocities (from proprioception, see :func:`joint_state`).
         episode: (T,) int, episode index (tracks never cross an episode boundary).
         head_pose: (T, 3) float32 head joint angles (from proprioception), or (T, 0).
+        moving_arm: (T,) int, the arm that babbled at each step when one arm babbled at a
+            time (0 left, 1 right; ``arms="alternate"``), -1 when both did; None: unknown.
+        posture_joints: Per hand [left, right], the proprioception indices of the joint
+            angles that place that hand (:func:`posture_joints`); empty when unknown.
     """
 
     eyes: np.ndarray
@@ -44,6 +53,8 @@ class BabblingData:
     arm_speed: np.ndarray
     episode: np.ndarray
     head_pose: np.ndarray | None = None
+    moving_arm: np.ndarray | None = None
+    posture_joints: list[list[int]] = field(default_factory=list)
 
     def __post_init__(self) -> None:
         if self.head_pose is None:
@@ -70,6 +81,25 @@ def joint_state(proprioception: np.ndarray, groups: dict[str, np.ndarray]) -> tu
     qpos, qvel = proprioception[:n_joints], proprioception[n_joints : 2 * n_joints]
     speed = np.array([np.linalg.norm(qvel[groups[f"{s}_arm"]]) for s in SIDES], np.float32)
     return speed, np.asarray(qpos[groups["head"]], np.float32)
+
+
+def posture_joints(actuator_names: list[str], groups: dict[str, np.ndarray]) -> list[list[int]]:
+    """Per hand [left, right], the proprioception indices of the angles that place it: that
+    arm's :data:`PLACING_JOINTS`, then the head's joints (the eyes turn with the head).
+
+    Proprioception starts with the joint angles in actuator order (:func:`joint_state`), so
+    an actuator's index is its angle's index.
+    """
+    head = [int(i) for i in groups["head"]]
+    return [
+        [
+            int(i)
+            for i in groups[f"{side}_arm"]
+            if any(word in actuator_names[int(i)] for word in PLACING_JOINTS)
+        ]
+        + head
+        for side in SIDES
+    ]
 
 
 def babble(
@@ -144,7 +174,7 @@ def babble(
         scale = np.ones(infant.action_dim)
         scale[infant.actuator_groups["head"]] = head_scale
         groups = {k: np.asarray(v) for k, v in infant.actuator_groups.items()}
-        eyes, proprio, actions, speeds, heads, episode = [], [], [], [], [], []
+        eyes, proprio, actions, speeds, heads, episode, moving = [], [], [], [], [], [], []
         action = np.zeros(infant.action_dim)
         still = np.zeros(infant.action_dim, bool)
         for t in range(steps):
@@ -177,6 +207,7 @@ def babble(
             speeds.append(speed)
             heads.append(head)
             episode.append(t // length)
+            moving.append((t // length) % 2 if arms == "alternate" else -1)
         return BabblingData(
             eyes=np.stack(eyes),
             proprioception=np.stack(proprio),
@@ -184,6 +215,8 @@ def babble(
             arm_speed=np.stack(speeds),
             episode=np.asarray(episode),
             head_pose=np.stack(heads),
+            moving_arm=np.asarray(moving),
+            posture_joints=posture_joints(list(infant.actuator_names), groups),
         )
     finally:
         if own:

@@ -24,6 +24,7 @@ from devlearn_hand_regard import detector_store
 from devlearn_hand_regard.config import (
     APPEARANCE_CHOICES,
     BABBLING_ARMS_CHOICES,
+    HAND_ATTRIBUTION_CHOICES,
     NOT_IN_PAPER,
     POLICY_CHOICES,
     REWARD_CHOICES,
@@ -133,13 +134,17 @@ class HandRegard(Behavior):
         _check_choice("eval_start", cfg.eval_start, START_CHOICES)
         _check_choice("policy", cfg.policy, POLICY_CHOICES)
         _check_choice("babbling_arms", cfg.babbling_arms, BABBLING_ARMS_CHOICES)
+        _check_choice("hand_attribution", cfg.hand_attribution, HAND_ATTRIBUTION_CHOICES)
         self.scene = cfg.scene  # the config may have changed since __init__
         return {"appearance": cfg.appearance, "start": cfg.start}
 
     def prepare(self, run_dir: Path) -> None:
         """Reuse ``run_dir/hand_detector.json`` (a resumed run), else copy the detector
         ``config.detector_file`` names (one calibration shared by several runs), else
-        calibrate one by motor babbling; either way the run folder holds its detector.
+        calibrate one by motor babbling; either way the run folder holds its detector. A
+        given detector is used as it is: one calibrated before issue #39 has no visibility
+        model and attributes by position (it warns); ``python -m devlearn_hand_regard.measure
+        --detector OLD --save NEW`` gives it one.
 
         Sets ``config.detector_file`` to the file's absolute path.
 
@@ -180,7 +185,7 @@ class HandRegard(Behavior):
         """
         stored = artifacts.get("hand_detector")
         if stored is not None:
-            self._detector = HandDetector(DetectorParams.from_dict(stored))
+            self._detector = self._make_detector(DetectorParams.from_dict(stored))
             return
         name = self.config.detector_file
         if not name:
@@ -207,8 +212,19 @@ class HandRegard(Behavior):
                     "call prepare(run_dir) first. Nothing will be detected.",
                     stacklevel=2,
                 )
-            self._detector = HandDetector(params)
+            self._detector = self._make_detector(params)
         return self._detector
+
+    def _make_detector(self, params: DetectorParams | None) -> HandDetector:
+        """The detector of ``params`` telling the hands apart as ``config.hand_attribution``
+        says (``visibility`` needs a detector calibrated since issue #39; an older one warns
+        and attributes by position).
+
+        Raises:
+            UsageError: An unknown ``config.hand_attribution``.
+        """
+        _check_choice("hand_attribution", self.config.hand_attribution, HAND_ATTRIBUTION_CHOICES)
+        return HandDetector(params, attribution=self.config.hand_attribution)
 
     # --- episode hooks ----------------------------------------------------------------------
     def on_episode_start(self, infant: Infant, rng: np.random.Generator) -> None:
@@ -273,6 +289,7 @@ class HandRegard(Behavior):
         cfg = self.config
         _check_choice("policy", cfg.policy, POLICY_CHOICES)
         _check_choice("babbling_arms", cfg.babbling_arms, BABBLING_ARMS_CHOICES)
+        _check_choice("hand_attribution", cfg.hand_attribution, HAND_ATTRIBUTION_CHOICES)
         if cfg.policy == "proprio":
             return NetworkSpec(
                 encoders={

@@ -8,12 +8,15 @@ left/right attribution all come from :class:`DetectorParams`, which motor babbli
 from __future__ import annotations
 
 import json
+import warnings
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
 import cv2
 import numpy as np
+
+from devlearn_hand_regard.attribution import assign, predict_visibility
 
 FORMAT_VERSION = 2
 """2: no static-body masks (the mittens made them unnecessary); 1 files are refused."""
@@ -44,6 +47,9 @@ class DetectorParams:
             babbling found that the hands differ in colour (``two_colour_mittens``): then a
             hand is the largest blob of its own colour, and positions are not used. Empty:
             one colour for both hands, attributed by position.
+        visibility_model: Each hand's visibility per eye predicted from its own arm's posture,
+            learned from one-arm babbling (:func:`attribution.fit_visibility_model`): the
+            detector's ``visibility`` attribution. Empty: not learned (files before issue #39).
     """
 
     hsv_ranges: list[list[int]]
@@ -56,6 +62,7 @@ class DetectorParams:
     calibration: dict[str, Any] = field(default_factory=dict)
     position_model: dict[str, Any] = field(default_factory=dict)
     side_hsv_ranges: list[list[list[int]]] = field(default_factory=list)
+    visibility_model: dict[str, Any] = field(default_factory=dict)
 
     def save(self, path: str | Path) -> Path:
         """Write the parameters as JSON; return the path."""
@@ -126,17 +133,47 @@ def colour_blobs(mask: np.ndarray, min_area: float, max_area: float, kernel: int
     return sorted(blobs, key=lambda b: -b.area)
 
 
+ATTRIBUTIONS = ("visibility", "position")
+"""How a detector says which blob is which hand when both mittens have one colour:
+``visibility`` (issue #39): each hand's visibility predicted from its own arm's posture
+(:mod:`devlearn_hand_regard.attribution`); ``position``: the image position each hand is
+expected at (the posture model or the mean babbling positions, :meth:`HandDetector.attribute`),
+the rule before issue #39."""
+
+
 class HandDetector:
     """Finds up to two hands per eye and says which is which.
 
     Args:
         params: Calibrated parameters; ``None`` gives a detector that never sees anything.
         max_hands: Most hands reported per eye (paper: 2).
+        attribution: One of :data:`ATTRIBUTIONS`. ``visibility`` with parameters that have no
+            visibility model (calibrated before issue #39, or babbling saw too few hands to
+            learn one) falls back to ``position`` with a warning; :attr:`attribution` is the
+            rule in use.
+
+    Raises:
+        ValueError: An unknown attribution.
     """
 
-    def __init__(self, params: DetectorParams | None, max_hands: int = 2) -> None:
+    def __init__(
+        self, params: DetectorParams | None, max_hands: int = 2, attribution: str = "position"
+    ) -> None:
+        if attribution not in ATTRIBUTIONS:
+            raise ValueError(
+                f"unknown hand attribution '{attribution}'; valid: {', '.join(ATTRIBUTIONS)}"
+            )
+        if attribution == "visibility" and params is not None and not params.visibility_model:
+            warnings.warn(
+                "hand_regard: this hand detector has no visibility model (calibrated before "
+                "issue #39, or babbling saw too few hands to learn one); it tells the left "
+                "hand from the right by position (pair precision ~0.55 with both arms moving)",
+                stacklevel=2,
+            )
+            attribution = "position"
         self.params = params
         self.max_hands = max_hands
+        self.attribution = attribution
 
     def colour_mask(self, image: np.ndarray, side: int | None = None) -> np.ndarray:
         """Return (H, W) bool: pixels inside the learned hand colour boxes of an RGB image
@@ -232,12 +269,15 @@ class HandDetector:
         hands: list[int] | None = None,
     ) -> tuple[np.ndarray, np.ndarray]:
         """Detect and attribute the hands in both eyes: by each hand's own colour when the
-        calibration learned two (``side_hsv_ranges``), else by :meth:`attribute`.
+        calibration learned two (``side_hsv_ranges``), else as ``attribution`` says: by the
+        posture's predicted visibility (:meth:`attribute_by_visibility`) or by position
+        (:meth:`attribute`).
 
         Args:
             eyes: (2, H, W, 3) uint8 RGB, [left eye, right eye].
-            proprioception: (P,) the infant's proprioception at the same step; with it the
-                blobs are attributed by the posture's predicted hand positions.
+            proprioception: (P,) the infant's proprioception at the same step: with it the
+                blobs are attributed by the posture (each hand's predicted visibility, or
+                predicted position); without it by the hands' mean babbling positions.
             hands: The hands that can be in view (0 left, 1 right; default both): with one,
                 the largest hand blob is that hand (a one-arm curriculum stage, the other
                 arm hanging out of view).
@@ -249,20 +289,59 @@ class HandDetector:
         detections = np.zeros((n_eyes, 2), dtype=bool)
         masks = np.zeros((n_eyes, 2, height, width), dtype=bool)
         by_colour = self.params is not None and bool(self.params.side_hsv_ranges)
+        likelihood = None
+        if self.attribution == "visibility" and self.params is not None:
+            if proprioception is not None:
+                likelihood = predict_visibility(self.params.visibility_model, proprioception)
         for eye in range(n_eyes):
+            attributed: list[list[Blob]]
             if by_colour:  # each hand is the largest blob of its own colour
-                attributed = [next(iter(self.blobs(eyes[eye], side)), None) for side in range(2)]
+                attributed = [self.blobs(eyes[eye], side)[:1] for side in range(2)]
             elif hands is not None and len(hands) == 1:
-                attributed = [None, None]
-                attributed[hands[0]] = next(iter(self.blobs(eyes[eye])), None)
+                attributed = [[], []]
+                attributed[hands[0]] = self.blobs(eyes[eye])[:1]
+            elif likelihood is not None:
+                attributed = self.attribute_by_visibility(
+                    self.blobs(eyes[eye]), eye, likelihood[eye]
+                )
             else:
                 found = self.blobs(eyes[eye])
-                attributed = self.attribute(found, eye, width, proprioception)
-            for hand, blob in enumerate(attributed):
-                if blob is not None and (hands is None or hand in hands):
+                single = self.attribute(found, eye, width, proprioception)
+                attributed = [[blob] if blob is not None else [] for blob in single]
+            for hand, blobs in enumerate(attributed):
+                if blobs and (hands is None or hand in hands):
                     detections[eye, hand] = True
-                    masks[eye, hand] = blob.mask
+                    for blob in blobs:
+                        masks[eye, hand] |= blob.mask
         return detections, masks
+
+    def attribute_by_visibility(
+        self, blobs: list[Blob], eye: int, likelihood: np.ndarray
+    ) -> list[list[Blob]]:
+        """Say which blobs are the left and which the right hand from the posture alone.
+
+        :func:`attribution.assign` names the hands in view (the blob to the hand likelier in
+        view; two blobs to both hands only when each is likelier in view than not, else both
+        to the likelier hand, one hand split in two). Two hands in view take the blobs in the
+        pairing closer to the hands' mean babbling positions (:meth:`attribute` without
+        proprioception).
+
+        Args:
+            blobs: One eye's hand blobs, largest first.
+            eye: Which eye (0 left, 1 right).
+            likelihood: (2 hands,) P(this eye sees hand h) from the posture.
+        Returns:
+            [left-hand blobs, right-hand blobs].
+        """
+        in_view = assign(likelihood, len(blobs))
+        if len(in_view) == 2:
+            width = blobs[0].mask.shape[1]
+            paired = self.attribute(blobs[:2], eye, width)
+            return [[blob] if blob is not None else [] for blob in paired]
+        out: list[list[Blob]] = [[], []]
+        for hand in in_view:
+            out[hand] = list(blobs)
+        return out
 
 
 class HandFlow:

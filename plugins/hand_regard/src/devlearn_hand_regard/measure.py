@@ -10,6 +10,12 @@ accuracy of the detections (truth: any pixel of that hand), recall on clearly vi
 (at least 20 pixels), per hand the pixel precision and recall of its mask, and which labels
 the detected pixels carry (hand, other body, scene/toys, background). The segmentation is
 used here only, never by the detector.
+
+The detector tells the hands apart as ``--attribution`` says (default ``visibility``, issue
+#39: learned after calibration from more one-arm babbling, seed + 2; a ``--detector`` file
+without it learns it, babbling again as calibration did): ``score`` is that rule's,
+``score_position`` the same detector attributing by position (the rule before issue #39) on
+the same frames.
 """
 
 from __future__ import annotations
@@ -25,7 +31,9 @@ import numpy as np
 
 from devlearn_hand_regard.babbling import BabblingData, babble
 from devlearn_hand_regard.calibration import calibrate
-from devlearn_hand_regard.detector import DetectorParams, HandDetector
+from devlearn_hand_regard.config import HandRegardConfig
+from devlearn_hand_regard.detector import ATTRIBUTIONS, DetectorParams, HandDetector
+from devlearn_hand_regard.detector_store import calibration_babbling, learn_side_attribution
 from devlearn_hand_regard.evaluation import PAIRS, pair_name
 
 if TYPE_CHECKING:
@@ -106,9 +114,12 @@ def score(
         hands' identity ignored (is any hand in this eye?); ``pixels``: share of detected
         pixels per segmentation label; ``hand_pixel_recall``: share of hand pixels detected.
         Per pair, ``precision_pixels`` and ``recall_pixels`` take as truth at least
-        ``clear_pixels`` of the hand's pixels (``devlearn eval``'s ``pixels`` criterion).
+        ``clear_pixels`` of the hand's pixels (``devlearn eval``'s ``pixels`` criterion), and
+        ``credited_absent`` is the share of steps the detector credits that pair while the
+        hand shows no pixel in that eye (``credited_absent_max``: the largest over pairs).
     """
     conf = np.zeros((4, 2, 2))  # tp, fp, fn, tn per (eye, hand)
+    absent = np.zeros((2, 2))  # steps a pair is detected while that hand shows no pixel
     conf_clear = np.zeros((4, 2, 2))  # the same against "clearly visible" (eval's ``pixels``)
     clear = np.zeros((2, 2, 2))  # clearly visible: (found, visible) per (eye, hand)
     anyh = np.zeros(4)
@@ -133,6 +144,7 @@ def score(
                 ]
                 truth, found = n > 0, bool(detections[eye, hand])
                 conf[_cell(truth, found), eye, hand] += 1
+                absent[eye, hand] += found and n == 0
                 conf_clear[_cell(n >= clear_pixels, found), eye, hand] += 1
                 if n >= clear_pixels:
                     clear[:, eye, hand] += [found, 1]
@@ -149,6 +161,7 @@ def score(
             "clear_steps": int(clear[1, eye, hand]),
             "precision_pixels": against_pixels["precision"],
             "recall_pixels": against_pixels["recall"],
+            "credited_absent": round(absent[eye, hand] / max(len(data), 1), 4),
         }
     tp, fp, fn, tn = conf.sum(axis=(1, 2))
     return {
@@ -170,6 +183,7 @@ def score(
             k: _mean([p[k] for p in pairs.values()])
             for k in ("precision", "recall", "clear_recall", "precision_pixels", "recall_pixels")
         },
+        "credited_absent_max": max(p["credited_absent"] for p in pairs.values()),
     }
 
 
@@ -262,6 +276,18 @@ def main(argv: list[str] | None = None) -> dict:
         choices=("alternate", "both"),
         help="calibration babbling: one arm per episode (default) or both arms",
     )
+    parser.add_argument(
+        "--attribution",
+        default="visibility",
+        choices=ATTRIBUTIONS,
+        help="how the detector tells the hands apart (default visibility, issue #39)",
+    )
+    parser.add_argument(
+        "--attribution-share",
+        type=float,
+        default=HandRegardConfig.attribution_babbling_share,
+        help="one-arm babbling for the visibility attribution, share of --babbling-steps",
+    )
     parser.add_argument("--detector", help="score this detector JSON instead of calibrating")
     parser.add_argument("--save", help="write the calibrated detector JSON here")
     parser.add_argument("--out", help="write the JSON result here too")
@@ -275,33 +301,42 @@ def main(argv: list[str] | None = None) -> dict:
         "scene": args.scene,
         "hold_steps": args.hold_steps,
         "arms": args.arms,
+        "attribution": args.attribution,
         "argv": list(sys.argv[1:] if argv is None else argv),
         "test_frames": {
             "episodes": args.test_episodes,
             "episode_steps": args.test_episode_steps,
             "start": args.start,
+            "seed": args.test_seed,
         },
     }
+    cfg = HandRegardConfig(
+        scene=args.scene,
+        appearance=args.appearance,
+        start="rest" if args.start == "random" else args.start,
+        babbling_steps=args.babbling_steps,
+        babbling_seed=args.seed,
+        babbling_hold_steps=args.hold_steps,
+        babbling_arms=args.arms,
+        hand_attribution=args.attribution,
+        attribution_babbling_share=args.attribution_share,
+    )
     try:
         start = time.perf_counter()
+        data = None
         if args.detector:
             params = DetectorParams.load(args.detector)
         else:
-            start_mode = "rest" if args.start == "random" else args.start
-            data = babble(
-                args.babbling_steps,
-                seed=args.seed,
-                infant=infant,
-                start=start_mode,
-                hold_steps=args.hold_steps,
-                progress=True,
-                arms=args.arms,
-            )
+            data = calibration_babbling(cfg, infant, progress=True)
             result["babbling_s"] = round(time.perf_counter() - start, 1)
             start = time.perf_counter()
             params = calibrate(data, per_hand_colours=args.arms == "alternate")
             result["calibration_s"] = round(time.perf_counter() - start, 1)
-            del data
+        if args.attribution == "visibility" and not params.visibility_model:
+            start = time.perf_counter()
+            learn_side_attribution(params, cfg, infant, data, progress=True)
+            result["side_attribution_s"] = round(time.perf_counter() - start, 1)
+        del data
         if args.save:
             path = params.save(args.save)
             result["detector_bytes"] = path.stat().st_size
@@ -321,13 +356,16 @@ def main(argv: list[str] | None = None) -> dict:
             start="rest" if args.start == "random" else args.start,
             hold_steps=args.hold_steps,
         )
+        detector = HandDetector(params, attribution=args.attribution)
         start = time.perf_counter()
-        result["score"] = score(HandDetector(params), test, segmentation)
+        result["score"] = score(detector, test, segmentation)
         result["detect_ms_per_step"] = round(1000 * (time.perf_counter() - start) / len(test), 2)
+        if args.attribution != "position":
+            result["score_position"] = score(HandDetector(params), test, segmentation)
         means_only = score(HandDetector(params), test, segmentation, posture=False)
         result["score_mean_positions"] = {k: means_only[k] for k in ("pairs", "pair_mean")}
         if args.picture:
-            detection_picture(HandDetector(params), test, segmentation, args.picture)
+            detection_picture(detector, test, segmentation, args.picture)
     finally:
         infant.close()
     text = json.dumps(result, indent=1)

@@ -1,0 +1,197 @@
+"""Issue #39, item 2: which hand is it, measured where it matters, old detector beside new.
+
+Run from the repository root (``results/hand_regard/attribution.sh`` runs it with the
+committed arguments)::
+
+    python results/hand_regard/attribution.py --detector D.json --babbling R.json [R2.json ...] \
+        --out results/hand_regard/attribution
+
+Two kinds of frames, each scored against the renderer's segmentation (per (eye, hand) pair
+precision and recall against ``pixels``, at least 20 of the hand's pixels, as ``devlearn
+eval``; and the share of steps a pair is credited while that hand shows no pixel in that eye):
+
+- **both-arm babbling** from BabyBench's start: read from ``python -m
+  devlearn_hand_regard.measure`` results (``--babbling``), which hold the new rule's score
+  (``score``) and the old one's on the same frames (``score_position``);
+- **the published trained policies' own frames** (``--policies``, default every
+  ``results/hand_regard/i29/*/policy.pt``): each policy runs ``devlearn eval``'s protocol (10
+  episodes of 1,000 steps from BabyBench's start, eval seed 0, its mean action) with the
+  detector it was published with, so the frames are those of its published evaluation; the
+  frames it sees (one per decision) are recorded and scored by its own detector (the
+  ``position`` attribution, as published) and by the new one (``--detector``, ``visibility``).
+
+Writes ``attribution.json`` (every figure) and ``attribution.md`` (the tables) in ``--out``.
+The segmentation is read here only, never by a detector.
+"""
+
+from __future__ import annotations
+
+import argparse
+import glob
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from devlearn_hand_regard.babbling import BabblingData
+from devlearn_hand_regard.detector import DetectorParams, HandDetector
+from devlearn_hand_regard.measure import score
+
+from devlearn.evaluation.evaluate import evaluate
+from devlearn.infant import build_infant
+from devlearn.plugins import PluginRegistry
+from devlearn.training.checkpoint import Checkpoint
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent.parent
+SHORT = {
+    "left_eye_left_hand": "LL",
+    "right_eye_left_hand": "RL",
+    "left_eye_right_hand": "LR",
+    "right_eye_right_hand": "RR",
+}
+
+
+class FrameRecorder:
+    """Wraps an infant: every time the eyes are read (once per decision, by the behaviour's
+    facts), keeps the images, the proprioception and the segmentation."""
+
+    def __init__(self, infant: Any) -> None:
+        self.infant = infant
+        self.eyes_seen: list[np.ndarray] = []
+        self.proprioception_seen: list[np.ndarray] = []
+        self.segmentation: list[np.ndarray] = []
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.infant, name)
+
+    def eyes(self) -> np.ndarray:
+        """The eye images; a copy of them, the proprioception and the segmentation are kept."""
+        eyes = self.infant.eyes()
+        self.eyes_seen.append(eyes.copy())
+        self.proprioception_seen.append(np.asarray(self.infant.proprioception(), np.float32))
+        self.segmentation.append(self.infant.eyes_segmentation().copy())
+        return eyes
+
+    def frames(self) -> tuple[BabblingData, np.ndarray]:
+        """The recorded frames (as a recording ``measure.score`` reads) and their (T, 2, H, W)
+        segmentation."""
+        steps = len(self.eyes_seen)
+        data = BabblingData(
+            eyes=np.stack(self.eyes_seen),
+            proprioception=np.stack(self.proprioception_seen),
+            actions=np.zeros((steps, 0), np.float32),
+            arm_speed=np.zeros((steps, 2), np.float32),
+            episode=np.zeros(steps, int),
+        )
+        return data, np.stack(self.segmentation)
+
+
+def policy_frames(path: Path, episodes: int, registry: PluginRegistry) -> dict[str, Any]:
+    """Run a published policy under ``devlearn eval``'s protocol, recording its frames; return
+    the frames, their segmentation and the evaluation's summary."""
+    recorders: list[FrameRecorder] = []
+
+    def factory(scene: str, **options: Any) -> FrameRecorder:
+        recorders.append(FrameRecorder(build_infant(scene, **options)))
+        return recorders[-1]
+
+    summary = evaluate("hand_regard", path, episodes, registry, infant_factory=factory, seed=0)
+    data, segmentation = recorders[0].frames()
+    return {"data": data, "segmentation": segmentation, "summary": summary}
+
+
+def brief(result: dict[str, Any]) -> dict[str, Any]:
+    """The figures of a ``measure.score`` result that the tables show."""
+    return {
+        "steps": result["steps"],
+        "pair_mean": {k: result["pair_mean"][k] for k in ("precision_pixels", "recall_pixels")},
+        "pairs": {
+            name: {
+                k: pair[k]
+                for k in ("precision_pixels", "recall_pixels", "credited_absent", "in_view")
+            }
+            for name, pair in result["pairs"].items()
+        },
+        "credited_absent_max": result["credited_absent_max"],
+        "any_hand": result["any_hand"],
+    }
+
+
+def _cell(value: float | None) -> str:
+    return "-" if value is None else f"{value:.2f}"
+
+
+def table_rows(label: str, rule: str, result: dict[str, Any]) -> str:
+    """One Markdown row: pair-averaged and per-pair precision / recall, worst false credit."""
+    mean = result["pair_mean"]
+    pairs = " | ".join(
+        f"{_cell(p['precision_pixels'])} / {_cell(p['recall_pixels'])}"
+        for p in result["pairs"].values()
+    )
+    absent = max(p["credited_absent"] for p in result["pairs"].values())
+    return (
+        f"| {label} | {rule} | {result['steps']:,} | **{_cell(mean['precision_pixels'])} / "
+        f"{_cell(mean['recall_pixels'])}** | {pairs} | {100 * absent:.1f}% |"
+    )
+
+
+def main(argv: list[str] | None = None) -> dict[str, Any]:
+    """Command line: see the module docstring."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--detector", required=True, help="the new detector (visibility model)")
+    parser.add_argument("--babbling", nargs="*", default=[], help="measure.py result JSONs")
+    parser.add_argument("--policies", nargs="*", help="policy files (default: i29's)")
+    parser.add_argument("--episodes", type=int, default=10, help="evaluation episodes each")
+    parser.add_argument("--out", required=True, help="folder for attribution.json / .md")
+    args = parser.parse_args(argv)
+    policies = args.policies or sorted(glob.glob(str(HERE / "i29" / "*" / "policy.pt")))
+    new = HandDetector(DetectorParams.load(args.detector), attribution="visibility")
+    registry = PluginRegistry()
+    out: dict[str, Any] = {"argv": sys.argv[1:] if argv is None else argv, "babbling": {}}
+    header = (
+        "| frames | attribution | steps | pair-averaged precision / recall | "
+        + " | ".join(SHORT.values())
+        + " | most steps a pair is credited with the hand absent |\n"
+        + "|---|---|---|---|---|---|---|---|---|"
+    )
+    rows = [header]
+    for path in args.babbling:
+        measured = json.loads(Path(path).read_text())
+        frames = measured["test_frames"]
+        label = (
+            f"both-arm babbling, {frames['episodes']} x {frames['episode_steps']} steps, "
+            f"seed {frames['seed']}"
+        )
+        entry = {
+            "position": brief(measured["score_position"]),
+            "visibility": brief(measured["score"]),
+        }
+        out["babbling"][Path(path).name] = entry
+        rows += [table_rows(label, rule, entry[rule]) for rule in ("position", "visibility")]
+    out["policies"] = {}
+    for path in policies:
+        name = Path(path).parent.name
+        recorded = policy_frames(Path(path), args.episodes, registry)
+        data, segmentation = recorded["data"], recorded["segmentation"]
+        own = Checkpoint.open(Path(path), registry, "hand_regard").behavior().detector
+        entry = {
+            "position": brief(score(own, data, segmentation)),
+            "visibility": brief(score(new, data, segmentation)),
+            "published_pixels": recorded["summary"]["criteria"]["pixels"]["visibility"],
+        }
+        out["policies"][name] = entry
+        label = f"policy `{name}`, {args.episodes} eval episodes"
+        rows += [table_rows(label, rule, entry[rule]) for rule in ("position", "visibility")]
+    folder = Path(args.out)
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "attribution.json").write_text(json.dumps(out, indent=1) + "\n")
+    markdown = "\n".join(rows) + "\n"
+    (folder / "attribution.md").write_text(markdown)
+    print(markdown)
+    return out
+
+
+if __name__ == "__main__":
+    main()
