@@ -2,7 +2,7 @@
 # Issue #39, item 2: which hand is it, measured where it matters, the old rule (position)
 # beside the new (visibility: each hand's visibility predicted from its own arm's posture).
 #
-#   bash results/hand_regard/attribution.sh        # ~20 min on 2 busy cores
+#   bash results/hand_regard/attribution.sh        # ~12 min on 2 busy cores
 #
 # Writes results/hand_regard/attribution/ (babbling_seed{1,7}.json: measure's full results;
 # attribution.{json,md}: the tables) and the detector with its visibility model,

@@ -12,11 +12,11 @@ from devlearn_hand_regard.attribution import (
     assign,
     fit_logistic,
     fit_visibility_model,
+    polynomial_features,
     predict_visibility,
-    quadratic_features,
     visibility_labels,
 )
-from devlearn_hand_regard.babbling import BabblingData, posture_joints
+from devlearn_hand_regard.babbling import BabblingData, mirror_signs, posture_joints
 from devlearn_hand_regard.detector import DetectorParams, HandDetector
 from synthetic import draw
 
@@ -34,11 +34,19 @@ RAISED = 0.6
 """A synthetic hand is in view when its arm's shoulder angle is above this."""
 
 
-def one_arm_babbling(steps: int = 4000, episode: int = 500, seed: int = 0) -> BabblingData:
+def one_arm_babbling(
+    steps: int = 4000,
+    episode: int = 500,
+    seed: int = 0,
+    right_reach: float = 1.0,
+    turn: bool = False,
+) -> tuple[BabblingData, np.ndarray]:
     """Proprioception of 8 joints ([qpos, 5 x zeros] as the infant's layout), one arm
     babbling per episode (left first) while the other hangs at -0.5; a hand is in view (of
-    both eyes) when its shoulder is raised above :data:`RAISED`, whatever its elbow or wrist.
-    The head's tilt is held (constant); the swivel wanders."""
+    both eyes) when its shoulder is raised above :data:`RAISED`, whatever its elbow or wrist
+    (``turn``: and the head turned towards it, swivel > 0 for the left hand, < 0 for the
+    right). The head's tilt is held (constant); the swivel wanders. ``right_reach``: the
+    right shoulder's highest babbled angle (below RAISED: the right hand is never seen)."""
     rng = np.random.default_rng(seed)
     qpos = np.zeros((steps, 8))
     qpos[:, 0] = rng.uniform(-0.5, 0.5, steps)
@@ -48,9 +56,10 @@ def one_arm_babbling(steps: int = 4000, episode: int = 500, seed: int = 0) -> Ba
         babbling = moving == hand
         qpos[:, joints] = -0.5
         qpos[np.ix_(babbling, joints)] = rng.uniform(-1, 1, (int(babbling.sum()), 3))
+    qpos[:, 5] = np.minimum(qpos[:, 5], right_reach)
     seen = np.zeros((steps, 2), bool)
-    for shoulder in (2, 5):
-        seen |= (qpos[:, shoulder] > RAISED)[:, None]
+    for shoulder, side in ((2, 1.0), (5, -1.0)):
+        seen |= ((qpos[:, shoulder] > RAISED) & (side * qpos[:, 0] > 0 if turn else True))[:, None]
     data = BabblingData(
         eyes=np.zeros((steps, 2, 1, 1, 3), np.uint8),
         proprioception=np.c_[qpos, np.zeros((steps, 40))].astype(np.float32),
@@ -59,6 +68,7 @@ def one_arm_babbling(steps: int = 4000, episode: int = 500, seed: int = 0) -> Ba
         episode=np.arange(steps) // episode,
         moving_arm=moving,
         posture_joints=posture_joints(NAMES, GROUPS),
+        posture_mirror=mirror_signs(NAMES, posture_joints(NAMES, GROUPS)[0]),
     )
     return data, seen
 
@@ -76,16 +86,21 @@ def model():
 
 def test_posture_joints_are_each_arms_shoulder_and_elbow_and_the_head():
     assert posture_joints(NAMES, GROUPS) == [[2, 3, 0, 1], [5, 6, 0, 1]]
+    # in the mirror the head's turn reverses, its nod and the arms' angles do not
+    assert mirror_signs(NAMES, [2, 3, 0, 1]) == [1.0, 1.0, -1.0, 1.0]
 
 
-def test_quadratic_features_and_a_logistic_fit():
+def test_polynomial_features_and_a_logistic_fit():
     x = np.array([[1.0, 2.0], [3.0, -1.0]])
-    np.testing.assert_array_equal(quadratic_features(x), [[1, 1, 2, 1, 2, 4], [1, 3, -1, 9, -3, 1]])
+    np.testing.assert_array_equal(
+        polynomial_features(x, 2), [[1, 1, 2, 1, 2, 4], [1, 3, -1, 9, -3, 1]]
+    )
+    assert polynomial_features(np.zeros((3, 5))).shape == (3, 56)  # degree 3, five angles
     rng = np.random.default_rng(0)
     z = rng.uniform(-1, 1, (500, 1))
     labels = (z[:, 0] ** 2 < 0.25).astype(float)  # a band: needs the square term
-    weights = fit_logistic(quadratic_features(z), labels, ridge=0.1)
-    p = 1 / (1 + np.exp(-quadratic_features(np.array([[0.0], [0.9]])) @ weights))
+    weights = fit_logistic(polynomial_features(z, 2), labels, ridge=0.1)
+    p = 1 / (1 + np.exp(-polynomial_features(np.array([[0.0], [0.9]]), 2) @ weights))
     assert p[0] > 0.9 and p[1] < 0.1
 
 
@@ -115,6 +130,24 @@ def test_visibility_model_follows_each_arms_own_posture(model):
     # quadratic features cannot run away
     beyond = predict_visibility(model, posture(9.0, -9.0))
     assert np.all(beyond[:, 0] > 0.9) and np.all(beyond[:, 1] < 0.1)
+
+
+def test_each_hand_also_learns_from_the_other_arm_in_the_mirror():
+    """A hand is seen with its arm raised and the head turned towards it. The right arm
+    raised its hand into view only in 30 frames, the left one often: seen in the mirror (same
+    angles, head turn reversed) the left arm's frames teach the right hand's model where the
+    head must turn; a mirror that kept the turn's sign would teach it the wrong way."""
+    data, seen = one_arm_babbling(right_reach=0.3, turn=True)
+    few = np.flatnonzero(data.moving_arm == 1)[:30]  # a few raised right-arm frames
+    data.proprioception[few, 5], data.proprioception[few, 0] = 0.9, -0.4
+    seen[few] = True
+    turned_right, turned_left = posture(-0.5, 0.8, swivel=-0.3), posture(-0.5, 0.8, swivel=0.3)
+    mirrored = fit_visibility_model([(data, seen)])
+    assert np.all(predict_visibility(mirrored, turned_right)[:, 1] > 0.8)
+    assert np.all(predict_visibility(mirrored, turned_left)[:, 1] < 0.2)
+    data.posture_mirror = [1.0] * 4  # a wrong mirror: the head's turn not reversed
+    wrong = fit_visibility_model([(data, seen)])
+    assert np.all(predict_visibility(wrong, turned_left)[:, 1] > 0.5)
 
 
 def test_assign_names_the_likeliest_hands():

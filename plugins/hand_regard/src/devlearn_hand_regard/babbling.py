@@ -45,6 +45,8 @@ class BabblingData:
             time (0 left, 1 right; ``arms="alternate"``), -1 when both did; None: unknown.
         posture_joints: Per hand [left, right], the proprioception indices of the joint
             angles that place that hand (:func:`posture_joints`); empty when unknown.
+        posture_mirror: Per position in those lists, the sign an angle takes in the body's
+            mirror image (:func:`mirror_signs`); empty when unknown.
     """
 
     eyes: np.ndarray
@@ -55,6 +57,7 @@ class BabblingData:
     head_pose: np.ndarray | None = None
     moving_arm: np.ndarray | None = None
     posture_joints: list[list[int]] = field(default_factory=list)
+    posture_mirror: list[float] = field(default_factory=list)
 
     def __post_init__(self) -> None:
         if self.head_pose is None:
@@ -99,6 +102,26 @@ def posture_joints(actuator_names: list[str], groups: dict[str, np.ndarray]) -> 
         ]
         + head
         for side in SIDES
+    ]
+
+
+MIRRORED_HEAD_TURNS = ("swivel", "side")
+"""Head joints (actuator names containing these words) whose angle changes sign in the body's
+mirror image: a turn and a side tilt reverse, a nod does not."""
+
+
+def mirror_signs(actuator_names: list[str], joints: list[int]) -> list[float]:
+    """Per joint of one hand's :func:`posture_joints` list, the sign its angle takes when the
+    body is mirrored left to right (the other hand's list then describes the mirror image).
+
+    The arms are built as mirror images of each other (the same angle of the left and the
+    right shoulder puts the hands at mirrored places: on BabyBench's infant the pixels each
+    eye sees of a hand held before the eyes swap exactly, issue #39), so arm angles keep their
+    sign; of the head, turns and side tilts (:data:`MIRRORED_HEAD_TURNS`) change it.
+    """
+    return [
+        -1.0 if any(word in actuator_names[j] for word in MIRRORED_HEAD_TURNS) else 1.0
+        for j in joints
     ]
 
 
@@ -174,6 +197,7 @@ def babble(
         scale = np.ones(infant.action_dim)
         scale[infant.actuator_groups["head"]] = head_scale
         groups = {k: np.asarray(v) for k, v in infant.actuator_groups.items()}
+        names = list(infant.actuator_names)
         eyes, proprio, actions, speeds, heads, episode, moving = [], [], [], [], [], [], []
         action = np.zeros(infant.action_dim)
         still = np.zeros(infant.action_dim, bool)
@@ -216,7 +240,8 @@ def babble(
             episode=np.asarray(episode),
             head_pose=np.stack(heads),
             moving_arm=np.asarray(moving),
-            posture_joints=posture_joints(list(infant.actuator_names), groups),
+            posture_joints=posture_joints(names, groups),
+            posture_mirror=mirror_signs(names, posture_joints(names, groups)[0]),
         )
     finally:
         if own:

@@ -289,10 +289,9 @@ class HandDetector:
         detections = np.zeros((n_eyes, 2), dtype=bool)
         masks = np.zeros((n_eyes, 2, height, width), dtype=bool)
         by_colour = self.params is not None and bool(self.params.side_hsv_ranges)
-        likelihood = None
-        if self.attribution == "visibility" and self.params is not None:
-            if proprioception is not None:
-                likelihood = predict_visibility(self.params.visibility_model, proprioception)
+        likelihood = None  # (2 eyes, 2 hands) P(eye sees hand | posture), when attributing so
+        if self.attribution == "visibility" and self.params and proprioception is not None:
+            likelihood = predict_visibility(self.params.visibility_model, proprioception)
         for eye in range(n_eyes):
             attributed: list[list[Blob]]
             if by_colour:  # each hand is the largest blob of its own colour
