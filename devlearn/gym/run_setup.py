@@ -14,7 +14,7 @@ import numpy as np
 from gymnasium import spaces
 
 from devlearn.api.errors import UsageError
-from devlearn.config.growth import start_age
+from devlearn.config.growth import growth_schedule
 from devlearn.env.guards import OBSERVATION_BOUND
 from devlearn.training.resolve import RunRequest, resolve_config
 
@@ -161,6 +161,7 @@ class CurriculumClock:
         config: RunConfig,
     ) -> None:
         self.config = config
+        self.growth = growth_schedule(config)  # parsed once, as the runner does
         self.curriculum = curriculum
         self.steps_per_decision = int(steps_per_decision)
         self.decisions_per_iteration = int(decisions_per_iteration)
@@ -179,7 +180,11 @@ class CurriculumClock:
         """The body's age now (``infant.growth``'s at this step and stage, else
         ``infant.age_months``; None: the default body), as a run gives it to its envs before
         each iteration."""
-        return start_age(self.config, self.physics_steps, self.curriculum.index)
+        if self.growth is None:
+            return self.config.infant.age_months
+        return self.growth.age_at(
+            self.physics_steps, self.config.total_steps, self.curriculum.index
+        )
 
     def tick(self) -> tuple[bool, bool]:
         """Count one decision of every env.

@@ -97,22 +97,28 @@ def calibrate_by_babbling(
 
 
 def calibration_babbling(
-    cfg: HandRegardConfig, infant: Infant, progress: bool = False
+    cfg: HandRegardConfig,
+    infant: Infant,
+    progress: bool = False,
+    steps: int | None = None,
+    seed: int | None = None,
+    arms: str | None = None,
 ) -> BabblingData:
     """The motor babbling that calibration records (``cfg.babbling_*``, from ``cfg.start``):
-    the same frames for the same config (seeded)."""
+    the same frames for the same config (seeded). ``steps``, ``seed`` and ``arms`` replace the
+    config's for more babbling of the same kind (:func:`learn_side_attribution`)."""
     from devlearn_hand_regard.babbling import babble
 
     return babble(
-        cfg.babbling_steps,
-        seed=cfg.babbling_seed,
+        cfg.babbling_steps if steps is None else steps,
+        seed=cfg.babbling_seed if seed is None else seed,
         hold_steps=cfg.babbling_hold_steps,
         head_hold_steps=cfg.babbling_head_hold_steps,
         head_scale=cfg.babbling_head_scale,
         infant=infant,
         start=cfg.start,
         progress=progress,
-        arms=cfg.babbling_arms,
+        arms=cfg.babbling_arms if arms is None else arms,
     )
 
 
@@ -139,7 +145,6 @@ def learn_side_attribution(
     import sys
 
     from devlearn_hand_regard.attribution import fit_visibility_model, visibility_labels
-    from devlearn_hand_regard.babbling import babble
     from devlearn_hand_regard.detector import HandDetector
 
     colour = HandDetector(params)  # blobs only: their colour says "a hand"
@@ -160,15 +165,12 @@ def learn_side_attribution(
             flush=True,
         )
     for chunk, start in enumerate(range(0, steps if steps >= 2 else 0, ATTRIBUTION_CHUNK)):
-        extra = babble(
-            max(min(ATTRIBUTION_CHUNK, steps - start), 2),
+        extra = calibration_babbling(
+            cfg,
+            infant,
+            progress,
+            steps=max(min(ATTRIBUTION_CHUNK, steps - start), 2),
             seed=cfg.babbling_seed + ATTRIBUTION_SEED_OFFSET + chunk,
-            hold_steps=cfg.babbling_hold_steps,
-            head_hold_steps=cfg.babbling_head_hold_steps,
-            head_scale=cfg.babbling_head_scale,
-            infant=infant,
-            start=cfg.start,
-            progress=progress,
             arms="alternate",
         )
         hands_seen = seen(extra)
