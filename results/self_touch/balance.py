@@ -41,6 +41,13 @@ def _episode_parts(doc: dict[str, Any]) -> list[dict[str, list[int]]]:
     raise SystemExit("no 'episode_parts' in this eval.json (not a self-touch evaluation?)")
 
 
+def _corr(a: np.ndarray, b: np.ndarray) -> float:
+    """Pearson's correlation; NaN when a hand's coverage never varies (e.g. zero actions)."""
+    if a.std() == 0 or b.std() == 0:
+        return float("nan")
+    return float(np.corrcoef(a, b)[0, 1])
+
+
 def decompose(episodes: list[dict[str, list[int]]], seed: int = 0) -> dict[str, float]:
     """The imbalance of one evaluation and its sources (see the module docstring)."""
     left = np.array([len(e["left"]) for e in episodes], dtype=float)
@@ -55,7 +62,7 @@ def decompose(episodes: list[dict[str, list[int]]], seed: int = 0) -> dict[str, 
         "balance": float(np.abs(d).mean()),
         "preference": float(d.mean()),
         "without_preference": float(np.abs(d - np.round(d.mean())).mean()),
-        "corr": float(np.corrcoef(left, right)[0, 1]),
+        "corr": _corr(left, right),
         "independent": float(shuffled),
         "bonus_paid": float((np.abs(d) <= TOLERANCE).mean()),
     }

@@ -11,6 +11,11 @@ draws OUT/eval_curve.png (one line per seed, baselines as horizontal lines).
 ``ablation OUT``: OUT/runs/curriculum=ARM,seed=N/ run folders and the same baselines; prints one
 row per arm, the paper's Table II and the difference of every pair of arms.
 
+``pilots OUT``: issue #43's pilots (``pilots43.sh``): OUT/PILOT/seed=N/ run folders (PILOT
+control, balance or repeats) and OUT/baseline_{zero,random}/; prints the headline table, the
+balance's sources (``balance.py``), the likeness measures (``likeness_table.py``) and each
+pilot's difference from the control.
+
 The headline is the per-episode score ((left + right) parts touched in an episode / 68,
 averaged over the 100 episodes): mean and 95% t-interval over seeds, then each seed's own
 t-interval over its episodes. The union score (each hand's parts over all 100 episodes,
@@ -32,6 +37,10 @@ from typing import Any
 from devlearn_self_touch.evaluation import PAPER_RESULTS, union_score, union_score_interval
 
 from devlearn.api.stats import mean_ci
+
+sys.path.insert(0, str(Path(__file__).parent))  # balance.py and likeness_table.py beside it
+from balance import decompose  # noqa: E402
+from likeness_table import AREAS, MEASURES  # noqa: E402
 
 PAPER_TRAINING_SCORE = {"two_stage": 0.88, "fixed_only": 0.85, "random_only": 0.75}
 """The paper's training scores (Table I: 0.88; Table II "Train")."""
@@ -308,8 +317,85 @@ def ablation_tables(out: Path) -> str:
     return "\n".join(lines)
 
 
+def _welch(a: list[float], b: list[float]) -> str:
+    """``mean(a) - mean(b) [95% Welch interval]`` (the difference alone below 2 values each)."""
+    from scipy import stats
+
+    diff = statistics.mean(a) - statistics.mean(b)
+    if min(len(a), len(b)) < 2:
+        return f"{diff:+.3g}"
+    ci = stats.ttest_ind(a, b, equal_var=False).confidence_interval()
+    return f"{diff:+.3g} [{ci.low:+.3g}, {ci.high:+.3g}]"
+
+
+PILOT_DIFFERENCES = (
+    ("per-episode score", lambda e: e["episode_score_mean"]),
+    ("balance (per episode)", lambda e: e["episode_balance_mean"]),
+    ("|hand preference|", lambda e: abs(decompose(e["episode_parts"])["preference"])),
+    ("touches / min", lambda e: e["likeness"]["touches_per_minute"]),
+    ("distinct regions / min", lambda e: e["likeness"]["distinct_regions_per_minute"]),
+    ("time a hand touches the body", lambda e: e["likeness"]["contact_time_share"]),
+)
+
+
+def pilot_tables(out: Path) -> str:
+    pilots: dict[str, list[Path]] = {}
+    for pilot in ("control", "balance", "repeats"):
+        runs = sorted(out.glob(f"{pilot}/seed=*"), key=lambda r: int(_seed(r)))
+        runs = [r for r in runs if (r / "eval" / "eval.json").exists()]
+        if runs:
+            pilots[pilot] = runs
+    if not pilots:
+        raise SystemExit(f"no finished runs (PILOT/seed=N/eval/eval.json) in {out}")
+    evals = {p: [_load(r / "eval" / "eval.json") for r in runs] for p, runs in pilots.items()}
+    baselines = {
+        f"{policy} actions": e
+        for policy in ("zero", "random")
+        if (e := _load(out / f"baseline_{policy}" / "eval.json")) is not None
+    }
+    lines = [HEADLINE]
+    for pilot, runs in pilots.items():
+        seeds = ",".join(_seed(r) for r in runs)
+        label = f"{pilot} (seeds {seeds}, {evals[pilot][0]['checkpoint_env_steps']:,} steps)"
+        lines.append(group_row(label, evals[pilot], [training_score(r) for r in runs]))
+    lines += _baseline_rows(out)
+
+    lines.append("\nThe balance's sources (balance.py; mean over seeds, preference as |L - R|):\n")
+    cols = ("balance", "preference", "without_preference", "bonus_paid")
+    lines.append("| | " + " | ".join(c.replace("_", " ") for c in cols) + " |")
+    lines.append("|---" * (len(cols) + 1) + "|")
+    for name, group in [*evals.items(), *((k, [v]) for k, v in baselines.items())]:
+        parts = [decompose(e["episode_parts"]) for e in group]
+        cells = [_ci([abs(d[c]) for d in parts], 2) for c in cols]
+        lines.append(f"| {name} | " + " | ".join(cells) + " |")
+
+    lines.append("\nLikeness (mean and 95% t-interval over seeds):\n")
+    head = [label for _, label in MEASURES] + [f"share of touches: {a}" for a in AREAS]
+    lines.append("| | " + " | ".join(head) + " |")
+    lines.append("|---" * (len(head) + 1) + "|")
+    for name, group in [*evals.items(), *((k, [v]) for k, v in baselines.items())]:
+        like = [e["likeness"] for e in group]
+        cells = [_ci([r[key] for r in like if r[key] is not None]) for key, _ in MEASURES]
+        cells += [
+            _ci([r["touch_share_by_area"].get(a, 0.0) for r in like if r["touches"]]) for a in AREAS
+        ]
+        lines.append(f"| {name} | " + " | ".join(cells) + " |")
+
+    lines.append("\nEach pilot minus the control (Welch 95% interval over seeds):\n")
+    lines.append("| | " + " | ".join(name for name, _ in PILOT_DIFFERENCES) + " |")
+    lines.append("|---" * (len(PILOT_DIFFERENCES) + 1) + "|")
+    for pilot in (p for p in evals if p != "control" and "control" in evals):
+        cells = [
+            _welch([f(e) for e in evals[pilot]], [f(e) for e in evals["control"]])
+            for _, f in PILOT_DIFFERENCES
+        ]
+        lines.append(f"| {pilot} - control | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+TABLES = {"curriculum": curriculum_tables, "ablation": ablation_tables, "pilots": pilot_tables}
+
 if __name__ == "__main__":
-    if len(sys.argv) != 3 or sys.argv[1] not in ("curriculum", "ablation"):
-        raise SystemExit("usage: python results/self_touch/table.py curriculum|ablation OUT")
-    folder = Path(sys.argv[2])
-    print(curriculum_tables(folder) if sys.argv[1] == "curriculum" else ablation_tables(folder))
+    if len(sys.argv) != 3 or sys.argv[1] not in TABLES:
+        raise SystemExit(f"usage: python results/self_touch/table.py {'|'.join(TABLES)} OUT")
+    print(TABLES[sys.argv[1]](Path(sys.argv[2])))
