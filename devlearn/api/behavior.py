@@ -30,6 +30,12 @@ class Evaluator:
     over all evaluation episodes and prints :meth:`summary`.
     """
 
+    mergeable: ClassVar[bool] = False
+    """Whether :meth:`merge` is implemented (set it True where it is): ``devlearn eval`` then
+    may play the episodes in several environments at once; False (the default): one after
+    another in one environment (``devlearn.testing.check_behavior`` checks that the two
+    agree)."""
+
     def record(self, ctx: StepContext) -> None:
         """Take note of one step."""
 
@@ -71,8 +77,7 @@ class Evaluator:
         checks it). Neither evaluator has an episode open.
 
         Raises:
-            NotImplementedError: The default: ``devlearn eval`` then plays the episodes one
-                after another in one environment.
+            NotImplementedError: The default, for an evaluator that is not :attr:`mergeable`.
         """
         raise NotImplementedError(f"{type(self).__name__} does not merge")
 
@@ -265,6 +270,15 @@ class Behavior(ABC):
         that a policy is first judged on the skill it trained
         (:func:`evaluation_stage`). ``devlearn eval --start random|rest|babybench`` overrides
         the start either way, and the eval JSON records the start used."""
+        return None
+
+    def eval_start(self) -> str | None:
+        """The infant start (:data:`devlearn.infant.starts.STARTS`: ``babybench``, ``rest``)
+        ``devlearn eval`` plays episodes from when the evaluation stage does not randomise
+        the pose, e.g. hand regard's ``babybench``, BabyBench's start.
+
+        None (the default): the infant's own start, where the policy trained.
+        ``devlearn eval --start`` overrides it."""
         return None
 
     def process_action(self, action: np.ndarray, stage: dict[str, Any]) -> np.ndarray:

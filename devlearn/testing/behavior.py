@@ -14,11 +14,12 @@ import mujoco
 import numpy as np
 import torch
 
-from devlearn.api.behavior import Behavior, evaluation_stage
+from devlearn.api.behavior import Behavior, Evaluator, evaluation_stage
 from devlearn.api.curriculum import Curriculum
 from devlearn.api.network_spec import NetworkSpec
 from devlearn.api.rewards import BatchedFromPerEnv, BatchedIntrinsicReward, IntrinsicReward
 from devlearn.env.guards import TermError
+from devlearn.infant.starts import STARTS
 from devlearn.testing.values import (
     ConformanceError,
     check_number,
@@ -30,7 +31,8 @@ from devlearn.testing.values import (
 
 
 def check_behavior_class(behavior_cls: type[Behavior]) -> None:
-    """Check the class-level contract: name, scene, senses, config dataclass, docstrings."""
+    """Check the class-level contract: name, scene, senses, config dataclass, docstrings, a
+    picklable instance and its declared evaluation start."""
     name = getattr(behavior_cls, "name", None)
     require(isinstance(name, str) and name.isidentifier(), "Behavior.name must be an identifier")
     require(
@@ -42,7 +44,28 @@ def check_behavior_class(behavior_cls: type[Behavior]) -> None:
     require(dataclasses.is_dataclass(behavior_cls.config_class), "config_class: a dataclass")
     require(bool(behavior_cls.__doc__), f"{behavior_cls.__name__} needs a docstring")
     config = behavior_cls.config_class()
-    check_picklable(behavior_cls(config), f"behavior '{name}'")  # travels to worker processes
+    behavior = behavior_cls(config)
+    check_picklable(behavior, f"behavior '{name}'")  # travels to worker processes
+    start = behavior.eval_start()
+    require(
+        start is None or start in STARTS,
+        f"eval_start() must return None or one of {', '.join(STARTS)}, got {start!r}",
+    )
+
+
+def check_evaluator_class(evaluator: Any, label: str) -> None:
+    """Check that an evaluator is an :class:`~devlearn.api.behavior.Evaluator` whose
+    ``mergeable`` says whether it implements ``merge`` (``devlearn eval --envs N`` trusts it)."""
+    require(
+        isinstance(evaluator, Evaluator),
+        f"the {label} evaluator must be a devlearn.Evaluator, got {type(evaluator).__name__}",
+    )
+    implemented = type(evaluator).merge is not Evaluator.merge
+    require(
+        implemented == evaluator.mergeable,
+        f"{type(evaluator).__name__}: mergeable is {evaluator.mergeable} but merge() is "
+        + ("implemented: set mergeable = True" if implemented else "not implemented"),
+    )
 
 
 def check_reward_terms(terms: Sequence[IntrinsicReward | BatchedIntrinsicReward]) -> None:
@@ -123,7 +146,9 @@ def check_behavior(
     uint8) arrays; every reward term must return a finite Python float (the message names the
     term). A training and an evaluation evaluator (``evaluator(training=...)``) record every
     step; their ``end_episode()`` metrics must be finite numbers and their ``summary()``
-    JSON-serialisable, and ``write_artifacts`` must return files that exist; an evaluation
+    JSON-serialisable, and ``write_artifacts`` must return files that exist; both must be
+    :class:`~devlearn.api.behavior.Evaluator` whose ``mergeable`` says whether ``merge`` is
+    implemented (:func:`check_evaluator_class`); an evaluation
     evaluator that merges (``Evaluator.merge``, for ``devlearn eval --envs N``) must merge
     evaluators of single episodes into the summary of one that saw them all
     (:func:`check_evaluator_merge`). A behaviour that
@@ -151,6 +176,8 @@ def check_behavior(
 
     check_behavior_class(behavior_cls)
     behavior = behavior_cls(config if config is not None else behavior_cls.config_class())
+    for training, label in ((True, "training"), (False, "evaluation")):
+        check_evaluator_class(behavior.evaluator(training), label)
     check_reward_terms(behavior.reward_terms())
     curriculum = behavior.curriculum()
     check_curriculum(curriculum)
@@ -164,7 +191,7 @@ def check_behavior(
             phase,
             fresh=lambda: behavior.evaluator(training=False),
         )
-        env.evaluator = checked  # type: ignore[assignment]  # duck-typed: records and checks
+        env.evaluator = checked  # records in both, and checks what they return
         env.episode_steps = max(1, min(env.episode_steps, episode_steps))
         first = env.reset()
         shapes = check_observations(first, None, "after reset")
@@ -399,7 +426,7 @@ def checked_terms(terms: list[BatchedIntrinsicReward], phase: list[str]) -> list
     return [t if isinstance(t, BatchedFromPerEnv) else CheckedBatchedTerm(t, phase) for t in terms]
 
 
-class CheckedEvaluator:
+class CheckedEvaluator(Evaluator):
     """Feeds a training and an evaluation evaluator the same steps; checks what they return.
 
     With ``fresh`` (a new evaluation evaluator) and an evaluator that merges, every episode is
@@ -415,13 +442,11 @@ class CheckedEvaluator:
         phase: list[str],
         fresh: Callable[[], Any] | None = None,
     ) -> None:
-        from devlearn.evaluation.episodes import merges
-
         self.training = training
         self.evaluation = evaluation
         self.phase = phase
         self.episodes = 0
-        self.fresh = fresh if fresh is not None and merges(evaluation) else None
+        self.fresh = fresh if fresh is not None and evaluation.mergeable else None
         self.parts = [] if self.fresh is None else [self.fresh()]
 
     def record(self, ctx: Any) -> None:
@@ -451,7 +476,7 @@ class CheckedEvaluator:
     def episode_record(self) -> Any:
         """The training evaluator's record of the episode just ended (checked to pickle: it
         crosses from env workers to the runner)."""
-        record = getattr(self.training, "episode_record", lambda: None)()
+        record = self.training.episode_record()
         if record is not None:
             problem = pickle_problem(record, "training evaluator's episode_record()")
             require(problem is None, f"{problem} (it crosses from env workers to the runner)")
