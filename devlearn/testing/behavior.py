@@ -5,6 +5,7 @@ and evaluator checked (the instrumented wrappers are at the end of this module).
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import json
 import pickle
 from collections.abc import Callable, Sequence
@@ -14,7 +15,13 @@ import mujoco
 import numpy as np
 import torch
 
-from devlearn.api.behavior import Behavior, Evaluator, evaluation_stage
+from devlearn.api.behavior import (
+    BEHAVIOR_CORE,
+    BEHAVIOR_OPTIONAL,
+    Behavior,
+    Evaluator,
+    evaluation_stage,
+)
 from devlearn.api.curriculum import Curriculum
 from devlearn.api.network_spec import NetworkSpec
 from devlearn.api.rewards import BatchedFromPerEnv, BatchedIntrinsicReward, IntrinsicReward
@@ -31,8 +38,9 @@ from devlearn.testing.values import (
 
 
 def check_behavior_class(behavior_cls: type[Behavior]) -> None:
-    """Check the class-level contract: name, scene, senses, config dataclass, docstrings, a
-    picklable instance and its declared evaluation start."""
+    """Check the class-level contract: name, scene, senses, config dataclass, docstrings, the
+    contract's members as declared (:func:`check_contract_members`), a picklable instance and
+    its declared evaluation start."""
     name = getattr(behavior_cls, "name", None)
     require(isinstance(name, str) and name.isidentifier(), "Behavior.name must be an identifier")
     require(
@@ -43,6 +51,7 @@ def check_behavior_class(behavior_cls: type[Behavior]) -> None:
     require(set(behavior_cls.senses) <= valid, f"Behavior.senses must be within {sorted(valid)}")
     require(dataclasses.is_dataclass(behavior_cls.config_class), "config_class: a dataclass")
     require(bool(behavior_cls.__doc__), f"{behavior_cls.__name__} needs a docstring")
+    check_contract_members(behavior_cls)
     config = behavior_cls.config_class()
     behavior = behavior_cls(config)
     check_picklable(behavior, f"behavior '{name}'")  # travels to worker processes
@@ -51,6 +60,33 @@ def check_behavior_class(behavior_cls: type[Behavior]) -> None:
         start is None or start in STARTS,
         f"eval_start() must return None or one of {', '.join(STARTS)}, got {start!r}",
     )
+
+
+def check_contract_members(behavior_cls: type[Behavior]) -> None:
+    """Check that ``behavior_cls`` writes the members of the Behavior contract
+    (:data:`~devlearn.api.behavior.BEHAVIOR_CORE`, :data:`~devlearn.api.behavior.BEHAVIOR_OPTIONAL`)
+    as declared (a method as a method), and that none of its own methods misspells one: the
+    contract's default would then run instead, silently (``eval_starts`` for ``eval_start``)."""
+    contract = [*BEHAVIOR_CORE, *(n for names in BEHAVIOR_OPTIONAL.values() for n in names)]
+    for name in contract:
+        if callable(getattr(Behavior, name, None)):
+            require(
+                callable(getattr(behavior_cls, name)),
+                f"{behavior_cls.__name__}.{name} must be a method, as Behavior declares it",
+            )
+    own = {
+        name
+        for klass in behavior_cls.__mro__[: behavior_cls.__mro__.index(Behavior)]
+        for name, value in vars(klass).items()
+        if not name.startswith("_") and callable(value) and name not in contract
+    }
+    for name in sorted(own):
+        near = difflib.get_close_matches(name, contract, n=1, cutoff=0.85)
+        require(
+            not near,
+            f"{behavior_cls.__name__}.{name} is no member of the Behavior contract: did you "
+            f"mean {near[0] if near else ''}? (its default runs instead)",
+        )
 
 
 def check_evaluator_class(evaluator: Any, label: str) -> None:

@@ -406,9 +406,24 @@ class SidewaysStart(Probe):
         return "sideways"
 
 
+class MisspelledHook(Probe):
+    """Writes ``eval_starts``: the contract's ``eval_start`` default would run instead."""
+
+    def eval_starts(self):
+        return "babybench"
+
+
+class StartAsValue(Probe):
+    """Gives ``eval_start`` as a value, where the contract declares a method."""
+
+    eval_start = "babybench"
+
+
 @pytest.mark.parametrize(
     "probe, message",
     [
+        (MisspelledHook, "MisspelledHook.eval_starts is no member .* did you mean eval_start"),
+        (StartAsValue, "StartAsValue.eval_start must be a method"),
         (UndeclaredMergeProbe, "mergeable is False but merge\\(\\) is implemented"),
         (ClaimedMergeProbe, "mergeable is True but merge\\(\\) is not implemented"),
         (LooseEvaluatorProbe, "must be a devlearn.Evaluator, got LooseEvaluator"),
