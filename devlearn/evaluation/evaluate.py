@@ -361,6 +361,17 @@ class EvalConditions:
     workers: int
 
 
+def default_out_dir(request: EvalRequest) -> Path:
+    """Where ``devlearn eval`` writes without ``--out``: ``CHECKPOINT_DIR/eval`` (the
+    checkpoint resolved, :func:`resolve_checkpoint`), a baseline's ``eval_BEHAVIOR_POLICY``
+    here; an evaluation at another age goes beside the others (``eval_A_months``), not over
+    them."""
+    at = f"_{request.ages[-1].split('=', 1)[1].strip()}_months" if request.ages else ""
+    if request.checkpoint is not None:
+        return resolve_checkpoint(request.checkpoint).parent / f"eval{at}"
+    return Path(f"eval_{request.behavior}_{request.policy}{at}")
+
+
 def baseline_config(
     behavior_name: str, overrides: Sequence[str], registry: PluginRegistry
 ) -> RunConfig:

@@ -26,6 +26,7 @@ from devlearn.api.curriculum import Curriculum
 from devlearn.api.network_spec import NetworkSpec
 from devlearn.api.rewards import BatchedFromPerEnv, BatchedIntrinsicReward, IntrinsicReward
 from devlearn.env.guards import TermError
+from devlearn.infant import Infant
 from devlearn.infant.starts import STARTS
 from devlearn.testing.values import (
     ConformanceError,
@@ -278,7 +279,7 @@ def _scripted_contacts(
 ) -> None:
     """Take ``count`` steps on which a hand touches the body (placed there before each step)."""
     infant = env.infant
-    if count <= 0 or not hasattr(infant, "_qpos_index"):  # a fake infant: nothing to place
+    if count <= 0 or not isinstance(infant, Infant):  # a stand-in: no body to place
         return
     done = 0
     for _ in range(20 * count):

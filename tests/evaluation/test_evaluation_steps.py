@@ -5,6 +5,7 @@ the records apart."""
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -17,6 +18,7 @@ from devlearn.evaluation import evaluate as evaluation_module
 from devlearn.evaluation.evaluate import (
     EvalRequest,
     Evaluation,
+    default_out_dir,
     evaluation_conditions,
     open_subject,
 )
@@ -209,3 +211,14 @@ def test_the_evaluate_convenience_is_the_request_run(registry, tmp_path):
     )
     assert by_object["episode_metrics"] == by_function["episode_metrics"]
     assert by_object["protocol"] == by_function["protocol"]
+
+
+def test_the_default_output_folder_of_a_request(tmp_path):
+    (tmp_path / "run").mkdir()
+    (tmp_path / "run" / "checkpoint_latest.pt").write_bytes(b"")
+    run = tmp_path / "run"
+    assert default_out_dir(EvalRequest("tiny", run)) == run / "eval"
+    aged = EvalRequest("tiny", run, overrides=["infant.age_months=3", "infant.age_months = 6"])
+    assert default_out_dir(aged) == run / "eval_6_months"
+    zero = EvalRequest("tiny", policy="held_random", overrides=["seed=2"])
+    assert default_out_dir(zero) == Path("eval_tiny_held_random")
