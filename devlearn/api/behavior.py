@@ -30,6 +30,12 @@ class Evaluator:
     over all evaluation episodes and prints :meth:`summary`.
     """
 
+    mergeable: ClassVar[bool] = False
+    """Whether :meth:`merge` is implemented (set it True where it is): ``devlearn eval`` then
+    may play the episodes in several environments at once; False (the default): one after
+    another in one environment (``devlearn.testing.check_behavior`` checks that the two
+    agree)."""
+
     def record(self, ctx: StepContext) -> None:
         """Take note of one step."""
 
@@ -71,8 +77,7 @@ class Evaluator:
         checks it). Neither evaluator has an episode open.
 
         Raises:
-            NotImplementedError: The default: ``devlearn eval`` then plays the episodes one
-                after another in one environment.
+            NotImplementedError: The default, for an evaluator that is not :attr:`mergeable`.
         """
         raise NotImplementedError(f"{type(self).__name__} does not merge")
 
@@ -109,47 +114,112 @@ class Behavior(ABC):
     (``config_class``) in every environment process, so it must be picklable and cheap.
     Plugins register Behavior subclasses through the ``register_behaviors`` hook.
 
+    **The core** (:data:`BEHAVIOR_CORE`), what every behaviour writes: the class attributes
+    ``name``, ``scene`` and ``config_class``, and six methods, two of them abstract:
+
+    ================  ==========================================================================
+    ``facts``         per-step facts shared by observations, rewards and metrics (default: none)
+    ``observe``       the observations (abstract)
+    ``network``       the policy and value networks (abstract)
+    ``reward_terms``  the reward terms (default: those the config's ``rewards`` field declares)
+    ``curriculum``    the training stages (default: one stage)
+    ``evaluator``     the metrics collector (default: one that records nothing)
+    ================  ==========================================================================
+
+    **Optional capabilities** (:data:`BEHAVIOR_OPTIONAL`), each declared below with a default
+    that does nothing special, in groups:
+
+    ===================  =====================================================================
+    episode              ``senses``, ``infant_options``, ``on_episode_start``, ``before_step``,
+                         ``process_action``, ``obs_groups``: the body a behaviour reads and
+                         hooks around every reset and step
+    batching             ``facts_every_physics_step``, ``batch_facts``, ``batch_observe``: how
+                         facts are computed with a decision rate and over a worker's envs
+    run settings         ``train_defaults``, ``run_length_defaults``, ``presets``,
+                         ``paper_results``: run-config values as data, and the paper's figures
+    evaluation           ``description``, ``headline_metric``, ``eval_stage``, ``eval_start``,
+                         ``run_metrics``, ``render_frame``: what ``devlearn eval``, ``report``
+                         and the progress bar show, and where evaluation episodes start
+    artifacts            ``prepare``, ``policy_artifacts``, ``load_policy_artifacts``: one-off
+                         work before training and what a policy file must carry
+    ===================  =====================================================================
+
     Each environment owns its own copy of the behaviour and calls, per episode and step::
 
         reset:  infant.reset(rng) -> on_episode_start(infant, rng) -> facts -> observe
         step:   before_step(infant, action) -> process_action -> physics step -> facts
                 -> observe -> reward terms -> evaluator.record
-
-    A behaviour may compute facts and observations of all of a worker's environments at once
-    (:meth:`batch_facts`, :meth:`batch_observe`, once per worker in place of the per-env pair).
     """
 
+    # --- the core: what every behaviour writes ------------------------------------------------
     name: ClassVar[str]
     """Unique name used on the command line (``devlearn run NAME``)."""
-    description: ClassVar[str] = ""
-    """One line shown by ``devlearn plugins`` and ``devlearn info``."""
+
     scene: str
     """Infant scene to build: ``"crib"``, ``"sitting"`` or ``"sitting_babybench"``
     (:func:`devlearn.infant.build_infant`); an instance may set its own from its config."""
-    senses: ClassVar[tuple[str, ...]] = ("touch", "proprioception", "vestibular")
-    """Infant senses read: ``touch``, ``proprioception``, ``vestibular``, ``eyes``."""
+
     config_class: ClassVar[type]
     """Dataclass of the behaviour's own options; every field documented. Overridable on the CLI
     as ``--set behavior.FIELD=VALUE``."""
-    headline_metric: ClassVar[str] = ""
-    """Key of :meth:`Evaluator.end_episode` shown on the progress bar."""
-    facts_every_physics_step: ClassVar[bool] = True
-    """With a decision rate (``env.action_repeat=K``, one action held for K physics steps):
-    True (cheap facts, e.g. touch): facts, reward terms and the evaluator run at every physics
-    step and the decision's reward is their sum, exactly an env stepped K times with the same
-    action. False (facts that need renders, e.g. eye images and a detector): physics runs K
-    times, then facts, observations, reward terms and the evaluator run once, on the state the
-    decision reached, and the reward terms are paid K times (held over the decision)."""
 
     def __init__(self, config: Any | None = None) -> None:
         self.config = config if config is not None else self.config_class()
+
+    def facts(self, infant: Infant) -> dict[str, Any]:
+        """Compute per-step facts shared by observations, rewards and metrics (once a step)."""
+        return {}
+
+    @abstractmethod
+    def observe(self, infant: Infant, facts: dict[str, Any]) -> dict[str, np.ndarray]:
+        """Return this step's observations, name -> float32 array of a fixed shape."""
+
+    @abstractmethod
+    def network(self) -> NetworkSpec:
+        """Return how to build the policy and value networks."""
+
+    def reward_terms(self) -> Sequence[IntrinsicReward | BatchedIntrinsicReward]:
+        """Return fresh reward-term instances for one environment.
+
+        Default: the terms the config declares in its ``rewards`` field (term name ->
+        :class:`~devlearn.api.rewards.RewardTermCfg`: class, weight, params), built by
+        :func:`~devlearn.api.rewards.build_reward_terms`, so that every term can be switched off
+        or swept with ``--set behavior.rewards.NAME.weight=W``. Override it to add options of
+        the behaviour's own to some terms (self_touch's ``lifetime_memory``) or to leave terms
+        out. A :class:`~devlearn.api.rewards.BatchedIntrinsicReward` is computed once per
+        worker over all its environments; a plain :class:`IntrinsicReward` runs in each
+        environment (the core wraps it in :class:`~devlearn.api.rewards.BatchedFromPerEnv`).
+        Both kinds may be mixed.
+
+        Raises:
+            TypeError: The config has no ``rewards`` field and the behaviour does not override
+                this method.
+        """
+        rewards = getattr(self.config, "rewards", None)
+        if rewards is None:
+            raise TypeError(
+                f"{type(self).__name__}: declare the reward terms in the config's `rewards` "
+                "field (name -> RewardTermCfg(class, weight, params)) or override reward_terms()"
+            )
+        return build_reward_terms(rewards)
+
+    def curriculum(self) -> Curriculum:
+        """Return the training curriculum (default: one stage, fixed initial pose)."""
+        return Curriculum([Stage("main", None, {})])
+
+    def evaluator(self, training: bool) -> Evaluator:
+        """Return a fresh metrics collector (``training=False`` for ``devlearn eval``)."""
+        return Evaluator()
+
+    # --- optional: episode (the body read, hooks around resets and steps) ---------------------
+    senses: ClassVar[tuple[str, ...]] = ("touch", "proprioception", "vestibular")
+    """Infant senses read: ``touch``, ``proprioception``, ``vestibular``, ``eyes``."""
 
     def infant_options(self) -> dict[str, Any]:
         """Keyword arguments for :func:`devlearn.infant.build_infant` beyond the scene and
         senses, e.g. ``{"appearance": "skin"}``: how the infant looks, without building it."""
         return {}
 
-    # --- episode hooks ------------------------------------------------------------------
     def on_episode_start(self, infant: Infant, rng: np.random.Generator) -> None:
         """Called at the start of every episode, after the infant's reset, before its first
         :meth:`facts` (also in worker processes, and for the first episode of a new env).
@@ -172,16 +242,30 @@ class Behavior(ABC):
             action: (action_dim,) float64, read-only use (e.g. an action-cost fact).
         """
 
-    # --- observations -------------------------------------------------------------------
-    def facts(self, infant: Infant) -> dict[str, Any]:
-        """Compute per-step facts shared by observations, rewards and metrics (once a step)."""
-        return {}
+    def process_action(self, action: np.ndarray, stage: dict[str, Any]) -> np.ndarray:
+        """Adjust a policy action before it reaches the body (e.g. zero an inactive arm).
 
-    @abstractmethod
-    def observe(self, infant: Infant, facts: dict[str, Any]) -> dict[str, np.ndarray]:
-        """Return this step's observations, name -> float32 array of a fixed shape."""
+        Args:
+            action: (action_dim,) in [-1, 1].
+            stage: The active stage's options.
+        Returns:
+            (action_dim,) array.
+        """
+        return action
 
-    # --- batched observations (optional) ------------------------------------------------
+    def obs_groups(self, observation_names: list[str]) -> dict[str, list[str]]:
+        """Map rsl-rl's observation sets (``actor``, ``critic``) to observation names."""
+        return {"actor": list(observation_names), "critic": list(observation_names)}
+
+    # --- optional: batching -------------------------------------------------------------------
+    facts_every_physics_step: ClassVar[bool] = True
+    """With a decision rate (``env.action_repeat=K``, one action held for K physics steps):
+    True (cheap facts, e.g. touch): facts, reward terms and the evaluator run at every physics
+    step and the decision's reward is their sum, exactly an env stepped K times with the same
+    action. False (facts that need renders, e.g. eye images and a detector): physics runs K
+    times, then facts, observations, reward terms and the evaluator run once, on the state the
+    decision reached, and the reward terms are paid K times (held over the decision)."""
+
     def batch_facts(self, infants: Sequence[Infant]) -> list[dict[str, Any]]:
         """:meth:`facts` of several environments at once, in their order.
 
@@ -217,77 +301,7 @@ class Behavior(ABC):
         rows = [self.observe(infant, f) for infant, f in zip(infants, facts)]
         return {name: np.stack([row[name] for row in rows]) for name in rows[0]}
 
-    def obs_groups(self, observation_names: list[str]) -> dict[str, list[str]]:
-        """Map rsl-rl's observation sets (``actor``, ``critic``) to observation names."""
-        return {"actor": list(observation_names), "critic": list(observation_names)}
-
-    @abstractmethod
-    def network(self) -> NetworkSpec:
-        """Return how to build the policy and value networks."""
-
-    # --- rewards, actions, curriculum ----------------------------------------------------
-    def reward_terms(self) -> Sequence[IntrinsicReward | BatchedIntrinsicReward]:
-        """Return fresh reward-term instances for one environment.
-
-        Default: the terms the config declares in its ``rewards`` field (term name ->
-        :class:`~devlearn.api.rewards.RewardTermCfg`: class, weight, params), built by
-        :func:`~devlearn.api.rewards.build_reward_terms`, so that every term can be switched off
-        or swept with ``--set behavior.rewards.NAME.weight=W``. Override it to add options of
-        the behaviour's own to some terms (self_touch's ``lifetime_memory``) or to leave terms
-        out. A :class:`~devlearn.api.rewards.BatchedIntrinsicReward` is computed once per
-        worker over all its environments; a plain :class:`IntrinsicReward` runs in each
-        environment (the core wraps it in :class:`~devlearn.api.rewards.BatchedFromPerEnv`).
-        Both kinds may be mixed.
-
-        Raises:
-            TypeError: The config has no ``rewards`` field and the behaviour does not override
-                this method.
-        """
-        rewards = getattr(self.config, "rewards", None)
-        if rewards is None:
-            raise TypeError(
-                f"{type(self).__name__}: declare the reward terms in the config's `rewards` "
-                "field (name -> RewardTermCfg(class, weight, params)) or override reward_terms()"
-            )
-        return build_reward_terms(rewards)
-
-    def curriculum(self) -> Curriculum:
-        """Return the training curriculum (default: one stage, fixed initial pose)."""
-        return Curriculum([Stage("main", None, {})])
-
-    def eval_stage(self) -> dict[str, Any] | None:
-        """The stage options of ``devlearn eval``, when the behaviour declares its evaluation
-        protocol (self-touch: random initial poses, the paper's sec. II-A6; hand regard: both
-        arms from BabyBench's start).
-
-        None (the default): evaluation starts where the policy trained, the curriculum stage
-        of the checkpoint's training steps (a baseline: the stage a default run ends in), so
-        that a policy is first judged on the skill it trained
-        (:func:`evaluation_stage`). ``devlearn eval --start random|rest|babybench`` overrides
-        the start either way, and the eval JSON records the start used."""
-        return None
-
-    def process_action(self, action: np.ndarray, stage: dict[str, Any]) -> np.ndarray:
-        """Adjust a policy action before it reaches the body (e.g. zero an inactive arm).
-
-        Args:
-            action: (action_dim,) in [-1, 1].
-            stage: The active stage's options.
-        Returns:
-            (action_dim,) array.
-        """
-        return action
-
-    # --- metrics and set-up --------------------------------------------------------------
-    def evaluator(self, training: bool) -> Evaluator:
-        """Return a fresh metrics collector (``training=False`` for ``devlearn eval``)."""
-        return Evaluator()
-
-    def run_metrics(self) -> RunMetrics | None:
-        """Return the run-wide metrics over finished training episodes (:class:`RunMetrics`),
-        or None (the default) when the behaviour keeps none."""
-        return None
-
+    # --- optional: run settings and the paper's figures ---------------------------------------
     def train_defaults(self) -> dict[str, Any]:
         """Run-config overrides this behaviour prefers, as dotted keys (``{"total_steps": 8e6}``).
 
@@ -329,6 +343,48 @@ class Behavior(ABC):
         """
         return None
 
+    # --- optional: evaluation and display -----------------------------------------------------
+    description: ClassVar[str] = ""
+    """One line shown by ``devlearn plugins`` and ``devlearn info``."""
+
+    headline_metric: ClassVar[str] = ""
+    """Key of :meth:`Evaluator.end_episode` shown on the progress bar."""
+
+    def eval_stage(self) -> dict[str, Any] | None:
+        """The stage options of ``devlearn eval``, when the behaviour declares its evaluation
+        protocol (self-touch: random initial poses, the paper's sec. II-A6; hand regard: both
+        arms from BabyBench's start).
+
+        None (the default): evaluation starts where the policy trained, the curriculum stage
+        of the checkpoint's training steps (a baseline: the stage a default run ends in), so
+        that a policy is first judged on the skill it trained
+        (:func:`evaluation_stage`). ``devlearn eval --start random|rest|babybench`` overrides
+        the start either way, and the eval JSON records the start used."""
+        return None
+
+    def eval_start(self) -> str | None:
+        """The infant start (:data:`devlearn.infant.starts.STARTS`: ``babybench``, ``rest``)
+        ``devlearn eval`` plays episodes from when the evaluation stage does not randomise
+        the pose, e.g. hand regard's ``babybench``, BabyBench's start.
+
+        None (the default): the infant's own start, where the policy trained.
+        ``devlearn eval --start`` overrides it."""
+        return None
+
+    def run_metrics(self) -> RunMetrics | None:
+        """Return the run-wide metrics over finished training episodes (:class:`RunMetrics`),
+        or None (the default) when the behaviour keeps none."""
+        return None
+
+    def render_frame(self, infant: Infant) -> np.ndarray:
+        """One frame of ``devlearn eval --video``, (H, W, 3) uint8.
+
+        Default: the scene's third-person view (``infant.render_view()``); override to add
+        what this behaviour attends to (hand regard puts both eyes' views beside it).
+        """
+        return infant.render_view()
+
+    # --- optional: artifacts ------------------------------------------------------------------
     def prepare(self, run_dir: Path) -> None:
         """One-off work before training (e.g. motor babbling); may update ``self.config``.
 
@@ -355,13 +411,44 @@ class Behavior(ABC):
             UsageError: Something evaluation needs is neither stored nor found.
         """
 
-    def render_frame(self, infant: Infant) -> np.ndarray:
-        """One frame of ``devlearn eval --video``, (H, W, 3) uint8.
 
-        Default: the scene's third-person view (``infant.render_view()``); override to add
-        what this behaviour attends to (hand regard puts both eyes' views beside it).
-        """
-        return infant.render_view()
+BEHAVIOR_CORE: tuple[str, ...] = (
+    "name",
+    "scene",
+    "config_class",
+    "facts",
+    "observe",
+    "network",
+    "reward_terms",
+    "curriculum",
+    "evaluator",
+)
+"""What every behaviour writes: three class attributes and six methods (:class:`Behavior`'s
+table); ``devlearn new`` writes them first."""
+
+BEHAVIOR_OPTIONAL: dict[str, tuple[str, ...]] = {
+    "episode": (
+        "senses",
+        "infant_options",
+        "on_episode_start",
+        "before_step",
+        "process_action",
+        "obs_groups",
+    ),
+    "batching": ("facts_every_physics_step", "batch_facts", "batch_observe"),
+    "run settings": ("train_defaults", "run_length_defaults", "presets", "paper_results"),
+    "evaluation": (
+        "description",
+        "headline_metric",
+        "eval_stage",
+        "eval_start",
+        "run_metrics",
+        "render_frame",
+    ),
+    "artifacts": ("prepare", "policy_artifacts", "load_policy_artifacts"),
+}
+"""The optional capabilities of :class:`Behavior` by group, each declared there with a default;
+together with :data:`BEHAVIOR_CORE` every public member of the contract, once."""
 
 
 def evaluation_stage(behavior: Behavior, trained_steps: int) -> dict[str, Any]:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import sys
 from pathlib import Path
@@ -230,9 +231,10 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     The summary is printed even when writing the files failed (then exit code 2).
     """
     from devlearn.evaluation.evaluate import (
-        AGE_KEY,
+        EvalRequest,
+        Evaluation,
         EvalWriteError,
-        evaluate,
+        default_out_dir,
         resolve_checkpoint,
     )
 
@@ -244,15 +246,21 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     envs = None if args.envs is None else _count(args.envs, "--envs", 1, ENVS_MAX)
     workers = None if args.workers is None else _count(args.workers, "--workers", 0, ENVS_MAX)
     checkpoint = resolve_checkpoint(args.checkpoint) if args.checkpoint else None
-    # an evaluation at another age goes beside the others, not over them
-    ages = [o.split("=", 1)[1].strip() for o in args.overrides if o.startswith(AGE_KEY + "=")]
-    at = f"_{ages[-1]}_months" if ages else ""
-    if args.out:
-        out_dir = Path(args.out)
-    elif checkpoint is not None:
-        out_dir = checkpoint.parent / f"eval{at}"
-    else:
-        out_dir = Path(f"eval_{args.behavior}_{args.policy}{at}")
+    request = EvalRequest(  # checked before any folder is made
+        behavior=args.behavior,
+        checkpoint=checkpoint,
+        policy=args.policy or "checkpoint",
+        episodes=episodes,
+        seed=seed,
+        start=args.start,
+        action=args.action,
+        overrides=tuple(args.overrides),
+        envs=envs,
+        workers=workers,
+        video=args.video,
+    )
+    out_dir = Path(args.out) if args.out else default_out_dir(request)
+    request = dataclasses.replace(request, out_dir=out_dir)
     headline = registry.behavior(args.behavior).headline_metric
     baselines = _baselines(args.behavior, args.compare) if not args.json else {}
 
@@ -261,21 +269,7 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
 
     try:
         with removed_on_failure(out_dir):
-            summary = evaluate(
-                args.behavior,
-                checkpoint,
-                episodes,
-                registry,
-                video=args.video,
-                seed=seed,
-                out_dir=out_dir,
-                policy=args.policy or "checkpoint",
-                start=args.start,
-                overrides=args.overrides,
-                action=args.action,
-                envs=envs,
-                workers=workers,
-            )
+            summary = Evaluation(request, registry).run()
     except EvalWriteError as exc:
         _print(exc.summary, args.json, human(exc.summary, None))
         raise

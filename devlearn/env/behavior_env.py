@@ -193,8 +193,7 @@ class BehaviorEnv:
         self.final_observation = {k: np.array(v) for k, v in ctx.observations.items()}
         info = {f"reward/{name}": total for name, total in self._sums.items()}
         info.update({f"metrics/{k}": float(v) for k, v in self.evaluator.end_episode().items()})
-        # Evaluators that do not subclass Evaluator keep no record.
-        record = getattr(self.evaluator, "episode_record", lambda: None)()
+        record = self.evaluator.episode_record()
         if record is not None:  # for the runner's RunMetrics, not a logged value
             info[EPISODE_RECORD] = record
         return self.reset(), reward, True, True, info

@@ -1,2 +1,3 @@
-"""Evaluation: ``evaluate()`` of a checkpoint or baseline, policy files (``devlearn slim``),
+"""Evaluation: an :class:`~devlearn.evaluation.evaluate.Evaluation` of a checkpoint or baseline
+under an :class:`~devlearn.evaluation.evaluate.EvalRequest`, policy files (``devlearn slim``),
 export to ONNX or TorchScript, the report over evaluations and a behaviour's description."""

@@ -11,8 +11,9 @@ episode ``k`` as the reference does: a fresh generator, ``k`` resets, and the po
 reset, as in the reference. Each slot acts on one observation at a time, with the same calls
 as the reference (a batch of several rows can round differently in float32). Its evaluator
 sees its episodes only; the slots' evaluators are merged in slot order
-(:meth:`~devlearn.api.behavior.Evaluator.merge`). No env computes reward terms: an evaluation
-reports none.
+(:meth:`~devlearn.api.behavior.Evaluator.merge`; an evaluator that is not
+:attr:`~devlearn.api.behavior.Evaluator.mergeable` plays in one env). No env computes reward
+terms: an evaluation reports none.
 
 That a slot's skip reaches the reference's state rests on a property of the behaviour: the env's
 generator is drawn at resets only, in amounts that do not depend on the episode before, and the
@@ -34,7 +35,6 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import torch
 
-from devlearn.api.behavior import Evaluator
 from devlearn.api.errors import UsageError
 from devlearn.env.behavior_env import step_batch
 from devlearn.env.workers import WorkerPool, make_envs
@@ -51,13 +51,6 @@ HOLD_STEPS = 8
 """Mean steps a ``held_random`` baseline action is held (40 ms at 200 Hz)."""
 PROGRESS_SECONDS = 0.5
 """How often a worker reports its progress (physics steps, episodes) to the progress bar."""
-
-
-def merges(evaluator: Any) -> bool:
-    """Whether ``evaluator`` implements :meth:`~devlearn.api.behavior.Evaluator.merge` (so its
-    episodes can be played in several environments)."""
-    method = getattr(type(evaluator), "merge", None)
-    return method is not None and method is not Evaluator.merge
 
 
 # --- policies: how each decision's action is chosen, with their own randomness ---------------
@@ -244,15 +237,17 @@ class SlotResult:
 
 
 def set_infant_start(infant: Any, start: str) -> None:
-    """Make an env's infant start its episodes with ``start`` (babybench or rest).
+    """Make an env's infant start its episodes with ``start`` (babybench or rest): its
+    ``start`` attribute (:class:`~devlearn.infant.Infant`'s; a stand-in declares its own and
+    refuses a start it does not have with ValueError).
 
     Raises:
-        UsageError: The infant has no starts (a stand-in) and ``start`` is not its rest.
+        UsageError: The infant has no such start.
     """
-    if hasattr(infant, "start"):
+    try:
         infant.start = start
-    elif start != "rest":
-        raise UsageError(f"--start {start}: this infant has no such start (it has only rest)")
+    except ValueError as err:
+        raise UsageError(f"--start {start}: {err}") from None
 
 
 def prepare_env(env: BehaviorEnv, stage: dict[str, Any], start: str | None) -> str:
@@ -260,7 +255,7 @@ def prepare_env(env: BehaviorEnv, stage: dict[str, Any], start: str | None) -> s
     if start is not None:
         set_infant_start(env.infant, start)
     env.set_stage(stage)
-    return "random" if stage.get("random_pose") else str(getattr(env.infant, "start", "rest"))
+    return "random" if stage.get("random_pose") else str(env.infant.start)
 
 
 class _Slot:

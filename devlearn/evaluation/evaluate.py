@@ -1,4 +1,6 @@
-"""evaluate(): run a policy (checkpoint or baseline) under the behaviour's evaluation protocol."""
+"""An evaluation (``devlearn eval``): a policy (checkpoint or baseline) played under the
+behaviour's evaluation protocol, as a request (:class:`EvalRequest`) and its steps
+(:class:`Evaluation`)."""
 
 from __future__ import annotations
 
@@ -8,6 +10,8 @@ import os
 import subprocess
 import sys
 import time
+from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -18,7 +22,7 @@ from tqdm import tqdm
 from devlearn.ages import check_age
 from devlearn.api.behavior import evaluation_stage
 from devlearn.api.errors import UsageError
-from devlearn.config.run_config import to_dict
+from devlearn.config.run_config import RunConfig, fresh_config, to_dict
 from devlearn.env.behavior_env import BehaviorEnv
 from devlearn.evaluation.episodes import (
     VIDEO_FPS,
@@ -28,10 +32,10 @@ from devlearn.evaluation.episodes import (
     Players,
     Policy,
     ScriptedActions,
+    SlotResult,
     UniformPolicy,
     ZeroPolicy,
     merged_results,
-    merges,
     prepare_env,
 )
 from devlearn.evaluation.scripted_policy import ScriptedPolicy
@@ -39,6 +43,7 @@ from devlearn.training.checkpoint import LATEST, Checkpoint, is_scripted_policy
 from devlearn.training.resolve import RunRequest, resolve_config
 
 if TYPE_CHECKING:
+    from devlearn.api.behavior import Behavior, Evaluator
     from devlearn.env.behavior_env import InfantFactory
     from devlearn.plugins import PluginRegistry
 
@@ -228,6 +233,436 @@ def parallelism(
     return envs, workers
 
 
+@dataclass(frozen=True)
+class EvalRequest:
+    """What ``devlearn eval`` evaluates and under which protocol: every input of an evaluation,
+    checked when made (a bad value is refused in one line naming the valid ones).
+
+    Attributes:
+        behavior: The behaviour the checkpoint must belong to.
+        checkpoint: Path of a devlearn checkpoint or policy file, a scripted policy file
+            (another learner's, :mod:`~devlearn.evaluation.scripted_policy`), or a run folder
+            (its ``checkpoint_latest.pt`` or ``policy.pt``); None for a baseline.
+        policy: One of :data:`POLICIES` (``checkpoint`` with a checkpoint, else a baseline).
+        episodes: Number of full episodes, at least 1.
+        seed: Seed of the env's initial poses (and of a baseline's or sampling policy's draws).
+        start: One of :data:`STARTS`; other than ``stage`` it overrides the stage's
+            ``random_pose`` and the infant's start.
+        action: One of :data:`ACTIONS`, a checkpoint's: ``mean`` (deterministic, the default
+            protocol) or ``sample`` (drawn from the policy's distribution, as in training: a
+            behaviour whose skill lives in the policy's noise shows it only so).
+        overrides: ``key=value`` settings of a baseline's config (``--set``), e.g. a
+            calibrated detector for hand regard's baselines
+            (``behavior.detector_file=runs/hr/hand_detector.json``); with a checkpoint, whose
+            config is its own, only ``infant.age_months=A``: evaluate the policy in the body
+            at age A (by default a checkpoint is evaluated at the age it last trained at).
+        envs: Envs playing episodes at once (None: automatic, see :func:`parallelism`).
+        workers: Env worker processes they are split over (0: this process; None: automatic).
+        video: Write an MP4 of the first episode here (needs imageio-ffmpeg).
+        out_dir: Write ``eval.json`` and the evaluator's artifacts here (checked to be
+            writable before any episode runs); None: write nothing.
+    """
+
+    behavior: str
+    checkpoint: str | Path | None = None
+    policy: str = "checkpoint"
+    episodes: int = 10
+    seed: int = 0
+    start: str = "stage"
+    action: str = "mean"
+    overrides: tuple[str, ...] = ()
+    envs: int | None = 1
+    workers: int | None = 0
+    video: str | Path | None = None
+    out_dir: str | Path | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "overrides", tuple(str(o) for o in self.overrides))
+        if self.policy not in POLICIES:
+            raise UsageError(f"unknown policy '{self.policy}'; valid: {', '.join(POLICIES)}")
+        if self.start not in STARTS:
+            raise UsageError(f"unknown start '{self.start}'; valid: {', '.join(STARTS)}")
+        if self.action not in ACTIONS:
+            raise UsageError(f"unknown action '{self.action}'; valid: {', '.join(ACTIONS)}")
+        if self.action != "mean" and self.policy != "checkpoint":
+            raise UsageError(
+                f"--action {self.action} is a checkpoint's; a baseline acts as it is named"
+            )
+        if (self.checkpoint is None) != (self.policy != "checkpoint"):
+            raise UsageError(
+                "give a checkpoint, or a baseline policy (zero, random, held_random), not both"
+            )
+        if self.checkpoint is not None and len(self.ages) < len(self.overrides):
+            raise UsageError(
+                f"--set applies to baselines only, and {AGE_KEY}: a checkpoint evaluates with "
+                "its config"
+            )
+        for name, value, least in (
+            ("episodes", self.episodes, 1),
+            ("seed", self.seed, 0),
+            ("envs", self.envs, 1),
+            ("workers", self.workers, 0),
+        ):
+            if value is not None and value < least:
+                raise UsageError(f"--{name} must be at least {least}, got {value}")
+
+    @property
+    def ages(self) -> list[str]:
+        """The ``infant.age_months=A`` items of :attr:`overrides`, in order."""
+        return [o for o in self.overrides if o.split("=", 1)[0].strip() == AGE_KEY]
+
+
+@dataclass
+class EvalSubject:
+    """What is evaluated, opened and settled once: the behaviour under the config it acts with.
+
+    Attributes:
+        behavior: The behaviour, built under :attr:`config` (with a checkpoint's artifacts).
+        config: The checkpoint's config, or a baseline's (resolved once).
+        opened: The opened checkpoint or scripted policy; None for a baseline.
+        age_months: The body's age the episodes play at (None: the default body).
+    """
+
+    behavior: Behavior
+    config: RunConfig
+    opened: Checkpoint | ScriptedPolicy | None
+    age_months: float | None
+
+    @property
+    def trained_steps(self) -> int:
+        """The checkpoint's training steps (0: a baseline)."""
+        return int(self.opened.state.get("env_steps", 0)) if self.opened is not None else 0
+
+    @property
+    def stage_steps(self) -> int:
+        """Where in its curriculum the policy is judged: a checkpoint where its training
+        ended, a baseline where a run of its config would end (``total_steps``)."""
+        if self.opened is not None and "env_steps" in self.opened.state:
+            return int(self.opened.state["env_steps"])
+        return int(self.config.total_steps)
+
+
+@dataclass(frozen=True)
+class EvalConditions:
+    """Where and how the episodes play, settled from the request and the subject.
+
+    Attributes:
+        stage: The evaluation stage's options (:func:`~devlearn.api.behavior.evaluation_stage`,
+            ``random_pose`` set by a ``--start`` other than ``stage``).
+        infant_start: The infant start to set (``babybench``, ``rest``), or None: the
+            infant's own (where it trained).
+        envs: Envs playing the episodes (slots).
+        workers: Env worker processes (0: this process).
+    """
+
+    stage: dict[str, Any]
+    infant_start: str | None
+    envs: int
+    workers: int
+
+
+def default_out_dir(request: EvalRequest) -> Path:
+    """Where ``devlearn eval`` writes without ``--out``: ``CHECKPOINT_DIR/eval`` (the
+    checkpoint resolved, :func:`resolve_checkpoint`), a baseline's ``eval_BEHAVIOR_POLICY``
+    here; an evaluation at another age goes beside the others (``eval_A_months``), not over
+    them."""
+    at = f"_{request.ages[-1].split('=', 1)[1].strip()}_months" if request.ages else ""
+    if request.checkpoint is not None:
+        return resolve_checkpoint(request.checkpoint).parent / f"eval{at}"
+    return Path(f"eval_{request.behavior}_{request.policy}{at}")
+
+
+def baseline_config(
+    behavior_name: str, overrides: Sequence[str], registry: PluginRegistry
+) -> RunConfig:
+    """A baseline's config, resolved once: the config a saved config without values means (the
+    behaviour's ``LEGACY_DEFAULTS``), acting at the decision rate a new run of the behaviour
+    would use (its fresh config's ``env.action_repeat``), then ``overrides``."""
+    rate = fresh_config(registry.behavior(behavior_name)).env.action_repeat
+    request = RunRequest(behavior_name, [f"env.action_repeat={rate}", *overrides], saved={})
+    return resolve_config(request, registry)
+
+
+def open_subject(request: EvalRequest, registry: PluginRegistry) -> EvalSubject:
+    """Open what ``request`` evaluates: its checkpoint (or scripted policy) and behaviour, or a
+    baseline's behaviour under :func:`baseline_config`.
+
+    Raises:
+        UsageError: Missing, corrupt or foreign checkpoint; a scripted policy asked to sample;
+            a bad age or override.
+    """
+    if request.checkpoint is None:
+        cfg = baseline_config(request.behavior, request.overrides, registry)
+        behavior = registry.create(request.behavior, cfg.behavior)
+        return EvalSubject(behavior, cfg, None, cfg.infant.age_months)
+    path = resolve_checkpoint(request.checkpoint)
+    opened: Checkpoint | ScriptedPolicy
+    if is_scripted_policy(path):  # another learner's (devlearn.gym.save_policy)
+        if request.action != "mean":
+            raise UsageError(
+                f"--action {request.action}: a scripted policy ({path}) gives one deterministic "
+                "action; sampling needs a devlearn checkpoint"
+            )
+        opened = ScriptedPolicy.open(path, registry, request.behavior)
+    else:
+        opened = Checkpoint.open(path, registry, request.behavior)
+    age = _evaluated_age(request.ages, opened.age_months)
+    return EvalSubject(opened.behavior(), opened.config, opened, age)
+
+
+def evaluation_conditions(
+    request: EvalRequest, subject: EvalSubject, cores: int | None = None
+) -> EvalConditions:
+    """The stage, infant start and parallelism ``request`` plays ``subject``'s episodes with.
+
+    ``--start stage`` takes the evaluation stage as declared and, unless it randomises the
+    pose, the behaviour's :meth:`~devlearn.api.behavior.Behavior.eval_start` (None, the
+    default: the infant's own start, where the policy trained). Another ``--start`` overrides
+    both.
+
+    Raises:
+        UsageError: Several envs asked of a behaviour whose evaluator does not merge.
+    """
+    behavior = subject.behavior
+    stage = evaluation_stage(behavior, subject.stage_steps)
+    infant_start = None
+    if request.start != "stage":
+        stage = {**stage, "random_pose": request.start == "random"}
+        if request.start != "random":
+            infant_start = request.start
+    elif not stage.get("random_pose"):
+        # a behaviour may evaluate from another start than it trains from (hand regard's
+        # eval_start); the infant was built with the training start
+        infant_start = behavior.eval_start()
+    envs, workers = parallelism(
+        request.episodes,
+        request.envs,
+        request.workers,
+        behavior.evaluator(training=False).mergeable,
+        cores,
+    )
+    return EvalConditions(stage, infant_start, envs, workers)
+
+
+class Evaluation:
+    """One evaluation of ``devlearn eval``: a request played step by step.
+
+    :meth:`run` opens the subject (:func:`open_subject`), settles the conditions
+    (:func:`evaluation_conditions`), builds the policy and the episode plan (:meth:`plan`),
+    plays the episodes (:mod:`devlearn.evaluation.episodes`), measures them (:meth:`measures`:
+    the evaluator's summary and the protocol record) and writes the records (:meth:`write`:
+    eval.json and the evaluator's artifacts).
+
+    Args:
+        request: What to evaluate and under which protocol.
+        registry: Plugin registry.
+        infant_factory: Infant builder (tests); None: the real infant. With workers it must be
+            picklable.
+        progress: Show a progress bar (steps, episodes) on stderr.
+    """
+
+    def __init__(
+        self,
+        request: EvalRequest,
+        registry: PluginRegistry,
+        infant_factory: InfantFactory | None = None,
+        progress: bool = True,
+    ) -> None:
+        self.request = request
+        self.registry = registry
+        self.infant_factory = infant_factory
+        self.progress = progress
+
+    def run(self) -> dict[str, Any]:
+        """Play the episodes and summarise them under the evaluation protocol.
+
+        A checkpoint acts with its mean action (deterministic); the baselines run through
+        exactly the same loop with the behaviour's default config. The episodes are those of
+        one env playing them in order whatever ``envs`` and ``workers``: several envs only
+        play them sooner.
+
+        Returns:
+            :meth:`measures`, and, not part of eval.json: ``episode_metrics``, every episode's
+            ``end_episode`` metrics in order, and, when files were written, ``written``, their
+            paths.
+        Raises:
+            UsageError: Missing, corrupt or foreign checkpoint; unwritable out_dir.
+            EvalWriteError: The episodes ran but writing files failed (carries the summary).
+        """
+        request = self.request
+        out = prepare_out_dir(request.out_dir) if request.out_dir is not None else None
+        subject = open_subject(request, self.registry)
+        torch.manual_seed(request.seed)
+        threads = torch.get_num_threads()
+        # A batch of one gains nothing from more threads, and several threads on a core that
+        # another program uses are many times slower (measured: a 64x64 eye CNN 85 ms vs 11 ms).
+        torch.set_num_threads(1)
+        began = time.monotonic()
+        try:
+            conditions = evaluation_conditions(request, subject)
+            with Players(
+                subject.behavior,
+                conditions.envs,
+                conditions.workers,
+                request.seed,
+                self.infant_factory,
+                subject.config.env.action_repeat,
+                subject.age_months,
+            ) as players:
+                plan, episode_steps = self.plan(subject, conditions, players)
+                results = self.play(players, plan, episode_steps)
+            evaluator, episode_metrics, started = merged_results(results)
+            summary = self.measures(subject, conditions, evaluator, started)
+            summary["execution"] = {
+                "envs": conditions.envs,
+                "workers": conditions.workers,
+                "wall_seconds": round(time.monotonic() - began, 1),
+            }
+            if isinstance(subject.opened, ScriptedPolicy):
+                summary["learner"] = subject.opened.learner  # devlearn report tells learners apart
+            if out is not None:
+                summary["written"] = [str(p) for p in self.write(out, summary, evaluator)]
+            summary["episode_metrics"] = episode_metrics
+            return summary
+        finally:
+            torch.set_num_threads(threads)
+
+    def plan(
+        self, subject: EvalSubject, conditions: EvalConditions, players: Players
+    ) -> tuple[EpisodePlan, int]:
+        """The policy and the episode plan every slot plays, and the episode's physics steps.
+
+        An env gives the observation the network is built for and the episode length: the
+        first player in this process, else one of its own.
+        """
+        request = self.request
+        repeat = subject.config.env.action_repeat
+        env = (
+            players.envs[0]
+            if players.envs
+            else BehaviorEnv(
+                copy.deepcopy(subject.behavior),
+                request.seed,
+                self.infant_factory,
+                training=False,
+                action_repeat=repeat,
+                age_months=subject.age_months,
+            )
+        )
+        try:
+            prepare_env(env, conditions.stage, conditions.infant_start)
+            chosen = make_policy(
+                request.policy,
+                subject.opened,
+                env.reset(),
+                env.action_dim,
+                request.seed,
+                repeat,
+                request.action == "sample",
+            )
+            episode_steps, step_dt = env.episode_steps, env.step_dt
+        finally:
+            if not players.envs:
+                env.close()
+        if request.video is not None:
+            Path(request.video).parent.mkdir(parents=True, exist_ok=True)
+        blocks = np.array_split(np.arange(request.episodes), conditions.envs)
+        plan = EpisodePlan(
+            blocks=tuple((int(b[0]), int(b[-1]) + 1) for b in blocks),
+            seed=request.seed,
+            stage=conditions.stage,
+            start=conditions.infant_start,
+            decisions=episode_steps // repeat,
+            policy=chosen,
+            video=None if request.video is None else str(request.video),
+            video_stride=max(1, round(1.0 / (step_dt * repeat * VIDEO_FPS))),
+        )
+        return plan, episode_steps
+
+    def play(self, players: Players, plan: EpisodePlan, episode_steps: int) -> list[SlotResult]:
+        """Play ``plan`` with ``players``, a progress bar (steps, episodes) on stderr."""
+        episodes = self.request.episodes
+        with tqdm(
+            total=episodes * episode_steps,
+            unit="step",
+            disable=not self.progress,
+            desc=f"eval {self.request.behavior}",
+            file=sys.stderr,
+            dynamic_ncols=True,
+        ) as bar:
+            ended = [0]
+
+            def report(steps: int, finished: int) -> None:
+                ended[0] += finished
+                bar.set_postfix(episodes=f"{ended[0]}/{episodes}", refresh=False)
+                bar.update(steps)
+
+            return players.play(plan, report)
+
+    def measures(
+        self,
+        subject: EvalSubject,
+        conditions: EvalConditions,
+        evaluator: Evaluator,
+        started: str,
+    ) -> dict[str, Any]:
+        """The evaluator's summary, what was evaluated and the protocol record.
+
+        Returns:
+            ``evaluator.summary()`` plus ``behavior``, ``policy``, ``checkpoint``,
+            ``checkpoint_env_steps`` (x axis of ``devlearn curve``), ``training_seed``,
+            ``config`` (the checkpoint's, for ``devlearn report``'s grouping), ``age_months``
+            (the body's age, None: the default body), ``start`` (the start episodes took:
+            babybench, rest or random) and ``protocol`` (episodes, seed, start, settle steps,
+            criteria, training steps, code commit).
+        """
+        request = self.request
+        checkpoint = subject.opened
+        steps = subject.trained_steps
+        config = checkpoint.state["config"] if checkpoint is not None else to_dict(subject.config)
+        summary = evaluator.summary()
+        summary.update(
+            behavior=request.behavior,
+            policy=request.policy,
+            checkpoint=str(checkpoint.path) if checkpoint is not None else None,
+            checkpoint_env_steps=steps,
+            training_seed=int(subject.config.seed) if checkpoint is not None else None,
+            config=config,
+            age_months=subject.age_months,
+            start=started,
+            protocol={
+                "episodes": request.episodes,
+                "seed": request.seed,
+                "policy": request.policy,
+                "action": request.action if request.policy == "checkpoint" else request.policy,
+                "stage": json.loads(json.dumps(conditions.stage, default=str)),
+                "start": started,
+                "start_option": request.start,
+                "settle_steps": 0,
+                "action_repeat": subject.config.env.action_repeat,
+                "age_months": subject.age_months,
+                **evaluator.protocol(),
+                "checkpoint_env_steps": steps,
+                "code": code_version(),
+            },
+        )
+        return summary
+
+    def write(self, out: Path, summary: dict[str, Any], evaluator: Evaluator) -> list[Path]:
+        """Write ``summary`` as ``out/eval.json`` and the evaluator's artifacts; their paths.
+
+        Raises:
+            EvalWriteError: Writing failed (it carries ``summary``).
+        """
+        try:
+            (out / "eval.json").write_text(json.dumps(summary, indent=2, default=float) + "\n")
+            return [out / "eval.json", *evaluator.write_artifacts(out)]
+        except OSError as exc:
+            raise EvalWriteError(
+                f"evaluated, but writing to {out} failed: {exc.strerror or exc}", summary
+            ) from None
+
+
 def evaluate(
     behavior_name: str,
     checkpoint: str | Path | None,
@@ -240,227 +675,25 @@ def evaluate(
     progress: bool = True,
     policy: str = "checkpoint",
     start: str = "stage",
-    overrides: list[str] | None = None,
+    overrides: Sequence[str] | None = None,
     action: str = "mean",
     envs: int | None = 1,
     workers: int | None = 0,
 ) -> dict[str, Any]:
-    """Run ``episodes`` episodes of a policy and summarise them under the evaluation protocol.
-
-    The env uses :func:`~devlearn.api.behavior.evaluation_stage`'s options (the behaviour's
-    declared protocol, or the curriculum stage where the policy trained) and
-    ``behavior.evaluator(training=False)``.
-    A checkpoint acts with its mean action (deterministic); the baselines ``zero`` and
-    ``random`` run through exactly the same loop with the behaviour's default config.
-    The episodes are those of one env playing them in order whatever ``envs`` and ``workers``
-    (:mod:`devlearn.evaluation.episodes`): several envs only play them sooner.
-
-    Args:
-        behavior_name: The behaviour the checkpoint must belong to.
-        checkpoint: Path of a devlearn checkpoint or policy file, a scripted policy file
-            (another learner's, :mod:`~devlearn.evaluation.scripted_policy`), or a run folder
-            (its ``checkpoint_latest.pt`` or ``policy.pt``); None for a baseline.
-        episodes: Number of full episodes.
-        registry: Plugin registry.
-        video: Write an MP4 of the first episode here (needs imageio-ffmpeg).
-        seed: Seed of the env's initial poses (and of the ``random`` baseline's actions).
-        out_dir: Write ``eval.json`` and the evaluator's artifacts here (checked to be
-            writable before any episode runs).
-        infant_factory: Infant builder (tests); default the real infant.
-        progress: Show a progress bar (steps, episodes) on stderr.
-        policy: One of :data:`POLICIES`.
-        start: One of :data:`STARTS`; other than ``stage`` it overrides the stage's
-            ``random_pose`` and the infant's start.
-        overrides: ``key=value`` settings of a baseline's config (``--set``), e.g. a
-            calibrated detector for hand regard's baselines
-            (``behavior.detector_file=runs/hr/hand_detector.json``); with a checkpoint, whose
-            config is its own, only ``infant.age_months=A``: evaluate the policy in the body
-            at age A (by default a checkpoint is evaluated at the age it last trained at).
-        action: A checkpoint's action: ``mean`` (deterministic, the default protocol) or
-            ``sample`` (drawn from the policy's distribution, as in training: a behaviour whose
-            skill lives in the policy's noise shows it only so).
-        envs: Envs playing episodes at once (None: automatic, see :func:`parallelism`).
-        workers: Env worker processes they are split over (0: this process; None:
-            automatic). With workers, ``infant_factory`` must be picklable.
-    Returns:
-        ``evaluator.summary()`` plus ``behavior``, ``policy``, ``checkpoint``,
-        ``checkpoint_env_steps`` (x axis of ``devlearn curve``), ``training_seed``, ``config``
-        (the checkpoint's, for ``devlearn report``'s grouping), ``age_months`` (the body's age,
-        None: the default body), ``start`` (the start episodes took: babybench, rest or
-        random), ``protocol`` (episodes, seed, start, settle steps, criteria, training steps,
-        code commit), for a scripted policy ``learner`` (who trained it), and ``execution``
-        (envs, workers, wall seconds: how it ran, not part of the protocol). Not part of eval.json:
-        ``episode_metrics``, every episode's ``end_episode`` metrics in order, and, when files
-        were written, ``written``, their paths.
-    Raises:
-        UsageError: Missing, corrupt or foreign checkpoint; bad policy; unwritable out_dir.
-        EvalWriteError: The episodes ran but writing files failed (carries the summary).
-    """
-    if policy not in POLICIES:
-        raise UsageError(f"unknown policy '{policy}'; valid: {', '.join(POLICIES)}")
-    if start not in STARTS:
-        raise UsageError(f"unknown start '{start}'; valid: {', '.join(STARTS)}")
-    if action not in ACTIONS:
-        raise UsageError(f"unknown action '{action}'; valid: {', '.join(ACTIONS)}")
-    if action != "mean" and policy != "checkpoint":
-        raise UsageError(f"--action {action} is a checkpoint's; a baseline acts as it is named")
-    if (checkpoint is None) != (policy != "checkpoint"):
-        raise UsageError(
-            "give a checkpoint, or a baseline policy (zero, random, held_random), not both"
-        )
-    ages = [o for o in overrides or [] if str(o).split("=", 1)[0].strip() == AGE_KEY]
-    if checkpoint is not None and len(ages) < len(overrides or []):
-        raise UsageError(
-            f"--set applies to baselines only, and {AGE_KEY}: a checkpoint evaluates with "
-            "its config"
-        )
-    out = prepare_out_dir(out_dir) if out_dir is not None else None
-    opened: Checkpoint | ScriptedPolicy | None = None
-    if checkpoint is not None:
-        path = resolve_checkpoint(checkpoint)
-        if is_scripted_policy(path):  # another learner's (devlearn.gym.save_policy)
-            if action != "mean":
-                raise UsageError(
-                    f"--action {action}: a scripted policy ({path}) gives one deterministic "
-                    "action; sampling needs a devlearn checkpoint"
-                )
-            opened = ScriptedPolicy.open(path, registry, behavior_name)
-        else:
-            opened = Checkpoint.open(path, registry, behavior_name)
-        checkpoint, state, cfg = opened.path, opened.state, opened.config
-        behavior = opened.behavior()
-        age = _evaluated_age(ages, opened.age_months)
-    else:
-        # a baseline: the config a saved config without values means (the behaviour's
-        # LEGACY_DEFAULTS), acting at the decision rate a new run of the behaviour would use
-        state = {}
-        fresh = resolve_config(RunRequest(behavior_name), registry)
-        rate = [f"env.action_repeat={fresh.env.action_repeat}"]
-        request = RunRequest(behavior_name, [*rate, *(overrides or [])], saved={})
-        cfg = resolve_config(request, registry)
-        behavior = registry.create(behavior_name, cfg.behavior)
-        age = cfg.infant.age_months
-    torch.manual_seed(seed)
-    threads = torch.get_num_threads()
-    # A batch of one gains nothing from more threads, and several threads on a core that
-    # another program uses are many times slower (measured: a 64x64 eye CNN 85 ms vs 11 ms).
-    torch.set_num_threads(1)
-    repeat = cfg.env.action_repeat
-    began = time.monotonic()
-    try:
-        stage = evaluation_stage(behavior, int(state.get("env_steps", cfg.total_steps)))
-        infant_start = None
-        if start != "stage":
-            stage = {**stage, "random_pose": start == "random"}
-            if start != "random":
-                infant_start = start
-        elif not stage.get("random_pose") and hasattr(behavior, "eval_start"):
-            # a behaviour may evaluate from another start than it trains from (hand regard's
-            # eval_start); the infant was built with the training start
-            infant_start = behavior.eval_start()
-        envs, workers = parallelism(
-            episodes, envs, workers, merges(behavior.evaluator(training=False))
-        )
-        with Players(behavior, envs, workers, seed, infant_factory, repeat, age) as players:
-            # An env here gives the observation the network is built for and the episode
-            # length: the first player in this process, else one of its own.
-            env = (
-                players.envs[0]
-                if players.envs
-                else BehaviorEnv(
-                    copy.deepcopy(behavior),
-                    seed,
-                    infant_factory,
-                    training=False,
-                    action_repeat=repeat,
-                    age_months=age,
-                )
-            )
-            try:
-                prepare_env(env, stage, infant_start)
-                chosen = make_policy(
-                    policy, opened, env.reset(), env.action_dim, seed, repeat, action == "sample"
-                )
-                episode_steps, step_dt = env.episode_steps, env.step_dt
-            finally:
-                if not players.envs:
-                    env.close()
-            if video is not None:
-                Path(video).parent.mkdir(parents=True, exist_ok=True)
-            plan = EpisodePlan(
-                blocks=tuple(
-                    (int(b[0]), int(b[-1]) + 1) for b in np.array_split(np.arange(episodes), envs)
-                ),
-                seed=seed,
-                stage=stage,
-                start=infant_start,
-                decisions=episode_steps // repeat,
-                policy=chosen,
-                video=None if video is None else str(video),
-                video_stride=max(1, round(1.0 / (step_dt * repeat * VIDEO_FPS))),
-            )
-            with tqdm(
-                total=episodes * episode_steps,
-                unit="step",
-                disable=not progress,
-                desc=f"eval {behavior_name}",
-                file=sys.stderr,
-                dynamic_ncols=True,
-            ) as bar:
-                ended = [0]
-
-                def report(steps: int, finished: int) -> None:
-                    ended[0] += finished
-                    bar.set_postfix(episodes=f"{ended[0]}/{episodes}", refresh=False)
-                    bar.update(steps)
-
-                results = players.play(plan, report)
-        evaluator, episode_metrics, started = merged_results(results)
-        summary = evaluator.summary()
-        steps = int(state.get("env_steps", 0))
-        summary.update(
-            behavior=behavior_name,
-            policy=policy,
-            checkpoint=str(checkpoint) if checkpoint is not None else None,
-            checkpoint_env_steps=steps,
-            training_seed=int(cfg.seed) if checkpoint is not None else None,
-            config=state["config"] if checkpoint is not None else to_dict(cfg),
-            age_months=age,
-            start=started,
-            protocol={
-                "episodes": episodes,
-                "seed": seed,
-                "policy": policy,
-                "action": action if policy == "checkpoint" else policy,
-                "stage": json.loads(json.dumps(stage, default=str)),
-                "start": started,
-                "start_option": start,
-                "settle_steps": 0,
-                "action_repeat": repeat,
-                "age_months": age,
-                **evaluator.protocol(),
-                "checkpoint_env_steps": steps,
-                "code": code_version(),
-            },
-            execution={
-                "envs": envs,
-                "workers": workers,
-                "wall_seconds": round(time.monotonic() - began, 1),
-            },
-        )
-        if isinstance(opened, ScriptedPolicy):
-            summary["learner"] = opened.learner  # devlearn report tells learners apart
-        if out is not None:
-            written = []
-            try:
-                (out / "eval.json").write_text(json.dumps(summary, indent=2, default=float) + "\n")
-                written = [out / "eval.json", *evaluator.write_artifacts(out)]
-            except OSError as exc:
-                raise EvalWriteError(
-                    f"evaluated, but writing to {out} failed: {exc.strerror or exc}", summary
-                ) from None
-            summary["written"] = [str(p) for p in written]
-        summary["episode_metrics"] = episode_metrics
-        return summary
-    finally:
-        torch.set_num_threads(threads)
+    """``Evaluation(EvalRequest(...), registry, infant_factory, progress).run()``: a
+    convenience for scripts and tests (arguments as :class:`EvalRequest`'s attributes)."""
+    request = EvalRequest(
+        behavior=behavior_name,
+        checkpoint=checkpoint,
+        policy=policy,
+        episodes=episodes,
+        seed=seed,
+        start=start,
+        action=action,
+        overrides=tuple(overrides or ()),
+        envs=envs,
+        workers=workers,
+        video=video,
+        out_dir=out_dir,
+    )
+    return Evaluation(request, registry, infant_factory, progress).run()

@@ -5,6 +5,7 @@ and evaluator checked (the instrumented wrappers are at the end of this module).
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import json
 import pickle
 from collections.abc import Callable, Sequence
@@ -14,11 +15,19 @@ import mujoco
 import numpy as np
 import torch
 
-from devlearn.api.behavior import Behavior, evaluation_stage
+from devlearn.api.behavior import (
+    BEHAVIOR_CORE,
+    BEHAVIOR_OPTIONAL,
+    Behavior,
+    Evaluator,
+    evaluation_stage,
+)
 from devlearn.api.curriculum import Curriculum
 from devlearn.api.network_spec import NetworkSpec
 from devlearn.api.rewards import BatchedFromPerEnv, BatchedIntrinsicReward, IntrinsicReward
 from devlearn.env.guards import TermError
+from devlearn.infant import Infant
+from devlearn.infant.starts import STARTS
 from devlearn.testing.values import (
     ConformanceError,
     check_number,
@@ -30,7 +39,9 @@ from devlearn.testing.values import (
 
 
 def check_behavior_class(behavior_cls: type[Behavior]) -> None:
-    """Check the class-level contract: name, scene, senses, config dataclass, docstrings."""
+    """Check the class-level contract: name, scene, senses, config dataclass, docstrings, the
+    contract's members as declared (:func:`check_contract_members`), a picklable instance and
+    its declared evaluation start."""
     name = getattr(behavior_cls, "name", None)
     require(isinstance(name, str) and name.isidentifier(), "Behavior.name must be an identifier")
     require(
@@ -41,8 +52,57 @@ def check_behavior_class(behavior_cls: type[Behavior]) -> None:
     require(set(behavior_cls.senses) <= valid, f"Behavior.senses must be within {sorted(valid)}")
     require(dataclasses.is_dataclass(behavior_cls.config_class), "config_class: a dataclass")
     require(bool(behavior_cls.__doc__), f"{behavior_cls.__name__} needs a docstring")
+    check_contract_members(behavior_cls)
     config = behavior_cls.config_class()
-    check_picklable(behavior_cls(config), f"behavior '{name}'")  # travels to worker processes
+    behavior = behavior_cls(config)
+    check_picklable(behavior, f"behavior '{name}'")  # travels to worker processes
+    start = behavior.eval_start()
+    require(
+        start is None or start in STARTS,
+        f"eval_start() must return None or one of {', '.join(STARTS)}, got {start!r}",
+    )
+
+
+def check_contract_members(behavior_cls: type[Behavior]) -> None:
+    """Check that ``behavior_cls`` writes the members of the Behavior contract
+    (:data:`~devlearn.api.behavior.BEHAVIOR_CORE`, :data:`~devlearn.api.behavior.BEHAVIOR_OPTIONAL`)
+    as declared (a method as a method), and that none of its own methods misspells one: the
+    contract's default would then run instead, silently (``eval_starts`` for ``eval_start``)."""
+    contract = [*BEHAVIOR_CORE, *(n for names in BEHAVIOR_OPTIONAL.values() for n in names)]
+    for name in contract:
+        if callable(getattr(Behavior, name, None)):
+            require(
+                callable(getattr(behavior_cls, name)),
+                f"{behavior_cls.__name__}.{name} must be a method, as Behavior declares it",
+            )
+    own = {
+        name
+        for klass in behavior_cls.__mro__[: behavior_cls.__mro__.index(Behavior)]
+        for name, value in vars(klass).items()
+        if not name.startswith("_") and callable(value) and name not in contract
+    }
+    for name in sorted(own):
+        near = difflib.get_close_matches(name, contract, n=1, cutoff=0.85)
+        require(
+            not near,
+            f"{behavior_cls.__name__}.{name} is no member of the Behavior contract: did you "
+            f"mean {near[0] if near else ''}? (its default runs instead)",
+        )
+
+
+def check_evaluator_class(evaluator: Any, label: str) -> None:
+    """Check that an evaluator is an :class:`~devlearn.api.behavior.Evaluator` whose
+    ``mergeable`` says whether it implements ``merge`` (``devlearn eval --envs N`` trusts it)."""
+    require(
+        isinstance(evaluator, Evaluator),
+        f"the {label} evaluator must be a devlearn.Evaluator, got {type(evaluator).__name__}",
+    )
+    implemented = type(evaluator).merge is not Evaluator.merge
+    require(
+        implemented == evaluator.mergeable,
+        f"{type(evaluator).__name__}: mergeable is {evaluator.mergeable} but merge() is "
+        + ("implemented: set mergeable = True" if implemented else "not implemented"),
+    )
 
 
 def check_reward_terms(terms: Sequence[IntrinsicReward | BatchedIntrinsicReward]) -> None:
@@ -123,7 +183,9 @@ def check_behavior(
     uint8) arrays; every reward term must return a finite Python float (the message names the
     term). A training and an evaluation evaluator (``evaluator(training=...)``) record every
     step; their ``end_episode()`` metrics must be finite numbers and their ``summary()``
-    JSON-serialisable, and ``write_artifacts`` must return files that exist; an evaluation
+    JSON-serialisable, and ``write_artifacts`` must return files that exist; both must be
+    :class:`~devlearn.api.behavior.Evaluator` whose ``mergeable`` says whether ``merge`` is
+    implemented (:func:`check_evaluator_class`); an evaluation
     evaluator that merges (``Evaluator.merge``, for ``devlearn eval --envs N``) must merge
     evaluators of single episodes into the summary of one that saw them all
     (:func:`check_evaluator_merge`). A behaviour that
@@ -151,6 +213,8 @@ def check_behavior(
 
     check_behavior_class(behavior_cls)
     behavior = behavior_cls(config if config is not None else behavior_cls.config_class())
+    for training, label in ((True, "training"), (False, "evaluation")):
+        check_evaluator_class(behavior.evaluator(training), label)
     check_reward_terms(behavior.reward_terms())
     curriculum = behavior.curriculum()
     check_curriculum(curriculum)
@@ -164,7 +228,7 @@ def check_behavior(
             phase,
             fresh=lambda: behavior.evaluator(training=False),
         )
-        env.evaluator = checked  # type: ignore[assignment]  # duck-typed: records and checks
+        env.evaluator = checked  # records in both, and checks what they return
         env.episode_steps = max(1, min(env.episode_steps, episode_steps))
         first = env.reset()
         shapes = check_observations(first, None, "after reset")
@@ -215,7 +279,7 @@ def _scripted_contacts(
 ) -> None:
     """Take ``count`` steps on which a hand touches the body (placed there before each step)."""
     infant = env.infant
-    if count <= 0 or not hasattr(infant, "_qpos_index"):  # a fake infant: nothing to place
+    if count <= 0 or not isinstance(infant, Infant):  # a stand-in: no body to place
         return
     done = 0
     for _ in range(20 * count):
@@ -399,7 +463,7 @@ def checked_terms(terms: list[BatchedIntrinsicReward], phase: list[str]) -> list
     return [t if isinstance(t, BatchedFromPerEnv) else CheckedBatchedTerm(t, phase) for t in terms]
 
 
-class CheckedEvaluator:
+class CheckedEvaluator(Evaluator):
     """Feeds a training and an evaluation evaluator the same steps; checks what they return.
 
     With ``fresh`` (a new evaluation evaluator) and an evaluator that merges, every episode is
@@ -415,13 +479,11 @@ class CheckedEvaluator:
         phase: list[str],
         fresh: Callable[[], Any] | None = None,
     ) -> None:
-        from devlearn.evaluation.episodes import merges
-
         self.training = training
         self.evaluation = evaluation
         self.phase = phase
         self.episodes = 0
-        self.fresh = fresh if fresh is not None and merges(evaluation) else None
+        self.fresh = fresh if fresh is not None and evaluation.mergeable else None
         self.parts = [] if self.fresh is None else [self.fresh()]
 
     def record(self, ctx: Any) -> None:
@@ -451,7 +513,7 @@ class CheckedEvaluator:
     def episode_record(self) -> Any:
         """The training evaluator's record of the episode just ended (checked to pickle: it
         crosses from env workers to the runner)."""
-        record = getattr(self.training, "episode_record", lambda: None)()
+        record = self.training.episode_record()
         if record is not None:
             problem = pickle_problem(record, "training evaluator's episode_record()")
             require(problem is None, f"{problem} (it crosses from env workers to the runner)")

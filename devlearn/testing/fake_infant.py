@@ -59,6 +59,17 @@ class FakeInfant:
         self.steps_taken = 0
         self.position = np.zeros(action_dim)
 
+    @property
+    def start(self) -> str:
+        """How episodes start unless ``reset`` is told (the real infant's ``start``): a point
+        has only its rest position, ``"rest"``."""
+        return "rest"
+
+    @start.setter
+    def start(self, value: str) -> None:
+        if value != "rest":
+            raise ValueError("this infant has no such start (it has only rest)")
+
     def reset(self, rng: np.random.Generator, random_pose: bool = False) -> None:
         self.position = (
             rng.uniform(-1, 1, self.action_dim) if random_pose else np.zeros(self.action_dim)
@@ -155,6 +166,8 @@ class StepCounter(devlearn.IntrinsicReward):
 
 class CloseEvaluator(devlearn.Evaluator):
     """Share of steps with every joint within 0.2 of the target."""
+
+    mergeable = True  # merge() below: devlearn eval may play its episodes in several envs
 
     def __init__(self, target: float) -> None:
         self.target = target

@@ -28,6 +28,8 @@ class PathEvaluator(devlearn.Evaluator):
     """Per episode: the mean and last position of the point (they differ with every start and
     every action, so an episode played otherwise shows); summary: their list and mean."""
 
+    mergeable = True  # merge() below: devlearn eval may play its episodes in several envs
+
     def __init__(self) -> None:
         self.episodes: list[dict[str, float]] = []
         self.positions: list[np.ndarray] = []

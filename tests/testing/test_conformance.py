@@ -317,6 +317,8 @@ def test_the_gymnasium_check_passes_a_correct_behaviour_and_names_a_broken_one()
 class MergingCount(CountEvaluator):
     """Counts contact steps and merges (``devlearn eval --envs N``)."""
 
+    mergeable = True
+
     def merge(self, later):
         self.contacts += later.contacts
         self.episodes += later.episodes
@@ -347,3 +349,87 @@ def test_an_evaluator_that_merges_must_merge_into_the_whole_summary():
     check_behavior(MergingProbe, **{**FAST, "episodes": 2})
     with pytest.raises(ConformanceError, match=r"merge\(\) of 2 runs of episodes summarises"):
         check_behavior(ForgetfulMergeProbe, **{**FAST, "episodes": 2})
+
+
+class UndeclaredMerge(CountEvaluator):
+    """Merges, but does not say so (``mergeable`` keeps its default, False)."""
+
+    def merge(self, later):
+        self.contacts += later.contacts
+        self.episodes += later.episodes
+
+
+class UndeclaredMergeProbe(Probe):
+    """Its evaluator merges without declaring it."""
+
+    def evaluator(self, training):
+        return UndeclaredMerge()
+
+
+class ClaimedMerge(CountEvaluator):
+    """Says it merges, but keeps the contract's merge (which cannot)."""
+
+    mergeable = True
+
+
+class ClaimedMergeProbe(Probe):
+    """Its evaluator claims a merge it does not have."""
+
+    def evaluator(self, training):
+        return ClaimedMerge()
+
+
+class LooseEvaluator:
+    """Records like an evaluator without being one."""
+
+    def record(self, ctx):
+        pass
+
+    def end_episode(self):
+        return {}
+
+    def summary(self):
+        return {}
+
+
+class LooseEvaluatorProbe(Probe):
+    """Its evaluator is not a devlearn.Evaluator."""
+
+    def evaluator(self, training):
+        return LooseEvaluator()
+
+
+class SidewaysStart(Probe):
+    """Declares an evaluation start the infant does not have."""
+
+    def eval_start(self):
+        return "sideways"
+
+
+class MisspelledHook(Probe):
+    """Writes ``eval_starts``: the contract's ``eval_start`` default would run instead."""
+
+    def eval_starts(self):
+        return "babybench"
+
+
+class StartAsValue(Probe):
+    """Gives ``eval_start`` as a value, where the contract declares a method."""
+
+    eval_start = "babybench"
+
+
+@pytest.mark.parametrize(
+    "probe, message",
+    [
+        (MisspelledHook, "MisspelledHook.eval_starts is no member .* did you mean eval_start"),
+        (StartAsValue, "StartAsValue.eval_start must be a method"),
+        (UndeclaredMergeProbe, "mergeable is False but merge\\(\\) is implemented"),
+        (ClaimedMergeProbe, "mergeable is True but merge\\(\\) is not implemented"),
+        (LooseEvaluatorProbe, "must be a devlearn.Evaluator, got LooseEvaluator"),
+        (SidewaysStart, "eval_start\\(\\) must return None or one of .*got 'sideways'"),
+    ],
+)
+def test_the_declared_evaluation_extras_must_match_what_is_written(probe, message):
+    with pytest.raises(ConformanceError, match=message):
+        check_behavior(probe, **FAST)

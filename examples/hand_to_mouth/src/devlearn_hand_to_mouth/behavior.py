@@ -88,6 +88,8 @@ class HandToMouthConfig:
 class MouthEvaluator(devlearn.Evaluator):
     """Share of steps and of episodes in which a hand touched the mouth."""
 
+    mergeable = True  # merge() below: devlearn eval may play its episodes in several envs
+
     def __init__(self) -> None:
         self.steps = self.contact_steps = 0
         self.episode_contact_steps = 0

@@ -69,6 +69,8 @@ class HandRegardEvaluator(Evaluator):
             :func:`~devlearn_hand_regard.visibility.measure_visibility`.
     """
 
+    mergeable = True  # merge() below: devlearn eval may play its episodes in several envs
+
     def __init__(
         self, ground_truth: bool, measure: Callable[[Any], dict[str, np.ndarray]] | None = None
     ) -> None:

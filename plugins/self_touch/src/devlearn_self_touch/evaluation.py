@@ -170,6 +170,8 @@ class SelfTouchEvaluator(Evaluator):
             episode are not credited (see :data:`SETTLE_STEPS`). Training credits every step.
     """
 
+    mergeable = True  # merge() below: devlearn eval may play its episodes in several envs
+
     def __init__(self, training: bool = True, settle_steps: int = SETTLE_STEPS) -> None:
         if settle_steps < 0:
             raise ValueError(f"settle_steps must be >= 0, got {settle_steps}")
