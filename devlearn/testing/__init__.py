@@ -48,6 +48,7 @@ from devlearn.testing.fixtures import crib_infant, registry_for, sitting_infant
 from devlearn.testing.gym_env import check_gymnasium
 from devlearn.testing.hook_tracker import HookTracker
 from devlearn.testing.learned import check_learned_reward, random_transitions
+from devlearn.testing.runs import run_config
 from devlearn.testing.values import ConformanceError
 
 __all__ = [
@@ -70,5 +71,6 @@ __all__ = [
     "place_hand_on_body",
     "random_transitions",
     "registry_for",
+    "run_config",
     "sitting_infant",
 ]

@@ -9,8 +9,7 @@ import pytest
 from devlearn_curiosity import RND, ForwardModel
 
 from devlearn.cli import main
-from devlearn.config.run_config import default_config
-from devlearn.testing import registry_for
+from devlearn.testing import registry_for, run_config
 from devlearn.testing.fake_infant import TinyBehavior, fake_infant_factory
 from devlearn.training import train
 from devlearn.training.checkpoint import load_checkpoint
@@ -27,7 +26,7 @@ def test_both_terms_train_and_resume_with_worker_processes(tmp_path):
     sets = ["curiosity=rnd,forward_model", "behavior.use_eyes=true", "learned.rnd.weight=0.5"]
 
     def run(steps: int, workers: int, resume: Path | None = None):
-        cfg = default_config(
+        cfg = run_config(
             TinyBehavior,
             sets,
             out_dir=str(out),

@@ -226,12 +226,12 @@ def test_scene_start_and_policy_defaults_and_legacy():
 
 
 def test_demonstration_by_default_and_the_paper_preset():
-    from devlearn.config.run_config import default_config
+    from devlearn.testing import run_config
 
-    demo = default_config(HandRegard)
+    demo = run_config(HandRegard)
     assert demo.total_steps == 30_000 and demo.behavior.policy == "proprio"
     assert (demo.behavior.left_arm_steps, demo.behavior.right_arm_steps) == (3_000, 3_000)
-    paper = default_config(HandRegard, preset="paper")
+    paper = run_config(HandRegard, preset="paper")
     assert paper.total_steps == 1_850_000 and paper.behavior.policy == "cnn"
     assert (paper.behavior.left_arm_steps, paper.behavior.both_arms_steps) == (175_000, 1_500_000)
 
@@ -239,8 +239,8 @@ def test_demonstration_by_default_and_the_paper_preset():
 def test_stage_lengths_scale_with_the_run_unless_set():
     """A run of N steps goes through all three stages (10% + 10% + the rest, as the 614,400-step
     experiments did); --set and the paper preset keep their own lengths."""
+    from devlearn.config.resolve import RunRequest, resolve_config
     from devlearn.plugins import PluginRegistry
-    from devlearn.training.resolve import RunRequest, resolve_config
 
     registry = PluginRegistry()
 

@@ -164,11 +164,10 @@ def train_swapping(out, overrides=(), steps: int = 40, workers: int = 2) -> None
     iteration, one episode per env) in ``workers`` worker processes, into ``out``."""
     from devlearn_self_touch import SelfTouch
 
-    from devlearn.config.run_config import default_config
-    from devlearn.testing import registry_for
+    from devlearn.testing import registry_for, run_config
     from devlearn.training import train
 
-    cfg = default_config(
+    cfg = run_config(
         SelfTouch, [*TINY_RUN, *overrides], out_dir=str(out), num_envs=2, workers=workers
     )
     cfg.total_steps = steps
