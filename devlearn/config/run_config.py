@@ -268,14 +268,15 @@ def finish_config(cfg: RunConfig, behavior_cls: type[Behavior]) -> None:
             bounds or decision rate are invalid (:func:`check_learner`).
     """
     try:  # the spec checks its own values (e.g. the spread): say so before any env starts
-        spec = behavior_cls(cfg.behavior).network()
+        behavior = behavior_cls(cfg.behavior)  # one instance answers both questions
+        spec = behavior.network()
     except ValueError as err:
         raise UsageError(
             f"{behavior_cls.name}: its network() rejects the config: {err} "
             "(set through --set behavior.FIELD=VALUE, e.g. behavior.max_std)"
         ) from err
     try:  # stage lengths are the behaviour's fields: a negative one fails here, not in a worker
-        behavior_cls(cfg.behavior).curriculum()
+        behavior.curriculum()
     except ValueError as err:
         raise UsageError(
             f"{behavior_cls.name}: its curriculum() rejects the config: {err}"

@@ -8,11 +8,8 @@ from pathlib import Path
 import pytest
 from devlearn_curiosity import RND, ForwardModel
 
-from devlearn.cli import main
-from devlearn.testing import registry_for, run_config
+from devlearn.testing import load_checkpoint, registry_for, run_command, run_config, train
 from devlearn.testing.fake_infant import TinyBehavior, fake_infant_factory
-from devlearn.training import train
-from devlearn.training.checkpoint import load_checkpoint
 
 
 def rows(run_dir: Path) -> list[dict]:
@@ -91,10 +88,13 @@ def test_hand_regard_trains_and_resumes_with_curiosity(tmp_path, term):
         "--set",
         "ppo.num_learning_epochs=1",
     ]
-    # in this process: the CLI's own start-up is tested by a subprocess in tests/cli
-    # (test_readme runs the README's `devlearn run hand_regard`); four more cost ~20 s
-    assert main([*base, "--steps", "16", "--out", str(out), *sets]) == 0
-    assert main([*base, "--steps", "32", "--resume", str(out)]) == 0
+    # as a user runs them (a new process each): a run, then its resume
+    for args in (
+        ["--steps", "16", "--out", str(out), *sets],
+        ["--steps", "32", "--resume", str(out)],
+    ):
+        done = run_command(*base, *args)
+        assert done.code == 0, done.err
     lines = rows(out)
     assert [r["step"] for r in lines] == [16, 32]
     assert all(r[f"reward/{term}/raw"] > 0 for r in lines)

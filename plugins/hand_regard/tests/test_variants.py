@@ -11,9 +11,9 @@ from devlearn_hand_regard import HandRegard, HandRegardConfig
 from fake_sitting import FakeSittingInfant
 
 from devlearn.api.errors import UsageError
-from devlearn.config.run_config import from_dict, to_dict
-from devlearn.env.behavior_env import BehaviorEnv
 from devlearn.testing import run_config
+from devlearn.testing.envs import BehaviorEnv
+from devlearn.testing.runs import from_dict, to_dict
 
 ROOT = Path(__file__).resolve().parents[3]
 PAPER_TERMS = ["hand_count", "motion", "living_penalty"]
@@ -41,11 +41,12 @@ def test_bilateral_reward_adds_the_bilateral_term():
     assert terms[-1].weight == 0.5
 
 
-def test_reward_switch_on_the_command_line(capsys):
-    from devlearn.cli import main
+def test_reward_switch_on_the_command_line():
+    from devlearn.testing import run_command
 
-    assert main(["config", "hand_regard", "--json", "--set", "behavior.reward=paper"]) == 0
-    rows = {r["key"]: r for r in json.loads(capsys.readouterr().out)}
+    done = run_command("config", "hand_regard", "--json", "--set", "behavior.reward=paper")
+    assert done.code == 0, done.err
+    rows = {r["key"]: r for r in json.loads(done.out)}
     assert rows["behavior.reward"]["default"] == "paper"
     doc = rows["behavior.reward"]["doc"]
     assert "paper" in doc and "bilateral" in doc

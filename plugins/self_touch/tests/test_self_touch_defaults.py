@@ -9,12 +9,9 @@ import pytest
 from devlearn_self_touch import SelfTouch
 
 from devlearn.api.errors import UsageError
-from devlearn.config.resolve import load_run_config
-from devlearn.config.run_config import RunConfig, from_dict, to_dict
-from devlearn.env import BehaviorEnv
-from devlearn.plugins import PluginRegistry
-from devlearn.testing import run_config
-from devlearn.training.checkpoint import load_actor
+from devlearn.testing import PluginRegistry, policy_network, run_config
+from devlearn.testing.envs import BehaviorEnv
+from devlearn.testing.runs import RunConfig, from_dict, load_run_config, to_dict
 
 ROOT = Path(__file__).resolve().parents[3]
 RESULTS = ROOT / "results/self_touch"
@@ -64,8 +61,6 @@ def test_the_old_runs_policy_is_rebuilt_with_its_unbounded_spread():
     """results/self_touch/run was trained with the paper's softplus spread (~1,000 by the end;
     its policy file is in git history since 2d704d9): a policy of its saved config, rebuilt
     after the default became 1.0, still has that spread."""
-    from devlearn.training.checkpoint import build_actor
-
     registry = PluginRegistry()
     cfg = from_dict(json.loads((RESULTS / "run/config.json").read_text()), SelfTouch)
     assert (cfg.behavior.max_std, cfg.behavior.lifetime_memory) == (0.0, "per_env")
@@ -74,8 +69,8 @@ def test_the_old_runs_policy_is_rebuilt_with_its_unbounded_spread():
     try:
         env.set_stage(behavior.eval_stage())
         obs = env.reset()
-        saved = build_actor(cfg, behavior, obs, env.action_dim).state_dict()
-        actor = load_actor(cfg, {"actor_state_dict": saved}, behavior, obs, env.action_dim)
+        saved = policy_network(cfg, behavior, obs, env.action_dim).state_dict()
+        actor = policy_network(cfg, behavior, obs, env.action_dim, weights=saved)
     finally:
         env.close()
     assert actor.distribution.max_std == 0.0

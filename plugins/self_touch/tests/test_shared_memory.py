@@ -12,11 +12,9 @@ from devlearn_self_touch.rewards import ContactNovelty, TouchNovelty
 from self_touch_fakes import SwappingInfant, make_ctx, train_swapping
 
 from devlearn import BatchContext
-from devlearn.config.resolve import load_run_config
-from devlearn.env import DevVecEnv
-from devlearn.testing import registry_for, run_config
-from devlearn.training import train
-from devlearn.training.checkpoint import load_checkpoint
+from devlearn.testing import load_checkpoint, registry_for, run_config, train
+from devlearn.testing.envs import DevVecEnv
+from devlearn.testing.runs import load_run_config
 
 GROUPS = np.zeros(68, bool)
 GROUPS[:10] = True  # SwappingInfant's env 0 discovers regions 0-4, env 1 regions 5-9
