@@ -10,7 +10,8 @@ from __future__ import annotations
 import time
 
 import torch
-from devlearn_hand_regard.encoders import EyeCNN
+from devlearn_hand_regard.encoders import EYE_FEATURES
+from devlearn_hand_regard.eye_cnn import EyeCNN
 
 
 def ms_per_image(net: torch.nn.Module, images: torch.Tensor, mode: str, repeats: int = 3) -> float:
@@ -34,7 +35,7 @@ def ms_per_image(net: torch.nn.Module, images: torch.Tensor, mode: str, repeats:
 def main() -> None:
     torch.set_num_threads(1)
     torch.manual_seed(0)
-    net, images = EyeCNN(), torch.rand(256, 64, 64, 3)
+    net, images = EyeCNN(EYE_FEATURES), torch.rand(256, 64, 64, 3)
     for mode in ("fp32", "bf16"):
         print(f"{mode}: {ms_per_image(net, images, mode):.3f} ms per image (forward + backward)")
     net = net.to(memory_format=torch.channels_last)

@@ -27,11 +27,12 @@ from contextlib import contextmanager
 from typing import TYPE_CHECKING, Any
 
 from devlearn.bench.ceiling import env_breakdown
-from devlearn.bench.learner import build_learner, collect_random
+from devlearn.bench.learner import build_learner, collect_random, run_config
 from devlearn.bench.speed import without_user_warnings
 
 if TYPE_CHECKING:
     from devlearn.api.behavior import Behavior
+    from devlearn.plugins import PluginRegistry
     from devlearn.training.ppo import UniqueParamPPO
 
 ITERATION_PARTS = (
@@ -95,6 +96,7 @@ def iteration_profile(
     update_steps: int | None = None,
     threads: int = 1,
     prepare: Callable[[UniqueParamPPO], None] | None = None,
+    registry: PluginRegistry | None = None,
 ) -> dict[str, Any]:
     """Seconds per iteration of each of :data:`ITERATION_PARTS` for a run of ``behavior``
     under ``overrides`` (``--set`` values), and their total.
@@ -108,14 +110,14 @@ def iteration_profile(
             passes are scaled up to the run's rollout).
         threads: torch threads of the inference and the update (the CNN runs used 1).
         prepare: Called with the learner before it is timed (a code path to compare).
+        registry: Where the behaviour is registered (default: the installed plugins).
     Returns:
         Part -> seconds per iteration, ``total``, and ``update_us_per_sample`` (the update's
         seconds per rollout sample, in microseconds).
     """
-    from devlearn.config.run_config import default_config
     from devlearn.training.process import update_threads
 
-    cfg = default_config(type(behavior), overrides)
+    cfg = run_config(behavior, overrides, registry)
     envs, decisions, repeat = cfg.num_envs, cfg.ppo.num_steps_per_env, cfg.env.action_repeat
     step = env_breakdown(behavior, env_steps)  # ms per physics step, part by part
     once = repeat if behavior.facts_every_physics_step else 1
@@ -124,7 +126,7 @@ def iteration_profile(
         per_decision[part] = once * step[part]
     result = {part: ms * envs * decisions / 1000.0 for part, ms in per_decision.items()}
     steps = update_steps or decisions
-    alg, observations = build_learner(behavior, cfg.network.layout, envs, steps)
+    alg, observations = build_learner(behavior, cfg.network.layout, envs, steps, registry=registry)
     if prepare is not None:
         prepare(alg)
     with update_threads(threads):
@@ -155,7 +157,7 @@ and critic, 5 epochs of 4 mini-batches)."""
 
 
 def bench_cnn_path(
-    behavior_cls: type[Behavior], quick: bool, progress: Callable[[str], None]
+    registry: PluginRegistry, quick: bool, progress: Callable[[str], None]
 ) -> dict[str, Any]:
     """Hand regard's CNN path (``behavior.policy=cnn``): each part's seconds per iteration
     (``hand_regard_cnn_iteration_s``, :func:`iteration_profile` on one torch thread, as the
@@ -164,11 +166,11 @@ def bench_cnn_path(
     (``hand_regard_cnn_train_steps_per_s``, a short ``devlearn run``)."""
     from devlearn.bench.speed import bench_training
 
-    behavior = behavior_cls()
+    behavior = registry.create("hand_regard")
     behavior.config.policy = "cnn"
     progress("hand_regard (CNN): where an iteration's time goes")
     profile = iteration_profile(
-        behavior, CNN_RUN, 20 if quick else 200, update_steps=8 if quick else None
+        behavior, CNN_RUN, 20 if quick else 200, 8 if quick else None, registry=registry
     )
     result: dict[str, Any] = {
         "hand_regard_cnn_iteration_s": {k: profile[k] for k in (*ITERATION_PARTS, "total")},

@@ -15,11 +15,30 @@ if TYPE_CHECKING:
     from tensordict import TensorDict
 
     from devlearn.api.behavior import Behavior
+    from devlearn.config.run_config import RunConfig
+    from devlearn.plugins import PluginRegistry
     from devlearn.training.ppo import UniqueParamPPO
 
 
+def run_config(
+    behavior: Behavior, overrides: list[str], registry: PluginRegistry | None = None
+) -> RunConfig:
+    """The config ``devlearn run BEHAVIOR --set OVERRIDES`` trains with, resolved and checked
+    as the run's (:func:`~devlearn.config.resolve.resolve_config`); ``registry``: where the
+    behaviour is registered (default: the installed plugins)."""
+    from devlearn.config.resolve import RunRequest, resolve_config
+    from devlearn.plugins import PluginRegistry
+
+    return resolve_config(RunRequest(behavior.name, overrides), registry or PluginRegistry())
+
+
 def build_learner(
-    behavior: Behavior, layout: str, num_envs: int, num_steps: int, seed: int = 0
+    behavior: Behavior,
+    layout: str,
+    num_envs: int,
+    num_steps: int,
+    seed: int = 0,
+    registry: PluginRegistry | None = None,
 ) -> tuple[UniqueParamPPO, Callable[[], TensorDict]]:
     """The PPO algorithm a run of ``behavior`` would train, on random observations.
 
@@ -35,7 +54,7 @@ def build_learner(
     import torch
     from tensordict import TensorDict
 
-    from devlearn.config.run_config import default_config, to_rsl_rl
+    from devlearn.config.run_config import to_rsl_rl
     from devlearn.env import BehaviorEnv
     from devlearn.training.ppo import UniqueParamPPO
     from devlearn.training.process import quiet
@@ -46,7 +65,7 @@ def build_learner(
     fake_env = SimpleNamespace(num_envs=num_envs, num_actions=env.action_dim, unwrapped=dt)
     env.close()
     overrides = [f"network.layout={layout}", f"ppo.num_steps_per_env={num_steps}"]
-    cfg = default_config(type(behavior), overrides)
+    cfg = run_config(behavior, overrides, registry)
     train_cfg = to_rsl_rl(cfg, behavior, list(first))
     train_cfg["multi_gpu"] = None
     gen = torch.Generator().manual_seed(seed)
@@ -97,6 +116,7 @@ def bench_update(
     num_steps: int,
     repeats: int = 2,
     threads: int = 0,
+    registry: PluginRegistry | None = None,
 ) -> dict[str, Any]:
     """The PPO update's cost per rollout sample, and the rollout inference's per step.
 
@@ -111,6 +131,7 @@ def bench_update(
         repeats: Timed updates after one warm-up; the best is kept (least disturbed).
         threads: torch threads during the update and inference (0: the training default, all
             cores this process may use, see :func:`devlearn.training.process.learner_threads`).
+        registry: Where the behaviour is registered (default: the installed plugins).
 
     Returns:
         ``update_us_per_sample`` (seconds of one update / rollout samples, in microseconds),
@@ -123,7 +144,7 @@ def bench_update(
     from devlearn.training.process import learner_threads, update_threads
 
     threads = threads or learner_threads()
-    alg, observations = build_learner(behavior, layout, num_envs, num_steps)
+    alg, observations = build_learner(behavior, layout, num_envs, num_steps, registry=registry)
     best, inference = float("inf"), float("inf")
     with update_threads(threads):
         for k in range(repeats + 1):
@@ -147,7 +168,7 @@ OLD_LEARNER = ["network.layout=separate", "torch_threads=1", "update_threads=1"]
 """``--set`` options that train as before the shared layout and automatic threads."""
 
 
-def bench_learner(behaviors: dict, quick: bool, progress: Callable[[str], None]) -> dict:
+def bench_learner(registry: PluginRegistry, quick: bool, progress: Callable[[str], None]) -> dict:
     """PPO update cost per sample and training steps/s, old learner against new, one session.
 
     Old: separate actor and critic, one torch thread (the defaults before the shared layout).
@@ -158,6 +179,7 @@ def bench_learner(behaviors: dict, quick: bool, progress: Callable[[str], None])
     """
     from devlearn.training.process import learner_threads
 
+    behaviors = registry.behaviors()
     result: dict[str, Any] = {}
     rollouts = {"self_touch": (16, 32 if quick else 128), "hand_regard": (8, 8 if quick else 32)}
     for name, (envs, steps) in rollouts.items():
@@ -166,7 +188,7 @@ def bench_learner(behaviors: dict, quick: bool, progress: Callable[[str], None])
         for suffix, layout, threads in (("_old", "separate", 1), ("", "shared", learner_threads())):
             progress(f"{name}: PPO update, {layout} networks, {threads} thread(s)")
             behavior, repeats = behaviors[name](), 1 if quick else 2
-            figures = bench_update(behavior, layout, envs, steps, repeats, threads)
+            figures = bench_update(behavior, layout, envs, steps, repeats, threads, registry)
             result[f"{name}_update_us_per_sample{suffix}"] = figures["update_us_per_sample"]
             result[f"{name}_inference_ms_per_step{suffix}"] = figures["inference_ms_per_step"]
     old = [arg for kv in OLD_LEARNER for arg in ("--set", kv)]

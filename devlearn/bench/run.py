@@ -134,9 +134,9 @@ def run_bench(
         result.update(
             decision_rate(registry, "hand_regard", 1024 if quick else 4096, extra, progress)
         )
-    result.update(bench_learner(behaviors, quick, progress))
+    result.update(bench_learner(registry, quick, progress))
     if "hand_regard" in behaviors:
-        result.update(bench_cnn_path(behaviors["hand_regard"], quick, progress))
+        result.update(bench_cnn_path(registry, quick, progress))
     usage_self = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     usage_children = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
     # the largest resident set of any one process (this one, a training run or a worker)

@@ -176,9 +176,9 @@ def decision_rate(
     per policy decision) and, beside ``<behavior>_train_steps_per_s`` measured at it, the same
     training with a decision every physics step (``<behavior>_train_steps_per_s_k1``). Both
     count physics steps per second."""
-    from devlearn.config.run_config import default_config
+    from devlearn.config.resolve import RunRequest, resolve_config
 
-    repeat = default_config(registry.behavior(behavior)).env.action_repeat
+    repeat = resolve_config(RunRequest(behavior), registry).env.action_repeat
     result: dict[str, Any] = {f"{behavior}_train_action_repeat": repeat}
     if repeat > 1:
         progress(f"{behavior}: end-to-end training, a decision every physics step (K=1)")

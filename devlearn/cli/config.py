@@ -8,10 +8,9 @@ import textwrap
 from typing import TYPE_CHECKING
 
 from devlearn.cli.options import add_behavior, add_overrides, add_preset
-from devlearn.config.checks import check_config
 from devlearn.config.help import describe_keys
-from devlearn.config.run_config import apply_preset, default_config, new_config
-from devlearn.config.values import apply_overrides
+from devlearn.config.resolve import RunRequest, resolve_config
+from devlearn.config.run_config import new_config
 
 if TYPE_CHECKING:
     from devlearn.plugins import PluginRegistry
@@ -40,22 +39,29 @@ def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) 
 
 
 def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
-    """Print the keys as a table (grouped by section) or as JSON."""
+    """Print the keys as a table (grouped by section) or as JSON.
+
+    The values shown are resolved and checked as ``devlearn run`` resolves and checks them
+    (:func:`~devlearn.config.resolve.resolve_config`): a value ``run`` refuses is refused here
+    with the same line. Each key is marked by what set it: the behaviour, the preset, ``--set``.
+    """
     behavior_cls = registry.behavior(args.behavior)
     core = new_config(behavior_cls)
-    cfg = default_config(behavior_cls)
-    rows = describe_keys(cfg, core)
-    changes = [("preset", lambda c: apply_preset(c, behavior_cls, args.preset), args.preset)]
-    changes.append(("override", lambda c: apply_overrides(c, args.overrides), args.overrides))
-    for label, change, wanted in changes:  # mark what --preset, then --set changed
-        if wanted:
-            marks = {r["key"]: (r["default"], r["set_by"]) for r in rows}
-            cfg = change(cfg)
-            check_config(cfg)  # as `devlearn run` checks it, before describing it
-            rows = describe_keys(cfg, core)
-            for row in rows:
-                value, mark = marks[row["key"]]
-                row["set_by"] = label if row["default"] != value else mark
+    # the behaviour's defaults, then --preset, then --set: each resolved, so a mark names
+    # what changed a value
+    steps = [("", RunRequest(args.behavior))]
+    if args.preset:
+        steps.append(("preset", RunRequest(args.behavior, preset=args.preset)))
+    if args.overrides:
+        steps.append(("override", RunRequest(args.behavior, args.overrides, args.preset or "")))
+    rows: list[dict] = []
+    for label, request in steps:
+        cfg = resolve_config(request, registry)
+        marks = {r["key"]: (r["default"], r["set_by"]) for r in rows}
+        rows = describe_keys(cfg, core)
+        for row in rows if marks else ():
+            value, mark = marks.get(row["key"], (None, label))  # a key --set added: its own
+            row["set_by"] = label if row["default"] != value else mark
     if args.json:
         print(json.dumps(rows, indent=2))
         return 0

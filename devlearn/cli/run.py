@@ -68,7 +68,8 @@ def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) 
 def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     """Resolve the config, train, print the run directory and a final summary."""
     from devlearn.cli.summary import finished_message, paper_budget, run_summary
-    from devlearn.training.resolve import RunRequest, resolve_config
+    from devlearn.config.resolve import RunRequest, resolve_config
+    from devlearn.training.checkpoint import checkpoint_config
     from devlearn.training.train import default_run_dir, train
 
     behavior_cls = registry.behavior(args.behavior)
@@ -91,7 +92,7 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
         start_from=args.start_from or "",
         config_file=args.config or "",
     )
-    cfg = resolve_config(request, registry)
+    cfg = resolve_config(request, registry, checkpoint_config)
     if not args.resume and not cfg.out_dir:
         cfg.out_dir = str(default_run_dir(cfg.behavior_name))
     if args.resume:

@@ -14,7 +14,7 @@ from devlearn.ages import check_age
 from devlearn.api.errors import UsageError
 from devlearn.api.rewards import reward_term_cfg
 from devlearn.config.growth import growth_schedule
-from devlearn.timing import EPISODE_STEPS
+from devlearn.timing import EPISODE_STEPS, decision_rate_error
 
 if TYPE_CHECKING:
     from devlearn.config.run_config import RunConfig
@@ -123,12 +123,8 @@ def _check_batches(cfg: RunConfig) -> None:
     rollout: values that pass their own bounds but fail or hang together."""
     repeat = cfg.env.action_repeat
     _whole(repeat, "env.action_repeat", 1, EPISODE_STEPS)
-    if EPISODE_STEPS % repeat:
-        valid = [k for k in range(1, 21) if EPISODE_STEPS % k == 0]
-        raise UsageError(
-            f"env.action_repeat={repeat} must divide the episode ({EPISODE_STEPS} physics "
-            f"steps), e.g. {', '.join(map(str, valid))}"
-        )
+    if error := decision_rate_error(repeat):
+        raise UsageError(error)
     rollout = cfg.num_envs * cfg.ppo.num_steps_per_env
     iteration = rollout * repeat
     if iteration > OVERSHOOT_MAX * cfg.total_steps:

@@ -233,8 +233,9 @@ def fresh_config(
 ) -> RunConfig:
     """A new run's config, unchecked: defaults < the behaviour's ``train_defaults()`` < its
     preset ``preset`` < ``top`` < overrides, then the behaviour's
-    ``run_length_defaults(total_steps)`` for the keys neither the preset nor an override set
-    (:func:`default_config` checks it too).
+    ``run_length_defaults(total_steps)`` for the keys neither the preset nor an override set.
+    Checked only by :func:`devlearn.config.resolve.resolve_config`, the one way a run's
+    config is built.
 
     Raises:
         UsageError: An unknown preset (the valid ones named) or a bad override.
@@ -258,31 +259,6 @@ def fresh_config(
     return cfg
 
 
-def default_config(
-    behavior_cls: type[Behavior],
-    overrides: list[str] | None = None,
-    preset: str | None = None,
-    **top: Any,
-) -> RunConfig:
-    """Build a run's config: defaults < the behaviour's ``train_defaults()`` < its preset
-    ``preset`` < ``top`` < overrides, checked against the behaviour's network
-    (:func:`finish_config`). ``devlearn run`` and sweeps build theirs through
-    :func:`devlearn.training.resolve.resolve_config`, which also checks every value's bounds.
-
-    Args:
-        behavior_cls: The behaviour class.
-        overrides: ``key=value`` strings (``--set``).
-        preset: A name from the behaviour's ``presets()`` (``--preset``); None or empty: none.
-        top: Top-level RunConfig fields (e.g. ``total_steps=...``); None values are skipped.
-    Raises:
-        UsageError: An unknown preset (the valid ones named), a bad override, or values the
-            behaviour's :class:`~devlearn.api.network_spec.NetworkSpec` rejects.
-    """
-    cfg = fresh_config(behavior_cls, overrides, preset, **top)
-    finish_config(cfg, behavior_cls)
-    return cfg
-
-
 def finish_config(cfg: RunConfig, behavior_cls: type[Behavior]) -> None:
     """Check ``cfg`` against the network its behaviour builds under it and record the layout
     the behaviour chooses where ``network.layout`` is empty (so config.json says it).
@@ -292,14 +268,15 @@ def finish_config(cfg: RunConfig, behavior_cls: type[Behavior]) -> None:
             bounds or decision rate are invalid (:func:`check_learner`).
     """
     try:  # the spec checks its own values (e.g. the spread): say so before any env starts
-        spec = behavior_cls(cfg.behavior).network()
+        behavior = behavior_cls(cfg.behavior)  # one instance answers both questions
+        spec = behavior.network()
     except ValueError as err:
         raise UsageError(
             f"{behavior_cls.name}: its network() rejects the config: {err} "
             "(set through --set behavior.FIELD=VALUE, e.g. behavior.max_std)"
         ) from err
     try:  # stage lengths are the behaviour's fields: a negative one fails here, not in a worker
-        behavior_cls(cfg.behavior).curriculum()
+        behavior.curriculum()
     except ValueError as err:
         raise UsageError(
             f"{behavior_cls.name}: its curriculum() rejects the config: {err}"

@@ -21,6 +21,7 @@ from devlearn.env.guards import (
     check_reward,
     reward_within_bound,
 )
+from devlearn.timing import decision_rate_error
 
 if TYPE_CHECKING:
     from devlearn.api.behavior import Behavior
@@ -113,11 +114,8 @@ class BehaviorEnv:
         """A copy of the last observation of the latest episode that ended (the env has reset
         since, so :meth:`step` returned the next episode's first); None before any ended."""
         self.action_repeat = int(action_repeat)
-        if self.action_repeat < 1 or self.episode_steps % self.action_repeat:
-            raise ValueError(
-                f"env.action_repeat={action_repeat} must be at least 1 and divide the episode "
-                f"length of {self.episode_steps} physics steps"
-            )
+        if error := decision_rate_error(self.action_repeat, self.episode_steps):
+            raise ValueError(error)  # checked before any worker starts too (check_config)
 
     def _build_infant(self) -> Any:
         options = self.behavior.infant_options()

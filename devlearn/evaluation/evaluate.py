@@ -22,6 +22,7 @@ from tqdm import tqdm
 from devlearn.ages import check_age
 from devlearn.api.behavior import evaluation_stage
 from devlearn.api.errors import UsageError
+from devlearn.config.resolve import RunRequest, resolve_config
 from devlearn.config.run_config import RunConfig, fresh_config, to_dict
 from devlearn.env.behavior_env import BehaviorEnv
 from devlearn.evaluation.episodes import (
@@ -40,7 +41,6 @@ from devlearn.evaluation.episodes import (
 )
 from devlearn.evaluation.scripted_policy import ScriptedPolicy
 from devlearn.training.checkpoint import LATEST, Checkpoint, is_scripted_policy
-from devlearn.training.resolve import RunRequest, resolve_config
 
 if TYPE_CHECKING:
     from devlearn.api.behavior import Behavior, Evaluator

@@ -15,8 +15,8 @@ from gymnasium import spaces
 
 from devlearn.api.errors import UsageError
 from devlearn.config.growth import growth_schedule
+from devlearn.config.resolve import RunRequest, resolve_config
 from devlearn.env.guards import OBSERVATION_BOUND
-from devlearn.training.resolve import RunRequest, resolve_config
 
 if TYPE_CHECKING:
     from devlearn.api.behavior import Behavior
@@ -51,7 +51,7 @@ def set_items(overrides: Overrides) -> list[str]:
 class RunSetup:
     """A behaviour set up exactly as ``devlearn run`` sets it up, for a Gymnasium env.
 
-    The config comes from :func:`~devlearn.training.resolve.resolve_config` (the behaviour's
+    The config comes from :func:`~devlearn.config.resolve.resolve_config` (the behaviour's
     defaults, ``preset``, ``top`` and ``overrides``, every check of ``devlearn run``); the
     behaviour is built under it and prepared (``Behavior.prepare``: hand regard calibrates or
     copies its hand detector) in ``out_dir`` when the config names one, else in a temporary

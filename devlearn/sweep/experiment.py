@@ -42,17 +42,17 @@ def plan_sweep(
     spec: SweepSpec, registry: PluginRegistry, global_args: list[str] | None = None
 ) -> list[PlannedRun]:
     """Every run of the sweep, each config resolved and checked as ``devlearn run`` would
-    (:func:`~devlearn.training.resolve.resolve_config`); the job carries that config, which
+    (:func:`~devlearn.config.resolve.resolve_config`); the job carries that config, which
     the run starts from (``devlearn run --config RUN/run_config.json``).
 
     Raises:
         UsageError: An unknown behaviour, grid key or value, a value the behaviour rejects (the
             run is named), or a launcher that is not installed.
     """
+    from devlearn.config.resolve import RunRequest, resolve_config
     from devlearn.config.run_config import to_dict
     from devlearn.config.values import in_table, valid_keys
     from devlearn.training.learned_rewards import LearnedRewards
-    from devlearn.training.resolve import RunRequest, resolve_config
 
     train = spec.train
     base = resolve_config(RunRequest(spec.behavior), registry)

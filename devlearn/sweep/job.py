@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from devlearn.training.resolve import RUN_CONFIG_FILE
+from devlearn.config.resolve import RUN_CONFIG_FILE
 
 LOG_TAIL_LINES = 15
 """Lines of a failed run's log shown in its record and on the console."""

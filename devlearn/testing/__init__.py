@@ -13,11 +13,22 @@ observation, an evaluator metric, an attribute that does not pickle).
 :func:`check_gymnasium` checks the behaviour as a Gymnasium env (Gymnasium's own ``check_env``
 and the vector env, :mod:`devlearn.gym`): ``check_gymnasium(MyBehavior)``.
 :func:`check_learned_reward` for a learned reward (``check_learned_reward(MyTerm)``),
-and :func:`registry_for` to build a plugin registry from classes, without installing anything.
+and :func:`registry_for` to build a plugin registry from classes, without installing anything
+(:class:`PluginRegistry`: the installed plugins').
 :func:`place_hand_on_body` poses an infant with a hand on its body (a scripted contact), and
 :func:`random_transitions` gives a learned reward a batch to train on.
 Fixtures ``crib_infant`` and ``sitting_infant`` (module-scoped) are available after
 ``from devlearn.testing import crib_infant, sitting_infant`` in a ``conftest.py``.
+
+Runs through the core for a plugin's tests (:mod:`~devlearn.testing.runs`): :func:`run_config`
+(a run's config, resolved and checked as ``devlearn run``'s), :func:`train`,
+:func:`load_checkpoint`, :func:`save_checkpoint`, :func:`policy_network`, :func:`policy_file`,
+:func:`evaluate_policy`, :func:`open_scripted_policy` and :func:`run_command` (``devlearn
+ARGS`` in a new process); saved configs as runs read them (``devlearn.testing.runs``:
+``from_dict``, ``to_dict``, ``load_run_config``); a behaviour's envs as training steps them
+(:mod:`~devlearn.testing.envs`: ``BehaviorEnv``, ``make_envs``, ``step_batch``,
+``DevVecEnv``...). Plugin tests import only ``devlearn``, ``devlearn.api`` and
+``devlearn.testing`` (checked by ``tests/testing/test_plugin_test_imports.py``).
 
 For trainings in seconds without MuJoCo: :class:`FakeInfant` (a point moved by its actions, with
 faults on demand) through :func:`fake_infant_factory`, the tiny behaviour that learns on it
@@ -28,7 +39,8 @@ Modules: :mod:`~devlearn.testing.behavior` (the behaviour check), :mod:`~devlear
 (the Gymnasium check), :mod:`~devlearn.testing.learned`
 (the learned-reward check), :mod:`~devlearn.testing.values` (value checks and
 :class:`ConformanceError`), :mod:`~devlearn.testing.fixtures`,
-:mod:`~devlearn.testing.fake_infant`, :mod:`~devlearn.testing.hook_tracker`.
+:mod:`~devlearn.testing.fake_infant`, :mod:`~devlearn.testing.hook_tracker`,
+:mod:`~devlearn.testing.runs`, :mod:`~devlearn.testing.envs`.
 """
 
 from __future__ import annotations
@@ -46,16 +58,30 @@ from devlearn.testing.behavior import (
     place_hand_on_body,
 )
 from devlearn.testing.fake_infant import FakeInfant, TinyBehavior, TinyConfig, fake_infant_factory
-from devlearn.testing.fixtures import crib_infant, registry_for, sitting_infant
+from devlearn.testing.fixtures import PluginRegistry, crib_infant, registry_for, sitting_infant
 from devlearn.testing.gym_env import check_gymnasium
 from devlearn.testing.hook_tracker import HookTracker
 from devlearn.testing.learned import check_learned_reward, random_transitions
+from devlearn.testing.runs import (
+    CommandResult,
+    evaluate_policy,
+    load_checkpoint,
+    open_scripted_policy,
+    policy_file,
+    policy_network,
+    run_command,
+    run_config,
+    save_checkpoint,
+    train,
+)
 from devlearn.testing.values import ConformanceError
 
 __all__ = [
+    "CommandResult",
     "ConformanceError",
     "FakeInfant",
     "HookTracker",
+    "PluginRegistry",
     "TinyBehavior",
     "TinyConfig",
     "check_batched_observations",
@@ -70,9 +96,18 @@ __all__ = [
     "check_network",
     "check_reward_terms",
     "crib_infant",
+    "evaluate_policy",
     "fake_infant_factory",
+    "load_checkpoint",
+    "open_scripted_policy",
     "place_hand_on_body",
+    "policy_file",
+    "policy_network",
     "random_transitions",
     "registry_for",
+    "run_command",
+    "run_config",
+    "save_checkpoint",
     "sitting_infant",
+    "train",
 ]

@@ -1,4 +1,6 @@
-"""Fixtures for plugin tests: a registry built from classes, and module-scoped infants."""
+"""Fixtures for plugin tests: a registry built from classes (or the installed plugins':
+:class:`PluginRegistry`), module-scoped infants, and the scenes' colours a colour-based
+detector must tell apart."""
 
 from __future__ import annotations
 
@@ -9,7 +11,18 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from devlearn.api.behavior import Behavior
+from devlearn.infant.body_table import SKIN_RGBA
+from devlearn.infant.scenes import TOY_COLOURS
 from devlearn.plugins import PluginRegistry, PluginSource
+
+__all__ = [
+    "SKIN_RGBA",
+    "TOY_COLOURS",
+    "PluginRegistry",
+    "crib_infant",
+    "registry_for",
+    "sitting_infant",
+]
 
 if TYPE_CHECKING:
     from devlearn.infant import Infant

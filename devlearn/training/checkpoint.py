@@ -600,6 +600,17 @@ class Checkpoint:
         return load_actor(self.config, self.state, self.behavior(), obs, action_dim)
 
 
+def checkpoint_config(path: str, registry: PluginRegistry, behavior: str) -> RunConfig:
+    """The config the training checkpoint ``path`` was trained with, which must train
+    ``behavior`` (empty: any installed): what ``devlearn run --from`` starts from
+    (:class:`devlearn.config.resolve.CheckpointReader`, passed to ``resolve_config``).
+
+    Raises:
+        UsageError: A missing, corrupt or non-resumable checkpoint, or one of another behaviour.
+    """
+    return Checkpoint.open(path, registry, behavior, RESUME_KEYS).config
+
+
 def behavior_with_artifacts(
     registry: PluginRegistry, config: RunConfig, state: dict[str, Any], path: Path
 ) -> Behavior:

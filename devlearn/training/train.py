@@ -16,6 +16,7 @@ import torch
 from devlearn.api.errors import UsageError
 from devlearn.config.checks import check_memory, check_out_dir, holds_run
 from devlearn.config.growth import growth_schedule, start_age
+from devlearn.config.resolve import CONFIG_FILE, RunRequest, resolve_config, write_config_file
 from devlearn.config.run_config import RunConfig, to_rsl_rl
 from devlearn.env import DevVecEnv
 from devlearn.training.checkpoint import (
@@ -37,7 +38,6 @@ from devlearn.training.process import (
     resolve_workers,
     seed_everything,
 )
-from devlearn.training.resolve import CONFIG_FILE, RunRequest, resolve_config, write_config_file
 from devlearn.training.run_folder import copy_metrics, start_up
 from devlearn.training.runner import DevRunner
 
@@ -125,7 +125,7 @@ def train(
 
     Args:
         cfg: The run config, checked: from
-            :func:`~devlearn.training.resolve.resolve_config` (with ``resume``: None reads
+            :func:`~devlearn.config.resolve.resolve_config` (with ``resume``: None reads
             the run's config.json).
         registry: Plugin registry (``.behavior(name)``).
         resume: A run directory to continue from its newest complete checkpoint: step counter,
@@ -136,7 +136,7 @@ def train(
             stage follows from the step count), and the source run's metrics.jsonl rows up
             to the checkpoint's step are copied, so curves continue. ``cfg`` is usually
             the checkpoint's own, changed by the command line
-            (:func:`~devlearn.training.resolve.resolve_config` with ``start_from``).
+            (:func:`~devlearn.config.resolve.resolve_config` with ``start_from``).
         infant_factory: Infant builder for the envs (tests); default the real infant.
         progress: Show a progress bar.
         force: Start a new run in ``cfg.out_dir`` even if it holds one (its contents are

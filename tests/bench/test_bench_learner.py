@@ -4,8 +4,7 @@ from __future__ import annotations
 
 import math
 
-from devlearn.bench.learner import bench_update
-from devlearn.config.run_config import default_config
+from devlearn.bench.learner import bench_update, run_config
 from devlearn.plugins import PluginRegistry
 
 
@@ -25,6 +24,6 @@ def test_a_rollout_longer_than_the_behaviours_own_fits_the_storage():
     # devlearn bench collects 128 steps per env; the storage was built for the behaviour's
     # own ppo.num_steps_per_env (64 since the learner's defaults) and overflowed
     behavior = PluginRegistry().create("hand_to_mouth")
-    own = default_config(type(behavior), []).ppo.num_steps_per_env
+    own = run_config(behavior, []).ppo.num_steps_per_env
     figures = bench_update(behavior, "separate", 2, num_steps=own + 8, repeats=1, threads=1)
     assert math.isfinite(figures["update_us_per_sample"])

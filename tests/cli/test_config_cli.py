@@ -47,6 +47,24 @@ def test_overrides_are_shown_and_checked(capsys):
     assert "did you mean 'ppo.gamma'?" in capsys.readouterr().err
 
 
+
+@pytest.mark.parametrize(
+    "item",
+    [
+        "network.head=bogus",  # the learner's checks (finish_config): skipped before issue #42
+        "network.min_std=0.9",
+        "behavior.max_std=-1",  # the behaviour's network() rejects it
+        "env.action_repeat=7",  # the bounds (check_config)
+    ],
+)
+def test_config_set_refuses_what_run_refuses_with_the_same_line(capsys, tmp_path, item):
+    assert main(["run", "self_touch", "--set", item, "--out", str(tmp_path / "run")]) == 2
+    refused = capsys.readouterr().err.strip().splitlines()
+    assert len(refused) == 1 and refused[0].startswith("devlearn: error: "), refused
+    assert main(["config", "self_touch", "--set", item]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == refused
+    assert not (tmp_path / "run").exists()
+
 def test_table_groups_sections(capsys):
     assert main(["config", "self_touch"]) == 0
     out = capsys.readouterr().out

@@ -11,12 +11,13 @@ from devlearn.api.errors import UsageError
 from devlearn.cli import main
 from devlearn.config.checks import check_config
 from devlearn.config.growth import GROWTH_PIECES, parse_growth, start_age
-from devlearn.config.run_config import default_config, from_dict
+from devlearn.config.run_config import from_dict
+from devlearn.testing import run_config
 from devlearn.testing.fake_infant import TinyBehavior
 
 
 def config(*overrides: str, total_steps: int = 24_000):
-    cfg = default_config(TinyBehavior, list(overrides), total_steps=total_steps)
+    cfg = run_config(TinyBehavior, list(overrides), total_steps=total_steps)
     check_config(cfg)
     return cfg
 

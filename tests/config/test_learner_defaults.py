@@ -12,11 +12,11 @@ import pytest
 
 from devlearn.cli import main
 from devlearn.config.run_config import (
-    default_config,
     from_dict,
     new_config,
     to_dict,
 )
+from devlearn.testing import run_config
 from devlearn.testing.fake_infant import TinyBehavior
 
 LEARNER = {
@@ -89,7 +89,7 @@ def test_a_run_saved_before_loads_as_it_was_trained():
 def test_a_new_runs_config_file_gets_todays_defaults():
     cfg = from_dict({"behavior_name": "plain"}, Plain, new_run=True)
     assert {key: value(cfg, key) for key in LEARNER} == LEARNER
-    assert to_dict(cfg) == to_dict(default_config(Plain))
+    assert to_dict(cfg) == to_dict(run_config(Plain))
 
 
 def test_run_config_with_an_empty_file_trains_todays_learner(monkeypatch, tmp_path, capsys):

@@ -8,9 +8,10 @@ import json
 import pytest
 
 from devlearn.api.errors import UsageError
-from devlearn.config.run_config import RunConfig, default_config, from_dict, to_dict
+from devlearn.config.run_config import RunConfig, from_dict, to_dict
 from devlearn.config.values import apply_overrides, valid_keys
 from devlearn.plugins import PluginRegistry
+from devlearn.testing import run_config
 
 
 @pytest.fixture(scope="module")
@@ -24,7 +25,7 @@ def registry():
 )
 def test_any_term_weight_is_set_from_the_command_line(registry, name, term):
     cls = registry.behavior(name)
-    cfg = default_config(cls, [f"behavior.rewards.{term}.weight=0"])
+    cfg = run_config(cls, [f"behavior.rewards.{term}.weight=0"])
     assert cfg.behavior.rewards[term].weight == 0.0
     assert f"behavior.rewards.{term}.weight" in valid_keys(cfg)
     behavior = registry.create(name, cfg.behavior)
@@ -33,7 +34,7 @@ def test_any_term_weight_is_set_from_the_command_line(registry, name, term):
 
 
 def test_a_term_param_is_set_and_converted(registry):
-    cfg = default_config(
+    cfg = run_config(
         registry.behavior("self_touch"), ["behavior.rewards.balance.params.tolerance=5"]
     )
     assert cfg.behavior.rewards["balance"].params["tolerance"] == 5
@@ -42,7 +43,7 @@ def test_a_term_param_is_set_and_converted(registry):
 
 
 def test_a_misspelled_term_names_the_valid_ones(registry):
-    cfg = default_config(registry.behavior("self_touch"))
+    cfg = run_config(registry.behavior("self_touch"))
     with pytest.raises(UsageError, match=r"did you mean 'balance'.*touch_novelty, contact_novelty"):
         apply_overrides(cfg, ["behavior.rewards.balanse.weight=0"])
     with pytest.raises(UsageError, match=r"no 'tolerence'.*valid: reward, tolerance, min_parts"):
@@ -65,6 +66,6 @@ def test_an_old_config_with_weight_fields_loads_into_rewards(registry):
 
 def test_a_saved_new_config_round_trips(registry):
     cls = registry.behavior("hand_regard")
-    cfg = default_config(cls, ["behavior.rewards.bilateral_balance.params.horizon=50"])
+    cfg = run_config(cls, ["behavior.rewards.bilateral_balance.params.horizon=50"])
     again = from_dict(json.loads(json.dumps(to_dict(cfg))), cls)
     assert again.behavior.rewards == cfg.behavior.rewards

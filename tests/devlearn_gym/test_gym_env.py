@@ -11,12 +11,12 @@ import pytest
 
 import devlearn.gym
 from devlearn.api.errors import UsageError
+from devlearn.config.resolve import RunRequest, resolve_config
 from devlearn.config.run_config import to_dict
 from devlearn.env import BehaviorEnv
 from devlearn.gym.env import DevlearnEnv
 from devlearn.testing import registry_for
 from devlearn.testing.fake_infant import TinyBehavior, fake_infant_factory
-from devlearn.training.resolve import RunRequest, resolve_config
 
 REGISTRY = registry_for(TinyBehavior)
 

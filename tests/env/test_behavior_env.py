@@ -131,7 +131,7 @@ def test_a_decision_is_the_same_action_held_for_k_physics_steps_with_rewards_sum
 
 
 def test_a_decision_rate_must_divide_the_episode():
-    with pytest.raises(ValueError, match="divide the episode length of 5"):
+    with pytest.raises(ValueError, match=r"action_repeat=3 must divide the episode \(5 physics steps\)"):
         BehaviorEnv(TinyBehavior(TinyConfig()), 0, factory, action_repeat=3)
 
 

@@ -14,10 +14,10 @@ import pytest
 
 import devlearn
 from devlearn.api.errors import UsageError
+from devlearn.config.resolve import RunRequest, resolve_config
 from devlearn.evaluation.evaluate import evaluate, parallelism
 from devlearn.testing import registry_for
 from devlearn.testing.fake_infant import FakeInfant, TinyBehavior, fake_infant_factory
-from devlearn.training.resolve import RunRequest, resolve_config
 from devlearn.training.train import train
 
 EPISODE_STEPS = 12

@@ -24,7 +24,7 @@ from devlearn.evaluation.evaluate import (
 )
 from devlearn.testing import registry_for
 from devlearn.testing.fake_infant import CloseEvaluator, FakeInfant, TinyBehavior
-from devlearn.training.resolve import RunRequest, resolve_config
+from devlearn.config.resolve import RunRequest, resolve_config
 
 
 class Fixed(TinyBehavior):

@@ -9,10 +9,11 @@ import pytest
 import torch
 
 from devlearn.cli import main
-from devlearn.config.run_config import default_config, from_dict, to_dict
+from devlearn.config.run_config import from_dict, to_dict
 from devlearn.env import BehaviorEnv
 from devlearn.evaluation.export import DeterministicPolicy, export_policy, load_policy
 from devlearn.plugins import PluginRegistry
+from devlearn.testing import run_config
 from devlearn.training.checkpoint import (
     FORMAT,
     Checkpoint,
@@ -64,7 +65,7 @@ def record(behavior, steps: int = 4) -> dict[str, np.ndarray]:
 def fresh_checkpoint(name: str, registry, path: Path, overrides=(), legacy=False) -> Path:
     """A checkpoint of an untrained policy in today's default (shared) layout, or as
     ``overrides`` configure it; ``legacy``: its config saved without a network section."""
-    cfg = default_config(registry.behavior(name), list(overrides))
+    cfg = run_config(registry.behavior(name), list(overrides))
     behavior = registry.create(name, cfg.behavior)
     env = BehaviorEnv(behavior, 0, training=False)
     obs = env.reset()

@@ -14,8 +14,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "env"))
 
 from tiny_behaviors import NoveltyBehavior, StepNovelty  # noqa: E402
 
-from devlearn.config.run_config import default_config  # noqa: E402
-from devlearn.testing import registry_for  # noqa: E402
+from devlearn.testing import registry_for, run_config  # noqa: E402
 from devlearn.testing.fake_infant import fake_infant_factory  # noqa: E402
 from devlearn.training import train  # noqa: E402
 
@@ -39,5 +38,5 @@ class RankBehavior(NoveltyBehavior):
 if __name__ == "__main__":
     out, steps = sys.argv[1], int(sys.argv[2])
     top = {"num_envs": 4, "workers": 0, "save_interval": 1, "total_steps": steps}
-    cfg = default_config(RankBehavior, out_dir=out, **top)
+    cfg = run_config(RankBehavior, out_dir=out, **top)
     train(cfg, registry_for(RankBehavior), infant_factory=fake_infant_factory, progress=False)

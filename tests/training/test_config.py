@@ -10,12 +10,12 @@ import tiny_run
 from devlearn.api.errors import UsageError
 from devlearn.config.run_config import (
     RunConfig,
-    default_config,
     from_dict,
     to_dict,
     to_rsl_rl,
 )
 from devlearn.config.values import apply_overrides, valid_keys
+from devlearn.testing import run_config
 from devlearn.testing.fake_infant import TinyBehavior, TinyConfig
 
 
@@ -100,7 +100,7 @@ def test_override_errors_are_clear(override, message):
 
 
 def test_precedence_defaults_behaviour_cli_set():
-    cfg = default_config(TinyBehavior, ["ppo.num_mini_batches=4"], num_envs=3, seed=None)
+    cfg = run_config(TinyBehavior, ["ppo.num_mini_batches=4"], num_envs=3, seed=None)
     assert cfg.ppo.num_steps_per_env == 8  # from TinyBehavior.train_defaults()
     assert cfg.ppo.num_mini_batches == 4  # --set beats train_defaults
     assert cfg.num_envs == 3 and cfg.seed == 0
@@ -109,7 +109,7 @@ def test_precedence_defaults_behaviour_cli_set():
 
 
 def test_dict_round_trip_through_json():
-    cfg = default_config(TinyBehavior, ["behavior.target=0.25", "ppo.desired_kl=none"])
+    cfg = run_config(TinyBehavior, ["behavior.target=0.25", "ppo.desired_kl=none"])
     data = json.loads(json.dumps(to_dict(cfg)))
     again = from_dict(data, TinyBehavior)
     assert again == cfg
@@ -121,7 +121,7 @@ def test_legacy_defaults_fill_fields_an_old_saved_config_lacks(monkeypatch):
     # A field added after a run was saved: that run loads with the legacy value, a run saved
     # with the field keeps its own, and a config without a behaviour section gets defaults.
     monkeypatch.setattr(TinyConfig, "LEGACY_DEFAULTS", {"target": 0.9}, raising=False)
-    data = to_dict(default_config(TinyBehavior, ["behavior.target=0.25"]))
+    data = to_dict(run_config(TinyBehavior, ["behavior.target=0.25"]))
     assert from_dict(data, TinyBehavior).behavior.target == 0.25
     del data["behavior"]["target"]
     assert from_dict(data, TinyBehavior).behavior.target == 0.9

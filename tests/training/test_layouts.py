@@ -9,9 +9,10 @@ import pytest
 import torch
 import torch.nn as nn
 
-from devlearn.config.run_config import default_config, from_dict, to_dict
+from devlearn.config.run_config import from_dict, to_dict
 from devlearn.env import BehaviorEnv
 from devlearn.plugins import PluginRegistry
+from devlearn.testing import run_config
 from devlearn.training.checkpoint import (
     FORMAT,
     build_actor,
@@ -86,7 +87,7 @@ def saved_the_old_way(name: str, overrides: list[str], seed: int, registry):
     """A policy file's state as every run before the layouts saved it (a config without a
     network section), of a seeded actor moved off its initialisation like trained weights;
     and the actor and one observation."""
-    cfg = default_config(registry.behavior(name), overrides)
+    cfg = run_config(registry.behavior(name), overrides)
     behavior = registry.create(name, cfg.behavior)
     env = BehaviorEnv(behavior, 0, training=False)
     obs = env.reset()
@@ -163,7 +164,7 @@ def test_committed_shared_checkpoint_acts_as_trained(registry):
 def test_every_encoder_sees_images_in_zero_one(name, registry):
     """Through the real builder: a white image reaches each first layer as 1, not 1/255."""
     for legacy, white in ((False, 1.0), (True, 1.0 / 255.0)):
-        cfg = default_config(registry.behavior(name), [f"network.legacy_uint8_scale={legacy}"])
+        cfg = run_config(registry.behavior(name), [f"network.legacy_uint8_scale={legacy}"])
         behavior = registry.create(name, cfg.behavior)
         env = BehaviorEnv(behavior, 0, training=False)
         obs = env.reset()

@@ -9,7 +9,8 @@ import tiny_run
 import torch
 
 from devlearn.api.errors import UsageError
-from devlearn.config.run_config import default_config, from_dict, to_dict
+from devlearn.config.run_config import from_dict, to_dict
+from devlearn.testing import run_config
 from devlearn.testing.fake_infant import TinyBehavior
 from devlearn.training.distribution import BoundedGaussian, TanhSoftplusGaussian, inverse_softplus
 from devlearn.training.health import PATIENCE, HealthWatch, rollout_health
@@ -195,7 +196,7 @@ def test_a_run_records_health_figures_and_its_warnings(tmp_path):
         "moments._std",
         "moments.count",
     }
-    paper = default_config(TinyBehavior, ["ppo.normalize_rewards=false"])
+    paper = run_config(TinyBehavior, ["ppo.normalize_rewards=false"])
     assert paper.ppo.normalize_rewards is False
 
 

@@ -11,18 +11,19 @@ import tiny_run
 import torch
 
 from devlearn.api.errors import UsageError
+from devlearn.config.resolve import RunRequest, resolve_config, write_config_file
 from devlearn.config.run_config import to_dict
 from devlearn.env import BehaviorEnv
 from devlearn.testing.fake_infant import TinyBehavior
 from devlearn.training import train
-from devlearn.training.checkpoint import Checkpoint, observation_batch
-from devlearn.training.resolve import RunRequest, resolve_config, write_config_file
+from devlearn.training.checkpoint import Checkpoint, checkpoint_config, observation_batch
 
 REGISTRY = tiny_run.registry()
 
 
 def resolve(*overrides: str, **fields) -> object:
-    return resolve_config(RunRequest("tiny", list(overrides), **fields), REGISTRY)
+    request = RunRequest("tiny", list(overrides), **fields)
+    return resolve_config(request, REGISTRY, checkpoint_config)
 
 
 @pytest.fixture(scope="module")
@@ -80,7 +81,15 @@ def test_every_value_is_checked_once_with_what_is_valid(fields, message):
 )
 def test_options_that_exclude_each_other_or_name_nothing_are_refused(fields, message):
     with pytest.raises(UsageError, match=message):
-        resolve_config(RunRequest("tiny", **fields), REGISTRY)
+        resolve_config(RunRequest("tiny", **fields), REGISTRY, checkpoint_config)
+
+
+def test_only_a_start_from_needs_the_checkpoint_reader():
+    # config sits below training: resolving reads no checkpoint unless --from asks, and then
+    # through the reader the caller passes (so `devlearn config` loads no torch:
+    # tests/cli/test_startup.py)
+    with pytest.raises(TypeError, match="start_from needs read_checkpoint"):
+        resolve_config(RunRequest("tiny", start_from="c.pt"), REGISTRY)
 
 
 def test_resume_keeps_the_runs_config_and_seed(trained):
@@ -99,7 +108,7 @@ def test_from_starts_with_the_checkpoints_config_then_preset_top_and_overrides(t
     assert (cfg.behavior.target, cfg.behavior.stage_steps, cfg.seed) == (0.7, 7, 8)
     assert (cfg.start_from, cfg.out_dir) == (source, "b")
     with pytest.raises(UsageError, match="trained for 'tiny', not 'other'"):
-        resolve_config(RunRequest("other", start_from=source), REGISTRY)
+        resolve_config(RunRequest("other", start_from=source), REGISTRY, checkpoint_config)
 
 
 def test_a_config_file_starts_a_run_with_exactly_its_config(tmp_path):

@@ -15,9 +15,8 @@ import torch
 
 import devlearn
 from devlearn.api.errors import RunStopped, UsageError
-from devlearn.config.run_config import default_config
 from devlearn.env.guards import GuardError
-from devlearn.testing import registry_for
+from devlearn.testing import registry_for, run_config
 from devlearn.testing.fake_infant import TinyBehavior, TinyConfig, fake_infant_factory
 from devlearn.training import train
 from devlearn.training.checkpoint import (
@@ -170,7 +169,7 @@ class BadTiny(TinyBehavior):
 def bad_config(out: Path, *overrides: str, **top):
     """The bad behaviour's config: 4 envs x 8 steps per iteration, in process by default."""
     top = {"num_envs": 4, "workers": 0, "save_interval": 1, **top}
-    return default_config(
+    return run_config(
         BadTiny, list(overrides), out_dir=str(out), total_steps=100_000, **top
     )
 

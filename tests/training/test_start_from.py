@@ -11,15 +11,16 @@ import tiny_run
 import torch
 
 from devlearn.api.errors import UsageError
+from devlearn.config.resolve import RunRequest, load_run_config, resolve_config
 from devlearn.config.values import apply_overrides
 from devlearn.training import train
-from devlearn.training.checkpoint import load_checkpoint
-from devlearn.training.resolve import RunRequest, load_run_config, resolve_config
+from devlearn.training.checkpoint import checkpoint_config, load_checkpoint
 
 
 def config_from_checkpoint(path: Path, behavior: str):
     """The config ``devlearn run BEHAVIOR --from PATH`` starts from, before its options."""
-    return resolve_config(RunRequest(behavior, start_from=str(path)), tiny_run.registry())
+    request = RunRequest(behavior, start_from=str(path))
+    return resolve_config(request, tiny_run.registry(), checkpoint_config)
 
 
 def rows(run_dir: Path) -> list[dict]:

@@ -29,10 +29,10 @@ def registry():
 
 def config(out_dir, total_steps: int = 256, *overrides: str, **top):
     """The tiny behaviour's config: 4 envs x 8 steps per iteration (32 env steps)."""
-    from devlearn.config.run_config import default_config
+    from devlearn.testing import run_config
 
     top = {"num_envs": 4, "workers": 0, "save_interval": 1, **top}
-    return default_config(
+    return run_config(
         TinyBehavior, list(overrides), out_dir=str(out_dir), total_steps=total_steps, **top
     )
 

@@ -18,11 +18,15 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import train  # noqa: E402
 from sb3_vec_env import GymnasiumVecEnv  # noqa: E402
 
-from devlearn.cli import main as devlearn  # noqa: E402
-from devlearn.evaluation.scripted_policy import ScriptedPolicy  # noqa: E402
 from devlearn.gym.vector import DevlearnVectorEnv  # noqa: E402
-from devlearn.plugins import PluginRegistry  # noqa: E402
-from devlearn.testing import TinyBehavior, fake_infant_factory, registry_for  # noqa: E402
+from devlearn.testing import (  # noqa: E402
+    PluginRegistry,
+    TinyBehavior,
+    fake_infant_factory,
+    open_scripted_policy,
+    registry_for,
+    run_command,
+)
 
 
 def test_sb3_sees_the_final_observation_and_the_next_episode():
@@ -63,7 +67,7 @@ def test_sb3_sees_the_final_observation_and_the_next_episode():
 
 @pytest.mark.slow
 @pytest.mark.parametrize("algo", ["ppo", "sac"])
-def test_sb3_trains_self_touch_and_devlearn_eval_scores_it(algo, tmp_path, capsys):
+def test_sb3_trains_self_touch_and_devlearn_eval_scores_it(algo, tmp_path):
     out = tmp_path / algo
     tiny = ["--envs", "2", "--workers", "0", "--net", "32", "--threads", "1", "--seed", "2"]
     record = train.main(["--algo", algo, "--steps", "2000", "--out", str(out), *tiny])
@@ -75,7 +79,7 @@ def test_sb3_trains_self_touch_and_devlearn_eval_scores_it(algo, tmp_path, capsy
     with open(out / "vecnormalize.pkl", "rb") as f:
         normalizer = pickle.load(f)
     model = train.ALGORITHMS[algo].load(out / "model.zip", device="cpu")
-    scripted = ScriptedPolicy.open(out / "policy.pt", PluginRegistry(), "self_touch")
+    scripted = open_scripted_policy(out / "policy.pt", PluginRegistry(), "self_touch")
     rng = np.random.default_rng(0)
     for _ in range(3):
         obs = {
@@ -84,10 +88,10 @@ def test_sb3_trains_self_touch_and_devlearn_eval_scores_it(algo, tmp_path, capsy
         }
         expected, _ = model.predict(normalizer.normalize_obs(obs), deterministic=True)
         assert scripted.act(obs) == pytest.approx(expected, abs=1e-5)
-    capsys.readouterr()
     args = ["eval", "self_touch", "--checkpoint", str(out), "--episodes", "1", "--json"]
-    assert devlearn([*args, "--out", str(tmp_path / "eval")]) == 0
-    summary = json.loads(capsys.readouterr().out)
+    done = run_command(*args, "--out", str(tmp_path / "eval"))
+    assert done.code == 0, done.err
+    summary = json.loads(done.out)
     assert summary["learner"] == f"sb3_{algo}" and summary["training_seed"] == 2
     assert summary["checkpoint_env_steps"] == record["env_steps"]
     assert summary["checkpoint"] == str(out / "policy.pt")

@@ -5,8 +5,7 @@ from __future__ import annotations
 import pytest
 from devlearn_curiosity import RND, ForwardModel, ForwardModelConfig, RNDConfig
 
-from devlearn.plugins import PluginRegistry
-from devlearn.testing import check_learned_reward
+from devlearn.testing import PluginRegistry, check_learned_reward
 
 HAND_REGARD_SHAPES = {"left_eye": (16, 16, 3), "right_eye": (16, 16, 3), "proprioception": (9,)}
 

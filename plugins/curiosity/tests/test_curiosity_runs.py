@@ -8,12 +8,8 @@ from pathlib import Path
 import pytest
 from devlearn_curiosity import RND, ForwardModel
 
-from devlearn.cli import main
-from devlearn.config.run_config import default_config
-from devlearn.testing import registry_for
+from devlearn.testing import load_checkpoint, registry_for, run_command, run_config, train
 from devlearn.testing.fake_infant import TinyBehavior, fake_infant_factory
-from devlearn.training import train
-from devlearn.training.checkpoint import load_checkpoint
 
 
 def rows(run_dir: Path) -> list[dict]:
@@ -27,7 +23,7 @@ def test_both_terms_train_and_resume_with_worker_processes(tmp_path):
     sets = ["curiosity=rnd,forward_model", "behavior.use_eyes=true", "learned.rnd.weight=0.5"]
 
     def run(steps: int, workers: int, resume: Path | None = None):
-        cfg = default_config(
+        cfg = run_config(
             TinyBehavior,
             sets,
             out_dir=str(out),
@@ -92,10 +88,13 @@ def test_hand_regard_trains_and_resumes_with_curiosity(tmp_path, term):
         "--set",
         "ppo.num_learning_epochs=1",
     ]
-    # in this process: the CLI's own start-up is tested by a subprocess in tests/cli
-    # (test_readme runs the README's `devlearn run hand_regard`); four more cost ~20 s
-    assert main([*base, "--steps", "16", "--out", str(out), *sets]) == 0
-    assert main([*base, "--steps", "32", "--resume", str(out)]) == 0
+    # as a user runs them (a new process each): a run, then its resume
+    for args in (
+        ["--steps", "16", "--out", str(out), *sets],
+        ["--steps", "32", "--resume", str(out)],
+    ):
+        done = run_command(*base, *args)
+        assert done.code == 0, done.err
     lines = rows(out)
     assert [r["step"] for r in lines] == [16, 32]
     assert all(r[f"reward/{term}/raw"] > 0 for r in lines)

@@ -20,7 +20,7 @@ from devlearn_hand_regard.babbling import BabblingData, mirror_signs, posture_jo
 from devlearn_hand_regard.detector import DetectorParams, HandDetector
 from synthetic import draw
 
-from devlearn.config.run_config import from_dict
+from devlearn.testing.runs import from_dict
 
 BLOCKS = np.array([[12.0, 52.0], [32.0, 56.0], [52.0, 50.0]])
 NAMES = ["head_swivel", "head_tilt", "left_shoulder_flexion", "left_elbow", "left_wrist_flexion"]

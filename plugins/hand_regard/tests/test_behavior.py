@@ -13,7 +13,7 @@ from devlearn_hand_regard.detector import DetectorParams
 from fake_sitting import LEFT_ARM, RIGHT_ARM, FakeSittingInfant
 
 from devlearn.api.errors import UsageError
-from devlearn.env import BehaviorEnv
+from devlearn.testing.envs import BehaviorEnv
 
 
 @pytest.fixture()
@@ -208,7 +208,7 @@ def test_proprio_policy_sees_the_detector_output(behavior):
 
 
 def test_scene_start_and_policy_defaults_and_legacy():
-    from devlearn.config.run_config import from_dict
+    from devlearn.testing.runs import from_dict
 
     behavior = HandRegard()
     assert behavior.scene == "sitting_babybench" and HandRegard.scene == "sitting_babybench"
@@ -226,12 +226,12 @@ def test_scene_start_and_policy_defaults_and_legacy():
 
 
 def test_demonstration_by_default_and_the_paper_preset():
-    from devlearn.config.run_config import default_config
+    from devlearn.testing import run_config
 
-    demo = default_config(HandRegard)
+    demo = run_config(HandRegard)
     assert demo.total_steps == 30_000 and demo.behavior.policy == "proprio"
     assert (demo.behavior.left_arm_steps, demo.behavior.right_arm_steps) == (3_000, 3_000)
-    paper = default_config(HandRegard, preset="paper")
+    paper = run_config(HandRegard, preset="paper")
     assert paper.total_steps == 1_850_000 and paper.behavior.policy == "cnn"
     assert (paper.behavior.left_arm_steps, paper.behavior.both_arms_steps) == (175_000, 1_500_000)
 
@@ -239,20 +239,19 @@ def test_demonstration_by_default_and_the_paper_preset():
 def test_stage_lengths_scale_with_the_run_unless_set():
     """A run of N steps goes through all three stages (10% + 10% + the rest, as the 614,400-step
     experiments did); --set and the paper preset keep their own lengths."""
-    from devlearn.plugins import PluginRegistry
-    from devlearn.training.resolve import RunRequest, resolve_config
+    from devlearn.testing import PluginRegistry, run_config
 
     registry = PluginRegistry()
 
-    def stages(**request):
-        b = resolve_config(RunRequest("hand_regard", **request), registry).behavior
+    def stages(overrides=(), preset="", **top):
+        b = run_config(HandRegard, overrides, preset, registry=registry, **top).behavior
         return b.left_arm_steps, b.right_arm_steps, b.both_arms_steps
 
     assert stages() == (3_000, 3_000, 24_000)  # the demonstration
-    assert stages(top={"total_steps": 614_400}) == (61_440, 61_440, 491_520)
+    assert stages(total_steps=614_400) == (61_440, 61_440, 491_520)
     assert stages(preset="paper") == (175_000, 175_000, 1_500_000)
     set_left = ["behavior.left_arm_steps=5000"]
-    assert stages(top={"total_steps": 614_400}, overrides=set_left) == (5_000, 61_440, 491_520)
+    assert stages(set_left, total_steps=614_400) == (5_000, 61_440, 491_520)
 
 
 def test_an_unusable_detector_file_is_one_line(tmp_path):

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 from devlearn_hand_regard import HandRegard, HandRegardConfig
 
+from devlearn import build_infant
 from devlearn.api.errors import UsageError
-from devlearn.env.behavior_env import BehaviorEnv
-from devlearn.infant import build_infant
+from devlearn.testing.envs import BehaviorEnv
 
 RESULTS = Path(__file__).resolve().parents[3] / "results" / "hand_regard"
 
@@ -120,8 +120,8 @@ def old_run_policy(detector_file: Path) -> dict:
     config (old scene, random starts; its policy file is in git history since 2d704d9) with
     an actor of that config and the detector among its artifacts. The weights are fresh: these
     tests check the evaluation protocol, not what the policy does."""
-    from devlearn.config.run_config import from_dict
-    from devlearn.training.checkpoint import FORMAT, build_actor
+    from devlearn.testing import policy_file, policy_network
+    from devlearn.testing.runs import from_dict
 
     saved = json.loads((RESULTS / "run" / "config.json").read_text())
     saved["behavior"]["detector_file"] = str(detector_file)
@@ -131,27 +131,15 @@ def old_run_policy(detector_file: Path) -> dict:
     try:
         env.set_stage(behavior.eval_stage())
         obs = env.reset()
-        actor = build_actor(cfg, behavior, obs, env.action_dim)
-        artifacts = behavior.policy_artifacts()
+        actor = policy_network(cfg, behavior, obs, env.action_dim)
     finally:
         env.close()
-    return {
-        "format": FORMAT,
-        "behavior": "hand_regard",
-        "config": saved,
-        "policy_only": True,
-        "iteration": 0,
-        "env_steps": 0,
-        "actor_state_dict": actor.state_dict(),
-        "artifacts": artifacts,
-    }
+    return policy_file(saved, behavior, actor.state_dict())
 
 
 def test_relocated_run_folder_evaluates(tmp_path, detector_file):
     """A run whose config names its detector by an absolute path, moved after training."""
-    from devlearn.evaluation.evaluate import evaluate
-    from devlearn.plugins import PluginRegistry
-    from devlearn.training.checkpoint import save_atomic
+    from devlearn.testing import PluginRegistry, evaluate_policy, save_checkpoint
 
     state = old_run_policy(detector_file)
     original = tmp_path / "original"
@@ -159,7 +147,7 @@ def test_relocated_run_folder_evaluates(tmp_path, detector_file):
     detector = state.pop("artifacts")["hand_detector"]
     (original / "hand_detector.json").write_text(json.dumps(detector))
     state["config"]["behavior"]["detector_file"] = str(original / "hand_detector.json")
-    save_atomic(state, original / "checkpoint_latest.pt")  # as a training run leaves it
+    save_checkpoint(state, original / "checkpoint_latest.pt")  # as a training run leaves it
     moved = tmp_path / "moved" / "run"
     shutil.copytree(original, moved)
     shutil.rmtree(original)
@@ -169,7 +157,7 @@ def test_relocated_run_folder_evaluates(tmp_path, detector_file):
         infant.episode_steps = 30
         return infant
 
-    summary = evaluate(
+    summary = evaluate_policy(
         "hand_regard",
         moved,
         1,
@@ -188,12 +176,10 @@ def test_relocated_run_folder_evaluates(tmp_path, detector_file):
 
 def test_an_old_policy_file_evaluates_from_babybench_start(tmp_path, detector_file):
     """`devlearn eval hand_regard --start babybench` on a policy file of the old scene."""
-    from devlearn.evaluation.evaluate import evaluate
-    from devlearn.plugins import PluginRegistry
-    from devlearn.training.checkpoint import save_atomic
+    from devlearn.testing import PluginRegistry, evaluate_policy, save_checkpoint
 
     policy = tmp_path / "policy.pt"
-    save_atomic(old_run_policy(detector_file), policy)
+    save_checkpoint(old_run_policy(detector_file), policy)
     scenes = []
 
     def short(scene, **kwargs):
@@ -202,7 +188,7 @@ def test_an_old_policy_file_evaluates_from_babybench_start(tmp_path, detector_fi
         infant.episode_steps = 20
         return infant
 
-    summary = evaluate(
+    summary = evaluate_policy(
         "hand_regard",
         policy,
         1,
@@ -220,8 +206,7 @@ def test_an_old_policy_file_evaluates_from_babybench_start(tmp_path, detector_fi
 
 def test_eval_start_differs_from_the_training_start(tmp_path):
     """Trained from rest, evaluated (``--start stage``) from its ``eval_start``, babybench."""
-    from devlearn.evaluation.evaluate import evaluate
-    from devlearn.plugins import PluginRegistry
+    from devlearn.testing import PluginRegistry, evaluate_policy
 
     built = []
 
@@ -231,7 +216,7 @@ def test_eval_start_differs_from_the_training_start(tmp_path):
         infant.episode_steps = 5
         return infant
 
-    summary = evaluate(
+    summary = evaluate_policy(
         "hand_regard",
         None,
         1,

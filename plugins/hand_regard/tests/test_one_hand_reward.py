@@ -20,8 +20,8 @@ import pytest
 from devlearn_hand_regard import HandRegard, HandRegardConfig
 from devlearn_hand_regard.rewards import BilateralBalance, HandCount
 
+from devlearn import build_infant
 from devlearn.api.rewards import StepContext
-from devlearn.infant import build_infant
 
 DETECTOR = (
     Path(__file__).resolve().parents[3]

@@ -5,8 +5,8 @@ from __future__ import annotations
 import pytest
 from devlearn_hand_regard import HandRegard
 
-from devlearn.plugins import PluginRegistry
 from devlearn.testing import (
+    PluginRegistry,
     check_behavior,
     check_behavior_class,
     check_curriculum,
@@ -15,7 +15,7 @@ from devlearn.testing import (
 )
 
 try:
-    from devlearn.infant import build_infant  # noqa: F401
+    from devlearn import build_infant  # noqa: F401
 
     HAS_INFANT = True
 except ImportError:  # the body is built in parallel; until it lands these tests skip

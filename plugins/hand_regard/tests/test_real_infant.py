@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 try:
-    from devlearn.infant import build_infant
+    from devlearn import build_infant
 except ImportError:  # the body is built in parallel; until it lands these tests skip
     build_infant = None
 
@@ -56,7 +56,7 @@ def test_babbling_finds_arm_correlated_tracks(real):
 
 
 def test_no_toy_colour_is_hand_coloured(real):
-    from devlearn.infant.scenes import TOY_COLOURS
+    from devlearn.testing.fixtures import TOY_COLOURS
 
     detector = HandDetector(real[0])
     for rgba in TOY_COLOURS:  # flat, shaded and lit toy faces
@@ -86,8 +86,7 @@ def short_infant(scene, **kwargs):
 
 
 def test_tiny_training_run_and_eval(tmp_path, real):
-    from devlearn.evaluation.evaluate import evaluate
-    from devlearn.plugins import PluginRegistry
+    from devlearn.testing import PluginRegistry, evaluate_policy
 
     out = tmp_path / "run"
     out.mkdir()
@@ -128,7 +127,7 @@ def test_tiny_training_run_and_eval(tmp_path, real):
     # `devlearn eval`'s code path in process, on one short (200-step) episode.
     evaluation = tmp_path / "eval"
     video = evaluation / "episode.mp4"
-    summary = evaluate(
+    summary = evaluate_policy(
         "hand_regard",
         out / "checkpoint_latest.pt",
         1,

@@ -10,7 +10,7 @@ from devlearn_hand_regard.calibration import calibrate
 from devlearn_hand_regard.detector import HandDetector
 from devlearn_hand_regard.measure import held_out, score
 
-from devlearn.infant import build_infant
+from devlearn import build_infant
 
 pytestmark = pytest.mark.slow
 CALIBRATION_STEPS = 2500
@@ -66,7 +66,7 @@ def test_skin_detector_finds_the_hands_but_not_only_them(skin):
 
 def test_skin_detector_fires_on_a_skin_coloured_forearm(skin):
     # A flat patch of the body's own skin colour is "hand" to the skin detector.
-    from devlearn.infant.body_table import SKIN_RGBA
+    from devlearn.testing.fixtures import SKIN_RGBA
 
     patch = np.full((8, 8, 3), np.array(SKIN_RGBA[:3]) * 255 * 0.9, np.uint8)
     assert HandDetector(skin[0]).colour_mask(patch).mean() > 0.5

@@ -11,8 +11,9 @@ from devlearn_hand_regard import HandRegard, HandRegardConfig
 from fake_sitting import FakeSittingInfant
 
 from devlearn.api.errors import UsageError
-from devlearn.config.run_config import default_config, from_dict, to_dict
-from devlearn.env.behavior_env import BehaviorEnv
+from devlearn.testing import run_config
+from devlearn.testing.envs import BehaviorEnv
+from devlearn.testing.runs import from_dict, to_dict
 
 ROOT = Path(__file__).resolve().parents[3]
 PAPER_TERMS = ["hand_count", "motion", "living_penalty"]
@@ -40,16 +41,17 @@ def test_bilateral_reward_adds_the_bilateral_term():
     assert terms[-1].weight == 0.5
 
 
-def test_reward_switch_on_the_command_line(capsys):
-    from devlearn.cli import main
+def test_reward_switch_on_the_command_line():
+    from devlearn.testing import run_command
 
-    assert main(["config", "hand_regard", "--json", "--set", "behavior.reward=paper"]) == 0
-    rows = {r["key"]: r for r in json.loads(capsys.readouterr().out)}
+    done = run_command("config", "hand_regard", "--json", "--set", "behavior.reward=paper")
+    assert done.code == 0, done.err
+    rows = {r["key"]: r for r in json.loads(done.out)}
     assert rows["behavior.reward"]["default"] == "paper"
     doc = rows["behavior.reward"]["doc"]
     assert "paper" in doc and "bilateral" in doc
     assert rows["behavior.appearance"]["doc"]
-    cfg = default_config(HandRegard, ["behavior.reward=paper"])
+    cfg = run_config(HandRegard, ["behavior.reward=paper"])
     assert _names(cfg.behavior) == PAPER_TERMS
 
 
@@ -91,7 +93,7 @@ def test_old_run_config_loads_with_mittens_and_the_bilateral_term():
     assert behavior.infant_options() == {"appearance": "mittens", "start": "rest"}
     assert behavior.scene == "sitting" and behavior.config.policy == "cnn"
     # A config saved now keeps its own values; no saved behaviour section: today's defaults.
-    fresh = default_config(HandRegard, ["behavior.appearance=skin", "behavior.reward=paper"])
+    fresh = run_config(HandRegard, ["behavior.appearance=skin", "behavior.reward=paper"])
     again = from_dict(to_dict(fresh), HandRegard).behavior
     assert (again.appearance, again.reward) == ("skin", "paper")
     assert from_dict({}, HandRegard).behavior.appearance == HandRegardConfig().appearance
@@ -108,4 +110,4 @@ def test_policy_spread_bound_reaches_the_network():
 def test_policy_spread_bound_must_exceed_the_initial_spread(max_std):
     """The core's NetworkSpec check answers for this behaviour too, at config time."""
     with pytest.raises(UsageError, match="max_std must be 0 \\(unbounded\\) or above init_std=0.5"):
-        default_config(HandRegard, [f"behavior.max_std={max_std}"])
+        run_config(HandRegard, [f"behavior.max_std={max_std}"])

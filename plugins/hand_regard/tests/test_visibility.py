@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from devlearn_hand_regard.visibility import axis_angles, pixel_counts, visible  # noqa: E402
 
-import devlearn.infant  # noqa: F401  (sets MUJOCO_GL before mujoco loads)
+import devlearn  # noqa: F401  (sets MUJOCO_GL before mujoco loads)
 
 # The eye at the origin looks along +x (its frame's -z); a 4 cm ball is the hand, a 10 cm box
 # the toy. Lying on the camera frame's x axis (image "right") puts the hand at 20 degrees.

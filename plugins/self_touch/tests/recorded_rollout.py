@@ -18,7 +18,7 @@ import sys
 
 import numpy as np
 
-from devlearn.env.behavior_env import EPISODE_RECORD
+from devlearn.testing.envs import EPISODE_RECORD
 
 NUM_ENVS, STEPS, EPISODE_STEPS, SEED = 2, 120, 40, 3
 
@@ -41,9 +41,8 @@ def record_rollout() -> dict[str, np.ndarray]:
     """
     from devlearn_self_touch import SelfTouch
 
-    from devlearn.env.behavior_env import step_batch
-    from devlearn.env.workers import make_envs
     from devlearn.testing import place_hand_on_body
+    from devlearn.testing.envs import make_envs, step_batch
 
     behavior = SelfTouch()
     # the memory f17ca1c had (each env its own); an unknown attribute there, so harmless

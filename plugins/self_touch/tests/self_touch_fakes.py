@@ -7,7 +7,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from devlearn import StepContext
-from devlearn.env.behavior_env import EPISODE_RECORD
+from devlearn.testing.envs import EPISODE_RECORD
 
 TINY_RUN = ["env.action_repeat=1", "ppo.num_steps_per_env=20", "ppo.num_mini_batches=2"]
 """One iteration is one 20-step episode per env (SwappingInfant's script), two minibatches."""
@@ -164,11 +164,9 @@ def train_swapping(out, overrides=(), steps: int = 40, workers: int = 2) -> None
     iteration, one episode per env) in ``workers`` worker processes, into ``out``."""
     from devlearn_self_touch import SelfTouch
 
-    from devlearn.config.run_config import default_config
-    from devlearn.testing import registry_for
-    from devlearn.training import train
+    from devlearn.testing import registry_for, run_config, train
 
-    cfg = default_config(
+    cfg = run_config(
         SelfTouch, [*TINY_RUN, *overrides], out_dir=str(out), num_envs=2, workers=workers
     )
     cfg.total_steps = steps

@@ -8,11 +8,10 @@ from devlearn_self_touch import SelfTouch, SelfTouchConfig
 from per_env_rewards import per_env_reward_terms
 from self_touch_fakes import FakeInfant, ScriptedInfant, same_info
 
+from devlearn import build_infant
 from devlearn.api.behavior import Behavior
-from devlearn.env.behavior_env import BehaviorEnv, step_batch
-from devlearn.env.workers import make_envs
-from devlearn.infant import build_infant
 from devlearn.testing import ConformanceError, check_batched_observations, place_hand_on_body
+from devlearn.testing.envs import BehaviorEnv, make_envs, step_batch
 
 SOURCES = ("hands", "threshold", "hands_or_threshold")
 

@@ -9,13 +9,13 @@ from per_env_rewards import per_env_reward_terms
 from self_touch_fakes import ScriptedInfant, same_info
 
 from devlearn import StepContext
-from devlearn.env.behavior_env import (
+from devlearn.testing.envs import (
     BehaviorEnv,
+    make_envs,
     share_batched_terms,
     step_batch,
     term_values,
 )
-from devlearn.env.workers import make_envs
 
 
 def recorded_steps(rng, num_envs: int, steps: int, episode: int):

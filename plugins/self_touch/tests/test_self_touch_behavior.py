@@ -13,7 +13,7 @@ from devlearn_self_touch.body_map import body_map, hand_touched_parts, sparse_bo
 from self_touch_fakes import FakeInfant, make_ctx
 
 from devlearn import Behavior, Curriculum
-from devlearn.plugins import PluginRegistry
+from devlearn.testing import PluginRegistry
 
 
 def test_entry_point_is_declared_and_registers_self_touch():

@@ -9,40 +9,38 @@ import pytest
 from devlearn_self_touch import SelfTouch
 
 from devlearn.api.errors import UsageError
-from devlearn.config.run_config import RunConfig, default_config, from_dict, to_dict
-from devlearn.env import BehaviorEnv
-from devlearn.plugins import PluginRegistry
-from devlearn.training.checkpoint import load_actor
-from devlearn.training.resolve import load_run_config
+from devlearn.testing import PluginRegistry, policy_network, run_config
+from devlearn.testing.envs import BehaviorEnv
+from devlearn.testing.runs import RunConfig, from_dict, load_run_config, to_dict
 
 ROOT = Path(__file__).resolve().parents[3]
 RESULTS = ROOT / "results/self_touch"
 
 
 def test_default_is_the_supported_recipe_and_a_short_run():
-    cfg = default_config(SelfTouch)
+    cfg = run_config(SelfTouch)
     assert (cfg.behavior.max_std, cfg.behavior.lifetime_memory) == (1.0, "shared")
     assert cfg.total_steps == RunConfig.total_steps  # the README's few-minute run
     assert cfg.preset == ""
 
 
 def test_paper_preset_gives_the_papers_values():
-    cfg = default_config(SelfTouch, preset="paper")
+    cfg = run_config(SelfTouch, preset="paper")
     assert (cfg.behavior.max_std, cfg.total_steps, cfg.preset) == (0.0, 8_000_000, "paper")
     assert cfg.behavior.lifetime_memory == "shared"  # the paper's one agent
     assert (cfg.behavior.fixed_pose_steps, cfg.behavior.curriculum) == (4_000_000, "two_stage")
     # the command line still wins over the preset
-    cfg = default_config(SelfTouch, ["behavior.max_std=2"], preset="paper", total_steps=4096)
+    cfg = run_config(SelfTouch, ["behavior.max_std=2"], preset="paper", total_steps=4096)
     assert (cfg.behavior.max_std, cfg.total_steps) == (2.0, 4096)
     with pytest.raises(UsageError, match="unknown preset 'papr' for self_touch; valid: paper"):
-        default_config(SelfTouch, preset="papr")
+        run_config(SelfTouch, preset="papr")
     with pytest.raises(UsageError, match="'preset' is set with --preset NAME"):
-        default_config(SelfTouch, ["preset=paper"])
+        run_config(SelfTouch, ["preset=paper"])
 
 
 def test_a_new_config_loads_back_with_its_own_values():
     """LEGACY_DEFAULTS fill only what a saved config lacks."""
-    cfg = from_dict(to_dict(default_config(SelfTouch)), SelfTouch)
+    cfg = from_dict(to_dict(run_config(SelfTouch)), SelfTouch)
     assert (cfg.behavior.max_std, cfg.behavior.lifetime_memory) == (1.0, "shared")
 
 
@@ -63,8 +61,6 @@ def test_the_old_runs_policy_is_rebuilt_with_its_unbounded_spread():
     """results/self_touch/run was trained with the paper's softplus spread (~1,000 by the end;
     its policy file is in git history since 2d704d9): a policy of its saved config, rebuilt
     after the default became 1.0, still has that spread."""
-    from devlearn.training.checkpoint import build_actor
-
     registry = PluginRegistry()
     cfg = from_dict(json.loads((RESULTS / "run/config.json").read_text()), SelfTouch)
     assert (cfg.behavior.max_std, cfg.behavior.lifetime_memory) == (0.0, "per_env")
@@ -73,8 +69,8 @@ def test_the_old_runs_policy_is_rebuilt_with_its_unbounded_spread():
     try:
         env.set_stage(behavior.eval_stage())
         obs = env.reset()
-        saved = build_actor(cfg, behavior, obs, env.action_dim).state_dict()
-        actor = load_actor(cfg, {"actor_state_dict": saved}, behavior, obs, env.action_dim)
+        saved = policy_network(cfg, behavior, obs, env.action_dim).state_dict()
+        actor = policy_network(cfg, behavior, obs, env.action_dim, weights=saved)
     finally:
         env.close()
     assert actor.distribution.max_std == 0.0
@@ -83,4 +79,4 @@ def test_the_old_runs_policy_is_rebuilt_with_its_unbounded_spread():
 def test_a_spread_bound_below_the_initial_spread_is_a_usage_error():
     """The core's NetworkSpec check answers at config time, naming the valid values."""
     with pytest.raises(UsageError, match="max_std must be 0 \\(unbounded\\) or above init_std=0.5"):
-        default_config(SelfTouch, ["behavior.max_std=0.3"])
+        run_config(SelfTouch, ["behavior.max_std=0.3"])

@@ -12,12 +12,9 @@ from devlearn_self_touch.rewards import ContactNovelty, TouchNovelty
 from self_touch_fakes import SwappingInfant, make_ctx, train_swapping
 
 from devlearn import BatchContext
-from devlearn.config.run_config import default_config
-from devlearn.env import DevVecEnv
-from devlearn.testing import registry_for
-from devlearn.training import train
-from devlearn.training.checkpoint import load_checkpoint
-from devlearn.training.resolve import load_run_config
+from devlearn.testing import load_checkpoint, registry_for, run_config, train
+from devlearn.testing.envs import DevVecEnv
+from devlearn.testing.runs import load_run_config
 
 GROUPS = np.zeros(68, bool)
 GROUPS[:10] = True  # SwappingInfant's env 0 discovers regions 0-4, env 1 regions 5-9
@@ -125,7 +122,7 @@ def test_same_seed_and_worker_count_same_numbers(tmp_path):
     drop = {"steps_per_s", "collect_s", "update_s"}  # wall-clock timings
     runs = []
     for name in ("a", "b"):
-        cfg = default_config(SelfTouch, overrides, out_dir=str(tmp_path / name), workers=2)
+        cfg = run_config(SelfTouch, overrides, out_dir=str(tmp_path / name), workers=2)
         cfg.num_envs, cfg.total_steps = 2, 80
         train(cfg, registry, infant_factory=SwappingInfant, progress=False)
         lines = (tmp_path / name / "metrics.jsonl").read_text().splitlines()

@@ -12,10 +12,8 @@ from devlearn_self_touch import SelfTouch, SelfTouchConfig
 from devlearn_self_touch.evaluation import TrainingScore
 from self_touch_fakes import SwappingInfant, make_ctx, train_swapping
 
-from devlearn.testing import registry_for
-from devlearn.training import train
-from devlearn.training.checkpoint import load_checkpoint
-from devlearn.training.resolve import load_run_config
+from devlearn.testing import load_checkpoint, registry_for, train
+from devlearn.testing.runs import load_run_config
 
 
 def episode(left=(), right=()) -> np.ndarray:

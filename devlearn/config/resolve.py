@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 from devlearn.api.errors import UsageError
 from devlearn.config.checks import check_config
@@ -28,6 +28,26 @@ CONFIG_FILE = "config.json"
 RUN_CONFIG_FILE = "run_config.json"
 """The resolved config a sweep writes into a run's folder and starts the run from
 (``devlearn run BEHAVIOR --config RUN/run_config.json``)."""
+
+
+class CheckpointReader(Protocol):
+    """Reads the config a checkpoint was trained with, for ``--from`` (the one request that
+    needs a checkpoint): :func:`devlearn.training.checkpoint.checkpoint_config`.
+
+    Passed in by the caller, because reading a checkpoint is the training layer's (torch,
+    the checkpoint format) and config sits below it: resolving any other request loads no
+    torch (``devlearn config`` stays light).
+    """
+
+    def __call__(self, path: str, registry: PluginRegistry, behavior: str) -> RunConfig:
+        """The config checkpoint ``path`` was trained with (unchecked), which must train
+        ``behavior`` (empty: any installed behaviour).
+
+        Raises:
+            UsageError: A missing, corrupt or incomplete checkpoint, or one of another
+                behaviour.
+        """
+        ...
 
 
 @dataclass
@@ -63,16 +83,26 @@ class RunRequest:
     reads one: keys it lacks take the values old runs were trained with)."""
 
 
-def resolve_config(request: RunRequest, registry: PluginRegistry) -> RunConfig:
+def resolve_config(
+    request: RunRequest,
+    registry: PluginRegistry,
+    read_checkpoint: CheckpointReader | None = None,
+) -> RunConfig:
     """The run config ``request`` asks for, checked (every value in bounds, the learner's
     head, spread bounds and decision rate, the behaviour's ``network()``), ready for
-    :func:`~devlearn.training.train.train`.
+    :func:`~devlearn.training.train.train`. Every command that builds a run's config builds it
+    here (``devlearn run``, ``config``, ``sweep``, ``eval``'s baselines, ``bench``, the
+    Gymnasium envs), so each checks what ``devlearn run`` checks.
 
     - fresh: defaults < the behaviour's ``train_defaults()`` < preset < top < overrides;
     - ``resume``: the run's ``config.json`` < top < overrides; the seed stays the run's;
     - ``start_from``: the checkpoint's config < preset < top < overrides; ``start_from``
       records the checkpoint and ``out_dir`` is ``request.out_dir``;
     - ``config_file`` / ``saved``: that config < top < overrides.
+
+    ``read_checkpoint`` reads ``start_from``'s config
+    (:func:`devlearn.training.checkpoint.checkpoint_config`); only a request with
+    ``start_from`` needs it.
 
     Raises:
         UsageError: Options that exclude each other, an unknown behaviour or preset, a
@@ -104,7 +134,12 @@ def resolve_config(request: RunRequest, registry: PluginRegistry) -> RunConfig:
     if request.resume:
         cfg = _resumed(request, registry, top)
     elif request.start_from:
-        cfg = _branched(request, registry, top)
+        if read_checkpoint is None:
+            raise TypeError(
+                "resolve_config: a request with start_from needs read_checkpoint "
+                "(devlearn.training.checkpoint.checkpoint_config)"
+            )
+        cfg = _branched(request, registry, top, read_checkpoint)
     elif request.config_file or request.saved is not None:
         data = request.saved
         if data is None:
@@ -192,11 +227,13 @@ def _resumed(request: RunRequest, registry: PluginRegistry, top: dict[str, Any])
     return cfg
 
 
-def _branched(request: RunRequest, registry: PluginRegistry, top: dict[str, Any]) -> RunConfig:
-    from devlearn.training.checkpoint import RESUME_KEYS, Checkpoint
-
-    opened = Checkpoint.open(request.start_from, registry, request.behavior, RESUME_KEYS)
-    cfg = opened.config
+def _branched(
+    request: RunRequest,
+    registry: PluginRegistry,
+    top: dict[str, Any],
+    read_checkpoint: CheckpointReader,
+) -> RunConfig:
+    cfg = read_checkpoint(str(request.start_from), registry, request.behavior)
     if request.preset:
         apply_preset(cfg, registry.behavior(cfg.behavior_name), request.preset)
     apply_overrides(cfg, top)
