@@ -15,7 +15,7 @@ import re
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import pluggy
 
@@ -109,6 +109,28 @@ def entry_point_sources() -> list[PluginSource]:
     return sorted(sources, key=lambda s: s.name)
 
 
+_T = TypeVar("_T")
+
+
+def _registered_name(cls: object, base: type, hook: str, kind: str) -> str:
+    """The name of ``cls``, which hook ``hook`` registers: a TypeError unless ``cls`` is a
+    subclass of ``base`` (``kind`` in the message) with a lower_snake_case ``name``."""
+    if not (inspect.isclass(cls) and issubclass(cls, base)):
+        raise TypeError(f"{hook} got {cls!r}, not {kind}")
+    name = getattr(cls, "name", None)
+    if not isinstance(name, str) or not PLUGIN_NAME.match(name):
+        raise TypeError(f"{cls.__name__}.name must be a lower_snake_case string")
+    return name
+
+
+def _named(table: dict[str, _T], kind: str, name: str, none: str) -> _T:
+    """``table[name]``, or a UsageError naming the valid ones (``none`` when there are none)."""
+    if name not in table:
+        installed = ", ".join(sorted(table)) or none
+        raise UsageError(f"unknown {kind} '{name}'; installed: {installed}")
+    return table[name]
+
+
 class PluginRegistry:
     """Loads plugins, calls their hooks and holds what they registered.
 
@@ -180,11 +202,7 @@ class PluginRegistry:
 
     def _register_behaviors(self, info: PluginInfo) -> Callable[[type], None]:
         def register(behavior: type) -> None:
-            if not (inspect.isclass(behavior) and issubclass(behavior, Behavior)):
-                raise TypeError(f"register_behaviors got {behavior!r}, not a Behavior subclass")
-            name = getattr(behavior, "name", None)
-            if not isinstance(name, str) or not PLUGIN_NAME.match(name):
-                raise TypeError(f"{behavior.__name__}.name must be a lower_snake_case string")
+            name = _registered_name(behavior, Behavior, "register_behaviors", "a Behavior subclass")
             if not dataclasses.is_dataclass(getattr(behavior, "config_class", None)):
                 raise TypeError(f"{behavior.__name__}.config_class must be a dataclass")
             if self._claim("behavior", name, info):
@@ -197,11 +215,9 @@ class PluginRegistry:
         def register(term: type) -> None:
             from devlearn.api.learned import LearnedReward, LearnedRewardConfig
 
-            if not (inspect.isclass(term) and issubclass(term, LearnedReward)):
-                raise TypeError(f"register_learned_rewards got {term!r}, not a LearnedReward")
-            name = getattr(term, "name", None)
-            if not isinstance(name, str) or not PLUGIN_NAME.match(name):
-                raise TypeError(f"{term.__name__}.name must be a lower_snake_case string")
+            name = _registered_name(
+                term, LearnedReward, "register_learned_rewards", "a LearnedReward"
+            )
             config = getattr(term, "config_class", None)
             if not (inspect.isclass(config) and issubclass(config, LearnedRewardConfig)):
                 raise TypeError(f"{term.__name__}.config_class must subclass LearnedRewardConfig")
@@ -218,10 +234,7 @@ class PluginRegistry:
 
     def behavior(self, name: str) -> type[Behavior]:
         """Return the behaviour class called ``name``; raise UsageError listing the valid ones."""
-        if name not in self._behaviors:
-            installed = ", ".join(sorted(self._behaviors)) or "none (install a plugin)"
-            raise UsageError(f"unknown behavior '{name}'; installed: {installed}")
-        return self._behaviors[name]
+        return _named(self._behaviors, "behavior", name, "none (install a plugin)")
 
     def create(self, name: str, config: Any | None = None) -> Behavior:
         """Instantiate behaviour ``name`` with ``config`` (its default when None).
@@ -241,10 +254,7 @@ class PluginRegistry:
 
     def learned_reward(self, name: str) -> type[LearnedReward]:
         """Return the learned reward called ``name``; raise UsageError listing the valid ones."""
-        if name not in self._learned:
-            installed = ", ".join(sorted(self._learned)) or "none (install devlearn-curiosity)"
-            raise UsageError(f"unknown learned reward '{name}'; installed: {installed}")
-        return self._learned[name]
+        return _named(self._learned, "learned reward", name, "none (install devlearn-curiosity)")
 
     def plugin_of(self, behavior_name: str) -> PluginInfo:
         """Return the plugin that registered a behaviour."""

@@ -2,14 +2,12 @@
 
 from __future__ import annotations
 
-import types
-
 import numpy as np
 import pytest
 import torch
+from fake_plugins import fake_plugin
 from learned_terms import ForgetfulPredictor, LinearConfig, LinearPredictor
 
-from devlearn import hookimpl
 from devlearn.api.errors import UsageError
 from devlearn.api.learned import LearnedReward
 from devlearn.api.learned_update import RunningScale
@@ -69,15 +67,7 @@ def test_conformance_catches_a_term_that_forgets_its_optimiser():
 
 
 def _plugin(name: str, *terms) -> PluginSource:
-    module = types.ModuleType(name)
-
-    @hookimpl
-    def register_learned_rewards(register):
-        for t in terms:
-            register(t)
-
-    module.register_learned_rewards = register_learned_rewards
-    return PluginSource(name, module, f"dist-{name}", "1")
+    return fake_plugin(name, "register_learned_rewards", *terms)
 
 
 def test_registry_finds_learned_rewards_and_reports_clashes():

@@ -6,6 +6,7 @@ import dataclasses
 import types
 
 import pytest
+from fake_plugins import fake_plugin
 
 from devlearn import Behavior, hookimpl
 from devlearn.api.errors import UsageError
@@ -38,15 +39,7 @@ def _behavior(name: str) -> type[Behavior]:
 
 
 def _plugin(name: str, *behaviors: type[Behavior]) -> PluginSource:
-    module = types.ModuleType(name)
-
-    @hookimpl
-    def register_behaviors(register):
-        for b in behaviors:
-            register(b)
-
-    module.register_behaviors = register_behaviors
-    return PluginSource(name, module, f"dist-{name}", "1.2")
+    return fake_plugin(name, "register_behaviors", *behaviors, version="1.2")
 
 
 def _raising_loader():

@@ -72,7 +72,24 @@ class StepContext:
     stage: dict[str, Any] = field(default_factory=dict)
 
 
-class IntrinsicReward(ABC):
+class _RewardTerm:
+    """What both term contracts share: a name, a weight, and registration. The two contracts
+    (:class:`IntrinsicReward`, :class:`BatchedIntrinsicReward`) subclass this directly; every
+    class below them is a reward term, registered as Python defines it (``_TERM_CLASSES``)."""
+
+    name: str = "reward"
+    """Name used in logs (``reward/<name>``) and config."""
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if _RewardTerm not in cls.__bases__:  # a term, not one of the two contracts
+            _register_term(cls)
+
+    def __init__(self, weight: float = 1.0) -> None:
+        self.weight = float(weight)
+
+
+class IntrinsicReward(_RewardTerm, ABC):
     """A single intrinsic reward term, computed inside one environment.
 
     One instance lives in each environment, so its memory (e.g. "touched before") is that
@@ -86,16 +103,6 @@ class IntrinsicReward(ABC):
     A reward that is a model trained on batches of transitions (novelty, prediction error) is
     a :class:`~devlearn.api.learned.LearnedReward` instead: it lives in the learner, not here.
     """
-
-    name: str = "reward"
-    """Name used in logs (``reward/<name>``) and config."""
-
-    def __init_subclass__(cls, **kwargs: Any) -> None:
-        super().__init_subclass__(**kwargs)
-        _register_term(cls)
-
-    def __init__(self, weight: float = 1.0) -> None:
-        self.weight = float(weight)
 
     @abstractmethod
     def __call__(self, ctx: StepContext) -> float:
@@ -154,7 +161,7 @@ class BatchContext:
         return np.fromiter((c.step for c in self.contexts), np.int64, len(self.contexts))
 
 
-class BatchedIntrinsicReward(ABC):
+class BatchedIntrinsicReward(_RewardTerm, ABC):
     """A reward term computed once per step for all environments of a worker, as arrays.
 
     The batched form of :class:`IntrinsicReward`, for terms whose per-step Python cost matters:
@@ -182,15 +189,8 @@ class BatchedIntrinsicReward(ABC):
     into it, so loading any split of the saved envs gives the merged memory.
     """
 
-    name: str = "reward"
-    """Name used in logs (``reward/<name>``) and config."""
-
-    def __init_subclass__(cls, **kwargs: Any) -> None:
-        super().__init_subclass__(**kwargs)
-        _register_term(cls)
-
     def __init__(self, weight: float = 1.0) -> None:
-        self.weight = float(weight)
+        super().__init__(weight)
         self.num_envs = 0
 
     def bind(self, num_envs: int) -> None:

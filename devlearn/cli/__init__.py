@@ -1,4 +1,5 @@
-"""The ``devlearn`` command line: one sub-command per module in this package."""
+"""The ``devlearn`` command line: the sub-commands declared in ``commands.py``, each run by its
+module in this package."""
 
 from __future__ import annotations
 
@@ -8,34 +9,7 @@ import sys
 from typing import NoReturn
 
 from devlearn.api.errors import UsageError
-
-# Sub-command modules, each with add_parser(subparsers) and run(args, registry) -> int.
-COMMANDS = (
-    "run",
-    "evaluate",
-    "info",
-    "config",
-    "new",
-    "plugins",
-    "bench",
-    "picture",
-    "curve",
-    "export",
-    "slim",
-    "report",
-    "sweep",
-)
-
-
-def _load_commands() -> list:
-    modules = []
-    for name in COMMANDS:
-        try:
-            modules.append(importlib.import_module(f"devlearn.cli.{name}"))
-        except ModuleNotFoundError as exc:
-            if exc.name != f"devlearn.cli.{name}":
-                raise
-    return modules
+from devlearn.cli.commands import COMMANDS, OneOf
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -46,8 +20,9 @@ class OneLineParser(argparse.ArgumentParser):
         self.exit(2, f"devlearn: error: {message} (see `{self.prog} --help`)\n")
 
 
-def build_parser() -> tuple[argparse.ArgumentParser, dict]:
-    """Return the argument parser and a map from sub-command name to its module."""
+def build_parser() -> argparse.ArgumentParser:
+    """Return the argument parser of every sub-command in ``COMMANDS`` (importing none of
+    their modules)."""
     parser = OneLineParser(
         prog="devlearn",
         description="Developmental RL: a simulated infant learns body skills from curiosity.",
@@ -62,11 +37,16 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict]:
     subparsers = parser.add_subparsers(
         dest="command", metavar="COMMAND", parser_class=OneLineParser
     )
-    handlers = {}
-    for module in _load_commands():
-        for name in module.add_parser(subparsers):
-            handlers[name] = module
-    return parser, handlers
+    for command in COMMANDS:
+        p = subparsers.add_parser(command.name, help=command.help, description=command.description)
+        for entry in command.options:
+            if isinstance(entry, OneOf):
+                group = p.add_mutually_exclusive_group(required=entry.required)
+                for option in entry.options:
+                    group.add_argument(*option.flags, **option.kwargs)
+            else:
+                p.add_argument(*entry.flags, **entry.kwargs)
+    return parser
 
 
 def follow_parent() -> None:
@@ -93,7 +73,7 @@ def follow_parent() -> None:
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI; return the exit code (2 for bad input, with a one-line message)."""
     follow_parent()
-    parser, handlers = build_parser()
+    parser = build_parser()
     args = parser.parse_args(argv)
     if args.command is None:
         parser.print_help()
@@ -104,7 +84,8 @@ def main(argv: list[str] | None = None) -> int:
     for error in registry.errors:
         print(f"devlearn: warning: {error}", file=sys.stderr)
     try:
-        return int(handlers[args.command].run(args, registry) or 0)
+        command = next(c for c in COMMANDS if c.name == args.command)
+        return int(importlib.import_module(command.module).run(args, registry) or 0)
     except UsageError as exc:
         print(f"devlearn: error: {exc}", file=sys.stderr)
         return 2

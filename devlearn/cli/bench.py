@@ -5,175 +5,123 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 if TYPE_CHECKING:
     from devlearn.plugins import PluginRegistry
 
-# (key, label, unit, BabyBench reference on our machine kind, our target, higher is better).
-# BabyBench's self-touch figure is the one measured beside ours in one run (issue 14).
-ROWS = [
-    ("self_touch_steps_per_s", "self-touch env steps/s (1 process)", "/s", "283", ">= 4000", 1),
-    (
+
+class Row(NamedTuple):
+    """One figure of the table (higher is better for rates, ``/s``, and fractions, ``%``)."""
+
+    key: str
+    label: str
+    unit: str
+    reference: str = "-"
+    """BabyBench's figure on our machine kind ("-": none). Its self-touch figure is the one
+    measured beside ours in one run (issue 14)."""
+    target: str = "-"
+    """Our target ("-": none)."""
+
+
+ROWS = (
+    # one environment, in one process, against the physics alone (its ceiling)
+    Row("self_touch_steps_per_s", "self-touch env steps/s (1 process)", "/s", "283", ">= 4000"),
+    Row(
         "self_touch_steps_per_s_per_env_observations",
         "self-touch env, per-env facts and observations",
         "/s",
-        "-",
-        "-",
-        1,
     ),
-    ("self_touch_reference_steps_per_s", "self-touch env, previous code paths", "/s", "-", "-", 1),
-    ("self_touch_fraction_of_ceiling", "self-touch env / crib physics", "%", "8%", ">= 20%", 1),
-    ("hand_regard_steps_per_s", "hand-regard env steps/s (1 process)", "/s", "30", ">= 400", 1),
-    (
-        "hand_regard_reference_steps_per_s",
-        "hand-regard env, previous code paths",
-        "/s",
-        "-",
-        "-",
-        1,
+    Row("self_touch_reference_steps_per_s", "self-touch env, previous code paths", "/s"),
+    Row("self_touch_fraction_of_ceiling", "self-touch env / crib physics", "%", "8%", ">= 20%"),
+    Row("hand_regard_steps_per_s", "hand-regard env steps/s (1 process)", "/s", "30", ">= 400"),
+    Row("hand_regard_reference_steps_per_s", "hand-regard env, previous code paths", "/s"),
+    Row("hand_regard_fraction_of_ceiling", "hand-regard env / sitting physics", "%"),
+    Row("physics_crib_steps_per_s", "physics only, crib (the ceiling)", "/s", "3,500"),
+    Row("physics_sitting_steps_per_s", "physics only, sitting (the ceiling)", "/s"),
+    # one physics step and each sense
+    Row("physics_ms_per_step", "physics per step", "ms", "0.24"),
+    Row("touch_compiled_ms_per_step", "touch + hand contacts, compiled", "ms", "-", "<= 0.05"),
+    Row("touch_reference_ms_per_step", "touch, previous numpy path", "ms", "3"),
+    Row("touch_and_hands_reference_ms_per_step", "touch + hand contacts, numpy", "ms"),
+    Row("touch_ms_per_step", "touch per step (dense N x 3 vector)", "ms", "3"),
+    Row("touch_sparse_ms_per_step", "touch per step (sparse, self-touch)", "ms"),
+    Row("proprioception_ms_per_step", "proprioception per step", "ms"),
+    Row("render_ms_per_frame", "one 64x64 eye render", "ms", "several"),
+    # 16 environments: batched in one process, over workers, as Gymnasium vector envs
+    Row(
+        "self_touch_vec_steps_per_s_in_process", "self-touch 16 envs in this process, batched", "/s"
     ),
-    ("hand_regard_fraction_of_ceiling", "hand-regard env / sitting physics", "%", "-", "-", 1),
-    ("physics_crib_steps_per_s", "physics only, crib (the ceiling)", "/s", "3,500", "-", 1),
-    ("physics_sitting_steps_per_s", "physics only, sitting (the ceiling)", "/s", "-", "-", 1),
-    ("physics_ms_per_step", "physics per step", "ms", "0.24", "-", 0),
-    ("touch_compiled_ms_per_step", "touch + hand contacts, compiled", "ms", "-", "<= 0.05", 0),
-    ("touch_reference_ms_per_step", "touch, previous numpy path", "ms", "3", "-", 0),
-    ("touch_and_hands_reference_ms_per_step", "touch + hand contacts, numpy", "ms", "-", "-", 0),
-    ("touch_ms_per_step", "touch per step (dense N x 3 vector)", "ms", "3", "-", 0),
-    ("touch_sparse_ms_per_step", "touch per step (sparse, self-touch)", "ms", "-", "-", 0),
-    ("proprioception_ms_per_step", "proprioception per step", "ms", "-", "-", 0),
-    ("render_ms_per_frame", "one 64x64 eye render", "ms", "several", "-", 0),
-    (
-        "self_touch_vec_steps_per_s_in_process",
-        "self-touch 16 envs in this process, batched",
-        "/s",
-        "-",
-        "-",
-        1,
-    ),
-    (
+    Row(
         "self_touch_vec_steps_per_s_in_process_per_env_observations",
         "self-touch 16 envs in this process, per-env facts and observations",
         "/s",
-        "-",
-        "-",
-        1,
     ),
-    ("self_touch_vec_steps_per_s_1_workers", "self-touch 16 envs, 1 worker", "/s", "-", "-", 1),
-    (
+    Row("self_touch_vec_steps_per_s_1_workers", "self-touch 16 envs, 1 worker", "/s"),
+    Row(
         "self_touch_vec_steps_per_s_2_workers",
         "self-touch 16 envs, 2 workers",
         "/s",
         "-",
         ">= 6000",
-        1,
     ),
-    (
+    Row(
         "self_touch_vec_2_workers_fraction_of_ceiling",
         "self-touch 16 envs, 2 workers / (2 x crib physics)",
         "%",
-        "-",
-        "-",
-        1,
     ),
-    (
+    Row(
         "gym_vec_steps_per_s",
         "self-touch 16 envs, 2 workers, Gymnasium vector env (devlearn.gym)",
         "/s",
-        "-",
-        "-",
-        1,
     ),
-    (
+    Row(
         "gym_vec_devlearn_steps_per_s",
         "self-touch 16 envs, 2 workers, DevVecEnv (same turns)",
         "/s",
-        "-",
-        "-",
-        1,
     ),
-    (
-        "gym_vec_fraction_of_devlearn",
-        "Gymnasium vector env / DevVecEnv",
-        "%",
-        "-",
-        ">= 85%",
-        1,
-    ),
-    ("self_touch_train_steps_per_s", "self-touch training steps/s", "/s", "-", ">= 2500", 1),
-    ("hand_regard_train_steps_per_s", "hand-regard training steps/s", "/s", "-", ">= 60", 1),
-    ("self_touch_train_action_repeat", "self-touch physics steps per decision", "", "-", "-", 0),
-    (
-        "self_touch_train_steps_per_s_k1",
-        "self-touch training, a decision every step",
-        "/s",
-        "-",
-        "-",
-        1,
-    ),
-    ("hand_regard_train_action_repeat", "hand-regard physics steps per decision", "", "-", "-", 0),
-    (
-        "hand_regard_train_steps_per_s_k1",
-        "hand-regard training, a decision every step",
-        "/s",
-        "-",
-        "-",
-        1,
-    ),
-    ("self_touch_update_us_per_sample_old", "self-touch update/sample, old", "us", "-", "-", 0),
-    ("self_touch_update_us_per_sample", "self-touch update/sample", "us", "-", "<= 1/3 before", 0),
-    ("hand_regard_update_us_per_sample_old", "hand-regard update/sample, old", "us", "-", "-", 0),
-    ("hand_regard_update_us_per_sample", "hand-regard update/sample", "us", "-", "-", 0),
-    ("self_touch_train_steps_per_s_old", "self-touch training, before", "/s", "-", "-", 1),
-    (
+    Row("gym_vec_fraction_of_devlearn", "Gymnasium vector env / DevVecEnv", "%", "-", ">= 85%"),
+    # training: steps per second, decisions, the update's cost per sample
+    Row("self_touch_train_steps_per_s", "self-touch training steps/s", "/s", "-", ">= 2500"),
+    Row("hand_regard_train_steps_per_s", "hand-regard training steps/s", "/s", "-", ">= 60"),
+    Row("self_touch_train_action_repeat", "self-touch physics steps per decision", ""),
+    Row("self_touch_train_steps_per_s_k1", "self-touch training, a decision every step", "/s"),
+    Row("hand_regard_train_action_repeat", "hand-regard physics steps per decision", ""),
+    Row("hand_regard_train_steps_per_s_k1", "hand-regard training, a decision every step", "/s"),
+    Row("self_touch_update_us_per_sample_old", "self-touch update/sample, old", "us"),
+    Row("self_touch_update_us_per_sample", "self-touch update/sample", "us", "-", "<= 1/3 before"),
+    Row("hand_regard_update_us_per_sample_old", "hand-regard update/sample, old", "us"),
+    Row("hand_regard_update_us_per_sample", "hand-regard update/sample", "us"),
+    Row("self_touch_train_steps_per_s_old", "self-touch training, before", "/s"),
+    Row(
         "hand_regard_cnn_train_steps_per_s",
         "hand-regard training, the paper's CNN (1 thread)",
         "/s",
         "-",
         ">= 300 per core",
-        1,
     ),
-    (
-        "hand_regard_cnn_update_us_per_sample",
-        "hand-regard CNN update/sample (1 thread)",
-        "us",
-        "-",
-        "-",
-        0,
-    ),
-    ("hand_regard_train_steps_per_s_old", "hand-regard training, before", "/s", "-", "-", 1),
-    (
+    Row("hand_regard_cnn_update_us_per_sample", "hand-regard CNN update/sample (1 thread)", "us"),
+    Row("hand_regard_train_steps_per_s_old", "hand-regard training, before", "/s"),
+    # evaluation, building, start-up, memory
+    Row(
         "self_touch_eval_s_sequential",
         "devlearn eval self_touch (random policy; episodes: self_touch_eval_episodes), one env",
         "s",
-        "-",
-        "-",
-        0,
     ),
-    (
+    Row(
         "self_touch_eval_s",
         "devlearn eval self_touch, the same, automatic envs and workers",
         "s",
         "-",
         "<= 1/4 of one env",
-        0,
     ),
-    ("build_s", "environment build", "s", "19", "< 3", 0),
-    ("startup_help_s", "start-up: devlearn --help", "s", "-", "< 1.5", 0),
-    ("startup_plugins_s", "start-up: devlearn plugins", "s", "-", "< 1.5", 0),
-    ("startup_config_s", "start-up: devlearn config self_touch", "s", "-", "< 1.5", 0),
-    ("startup_info_s", "start-up: devlearn info self_touch", "s", "-", "< 1.5", 0),
-    ("peak_memory_mb", "peak memory", "MB", "-", "-", 0),
-]
-
-
-def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> list[str]:
-    """Register the ``bench`` sub-command."""
-    p = subparsers.add_parser("bench", help="measure environment and training speed")
-    p.add_argument("--json", action="store_true", help="print the figures as a JSON object")
-    p.add_argument("--quick", action="store_true", help="fewer steps (rougher figures)")
-    return ["bench"]
+    Row("build_s", "environment build", "s", "19", "< 3"),
+    Row("startup_help_s", "start-up: devlearn --help", "s", "-", "< 1.5"),
+    Row("startup_plugins_s", "start-up: devlearn plugins", "s", "-", "< 1.5"),
+    Row("startup_config_s", "start-up: devlearn config self_touch", "s", "-", "< 1.5"),
+    Row("startup_info_s", "start-up: devlearn info self_touch", "s", "-", "< 1.5"),
+    Row("peak_memory_mb", "peak memory", "MB"),
+)
 
 
 def format_table(result: dict) -> str:
@@ -184,7 +132,7 @@ def format_table(result: dict) -> str:
         "| measure | devlearn | BabyBench (reference) | target |",
         "|---|---|---|---|",
     ]
-    for key, label, unit, reference, target, _ in ROWS:
+    for key, label, unit, reference, target in ROWS:
         if key in result:
             value = result[key]
             if value is None:

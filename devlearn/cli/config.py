@@ -7,35 +7,12 @@ import json
 import textwrap
 from typing import TYPE_CHECKING
 
-from devlearn.cli.options import add_behavior, add_overrides, add_preset
 from devlearn.config.help import describe_keys
 from devlearn.config.resolve import RunRequest, resolve_config
 from devlearn.config.run_config import new_config
 
 if TYPE_CHECKING:
     from devlearn.plugins import PluginRegistry
-
-
-def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> list[str]:
-    """Register the ``config`` sub-command."""
-    p = subparsers.add_parser(
-        "config",
-        help="list a behaviour's config keys (type, default, meaning)",
-        description="List every key `devlearn run BEHAVIOR --set KEY=VALUE` accepts: the run's, "
-        "PPO's and the behaviour's own, with type, the value a run would use and its docstring. "
-        "Values set by the behaviour's train_defaults() are marked.",
-    )
-    add_behavior(p)
-    p.add_argument("--json", action="store_true", help="print a JSON list of keys")
-    add_overrides(
-        p,
-        "show the values after these overrides (checked as `devlearn run` would)",
-    )
-    add_preset(
-        p,
-        "show the values of one of the behaviour's presets (as `devlearn run --preset`)",
-    )
-    return ["config"]
 
 
 def run(args: argparse.Namespace, registry: PluginRegistry) -> int:

@@ -25,50 +25,6 @@ SMOOTH_MAX = 100_000
 """Largest ``--smooth`` window (iterations)."""
 
 
-def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> list[str]:
-    """Register the ``curve`` sub-command."""
-    p = subparsers.add_parser("curve", help="plot metrics of a run against environment steps")
-    p.add_argument(
-        "run_dirs",
-        type=Path,
-        nargs="+",
-        metavar="DIR",
-        help="run folders holding metrics.jsonl (several: one line each, e.g. an ablation), "
-        "or evaluation folders holding eval.json (together: one point per checkpoint)",
-    )
-    p.add_argument(
-        "--metric",
-        action="append",
-        default=None,
-        help="metrics.jsonl or eval.json key to plot (repeatable; default for runs: the "
-        "behaviour's headline, the reward, then its other metrics/* keys but counters; of "
-        "evaluations, the behaviour's headline and its per-episode mean)",
-    )
-    p.add_argument(
-        "--health",
-        action="store_true",
-        help="runs: also the learner's health (spread, saturated means, explained variance, "
-        "reward scale, learning rate, losses)",
-    )
-    p.add_argument(
-        "--vs",
-        action="append",
-        nargs="+",
-        type=Path,
-        default=None,
-        metavar="DIR",
-        help="another line to compare: evaluation folders of another run (repeatable)",
-    )
-    p.add_argument("--smooth", type=int, default=10, help="moving-average window (iterations)")
-    p.add_argument(
-        "--out",
-        type=Path,
-        help="PNG path (default: FIRST_DIR/learning_curve.png for runs; for evaluations "
-        "eval_curve.png in the folder holding them, e.g. RUN/eval_curve.png for RUN/eval_*)",
-    )
-    return ["curve"]
-
-
 def read_metrics(run_dir: Path) -> list[dict]:
     """Return the rows of ``run_dir/metrics.jsonl`` (one dict per iteration)."""
     path = run_dir / "metrics.jsonl"

@@ -11,92 +11,9 @@ from typing import TYPE_CHECKING, Any
 
 from devlearn.api.errors import UsageError
 from devlearn.cli.folders import removed_on_failure
-from devlearn.cli.options import add_behavior, add_overrides
 
 if TYPE_CHECKING:
     from devlearn.plugins import PluginRegistry
-
-
-def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> list[str]:
-    """Register the ``eval`` sub-command."""
-    p = subparsers.add_parser(
-        "eval",
-        help="evaluate a trained checkpoint or a baseline policy",
-        description="Run episodes in the behaviour's evaluation stage (a checkpoint's mean "
-        "action, or a zero / uniform-random / held-random baseline under the same protocol); "
-        "writes "
-        "eval.json (with the protocol) and the behaviour's pictures to --out.",
-    )
-    add_behavior(p)
-    source = p.add_mutually_exclusive_group(required=True)
-    source.add_argument(
-        "--checkpoint",
-        metavar="PATH",
-        help="checkpoint or policy file (.pt), or a run folder (its checkpoint_latest.pt)",
-    )
-    source.add_argument(
-        "--policy",
-        choices=("zero", "random", "held_random"),
-        help="baseline instead of a checkpoint: zero action, uniform random in [-1, 1] every "
-        "step, or held_random (uniform random actions held ~8 steps, as babbling)",
-    )
-    p.add_argument("--episodes", default="10", metavar="N", help="episodes to run (default 10)")
-    p.add_argument("--seed", default="0", metavar="S", help="seed of the initial poses")
-    p.add_argument(
-        "--envs",
-        metavar="N",
-        help="environments playing episodes at once (default: 4 per worker, 1 without "
-        "workers); the results are those of one environment playing every episode in order",
-    )
-    p.add_argument(
-        "--workers",
-        metavar="N",
-        help="worker processes the environments are split over (0: this process; default: "
-        "one per core when there are episodes enough to repay their start-up)",
-    )
-    p.add_argument(
-        "--start",
-        choices=("stage", "babybench", "rest", "random"),
-        default="stage",
-        help="where episodes start: stage (default): the behaviour's evaluation protocol "
-        "(self_touch: seeded random poses; hand_regard: babybench), or for a behaviour that "
-        "declares none, the curriculum stage where the policy trained; babybench (the scene's "
-        "settled state + 10 seeded random-action steps, as BabyBench's reset); rest (that "
-        "state alone, every episode: a deterministic policy then repeats one episode); "
-        "random (random joint angles: generalisation)",
-    )
-    p.add_argument(
-        "--action",
-        choices=("mean", "sample"),
-        default="mean",
-        help="a checkpoint's action: mean (deterministic, default) or sample (drawn from the "
-        "policy's distribution, seeded by --seed, as in training)",
-    )
-    add_overrides(
-        p,
-        "a baseline's config value, e.g. behavior.detector_file=runs/hr/hand_detector.json "
-        "(hand regard's baselines then score with a calibrated detector); repeatable. With "
-        "a checkpoint only infant.age_months=A: the body's age (0-24 months; default: the "
-        "age it last trained at), written to eval_A_months/ unless --out",
-    )
-    p.add_argument(
-        "--json", action="store_true", help="print every figure as JSON (eval.json's content)"
-    )
-    p.add_argument(
-        "--compare",
-        action="append",
-        default=[],
-        metavar="DIR",
-        help="a baseline's evaluation folder to show beside the headline (repeatable; default: "
-        "eval_BEHAVIOR_zero / _random / _held_random here, when they exist)",
-    )
-    p.add_argument("--video", metavar="PATH", help="write an MP4 of the first episode")
-    p.add_argument(
-        "--out",
-        metavar="DIR",
-        help="output directory (default CHECKPOINT_DIR/eval; baselines: eval_BEHAVIOR_POLICY)",
-    )
-    return ["eval"]
 
 
 EPISODES_MAX = 1_000_000

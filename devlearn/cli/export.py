@@ -6,28 +6,8 @@ import argparse
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from devlearn.cli.options import add_behavior
-
 if TYPE_CHECKING:
     from devlearn.plugins import PluginRegistry
-
-
-def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> list[str]:
-    """Register the ``export`` sub-command."""
-    p = subparsers.add_parser(
-        "export",
-        help="write a trained policy as ONNX or TorchScript",
-        description="Write the deterministic policy (observations to the mean action, in "
-        "[-1, 1]) of a checkpoint for use outside devlearn, e.g. on a robot. Inputs are the "
-        "behaviour's observations by name, batch first, in the dtypes it observes (uint8 "
-        "images, float32 otherwise); normalisation happens inside. ONNX needs the optional "
-        "packages: pip install 'devlearn[export]'.",
-    )
-    add_behavior(p)
-    p.add_argument("--checkpoint", required=True, metavar="PATH", help="checkpoint file (.pt)")
-    p.add_argument("--format", default="onnx", metavar="FORMAT", help="onnx or torchscript")
-    p.add_argument("--out", required=True, metavar="FILE", help="file to write")
-    return ["export"]
 
 
 def run(args: argparse.Namespace, registry: PluginRegistry) -> int:

@@ -6,19 +6,10 @@ import argparse
 import json
 from typing import TYPE_CHECKING
 
-from devlearn.cli.options import add_behavior
 from devlearn.evaluation.describe import describe_behavior
 
 if TYPE_CHECKING:
     from devlearn.plugins import PluginRegistry
-
-
-def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> list[str]:
-    """Register the ``info`` sub-command."""
-    p = subparsers.add_parser("info", help="describe a behaviour's observations, actions, skin")
-    add_behavior(p)
-    p.add_argument("--json", action="store_true", help="print a JSON object")
-    return ["info"]
 
 
 def run(args: argparse.Namespace, registry: PluginRegistry) -> int:

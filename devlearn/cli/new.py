@@ -25,20 +25,6 @@ FILES = {
 }
 
 
-def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> list[str]:
-    """Register the ``new`` sub-command."""
-    p = subparsers.add_parser(
-        "new",
-        help="write a new plugin distribution (behaviour, reward term, tests)",
-        description="Write an installable plugin: pyproject.toml with the devlearn entry point, "
-        "a behaviour with a reward term and an evaluator, and tests (conformance kit, reward by "
-        "hand, a tiny training run). `pip install -e DIR && python -m pytest DIR/tests` passes.",
-    )
-    p.add_argument("name", metavar="PLUGIN_NAME", help="behaviour name, lower_snake_case")
-    p.add_argument("--out", metavar="DIR", help="where to write it (default ./devlearn-NAME)")
-    return ["new"]
-
-
 def names_for(name: str) -> dict[str, str]:
     """The template's substitutions for behaviour ``name`` (``my_reach``)."""
     from devlearn.plugins import PLUGIN_NAME  # the registry's own rule for a behaviour's name

@@ -9,15 +9,6 @@ from devlearn.api.errors import UsageError
 from devlearn.plugins import PluginRegistry, set_plugin_disabled
 
 
-def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> list[str]:
-    """Register the ``plugins`` sub-command."""
-    p = subparsers.add_parser("plugins", help="list installed plugins (or enable/disable one)")
-    p.add_argument("--json", action="store_true", help="print a JSON list of plugin objects")
-    p.add_argument("--disable", metavar="NAME", help="disable a plugin without uninstalling it")
-    p.add_argument("--enable", metavar="NAME", help="re-enable a disabled plugin")
-    return ["plugins"]
-
-
 def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     """List plugins as a table or JSON, or change which are disabled."""
     for name, disable in ((args.disable, True), (args.enable, False)):

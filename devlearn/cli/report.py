@@ -9,22 +9,6 @@ if TYPE_CHECKING:
     from devlearn.plugins import PluginRegistry
 
 
-def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> list[str]:
-    """Register the ``report`` sub-command."""
-    p = subparsers.add_parser(
-        "report",
-        help="table and chart of evaluations: mean and 95%% interval over seeds",
-        description="Read evaluation folders (eval.json) or run folders containing them, group "
-        "them by variant (the config keys that differ; seeds pooled) and write report.md (mean "
-        "and 95%% t-interval over seeds per metric, zero/random baselines beside them when "
-        "given or found next to the paths, and the paper's figures where the behaviour "
-        "gives them) and report.png.",
-    )
-    p.add_argument("paths", nargs="+", metavar="PATH", help="evaluation or run folders")
-    p.add_argument("--out", default="report", metavar="DIR", help="output folder (default report)")
-    return ["report"]
-
-
 def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     """Write the report and print its table."""
     from pathlib import Path

@@ -11,58 +11,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from devlearn.api.errors import UsageError
-from devlearn.cli.options import add_behavior, add_overrides, add_preset
 
 if TYPE_CHECKING:
     from devlearn.plugins import PluginRegistry
-
-
-def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> list[str]:
-    """Register the ``run`` sub-command."""
-    p = subparsers.add_parser(
-        "run",
-        help="train a behaviour with PPO",
-        description="Train a behaviour; writes config.json, checkpoints, metrics.jsonl and "
-        "TensorBoard logs to the run directory. Ctrl-C or SIGTERM saves a checkpoint; "
-        "--resume continues.",
-    )
-    add_behavior(p)
-    p.add_argument("--steps", metavar="N", help="total environment steps (e.g. 8e6)")
-    p.add_argument("--envs", metavar="N", help="environments per process")
-    p.add_argument(
-        "--workers",
-        metavar="N",
-        help="environment worker processes (0: in process; default -1: one per core)",
-    )
-    p.add_argument("--seed", metavar="S", help="random seed")
-    p.add_argument("--out", metavar="DIR", help="run directory (default runs/BEHAVIOR-TIME)")
-    p.add_argument("--device", metavar="DEV", help="cpu or cuda (default cpu)")
-    p.add_argument(
-        "--logger", choices=("tensorboard", "wandb"), help="also log to W&B (default tensorboard)"
-    )
-    add_overrides(p)
-    add_preset(p)
-    p.add_argument("--resume", metavar="RUN_DIR", help="continue a run from its latest checkpoint")
-    p.add_argument(
-        "--from",
-        dest="start_from",
-        metavar="CHECKPOINT",
-        help="start a new run (in --out) from another run's checkpoint: its config (changed by "
-        "--set and the options above), weights, optimiser, step count and env memory",
-    )
-    p.add_argument(
-        "--config",
-        metavar="FILE",
-        help="start a new run from a resolved config file (a run's config.json, a sweep's "
-        "run_config.json), changed by --set and the options above",
-    )
-    p.add_argument(
-        "--force",
-        action="store_true",
-        help="with --out: replace the run that DIR holds (deletes what DIR holds once the new "
-        "run has started); without it such a folder is refused",
-    )
-    return ["run"]
 
 
 def run(args: argparse.Namespace, registry: PluginRegistry) -> int:

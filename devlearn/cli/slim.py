@@ -10,21 +10,6 @@ if TYPE_CHECKING:
     from devlearn.plugins import PluginRegistry
 
 
-def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> list[str]:
-    """Register the ``slim`` sub-command."""
-    p = subparsers.add_parser(
-        "slim",
-        help="write a small policy file from a training checkpoint",
-        description="Keep what evaluation needs (policy weights, config, training steps and "
-        "the behaviour's calibration, e.g. hand_regard's detector) and drop what only resuming "
-        "needs (critic, optimiser, env and rng state). The policy file evaluates from any "
-        "folder with `devlearn eval BEHAVIOR --checkpoint FILE`; it cannot resume training.",
-    )
-    p.add_argument("checkpoint", metavar="CHECKPOINT", help="training checkpoint or run folder")
-    p.add_argument("--out", metavar="PATH", help="policy file (default CHECKPOINT_DIR/policy.pt)")
-    return ["slim"]
-
-
 def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     """Write the policy file and say where, and how much smaller it is."""
     from devlearn.evaluation.evaluate import POLICY_FILE, resolve_checkpoint

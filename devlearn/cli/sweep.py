@@ -8,68 +8,9 @@ import sys
 from typing import TYPE_CHECKING
 
 from devlearn.api.errors import UsageError
-from devlearn.cli.options import add_behavior, add_overrides, add_preset
 
 if TYPE_CHECKING:
     from devlearn.plugins import PluginRegistry
-
-
-def add_parser(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> list[str]:
-    """Register the ``sweep`` sub-command."""
-    p = subparsers.add_parser(
-        "sweep",
-        help="train and evaluate a grid of variants times seeds, then report",
-        description="Run an experiment in one folder: every combination of --grid values times "
-        "--seeds is trained (devlearn run) and evaluated (devlearn eval) in its own run folder, "
-        "then devlearn report compares them. Started again, a sweep keeps finished runs and "
-        "continues unfinished ones from their checkpoints. Settings can come from a TOML sweep "
-        "file (--file); options given here win.",
-    )
-    add_behavior(p)
-    p.add_argument("--file", metavar="TOML", help="sweep file with the same settings")
-    p.add_argument("--out", metavar="DIR", help="the sweep folder (required here or in the file)")
-    p.add_argument(
-        "--grid",
-        action="append",
-        metavar="KEY=V1,V2",
-        help="config values to try, e.g. behavior.curriculum=fixed_only,two_stage (repeatable: "
-        "every combination)",
-    )
-    p.add_argument("--seeds", metavar="LIST", help="seeds of every combination: 1,2,3 or 1-3")
-    p.add_argument("--steps", metavar="N", help="environment steps per run (e.g. 4e5)")
-    p.add_argument("--envs", metavar="N", help="environments per run")
-    p.add_argument(
-        "--workers", metavar="N", help="env worker processes per run (default 0: in process)"
-    )
-    p.add_argument("--cores", metavar="N", help="cores each run holds (default: max(1, workers))")
-    add_overrides(
-        p,
-        "config override of every run (repeatable)",
-    )
-    add_preset(
-        p,
-        "every run starts from this preset of the behaviour (e.g. paper; `devlearn "
-        "config BEHAVIOR` lists them); --steps, --envs, --set and the grid apply over it",
-    )
-    p.add_argument("--episodes", metavar="N", help="evaluation episodes per run (default 10)")
-    p.add_argument("--eval-seed", metavar="S", help="seed of the evaluations (default 0)")
-    p.add_argument(
-        "--eval-args", metavar="'ARGS'", help="further devlearn eval options, quoted as one"
-    )
-    p.add_argument("--executor", metavar="local|ray", help="where runs execute (default local)")
-    p.add_argument("--jobs", metavar="N", help="local: runs at a time (default: as cores allow)")
-    p.add_argument(
-        "--address",
-        metavar="auto|HOST:PORT",
-        help="ray: the cluster to use (default: start a local Ray instance)",
-    )
-    p.add_argument(
-        "--no-report", dest="report", action="store_false", default=None, help="skip the report"
-    )
-    p.add_argument(
-        "--dry-run", action="store_true", help="check everything and list the runs; start nothing"
-    )
-    return ["sweep"]
 
 
 def run(args: argparse.Namespace, registry: PluginRegistry) -> int:

@@ -99,12 +99,7 @@ class DevlearnEnv(gymnasium.Env):
         self.setup = RunSetup(behavior, overrides, preset, registry=registry)
         cfg = self.setup.config
         factory = infant_factory or build_default_infant
-        self.clock = CurriculumClock(
-            self.setup.behavior.curriculum(),
-            cfg.env.action_repeat,
-            cfg.ppo.num_steps_per_env,
-            cfg,
-        )
+        self.clock = CurriculumClock(self.setup.behavior.curriculum(), cfg)
         try:
             self.env = BehaviorEnv(
                 self.setup.behavior,

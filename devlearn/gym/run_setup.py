@@ -148,23 +148,19 @@ class CurriculumClock:
 
     Args:
         curriculum: The behaviour's curriculum.
-        steps_per_decision: Physics steps one decision adds (``num_envs * action_repeat``).
-        decisions_per_iteration: ``ppo.num_steps_per_env``.
-        config: The run config (its ``infant`` section gives the body's age over the run).
+        config: The run config: ``env.action_repeat`` physics steps per decision,
+            ``ppo.num_steps_per_env`` decisions per iteration; its ``infant`` section gives the
+            body's age over the run.
+        num_envs: Environments stepped together (each decision adds ``num_envs *
+            env.action_repeat`` physics steps).
     """
 
-    def __init__(
-        self,
-        curriculum: Curriculum,
-        steps_per_decision: int,
-        decisions_per_iteration: int,
-        config: RunConfig,
-    ) -> None:
+    def __init__(self, curriculum: Curriculum, config: RunConfig, num_envs: int = 1) -> None:
         self.config = config
         self.growth = growth_schedule(config)  # parsed once, as the runner does
         self.curriculum = curriculum
-        self.steps_per_decision = int(steps_per_decision)
-        self.decisions_per_iteration = int(decisions_per_iteration)
+        self.steps_per_decision = int(num_envs) * config.env.action_repeat
+        self.decisions_per_iteration = config.ppo.num_steps_per_env
         self.decisions = 0
         self.physics_steps = 0
         """Physics steps taken, summed over the envs (a run's ``env_steps``)."""

@@ -82,12 +82,7 @@ class DevlearnVectorEnv(VectorEnv):
         top = {"num_envs": num_envs, "workers": workers}
         self.setup = RunSetup(behavior, overrides, preset, top, registry)
         cfg = self.setup.config
-        self.clock = CurriculumClock(
-            self.setup.behavior.curriculum(),
-            cfg.num_envs * cfg.env.action_repeat,
-            cfg.ppo.num_steps_per_env,
-            cfg,
-        )
+        self.clock = CurriculumClock(self.setup.behavior.curriculum(), cfg, cfg.num_envs)
         try:
             self.envs = DevVecEnv(
                 self.setup.behavior,

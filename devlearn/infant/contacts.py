@@ -185,14 +185,6 @@ class ContactReader:
         return ContactSides(body, other, point, force, cand, dist)
 
 
-def touch_from_contacts(skin: Skin, sides: ContactSides | None) -> np.ndarray:
-    """Sensor forces, (num_sensors, 3) float32, body frames."""
-    if sides is None:
-        return np.zeros((skin.num_sensors, 3), dtype=np.float32)
-    assert sides.force is not None, "ContactSides without forces (sides(with_force=False))"
-    return skin.spread(sides.body, sides.point, sides.force, sides.cand, sides.dist)
-
-
 def sparse_touch_from_contacts(
     skin: Skin, sides: ContactSides | None
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -201,6 +193,12 @@ def sparse_touch_from_contacts(
         return np.zeros(0, dtype=np.int64), np.zeros((0, 3), dtype=np.float32)
     assert sides.force is not None, "ContactSides without forces (sides(with_force=False))"
     return skin.spread_sparse(sides.body, sides.point, sides.force, sides.cand, sides.dist)
+
+
+def touch_from_contacts(skin: Skin, sides: ContactSides | None) -> np.ndarray:
+    """Sensor forces, (num_sensors, 3) float32, body frames: the dense form of
+    :func:`sparse_touch_from_contacts`."""
+    return skin.dense(*sparse_touch_from_contacts(skin, sides))
 
 
 def hand_contacts(skin: Skin, sides: ContactSides | None, hand_of_body: np.ndarray) -> np.ndarray:

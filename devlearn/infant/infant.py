@@ -48,8 +48,8 @@ class Infant:
     """The simulated infant in one scene (see docs/architecture.md, "The infant"): MIMo v1's
     18-month-old, or the body at ``age_months`` (:mod:`devlearn.infant.growth`).
 
-    Build with :func:`build_infant`. Senses are computed on first request after a ``step`` or
-    ``reset`` and cached; returned arrays are read-only.
+    Build with :func:`build_infant` (this class's public name). Senses are computed on first
+    request after a ``step`` or ``reset`` and cached; returned arrays are read-only.
     """
 
     physics_timestep = PHYSICS_TIMESTEP
@@ -59,6 +59,7 @@ class Infant:
     def __init__(
         self,
         scene: str,
+        *,
         senses: Sequence[str] = SENSES,
         eye_size: int = 64,
         appearance: str = "mittens",
@@ -66,6 +67,29 @@ class Infant:
         compiled: bool = True,
         age_months: float | None = None,
     ) -> None:
+        """Build the infant in a scene, reset to its rest pose.
+
+        Args:
+            scene: "crib" (lying, pelvis fixed, 30 actuators), "sitting_babybench" (BabyBench's
+                hand-regard scene: trunk and legs held, head pitch and side tilt held by
+                constraints, arms hanging; 17 actuators, toy blocks in front) or "sitting" (the
+                same body with the head free and the hands raised at rest).
+            senses: Any of "touch", "proprioception", "vestibular", "eyes".
+            eye_size: Eye image height and width (pixels).
+            appearance: "mittens" (purple mittens, toys coloured away from them) or "skin" (bare
+                hands the body's colour, toys in the natural palette); see
+                :data:`devlearn.infant.scenes.APPEARANCES`. Colours only: physics is the same.
+            start: How episodes start unless ``reset`` is told (:data:`~.starts.STARTS`):
+                ``rest``, ``babybench`` or ``random``.
+            compiled: Touch and proprioception through the compiled routines
+                (:mod:`devlearn.infant.kernels`, numba, loaded on first use); False: their
+                numpy references, the same numbers, slower per step but with no compilation or
+                numba import (what describing an infant needs).
+            age_months: Build the body at this age, 0 to 24 months, from growth curves
+                (:func:`devlearn.infant.growth.grown_body`: WHO median length and weight, body
+                proportions that change with age, torques, and the same skin sensors spread over
+                it); None: the default body, MIMo v1's 18-month-old (77.8 cm, 10.96 kg).
+        """
         unknown = sorted(set(senses) - set(SENSES))
         if unknown:
             raise ValueError(f"unknown sense(s) {unknown}; valid senses: {', '.join(SENSES)}")
@@ -234,7 +258,7 @@ class Infant:
     def touch(self) -> np.ndarray:
         """Returns (num_sensors, 3) float32: force on each sensor in its body's frame (N)."""
         sensors, values = self.touch_sparse()
-        return self._cached("touch", lambda: _densify(self.skin.num_sensors, sensors, values))
+        return self._cached("touch", lambda: self.skin.dense(sensors, values))
 
     def touch_sparse(self) -> tuple[np.ndarray, np.ndarray]:
         """:meth:`touch` as (sensors (M,) int64 sorted, forces (M, 3) float32): only the few
@@ -329,6 +353,13 @@ class Infant:
         """Free renderers (GL contexts); rendering again opens new ones."""
         _free_gl(self._gl)
 
+    def __enter__(self) -> Infant:
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        """Leaving a ``with build_infant(...) as infant:`` block closes the infant."""
+        self.close()
+
 
 _SKINS: dict[tuple[str, float | None], Skin] = {}
 
@@ -345,12 +376,6 @@ def _shared_skin(model: mujoco.MjModel, scene: str, age_months: float | None) ->
     return _SKINS[key]
 
 
-def _densify(num_sensors: int, sensors: np.ndarray, values: np.ndarray) -> np.ndarray:
-    out = np.zeros((num_sensors, 3), dtype=np.float32)
-    out[sensors] = values
-    return out
-
-
 def _free_gl(gl: dict[str, Any]) -> None:
     if gl["eyes"] is not None:
         gl["eyes"].close()
@@ -360,43 +385,6 @@ def _free_gl(gl: dict[str, Any]) -> None:
     gl["views"].clear()
 
 
-def build_infant(
-    scene: str,
-    *,
-    senses: Sequence[str] = SENSES,
-    eye_size: int = 64,
-    appearance: str = "mittens",
-    start: str = "rest",
-    compiled: bool = True,
-    age_months: float | None = None,
-) -> Infant:
-    """Build the infant in a scene.
-
-    Args:
-        scene: "crib" (lying, pelvis fixed, 30 actuators), "sitting_babybench" (BabyBench's
-            hand-regard scene: trunk and legs held, head pitch and side tilt held by
-            constraints, arms hanging; 17 actuators, toy blocks in front) or "sitting" (the
-            same body with the head free and the hands raised at rest).
-        senses: Any of "touch", "proprioception", "vestibular", "eyes".
-        eye_size: Eye image height and width (pixels).
-        appearance: "mittens" (purple mittens, toys coloured away from them) or "skin" (bare
-            hands the body's colour, toys in the natural palette); see
-            :data:`devlearn.infant.scenes.APPEARANCES`. Colours only: physics is the same.
-        start: How episodes start unless ``reset`` is told (:data:`~.starts.STARTS`):
-            ``rest``, ``babybench`` or ``random``.
-        compiled: Touch and proprioception through the compiled routines
-            (:mod:`devlearn.infant.kernels`, numba, loaded on first use); False: their numpy
-            references, the same numbers, slower per step but with no compilation or numba import
-            (what describing an infant needs).
-        age_months: Build the body at this age, 0 to 24 months, from growth curves
-            (:func:`devlearn.infant.growth.grown_body`: WHO median length and weight, body
-            proportions that change with age, torques, and the same skin sensors spread over
-            it); None: the default body, MIMo v1's 18-month-old (77.8 cm, 10.96 kg).
-
-    Returns:
-        The infant, reset to its rest pose.
-    """
-    return Infant(
-        scene, senses=senses, eye_size=eye_size, appearance=appearance, start=start,
-        compiled=compiled, age_months=age_months,
-    )  # fmt: skip
+build_infant = Infant
+"""Build the infant in a scene: the public name of :class:`Infant` (its arguments), as plugins,
+environments and tests call it."""

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from dm_control import mjcf
 
@@ -113,6 +113,22 @@ BABYBENCH_HEAD_PITCH = 0.4
 SETTLE_STEPS = 100
 """BabyBench: 100 zero-action physics steps from the scene's pose make the initial state."""
 
+_SITTING = SceneSpec(
+    "sitting",
+    frozenset({"head", "arm", "wrist"}),
+    _SITTING_LEGS,
+    root_pos=(0.0, 0.0, 0.07),
+    root_quat=(1.0, 0.0, 0.0, 0.0),
+    rest={
+        "head_tilt": 0.5,
+        "left_elbow": 0.6,
+        "right_elbow": 0.6,
+        "left_shoulder_flexion": 0.4,
+        "right_shoulder_flexion": 0.4,
+    },
+    overview=((0.75, -0.55, 0.55), (0.59, 0.81, 0.0, -0.35, 0.25, 0.9)),
+)
+
 SCENES = {
     # On its back, head towards +x: body x (front) -> world z, body z (up) -> world x, so the
     # body's left (+y) is world -y. The hip is welded to the mattress at its own radius.
@@ -126,32 +142,15 @@ SCENES = {
         overview=((-0.55, -0.45, 0.75), (0.63, -0.77, 0.0, 0.45, 0.37, 0.81)),
     ),
     # Upright on the floor, legs straight forward in a V, trunk and legs held.
-    "sitting": SceneSpec(
-        "sitting",
-        frozenset({"head", "arm", "wrist"}),
-        _SITTING_LEGS,
-        root_pos=(0.0, 0.0, 0.07),
-        root_quat=(1.0, 0.0, 0.0, 0.0),
-        rest={
-            "head_tilt": 0.5,
-            "left_elbow": 0.6,
-            "right_elbow": 0.6,
-            "left_shoulder_flexion": 0.4,
-            "right_shoulder_flexion": 0.4,
-        },
-        overview=((0.75, -0.55, 0.55), (0.59, 0.81, 0.0, -0.35, 0.25, 0.9)),
-    ),
+    "sitting": _SITTING,
     # BabyBench's hand-regard scene (facts sec. 3b), the hand_regard default: sitting as above,
     # but the head's pitch held at 0.4 rad and its side tilt at 0 by equality constraints (their
     # motors kept: 17 actions), only the swivel free, eyes locked, and the arms hanging at the
     # sides, hands beside the hips, out of both eyes' view; the state after 100 zero-action
     # steps is the initial state. Bringing a hand into view must be learned.
-    "sitting_babybench": SceneSpec(
-        "sitting_babybench",
-        frozenset({"head", "arm", "wrist"}),
-        _SITTING_LEGS,
-        root_pos=(0.0, 0.0, 0.07),
-        root_quat=(1.0, 0.0, 0.0, 0.0),
+    "sitting_babybench": replace(
+        _SITTING,
+        name="sitting_babybench",
         rest={
             "head_tilt": BABYBENCH_HEAD_PITCH,
             "left_shoulder_abduction": 0.25,
@@ -160,7 +159,6 @@ SCENES = {
             "left_shoulder_flexion": 0.2,
             "right_shoulder_flexion": 0.2,
         },
-        overview=((0.75, -0.55, 0.55), (0.59, 0.81, 0.0, -0.35, 0.25, 0.9)),
         equality={"head_tilt": BABYBENCH_HEAD_PITCH, "head_tilt_side": 0.0},
         settle_steps=SETTLE_STEPS,
     ),
@@ -206,96 +204,59 @@ def _props(root: mjcf.RootElement, scene: str, toy_colours: Sequence[Sequence[fl
         castshadow=False,
     )
     if scene == "crib":
-        world.add(
-            "geom",
-            group=SCENE_GROUP,
-            name="mattress",
-            type="plane",
-            size=(0.6, 0.4, 0.05),
-            rgba=(0.6, 0.75, 0.92, 1),
-            contype=WORLD_CONTYPE,
-            conaffinity=1,
-        )
-        # Something to look at: a ceiling (a plane seen from below) and the crib's rails,
-        # visual only (contype 0) so they cost no collision checks.
-        world.add(
-            "geom",
-            group=SCENE_GROUP,
-            name="ceiling",
-            type="plane",
-            size=(1.5, 1.5, 0.05),
-            pos=(0, 0, 1.4),
-            euler=(math.pi, 0, 0),
-            rgba=(0.95, 0.92, 0.8, 1),
-            contype=0,
-            conaffinity=0,
-        )
+        _prop(world, "mattress", "plane", (0.6, 0.4, 0.05), (0.6, 0.75, 0.92, 1), solid=True)
+        # Something to look at: a ceiling (a plane seen from below) and the crib's rails.
+        _prop(
+            world, "ceiling", "plane", (1.5, 1.5, 0.05), (0.95, 0.92, 0.8, 1),
+            pos=(0, 0, 1.4), euler=(math.pi, 0, 0),
+        )  # fmt: skip
+        wood = (0.8, 0.62, 0.42, 1)
         for i, (x, y, sx, sy) in enumerate(
             ((0.6, 0, 0.02, 0.4), (-0.6, 0, 0.02, 0.4), (0, 0.4, 0.6, 0.02), (0, -0.4, 0.6, 0.02))
         ):
-            world.add(
-                "geom",
-                group=SCENE_GROUP,
-                name=f"rail_{i}",
-                type="box",
-                size=(sx, sy, 0.15),
-                pos=(x, y, 0.15),
-                rgba=(0.8, 0.62, 0.42, 1),
-                contype=0,
-                conaffinity=0,
-            )
-        # A mobile of coloured shapes hanging over the infant's face (visual only).
+            _prop(world, f"rail_{i}", "box", (sx, sy, 0.15), wood, pos=(x, y, 0.15))
+        # A mobile of coloured shapes hanging over the infant's face.
         for i, (x, y, rgba) in enumerate(zip((0.36, 0.28, 0.22), (0.08, -0.07, 0.03), toy_colours)):
-            world.add(
-                "geom",
-                group=SCENE_GROUP,
-                name=f"mobile_{i}",
-                type="sphere",
-                size=(0.03,),
-                pos=(x, y, 0.62),
-                rgba=rgba,
-                contype=0,
-                conaffinity=0,
-            )
+            _prop(world, f"mobile_{i}", "sphere", (0.03,), rgba, pos=(x, y, 0.62))
     else:  # both sitting scenes
-        world.add(
-            "geom",
-            group=SCENE_GROUP,
-            name="floor",
-            type="plane",
-            size=(2.0, 2.0, 0.05),
-            rgba=(0.72, 0.74, 0.78, 1),
-            contype=WORLD_CONTYPE,
-            conaffinity=1,
-        )
-        # The room's walls, visual only: planes 2 m away, facing the infant.
+        _prop(world, "floor", "plane", (2.0, 2.0, 0.05), (0.72, 0.74, 0.78, 1), solid=True)
+        # The room's walls: planes 2 m away, facing the infant.
+        paint = (0.93, 0.9, 0.82, 1)
         for i, (pos, euler) in enumerate(_WALLS):
-            world.add(
-                "geom",
-                group=SCENE_GROUP,
-                name=f"wall_{i}",
-                type="plane",
-                size=(2.0, 1.0, 0.05),
-                pos=pos,
-                euler=euler,
-                rgba=(0.93, 0.9, 0.82, 1),
-                contype=0,
-                conaffinity=0,
-            )
+            _prop(world, f"wall_{i}", "plane", (2.0, 1.0, 0.05), paint, pos=pos, euler=euler)
         blocks = ((0.24, 0.05, 0.4), (0.3, -0.07, -0.3), (0.37, 0.02, 0.1), (0.21, -0.02, 0.8))
         for i, ((x, y, yaw), rgba) in enumerate(zip(blocks, toy_colours)):
-            world.add(
-                "geom",
-                group=SCENE_GROUP,
-                name=f"toy_{i}",
-                type="box",
-                size=(0.02, 0.02, 0.02),
-                pos=(x, y, 0.02),
-                euler=(0, 0, yaw),
-                rgba=rgba,
-                contype=WORLD_CONTYPE,
-                conaffinity=1,
-            )
+            _prop(
+                world, f"toy_{i}", "box", (0.02, 0.02, 0.02), rgba, solid=True,
+                pos=(x, y, 0.02), euler=(0, 0, yaw),
+            )  # fmt: skip
+
+
+def _prop(
+    world: mjcf.Element,
+    name: str,
+    shape: str,
+    size: Sequence[float],
+    rgba: Sequence[float],
+    solid: bool = False,
+    **placement: Sequence[float],
+) -> None:
+    """Add a geom of the scene (``SCENE_GROUP``) at ``placement`` (``pos``, ``euler``). A solid
+    one (the mattress, the floor, the toys) collides with the infant; the rest are visual only
+    (contype 0), so they cost no collision checks."""
+    contact = (
+        {"contype": WORLD_CONTYPE, "conaffinity": 1} if solid else {"contype": 0, "conaffinity": 0}
+    )
+    world.add(
+        "geom",
+        group=SCENE_GROUP,
+        name=name,
+        type=shape,
+        size=size,
+        rgba=rgba,
+        **placement,
+        **contact,
+    )
 
 
 def build_scene_model(

@@ -142,30 +142,6 @@ class Skin:
             best[q] = idx[np.argmin(np.linalg.norm(self.sensor_pos[idx] - points[q], axis=1))]
         return best
 
-    def spread(
-        self,
-        bodies: np.ndarray,
-        points: np.ndarray,
-        forces: np.ndarray,
-        cand: np.ndarray | None = None,
-        dist: np.ndarray | None = None,
-    ) -> np.ndarray:
-        """Spread contact forces over the skin.
-
-        Args:
-            bodies: (Q,) body id receiving each force (bodies with skin).
-            points: (Q, 3) contact points in that body's frame.
-            forces: (Q, 3) forces on that body, in its frame (N).
-            cand, dist: Optional output of :meth:`candidates` for these points.
-
-        Returns:
-            (num_sensors, 3) float32 summed sensor forces.
-        """
-        sensors, values = self.spread_sparse(bodies, points, forces, cand, dist)
-        out = np.zeros((self.num_sensors, 3), dtype=np.float32)
-        out[sensors] = values
-        return out
-
     def spread_sparse(
         self,
         bodies: np.ndarray,
@@ -174,12 +150,18 @@ class Skin:
         cand: np.ndarray | None = None,
         dist: np.ndarray | None = None,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """:meth:`spread`, returning only the sensors that received force (the hot path).
+        """Spread contact forces over the skin: the sensors that receive force.
+
+        Args:
+            bodies: (Q,) body id receiving each force (bodies with skin).
+            points: (Q, 3) contact points in that body's frame.
+            forces: (Q, 3) forces on that body, in its frame (N).
+            cand, dist: Optional output of :meth:`candidates` for these points.
 
         Returns:
             sensors: (M,) int64, sorted and unique, the sensors within range of some contact.
-            values: (M, 3) float32, their summed forces (body frames, N); rows of other
-            sensors of the dense :meth:`spread` are zero.
+            values: (M, 3) float32, their summed forces (body frames, N); the other sensors
+            feel none (:meth:`dense` gives the whole (num_sensors, 3) vector).
         """
         if len(bodies) == 0:
             return np.zeros(0, dtype=np.int64), np.zeros((0, 3), dtype=np.float32)
@@ -202,3 +184,10 @@ class Skin:
         index = (slot[:, None] * 3 + _XYZ).ravel()
         out = np.bincount(index, values.ravel(), minlength=3 * len(sensors))
         return sensors, out.reshape(-1, 3).astype(np.float32)
+
+    def dense(self, sensors: np.ndarray, values: np.ndarray) -> np.ndarray:
+        """The forces of :meth:`spread_sparse` on every sensor, (num_sensors, 3) float32 (zero
+        on the sensors it did not name)."""
+        out = np.zeros((self.num_sensors, 3), dtype=np.float32)
+        out[sensors] = values
+        return out

@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 
 from devlearn.api.stats import mean_ci
+from devlearn.evaluation.report import cell  # mean [low, high], as devlearn report shows it
 
 MEASURES = (
     ("touches_per_minute", "touches / min"),
@@ -18,15 +19,6 @@ MEASURES = (
     ("mean_seconds_between_touches", "s between touches"),
 )
 AREAS = ("face", "torso", "arm", "leg", "foot")
-
-
-def ci(values: list[float]) -> str:
-    """``mean [low, high]``: the 95% t-interval over seeds (devlearn's ``mean_ci``, as
-    ``devlearn report`` computes it); the mean alone for one value."""
-    stats = mean_ci(values)
-    if stats["ci_low"] is None:
-        return f"{stats['mean']:.3g}"
-    return f"{stats['mean']:.3g} [{stats['ci_low']:.3g}, {stats['ci_high']:.3g}]"
 
 
 def main(out: Path) -> None:
@@ -43,10 +35,10 @@ def main(out: Path) -> None:
         cells = []
         for key, _ in MEASURES:
             values = [r[key] for r in runs if r[key] is not None]
-            cells.append(ci(values) if values else "-")
+            cells.append(cell(mean_ci(values)))
         for area in AREAS:
             values = [r["touch_share_by_area"].get(area, 0.0) for r in runs if r["touches"]]
-            cells.append(ci(values) if values else "-")
+            cells.append(cell(mean_ci(values)))
         print(f"| {name} | " + " | ".join(cells) + " |")
 
 

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import functools
 import json
 import sys
 from pathlib import Path
@@ -13,22 +12,15 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "env"))
 
 from tiny_behaviors import OtherBehavior  # noqa: E402
 
-import devlearn.plugins  # noqa: E402
-from devlearn.cli import main  # noqa: E402
-from devlearn.testing import registry_for  # noqa: E402
-from devlearn.testing.fake_infant import TinyBehavior, fake_infant_factory  # noqa: E402
+from devlearn.testing.fake_infant import TinyBehavior  # noqa: E402
 
 SMALL = ["--envs", "2", "--seed", "1", "--set", "save_interval=1"]
 
 
 @pytest.fixture
-def cli(monkeypatch):
+def cli(cli_with):
     """Run ``devlearn ...`` in process with the tiny behaviours installed and a fake infant."""
-    registry = registry_for(TinyBehavior, OtherBehavior)
-    monkeypatch.setattr(devlearn.plugins, "PluginRegistry", lambda *a, **k: registry)
-    fake = functools.partial(fake_infant_factory, episode_steps=10)
-    monkeypatch.setattr("devlearn.env.behavior_env.build_default_infant", fake)
-    return main
+    return cli_with(TinyBehavior, OtherBehavior)
 
 
 def test_run_then_eval(cli, tmp_path, capsys):
@@ -78,51 +70,43 @@ def test_eval_video(cli, tmp_path, capsys):
     assert "close" in capsys.readouterr().out
 
 
-def error(cli, capsys, *argv: str) -> str:
-    capsys.readouterr()  # drop earlier output (progress bars)
-    assert cli(list(argv)) == 2
-    err = capsys.readouterr().err.strip()
-    assert err.startswith("devlearn: error: ") and "\n" not in err and "Traceback" not in err
-    return err
-
-
-def test_run_errors(cli, tmp_path, capsys):
-    assert "bad value 'lots' for total_steps" in error(
-        cli, capsys, "run", "tiny", "--steps", "lots"
+def test_run_errors(cli, refused, tmp_path):
+    assert "bad value 'lots' for total_steps" in refused(
+        cli, "run", "tiny", "--steps", "lots"
     )
-    assert "--envs must be at least 1" in error(cli, capsys, "run", "tiny", "--envs", "0")
-    assert "--device must be cpu, cuda or cuda:N" in error(
-        cli, capsys, "run", "tiny", "--device", "tpu"
+    assert "--envs must be at least 1" in refused(cli, "run", "tiny", "--envs", "0")
+    assert "--device must be cpu, cuda or cuda:N" in refused(
+        cli, "run", "tiny", "--device", "tpu"
     )
-    err = error(cli, capsys, "run", "tiny", "--set", "ppo.lr=1")
+    err = refused(cli, "run", "tiny", "--set", "ppo.lr=1")
     assert "unknown config key 'ppo.lr'; did you mean 'ppo.learning_rate'?" in err
-    assert "unknown behavior 'tinyy'" in error(cli, capsys, "run", "tinyy")
+    assert "unknown behavior 'tinyy'" in refused(cli, "run", "tinyy")
     empty = tmp_path / "empty"
     empty.mkdir()
-    assert "cannot read" in error(cli, capsys, "run", "tiny", "--resume", str(empty))
-    assert "does not exist" in error(cli, capsys, "run", "tiny", "--resume", str(tmp_path / "x"))
+    assert "cannot read" in refused(cli, "run", "tiny", "--resume", str(empty))
+    assert "does not exist" in refused(cli, "run", "tiny", "--resume", str(tmp_path / "x"))
     out = tmp_path / "run"
     assert cli(["run", "tiny", "--steps", "16", "--out", str(out), *SMALL]) == 0
     for ckpt in out.glob("checkpoint_*.pt"):
         ckpt.unlink()
-    assert "no checkpoint in" in error(cli, capsys, "run", "tiny", "--resume", str(out))
-    assert "trains 'tiny', not 'other'" in error(cli, capsys, "run", "other", "--resume", str(out))
+    assert "no checkpoint in" in refused(cli, "run", "tiny", "--resume", str(out))
+    assert "trains 'tiny', not 'other'" in refused(cli, "run", "other", "--resume", str(out))
 
 
-def test_eval_errors(cli, tmp_path, capsys):
+def test_eval_errors(cli, refused, tmp_path):
     out = tmp_path / "run"
     assert cli(["run", "tiny", "--steps", "16", "--out", str(out), *SMALL]) == 0
     ckpt = out / "checkpoint_latest.pt"
-    err = error(cli, capsys, "eval", "other", "--checkpoint", str(ckpt))
+    err = refused(cli, "eval", "other", "--checkpoint", str(ckpt))
     assert f"checkpoint {ckpt} was trained for 'tiny', not 'other'" in err
     truncated = tmp_path / "truncated.pt"
     truncated.write_bytes(ckpt.read_bytes()[:1000])
-    err = error(cli, capsys, "eval", "tiny", "--checkpoint", str(truncated))
+    err = refused(cli, "eval", "tiny", "--checkpoint", str(truncated))
     assert f"checkpoint {truncated} is corrupt or unreadable" in err
     missing = tmp_path / "missing.pt"
-    assert "does not exist" in error(cli, capsys, "eval", "tiny", "--checkpoint", str(missing))
-    assert "--episodes must be at least 1" in error(
-        cli, capsys, "eval", "tiny", "--checkpoint", str(ckpt), "--episodes", "0"
+    assert "does not exist" in refused(cli, "eval", "tiny", "--checkpoint", str(missing))
+    assert "--episodes must be at least 1" in refused(
+        cli, "eval", "tiny", "--checkpoint", str(ckpt), "--episodes", "0"
     )
 
 

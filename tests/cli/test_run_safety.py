@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import dataclasses
 import errno
-import functools
 import json
 import os
 import sys
@@ -20,50 +19,35 @@ from tiny_behaviors import OtherBehavior  # noqa: E402
 
 import devlearn  # noqa: E402
 import devlearn.plugins  # noqa: E402
-from devlearn.cli import main  # noqa: E402
 from devlearn.config import checks  # noqa: E402
-from devlearn.testing import registry_for  # noqa: E402
 from devlearn.testing.fake_infant import (  # noqa: E402
     Reach,
     TinyBehavior,
     TinyConfig,
-    fake_infant_factory,
 )
 from devlearn.training import checkpoint as checkpoint_module  # noqa: E402
 
 SMALL = ["--envs", "2", "--seed", "1", "--workers", "0", "--set", "save_interval=1"]
 
 
-def in_process(monkeypatch, *behaviors):
-    """``devlearn ...`` in process with ``behaviors`` installed and a fake infant."""
-    registry = registry_for(*behaviors)
-    monkeypatch.setattr(devlearn.plugins, "PluginRegistry", lambda *a, **k: registry)
-    fake = functools.partial(fake_infant_factory, episode_steps=10)
-    monkeypatch.setattr("devlearn.env.behavior_env.build_default_infant", fake)
-    return main
-
-
 @pytest.fixture
-def cli(monkeypatch):
+def cli(cli_with):
     """Run ``devlearn ...`` in process with the tiny behaviours installed and a fake infant."""
-    return in_process(monkeypatch, TinyBehavior, OtherBehavior)
+    return cli_with(TinyBehavior, OtherBehavior)
+
+
+def finished_run(cli, behavior: str, tmp_path: Path, capsys) -> Path:
+    """A finished 2-env run of 32 steps of ``behavior``, in ``tmp_path/run``."""
+    out = tmp_path / "run"
+    assert cli(["run", behavior, "--steps", "32", "--out", str(out), *SMALL]) == 0
+    capsys.readouterr()
+    return out
 
 
 @pytest.fixture
 def run_dir(cli, tmp_path, capsys):
     """A finished 2-env tiny run of 32 steps."""
-    out = tmp_path / "run"
-    assert cli(["run", "tiny", "--steps", "32", "--out", str(out), *SMALL]) == 0
-    capsys.readouterr()
-    return out
-
-
-def error(cli, capsys, *argv: str) -> str:
-    capsys.readouterr()  # drop earlier output (progress bars)
-    assert cli(list(argv)) == 2
-    err = capsys.readouterr().err.strip()
-    assert err.startswith("devlearn: error: ") and "\n" not in err and "Traceback" not in err
-    return err
+    return finished_run(cli, "tiny", tmp_path, capsys)
 
 
 def files(folder: Path) -> dict[str, bytes]:
@@ -80,30 +64,32 @@ class Payload:
         return exec, (f"open({str(self.marker)!r}, 'w').write('ran')",)
 
 
-def test_a_crafted_checkpoint_runs_nothing_on_eval(cli, tmp_path, capsys):
+def test_a_crafted_checkpoint_runs_nothing_on_eval(cli, refused, tmp_path):
     marker = tmp_path / "marker"
     crafted = tmp_path / "crafted.pt"
     state = {"format": "devlearn-checkpoint-1", "behavior": "tiny", "x": Payload(marker)}
     torch.save(state, crafted)
-    err = error(cli, capsys, "eval", "tiny", "--checkpoint", str(crafted), "--episodes", "1")
+    err = refused(cli, "eval", "tiny", "--checkpoint", str(crafted), "--episodes", "1")
     assert f"checkpoint {crafted} refused: it needs builtins.exec" in err
     assert not marker.exists()
 
 
-def test_a_genuine_checkpoint_with_a_payload_runs_nothing_on_resume(cli, run_dir, tmp_path, capsys):
+def test_a_genuine_checkpoint_with_a_payload_runs_nothing_on_resume(
+    cli, refused, run_dir, tmp_path
+):
     marker = tmp_path / "marker"
     for path in run_dir.glob("checkpoint_*.pt"):
         state = torch.load(path, weights_only=False)  # our own file: trusted here
         state["env"]["ranks"][0]["extra"] = Payload(marker)
         path.unlink()
         torch.save(state, path)
-    err = error(cli, capsys, "run", "tiny", "--resume", str(run_dir), "--steps", "64")
+    err = refused(cli, "run", "tiny", "--resume", str(run_dir), "--steps", "64")
     assert "refused: it needs builtins.exec" in err and not marker.exists()
 
 
-def test_out_on_an_existing_run_is_refused_and_leaves_it_unchanged(cli, run_dir, capsys):
+def test_out_on_an_existing_run_is_refused_and_leaves_it_unchanged(cli, refused, run_dir):
     before = files(run_dir)
-    err = error(cli, capsys, "run", "tiny", "--steps", "64", "--out", str(run_dir), *SMALL)
+    err = refused(cli, "run", "tiny", "--steps", "64", "--out", str(run_dir), *SMALL)
     assert f"--out {run_dir} already holds a run" in err
     assert f"--resume {run_dir}" in err and "--force" in err
     assert files(run_dir) == before
@@ -112,9 +98,9 @@ def test_out_on_an_existing_run_is_refused_and_leaves_it_unchanged(cli, run_dir,
     assert steps == [16]
 
 
-def test_a_rejected_resume_leaves_config_json_as_it_was(cli, run_dir, capsys):
+def test_a_rejected_resume_leaves_config_json_as_it_was(cli, refused, run_dir):
     config = (run_dir / "config.json").read_bytes()
-    err = error(cli, capsys, "run", "tiny", "--resume", str(run_dir), "--envs", "8", "--steps", "128")
+    err = refused(cli, "run", "tiny", "--resume", str(run_dir), "--envs", "8", "--steps", "128")
     assert "checkpoint has 2 envs per rank; resume with --envs 2" in err
     assert (run_dir / "config.json").read_bytes() == config
     assert cli(["run", "tiny", "--resume", str(run_dir), "--steps", "48"]) == 0
@@ -147,9 +133,9 @@ def test_a_rejected_resume_leaves_config_json_as_it_was(cli, run_dir, capsys):
         (["--envs", "1", "--steps", "64", "--set", "ppo.num_steps_per_env=1"], "a rollout of 1 sample"),
     ],
 )
-def test_bad_values_are_one_line_errors(cli, tmp_path, capsys, argv, expected):
+def test_bad_values_are_one_line_errors(cli, refused, tmp_path, argv, expected):
     out = tmp_path / "run"
-    assert expected in error(cli, capsys, "run", "tiny", "--steps", "16", "--out", str(out), *argv)
+    assert expected in refused(cli, "run", "tiny", "--steps", "16", "--out", str(out), *argv)
     assert not out.exists()
 
 
@@ -161,19 +147,18 @@ def test_bad_values_are_one_line_errors(cli, tmp_path, capsys, argv, expected):
         (["--seed", "1" + "0" * 20], "--seed must be at most 4294967295"),
     ],
 )
-def test_bad_eval_numbers_are_one_line_errors(cli, tmp_path, capsys, argv, expected):
+def test_bad_eval_numbers_are_one_line_errors(cli, refused, tmp_path, argv, expected):
     out = tmp_path / "eval"
-    err = error(cli, capsys, "eval", "tiny", "--policy", "zero", "--out", str(out), *argv)
+    err = refused(cli, "eval", "tiny", "--policy", "zero", "--out", str(out), *argv)
     assert expected in err
     assert not out.exists()
 
 
-def test_more_envs_than_memory_is_refused_before_building_them(cli, tmp_path, capsys, monkeypatch):
+def test_more_envs_than_memory_is_refused_before_building_them(cli, refused, tmp_path, monkeypatch):
     monkeypatch.setattr(checks, "available_memory_mb", lambda: 1000.0)
     out = tmp_path / "run"
-    err = error(
+    err = refused(
         cli,
-        capsys,
         "run",
         "tiny",
         "--steps",
@@ -187,17 +172,17 @@ def test_more_envs_than_memory_is_refused_before_building_them(cli, tmp_path, ca
     )
     assert "--envs 1000 needs at least 9.8 GB of memory" in err and "use --envs 100 or fewer" in err
     assert not out.exists()
-    err = error(cli, capsys, "run", "tiny", "--envs", "100000", "--steps", "1e6")
+    err = refused(cli, "run", "tiny", "--envs", "100000", "--steps", "1e6")
     assert "--envs 100000 needs at least" in err
 
 
-def test_unusable_out_folders(cli, tmp_path, capsys):
+def test_unusable_out_folders(cli, refused, tmp_path):
     a_file = tmp_path / "file"
     a_file.write_text("x")
-    assert f"--out {a_file} is a file" in error(cli, capsys, "run", "tiny", "--out", str(a_file))
+    assert f"--out {a_file} is a file" in refused(cli, "run", "tiny", "--out", str(a_file))
     under = a_file / "run"
-    assert f"lies under {a_file}, which is a file" in error(
-        cli, capsys, "run", "tiny", "--out", str(under)
+    assert f"lies under {a_file}, which is a file" in refused(
+        cli, "run", "tiny", "--out", str(under)
     )
     if os.geteuid() == 0:  # root writes anywhere a mode allows nothing: use sysfs
         read_only = Path("/sys/devlearn-test-run")
@@ -208,7 +193,7 @@ def test_unusable_out_folders(cli, tmp_path, capsys):
         locked.mkdir()
         locked.chmod(0o555)
         read_only = locked / "run"
-    err = error(cli, capsys, "run", "tiny", "--steps", "128", "--out", str(read_only))
+    err = refused(cli, "run", "tiny", "--steps", "128", "--out", str(read_only))
     assert f"--out {read_only} is not writable" in err
 
 
@@ -222,24 +207,24 @@ def _writable(folder: str) -> bool:
     return True
 
 
-def test_a_config_json_list_is_refused(cli, run_dir, capsys):
+def test_a_config_json_list_is_refused(cli, refused, run_dir):
     (run_dir / "config.json").write_text("[1, 2]\n")
-    err = error(cli, capsys, "run", "tiny", "--resume", str(run_dir))
+    err = refused(cli, "run", "tiny", "--resume", str(run_dir))
     assert "config.json is not a run config: it holds a JSON list" in err
 
 
-def test_a_checkpoint_missing_keys_is_refused(cli, run_dir, tmp_path, capsys):
+def test_a_checkpoint_missing_keys_is_refused(cli, refused, run_dir, tmp_path):
     state = torch.load(run_dir / "checkpoint_latest.pt", weights_only=False)
     for path in run_dir.glob("checkpoint_*.pt"):
         path.unlink()
     del state["rng"], state["curriculum"]
     torch.save(state, run_dir / "checkpoint_latest.pt")
-    err = error(cli, capsys, "run", "tiny", "--resume", str(run_dir))
+    err = refused(cli, "run", "tiny", "--resume", str(run_dir))
     assert "is incomplete: it lacks curriculum, rng" in err
     del state["actor_state_dict"]
     policy = tmp_path / "policy.pt"
     torch.save(state, policy)
-    err = error(cli, capsys, "eval", "tiny", "--checkpoint", str(policy))
+    err = refused(cli, "eval", "tiny", "--checkpoint", str(policy))
     assert "is incomplete: it lacks actor_state_dict" in err
 
 
@@ -289,10 +274,10 @@ def nan_actor(state: dict) -> None:
         (lambda s: s.update(env_steps=10**30), "is damaged: 'env_steps' is 1e+30, above 1e+12"),
     ],
 )
-def test_a_checkpoint_with_bad_values_is_refused_on_resume(cli, run_dir, capsys, change, expected):
+def test_a_checkpoint_with_bad_values_is_refused_on_resume(cli, refused, run_dir, change, expected):
     damage(run_dir, change)
     before = files(run_dir)
-    err = error(cli, capsys, "run", "tiny", "--resume", str(run_dir), "--steps", "64")
+    err = refused(cli, "run", "tiny", "--resume", str(run_dir), "--steps", "64")
     assert expected in err
     assert files(run_dir) == before
 
@@ -317,23 +302,12 @@ def test_a_checkpoint_with_bad_values_is_refused_on_resume(cli, run_dir, capsys,
     ],
 )
 def test_a_checkpoint_with_bad_values_is_refused_on_eval(
-    cli, run_dir, tmp_path, capsys, change, expected
+    cli, refused, run_dir, tmp_path, change, expected
 ):
     damage(run_dir, change)
     out = tmp_path / "eval"
-    err = error(
-        cli,
-        capsys,
-        "eval",
-        "tiny",
-        "--checkpoint",
-        str(run_dir),
-        "--episodes",
-        "1",
-        "--out",
-        str(out),
-    )
-    assert expected in err
+    argv = ["eval", "tiny", "--checkpoint", str(run_dir), "--episodes", "1", "--out", str(out)]
+    assert expected in refused(cli, *argv)
 
 
 class FullDisk:
@@ -379,10 +353,10 @@ def test_a_full_disk_is_reported_as_such(cli, run_dir, capsys, monkeypatch):
 # --- resuming: what it keeps and what it says -----------------------------------------------
 
 
-def test_resume_refuses_another_seed_and_keeps_config_json(cli, run_dir, capsys):
+def test_resume_refuses_another_seed_and_keeps_config_json(cli, refused, run_dir):
     config = (run_dir / "config.json").read_bytes()
     for argv in (["--seed", "7"], ["--set", "seed=7"]):
-        err = error(cli, capsys, "run", "tiny", "--resume", str(run_dir), "--steps", "64", *argv)
+        err = refused(cli, "run", "tiny", "--resume", str(run_dir), "--steps", "64", *argv)
         assert f"run {run_dir} was trained with seed 1, which a resumed run keeps" in err
         assert "--seed 7 --out NEW_DIR" in err
         assert (run_dir / "config.json").read_bytes() == config
@@ -400,16 +374,16 @@ def test_resume_says_when_it_falls_back_to_an_older_checkpoint(cli, run_dir, cap
     assert "resuming from checkpoint_32.pt (step 32), the newest that loads" in err
 
 
-def test_a_run_killed_before_its_first_checkpoint_says_how_to_restart(cli, run_dir, capsys):
+def test_a_run_killed_before_its_first_checkpoint_says_how_to_restart(cli, refused, run_dir):
     for path in run_dir.glob("checkpoint_*.pt"):
         path.unlink()
     temporary = run_dir / ".checkpoint_latest.pt.tmp-12345"
     temporary.write_bytes(b"")  # what a kill during the first save leaves
-    err = error(cli, capsys, "run", "tiny", "--resume", str(run_dir))
+    err = refused(cli, "run", "tiny", "--resume", str(run_dir))
     assert "the run stopped before its first checkpoint, so there is nothing to resume" in err
     assert f"start it again with --out {run_dir} --force" in err
     assert "removed 1 unfinished checkpoint file" in err and not temporary.exists()
-    err = error(cli, capsys, "run", "tiny", "--out", str(run_dir), *SMALL)
+    err = refused(cli, "run", "tiny", "--out", str(run_dir), *SMALL)
     assert "holds a run that stopped before its first checkpoint (nothing to resume)" in err
     assert "--resume" not in err
     assert cli(["run", "tiny", "--steps", "16", "--out", str(run_dir), "--force", *SMALL]) == 0
@@ -423,7 +397,7 @@ def test_a_refusal_prints_only_its_error(cli, run_dir, capsys):
 
 
 @pytest.mark.parametrize("protocol", [0, 2, 4, 5, "legacy"])
-def test_a_plain_pickle_with_a_payload_is_refused_by_name(cli, tmp_path, capsys, protocol):
+def test_a_plain_pickle_with_a_payload_is_refused_by_name(cli, refused, tmp_path, protocol):
     marker = tmp_path / "marker"
     crafted = tmp_path / "crafted.pt"
     state = {"format": "devlearn-checkpoint-1", "behavior": "tiny", "x": Payload(marker)}
@@ -433,21 +407,21 @@ def test_a_plain_pickle_with_a_payload_is_refused_by_name(cli, tmp_path, capsys,
         import pickle
 
         crafted.write_bytes(pickle.dumps(state, protocol=protocol))
-    err = error(cli, capsys, "eval", "tiny", "--checkpoint", str(crafted), "--episodes", "1")
+    err = refused(cli, "eval", "tiny", "--checkpoint", str(crafted), "--episodes", "1")
     assert f"checkpoint {crafted} refused: it needs builtins.exec" in err
     assert not marker.exists()
 
 
-def test_failed_commands_leave_no_new_folders(cli, tmp_path, capsys):
+def test_failed_commands_leave_no_new_folders(cli, refused, tmp_path):
     missing = tmp_path / "runs" / "nope" / "checkpoint_latest.pt"
-    err = error(cli, capsys, "eval", "tiny", "--checkpoint", str(missing), "--episodes", "1")
+    err = refused(cli, "eval", "tiny", "--checkpoint", str(missing), "--episodes", "1")
     assert "does not exist" in err and not (tmp_path / "runs").exists()
     out = tmp_path / "reports" / "r"
-    error(cli, capsys, "report", str(tmp_path / "no_eval_here"), "--out", str(out))
+    refused(cli, "report", str(tmp_path / "no_eval_here"), "--out", str(out))
     assert not (tmp_path / "reports").exists()
     kept = tmp_path / "kept"
     kept.mkdir()
-    error(cli, capsys, "eval", "tiny", "--checkpoint", str(missing), "--out", str(kept))
+    refused(cli, "eval", "tiny", "--checkpoint", str(missing), "--out", str(kept))
     assert kept.is_dir()  # what existed before stays
 
 
@@ -482,16 +456,13 @@ def hostile(monkeypatch, tmp_path):
 
 
 @pytest.fixture
-def terms_cli(monkeypatch):
-    return in_process(monkeypatch, TermsBehavior)
+def terms_cli(cli_with):
+    return cli_with(TermsBehavior)
 
 
 @pytest.fixture
 def terms_run(terms_cli, tmp_path, capsys):
-    out = tmp_path / "run"
-    assert terms_cli(["run", "terms", "--steps", "32", "--out", str(out), *SMALL]) == 0
-    capsys.readouterr()
-    return out
+    return finished_run(terms_cli, "terms", tmp_path, capsys)
 
 
 EVIL = "evil_term:X"
@@ -499,23 +470,23 @@ REFUSED = "behavior.rewards.reach.cls: unknown reward term class 'evil_term:X'"
 
 
 def test_a_reward_term_class_named_by_set_or_config_is_never_imported(
-    terms_cli, hostile, tmp_path, capsys
+    terms_cli, refused, hostile, tmp_path
 ):
     out = tmp_path / "new"
-    err = error(terms_cli, capsys, "run", "terms", "--steps", "32", "--out", str(out), *SMALL,
+    err = refused(terms_cli, "run", "terms", "--steps", "32", "--out", str(out), *SMALL,
                 "--set", f"behavior.rewards.reach.cls={EVIL}")  # fmt: skip
     assert REFUSED in err and "valid: " in err and "fake_infant:Reach" in err
     config = tmp_path / "config.json"
     config.write_text(json.dumps({"behavior": {"rewards": {"reach": {"cls": EVIL}}}}))
-    err = error(terms_cli, capsys, "run", "terms", "--config", str(config), "--out", str(out))
+    err = refused(terms_cli, "run", "terms", "--config", str(config), "--out", str(out))
     assert REFUSED in err
-    err = error(terms_cli, capsys, "config", "terms", "--set", f"behavior.rewards.reach.cls={EVIL}")
+    err = refused(terms_cli, "config", "terms", "--set", f"behavior.rewards.reach.cls={EVIL}")
     assert REFUSED in err
     assert not hostile.exists() and "evil_term" not in sys.modules and not out.exists()
 
 
 def test_a_checkpoint_naming_a_reward_term_class_imports_nothing(
-    terms_cli, terms_run, hostile, tmp_path, capsys
+    terms_cli, refused, terms_run, hostile, tmp_path
 ):
     state = damage(
         terms_run, lambda s: s["config"]["behavior"]["rewards"]["reach"].update(cls=EVIL)
@@ -533,11 +504,10 @@ def test_a_checkpoint_naming_a_reward_term_class_imports_nothing(
         ["run", "terms", "--config", str(terms_run / "config.json"), "--out", str(tmp_path / "c")],
     ]  # fmt: skip
     for argv in commands:
-        assert REFUSED in error(terms_cli, capsys, *argv), argv
+        assert REFUSED in refused(terms_cli, *argv), argv
     assert not hostile.exists() and "evil_term" not in sys.modules
     assert files(terms_run) == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["pkg", "run"]  # nothing written
-
 
 
 @pytest.mark.parametrize(
@@ -557,20 +527,20 @@ def test_a_checkpoint_naming_a_reward_term_class_imports_nothing(
     ],
 )  # fmt: skip
 def test_config_files_with_bad_values_are_refused_before_anything_is_written(
-    terms_cli, tmp_path, capsys, config, expected
+    terms_cli, refused, tmp_path, config, expected
 ):
     path = tmp_path / "config.json"
     path.write_text(json.dumps(config))
     out = tmp_path / "run"
-    assert expected in error(terms_cli, capsys, "run", "terms", "--config", str(path),
+    assert expected in refused(terms_cli, "run", "terms", "--config", str(path),
                              "--out", str(out), "--steps", "32", "--envs", "2")  # fmt: skip
     assert not out.exists()
 
 
-def test_a_deeply_nested_config_file_is_one_line(terms_cli, tmp_path, capsys):
+def test_a_deeply_nested_config_file_is_one_line(refused, terms_cli, tmp_path):
     path = tmp_path / "deep.json"
     path.write_text('{"a":' * 100_000 + "1" + "}" * 100_000)
-    err = error(terms_cli, capsys, "run", "terms", "--config", str(path))
+    err = refused(terms_cli, "run", "terms", "--config", str(path))
     assert "its JSON is nested too deeply" in err
 
 
@@ -591,7 +561,7 @@ def test_a_deeply_nested_config_file_is_one_line(terms_cli, tmp_path, capsys):
     ],
 )
 def test_slim_export_from_and_resume_write_nothing_from_an_unusable_checkpoint(
-    cli, run_dir, tmp_path, capsys, change, expected
+    cli, refused, run_dir, tmp_path, change, expected
 ):
     damage(run_dir, change)
     before = files(run_dir)
@@ -604,22 +574,22 @@ def test_slim_export_from_and_resume_write_nothing_from_an_unusable_checkpoint(
         ["run", "tiny", "--resume", str(run_dir), "--steps", "64"],
     ]  # fmt: skip
     for argv in commands:
-        assert expected in error(cli, capsys, *argv), argv
+        assert expected in refused(cli, *argv), argv
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]  # nothing written
     assert files(run_dir) == before  # config.json included
 
 
 def test_export_to_an_unusable_place_is_one_line_and_leaves_nothing(
-    cli, run_dir, tmp_path, capsys, monkeypatch
+    cli, refused, run_dir, tmp_path, monkeypatch
 ):
     checkpoint = str(run_dir / "checkpoint_latest.pt")
     base = ["export", "tiny", "--checkpoint", checkpoint, "--format", "torchscript", "--out"]
-    err = error(cli, capsys, *base, str(tmp_path))
+    err = refused(cli, *base, str(tmp_path))
     assert f"--out {tmp_path} is a folder; give the file to write" in err
-    err = error(cli, capsys, *base, str(tmp_path / "missing" / "p.ts"))
+    err = refused(cli, *base, str(tmp_path / "missing" / "p.ts"))
     assert "does not exist" in err
     if os.geteuid() == 0 and Path("/sys").is_dir() and not _writable("/sys"):
-        assert "cannot write /sys/p.ts: " in error(cli, capsys, *base, "/sys/p.ts")
+        assert "cannot write /sys/p.ts: " in refused(cli, *base, "/sys/p.ts")
     full = tmp_path / "full"
     full.mkdir()
 
@@ -629,23 +599,23 @@ def test_export_to_an_unusable_place_is_one_line_and_leaves_nothing(
 
     traced = type(torch.jit.trace(torch.nn.Linear(1, 1), torch.zeros(1, 1)))
     monkeypatch.setattr(traced, "save", no_space)
-    err = error(cli, capsys, *base, str(full / "p.ts"))
+    err = refused(cli, *base, str(full / "p.ts"))
     assert "cannot write " in err and "file write failed" in err
     assert list(full.iterdir()) == []  # no partial file
 
 
-def test_an_obfuscated_pickle_is_refused_naming_what_it_computes(cli, tmp_path, capsys):
+def test_an_obfuscated_pickle_is_refused_naming_what_it_computes(cli, refused, tmp_path):
     obfuscated = tmp_path / "obf.pt"  # the module's name comes from a call: str('os')
     obfuscated.write_bytes(
         b"\x80\x04\x8c\x08builtins\x94\x8c\x03str\x94\x93\x94\x8c\x02os\x94\x85\x94R\x94"
         b"\x8c\x06system\x94\x93\x94\x8c\x04echo\x94\x85\x94R\x94."
     )
-    err = error(cli, capsys, "eval", "tiny", "--checkpoint", str(obfuscated))
+    err = refused(cli, "eval", "tiny", "--checkpoint", str(obfuscated))
     assert "refused: it needs <computed at load time>.system, builtins.str" in err
     assert "None." not in err
 
 
-def test_a_fifo_or_a_link_loop_is_named_as_such(cli, tmp_path, capsys):
+def test_a_fifo_or_a_link_loop_is_named_as_such(cli, refused, tmp_path):
     fifo = tmp_path / "fifo"
     os.mkfifo(fifo)
     loop = tmp_path / "loop1"
@@ -660,7 +630,7 @@ def test_a_fifo_or_a_link_loop_is_named_as_such(cli, tmp_path, capsys):
         tmp_path / "nothing.pt": "does not exist",
     }
     for path, expected in cases.items():
-        assert f"checkpoint {path} {expected}" in error(cli, capsys, "eval", "tiny",
+        assert f"checkpoint {path} {expected}" in refused(cli, "eval", "tiny",
                                                         "--checkpoint", str(path))  # fmt: skip
 
 

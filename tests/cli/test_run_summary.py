@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import functools
 import json
 import sys
 from pathlib import Path
@@ -11,23 +10,16 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "env"))
 
-import devlearn.plugins  # noqa: E402
-from devlearn.cli import main  # noqa: E402
 from devlearn.cli.summary import headline  # noqa: E402
-from devlearn.testing import registry_for  # noqa: E402
-from devlearn.testing.fake_infant import TinyBehavior, fake_infant_factory  # noqa: E402
+from devlearn.testing.fake_infant import TinyBehavior  # noqa: E402
 
 SMALL = ["--envs", "2", "--seed", "1", "--workers", "0", "--set", "save_interval=1"]
 
 
 @pytest.fixture
-def cli(monkeypatch):
+def cli(cli_with):
     """``devlearn ...`` in process with the tiny behaviour and a fake infant."""
-    registry = registry_for(TinyBehavior)
-    monkeypatch.setattr(devlearn.plugins, "PluginRegistry", lambda *a, **k: registry)
-    fake = functools.partial(fake_infant_factory, episode_steps=10)
-    monkeypatch.setattr("devlearn.env.behavior_env.build_default_infant", fake)
-    return main
+    return cli_with(TinyBehavior)
 
 
 def test_finished_run_prints_where_how_far_and_what_next(cli, tmp_path, capsys):
@@ -113,16 +105,15 @@ class PaperTiny(TinyBehavior):
         return {"paper": {"total_steps": 320}, "other": {"seed": 3}}
 
 
-def test_the_summary_puts_the_run_beside_baselines_and_its_budget(tmp_path, monkeypatch, capsys):
-    registry = registry_for(PaperTiny)
-    monkeypatch.setattr(devlearn.plugins, "PluginRegistry", lambda *a, **k: registry)
-    fake = functools.partial(fake_infant_factory, episode_steps=10)
-    monkeypatch.setattr("devlearn.env.behavior_env.build_default_infant", fake)
+def test_the_summary_puts_the_run_beside_baselines_and_its_budget(
+    cli_with, tmp_path, monkeypatch, capsys
+):
+    cli = cli_with(PaperTiny)
     monkeypatch.chdir(tmp_path)
     baseline = tmp_path / "eval_tiny_random"
     baseline.mkdir()
     (baseline / "eval.json").write_text(json.dumps({"close": 0.25, "policy": "random"}))
-    assert main(["run", "tiny", "--steps", "64", "--out", "run", *SMALL]) == 0
+    assert cli(["run", "tiny", "--steps", "64", "--out", "run", *SMALL]) == 0
     printed = capsys.readouterr().out
     assert (
         "budget      64 steps, 20% of a full run (320, --preset paper): a demonstration" in printed
@@ -133,7 +124,7 @@ def test_the_summary_puts_the_run_beside_baselines_and_its_budget(tmp_path, monk
     assert "devlearn eval tiny --policy zero --episodes 100   # baseline" in printed
     assert "devlearn eval tiny --policy random" not in printed  # already there
     assert "devlearn report run/eval eval_tiny_random eval_tiny_zero" in printed
-    assert main(["run", "tiny", "--steps", "320", "--out", "full", *SMALL]) == 0
+    assert cli(["run", "tiny", "--steps", "320", "--out", "full", *SMALL]) == 0
     assert "budget " not in capsys.readouterr().out  # a full run is no demonstration
 
 

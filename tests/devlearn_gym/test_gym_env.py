@@ -41,13 +41,10 @@ def test_every_installed_behaviour_has_an_id():
 
 
 def test_the_config_is_devlearn_runs():
-    env = make({"seed": 3, "env.action_repeat": 2, "behavior.target": 0.25}, preset="")
-    try:
+    with make({"seed": 3, "env.action_repeat": 2, "behavior.target": 0.25}, preset="") as env:
         request = RunRequest("tiny", ["seed=3", "env.action_repeat=2", "behavior.target=0.25"])
         assert to_dict(env.setup.config) == to_dict(resolve_config(request, REGISTRY))
         assert env.env.action_repeat == 2 and env.setup.behavior.config.target == 0.25
-    finally:
-        env.close()
     with pytest.raises(UsageError, match="env.action_repeat must be at least 1"):
         make({"env.action_repeat": 0})
     with pytest.raises(UsageError, match="unknown config key 'behavior.targt'.*behavior.target"):
@@ -92,55 +89,40 @@ def test_rewards_observations_and_episodes_are_a_runs_env():
 def test_the_curriculum_advances_at_a_runs_iteration_boundaries():
     # stage 1 after 6 physics steps; a run looks at the count every 4 decisions (8 steps)
     settings = {"behavior.stage_steps": 6, "ppo.num_steps_per_env": 4, "env.action_repeat": 2}
-    env = make(settings)
-    try:
+    with make(settings) as env:
         env.reset()
         stages = [env.step(np.zeros(3))[4]["stage"] for _ in range(6)]
         assert stages == ["fixed"] * 4 + ["random"] * 2
         assert env.clock.physics_steps == 12 and env.env.stage == {"random_pose": True}
-    finally:
-        env.close()
 
 
 def test_seeds_repeat_and_differ():
-    env = make({"behavior.stage_steps": 0})  # random poses from the start
-    try:
+    with make({"behavior.stage_steps": 0}) as env:  # random poses from the start
         first, _ = env.reset(seed=11)
         again, _ = env.reset(seed=11)
         other, _ = env.reset(seed=12)
         assert np.array_equal(first["proprioception"], again["proprioception"])
         assert not np.array_equal(first["proprioception"], other["proprioception"])
-        seeded = make({"behavior.stage_steps": 0, "seed": 11})  # the config's seed
-        try:
+        with make({"behavior.stage_steps": 0, "seed": 11}) as seeded:  # the config's seed
             assert np.array_equal(seeded.reset()[0]["proprioception"], first["proprioception"])
-        finally:
-            seeded.close()
-    finally:
-        env.close()
 
 
 def test_rgb_array_renders_the_eyes_and_the_view():
     # (check_env: devlearn.testing.check_gymnasium, tests/testing/test_conformance.py)
-    env = make(render_mode="rgb_array")
-    try:
+    with make(render_mode="rgb_array") as env:
         env.reset()
         frame = env.render()
         assert frame.shape == (256, 2 * 256 + 384, 3) and frame.dtype == np.uint8
         assert "eyes" in env.env.infant.senses  # added for the picture, not observed
         assert set(env.observation_space.spaces) == {"proprioception"}
-    finally:
-        env.close()
     assert make().render() is None
 
 
 def test_the_body_has_a_runs_age_at_every_iteration_boundary():
     """infant.age_months builds the body at that age; infant.growth changes it where a run
     would: at its iteration boundaries (ppo.num_steps_per_env decisions)."""
-    fixed = make({"infant.age_months": 6})
-    try:
+    with make({"infant.age_months": 6}) as fixed:
         assert fixed.env.age_months == 6 and fixed.env.infant.age_months == 6
-    finally:
-        fixed.close()
     cfg = make().setup.config
     decisions = cfg.ppo.num_steps_per_env
     steps = decisions * cfg.env.action_repeat  # one env: physics steps of an iteration

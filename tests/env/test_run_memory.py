@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import contextlib
+from collections.abc import Iterator
+
 import numpy as np
 import torch
 from tiny_behaviors import NoveltyBehavior, StepNovelty
@@ -10,6 +13,19 @@ from devlearn.env import DevVecEnv
 from devlearn.testing.fake_infant import fake_infant_factory
 
 STEPS = 10  # the fake infant's episode
+
+
+@contextlib.contextmanager
+def novelty_envs(workers: int = 0) -> Iterator[DevVecEnv]:
+    """Two envs of the novelty behaviour on fake infants (over ``workers`` processes), closed
+    after the block."""
+    vec = DevVecEnv(
+        NoveltyBehavior(), 2, seed=0, workers=workers, infant_factory=fake_infant_factory
+    )
+    try:
+        yield vec
+    finally:
+        vec.close()
 
 
 def episode(vec: DevVecEnv) -> list[float]:
@@ -30,17 +46,13 @@ def test_default_merge_ors_flags_and_keeps_the_largest_count():
 
 
 def test_one_batch_pays_each_discovery_once():
-    vec = DevVecEnv(NoveltyBehavior(), 2, seed=0, infant_factory=fake_infant_factory)
-    try:
+    with novelty_envs() as vec:
         assert episode(vec) == [10.0, 0.0]  # the first env in batch order
         assert episode(vec) == [0.0, 0.0]
-    finally:
-        vec.close()
 
 
 def test_workers_pay_once_each_until_the_merge_then_never_again():
-    vec = DevVecEnv(NoveltyBehavior(), 2, seed=0, workers=2, infant_factory=fake_infant_factory)
-    try:
+    with novelty_envs(2) as vec:
         assert episode(vec) == [10.0, 10.0]  # one env per worker: each its own discovery
         vec.sync_run_memory()
         states = vec.state_dict()["envs"]
@@ -52,22 +64,14 @@ def test_workers_pay_once_each_until_the_merge_then_never_again():
             assert state["terms"]["step_novelty"]["seen"].all()
             assert state["terms"]["step_novelty"]["widest"].tolist() == [7]
         assert episode(vec) == [0.0, 0.0]
-    finally:
-        vec.close()
 
 
 def test_memory_loads_merged_into_another_worker_count():
-    pooled = DevVecEnv(NoveltyBehavior(), 2, seed=0, workers=2, infant_factory=fake_infant_factory)
-    try:
+    with novelty_envs(2) as pooled:
         episode(pooled)  # not merged: each worker's copy has widest 1
         state = pooled.state_dict()
-    finally:
-        pooled.close()
     state["envs"][1]["terms"]["step_novelty"]["widest"] = np.array([3])
-    local = DevVecEnv(NoveltyBehavior(), 2, seed=0, infant_factory=fake_infant_factory)
-    try:
+    with novelty_envs() as local:
         local.load_state_dict(state)
         widest = [s["terms"]["step_novelty"]["widest"].tolist() for s in local.state_dict()["envs"]]
         assert widest == [[3], [3]]  # env 0 replaced, env 1 merged in: one memory
-    finally:
-        local.close()

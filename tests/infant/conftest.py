@@ -10,15 +10,13 @@ from devlearn.infant import build_infant
 
 @pytest.fixture(scope="module")
 def crib():
-    infant = build_infant("crib")
-    infant.reset(np.random.default_rng(0))
-    yield infant
-    infant.close()
+    with build_infant("crib") as infant:
+        infant.reset(np.random.default_rng(0))
+        yield infant
 
 
 @pytest.fixture(scope="module")
 def sitting():
-    infant = build_infant("sitting")
-    infant.reset(np.random.default_rng(0))
-    yield infant
-    infant.close()
+    with build_infant("sitting") as infant:
+        infant.reset(np.random.default_rng(0))
+        yield infant

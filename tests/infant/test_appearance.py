@@ -29,9 +29,8 @@ def _hand_colours(infant) -> list[np.ndarray]:
 
 @pytest.fixture(scope="module")
 def skin():
-    infant = build_infant("sitting", appearance="skin")
-    yield infant
-    infant.close()
+    with build_infant("sitting", appearance="skin") as infant:
+        yield infant
 
 
 def test_skin_hands_are_the_body_colour(skin):

@@ -13,9 +13,8 @@ from devlearn.infant.starts import KICK_STEPS, STARTS
 
 @pytest.fixture(scope="module")
 def babybench():
-    infant = build_infant("sitting_babybench", senses=("proprioception", "eyes"))
-    yield infant
-    infant.close()
+    with build_infant("sitting_babybench", senses=("proprioception", "eyes")) as infant:
+        yield infant
 
 
 def _head(infant) -> np.ndarray:
@@ -23,32 +22,35 @@ def _head(infant) -> np.ndarray:
     return infant.data.qpos[infant._qpos_index[infant.actuator_groups["head"]]]
 
 
+def _angles(axes: np.ndarray, origins: np.ndarray, hands: np.ndarray) -> np.ndarray:
+    """(2 eyes, 2 hands) degrees between each eye's ``axes`` row and the vector from its
+    ``origins`` row to each hand's point (``hands``: (2, 3), left then right)."""
+    to_hand = hands[None] - origins[:, None]
+    cos = np.einsum("ek,ehk->eh", axes, to_hand) / np.linalg.norm(to_hand, axis=2)
+    return np.degrees(np.arccos(np.clip(cos, -1, 1)))
+
+
+def _hands(infant) -> list[int]:
+    return [infant.model.body(f"{hand}_hand").id for hand in ("left", "right")]
+
+
 def _axis_angles(infant) -> np.ndarray:
     """(2 eyes, 2 hands) degrees between each eye camera's optical axis (its frame's -z) and
     the direction to each hand's centre of mass."""
-    data, out = infant.data, np.empty((2, 2))
-    for e, eye in enumerate(("left", "right")):
-        cam = mujoco.mj_name2id(infant.model, mujoco.mjtObj.mjOBJ_CAMERA, f"{eye}_eye")
-        axis = -data.cam_xmat[cam].reshape(3, 3)[:, 2]
-        for h, hand in enumerate(("left", "right")):
-            to_hand = data.xipos[infant.model.body(f"{hand}_hand").id] - data.cam_xpos[cam]
-            cos = axis @ to_hand / np.linalg.norm(to_hand)
-            out[e, h] = np.degrees(np.arccos(np.clip(cos, -1, 1)))
-    return out
+    data = infant.data
+    camera = mujoco.mjtObj.mjOBJ_CAMERA
+    cams = [mujoco.mj_name2id(infant.model, camera, f"{eye}_eye") for eye in ("left", "right")]
+    axes = -data.cam_xmat[cams].reshape(2, 3, 3)[:, :, 2]
+    return _angles(axes, data.cam_xpos[cams], data.xipos[_hands(infant)])
 
 
 def _babybench_angles(infant) -> np.ndarray:
     """(2 eyes, 2 hands) degrees between each eye *body's* -z axis and the eye-to-hand vector
     (body origins): BabyBench's hand-regard counter, 90 degrees below the optical axis."""
-    data, out = infant.data, np.empty((2, 2))
-    for e, eye in enumerate(("left", "right")):
-        body = infant.model.body(f"{eye}_eye").id
-        axis = -data.xmat[body].reshape(3, 3)[:, 2]
-        for h, hand in enumerate(("left", "right")):
-            to_hand = data.xpos[infant.model.body(f"{hand}_hand").id] - data.xpos[body]
-            cos = axis @ to_hand / np.linalg.norm(to_hand)
-            out[e, h] = np.degrees(np.arccos(np.clip(cos, -1, 1)))
-    return out
+    data = infant.data
+    eyes = [infant.model.body(f"{eye}_eye").id for eye in ("left", "right")]
+    axes = -data.xmat[eyes].reshape(2, 3, 3)[:, :, 2]
+    return _angles(axes, data.xpos[eyes], data.xpos[_hands(infant)])
 
 
 def test_seventeen_motors_head_pitch_and_side_tilt_held(babybench):

@@ -1,15 +1,14 @@
-"""``devlearn picture``: the module contract and the two pictures."""
+"""``devlearn picture``: its options, its module's ``run`` and the pictures."""
 
 from __future__ import annotations
 
-import argparse
 import gc
 
 import cv2
 import numpy as np
 import pytest
 
-from devlearn.cli import picture
+from devlearn.cli import build_parser, picture
 
 
 @pytest.fixture(autouse=True)
@@ -22,10 +21,7 @@ def no_leftover_renderers():
 
 
 def _parse(argv):
-    parser = argparse.ArgumentParser(prog="devlearn")
-    sub = parser.add_subparsers(dest="command")
-    assert picture.add_parser(sub) == ["picture"]
-    return parser.parse_args(argv)
+    return build_parser().parse_args(argv)
 
 
 @pytest.mark.parametrize(

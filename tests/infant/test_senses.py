@@ -118,3 +118,14 @@ def test_an_uncompiled_infant_senses_the_same_numbers(crib):
     finally:
         plain.close()
         crib.reset(np.random.default_rng(0))
+
+
+def test_leaving_a_with_block_closes_the_infant():
+    """``with build_infant(...) as infant:`` frees its renderers when the block ends, by an
+    error too."""
+    with pytest.raises(KeyError):
+        with build_infant("sitting", senses=("eyes",)) as infant:
+            assert infant.eyes().shape == (2, 64, 64, 3)
+            assert infant._gl["eyes"] is not None
+            raise KeyError("leaving by an error")
+    assert infant._gl["eyes"] is None

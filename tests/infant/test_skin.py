@@ -98,7 +98,7 @@ def test_spread_conserves_force_locally(crib, body):
     for _ in range(5):
         point = skin.sensor_pos[rng.choice(idx)] + rng.normal(0, 0.2 * skin.body_spacing[b], 3)
         force = rng.normal(0, 3.0, 3)
-        touch = skin.spread(np.array([b]), point[None], force[None])
+        touch = skin.dense(*skin.spread_sparse(np.array([b]), point[None], force[None]))
         assert touch.dtype == np.float32 and touch.shape == (skin.num_sensors, 3)
         assert np.allclose(touch.sum(axis=0), force, rtol=1e-5, atol=1e-5)
         hit = np.flatnonzero(np.any(touch != 0, axis=1))
@@ -111,7 +111,7 @@ def test_spread_far_from_sensors_goes_to_the_nearest(crib):
     skin = crib.skin
     b = crib.model.body("head").id
     point = np.array([[0.02, 0.0, 0.085 + 0.0735 + 0.05]])  # 5 cm above the crown
-    touch = skin.spread(np.array([b]), point, np.array([[0.0, 0.0, -2.0]]))
+    touch = skin.dense(*skin.spread_sparse(np.array([b]), point, np.array([[0.0, 0.0, -2.0]])))
     hit = np.flatnonzero(np.any(touch != 0, axis=1))
     nearest = np.argmin(
         np.where(skin.sensor_body == b, np.linalg.norm(skin.sensor_pos - point, axis=1), np.inf)

@@ -14,6 +14,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import pytest
 import tiny_devlearn
@@ -21,6 +22,7 @@ import tiny_devlearn
 from devlearn.cli import main
 
 GRID = ["--grid", "behavior.target=0.1,0.15", "--seeds", "1,2"]
+ONE_RUN = ["--grid", "behavior.target=0.3", "--seeds", "1", "--no-report"]
 NAMES = ["target=0.1,seed=1", "target=0.15,seed=1", "target=0.1,seed=2", "target=0.15,seed=2"]
 TIMINGS = {"steps_per_s", "collect_s", "update_s"}
 
@@ -40,6 +42,17 @@ def sweep_argv(out: Path, steps: int = 64, *extra: str) -> list[str]:
         "--steps", str(steps), "--envs", "2", "--episodes", "2", "--set", "save_interval=1",
         *extra,
     ]  # fmt: skip
+
+
+def start_sweep(argv: list[str], stdout: Any = subprocess.PIPE) -> subprocess.Popen:
+    """The tiny sweep ``argv`` started as another process, in its own process group (as a
+    shell's job, so that a test can stop it with its runs), its output merged into ``stdout``."""
+    return subprocess.Popen(
+        [sys.executable, tiny_devlearn.__file__, *argv],
+        stdout=stdout,
+        stderr=subprocess.STDOUT,
+        start_new_session=True,
+    )
 
 
 def run_cli(argv: list[str]) -> tuple[int, str, str]:
@@ -177,12 +190,7 @@ def test_killed_in_its_second_run_a_restart_finishes_without_retraining_the_firs
     out, steps = tmp_path / "sweep", 480  # 30 iterations of 2 envs x 8 steps
     argv = sweep_argv(out, steps, *GRID, "--jobs", "1", "--no-report")
     log = open(tmp_path / "sweep.log", "wb")
-    proc = subprocess.Popen(
-        [sys.executable, tiny_devlearn.__file__, *argv],
-        stdout=log,
-        stderr=subprocess.STDOUT,
-        start_new_session=True,  # its own process group: killed with its runs below
-    )
+    proc = start_sweep(argv, log)  # killed with its runs below
     first, second = (out / "runs" / n for n in NAMES[:2])
     try:
         deadline = time.time() + 300
@@ -224,13 +232,7 @@ def test_sigterm_stops_the_sweep_and_its_run_saves_a_checkpoint(tmp_path):
     from devlearn.training.checkpoint import load_checkpoint
 
     out = tmp_path / "sweep"
-    argv = sweep_argv(out, 10**6, "--grid", "behavior.target=0.3", "--seeds", "1", "--no-report")
-    proc = subprocess.Popen(
-        [sys.executable, tiny_devlearn.__file__, *argv],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.STDOUT,
-        start_new_session=True,
-    )
+    proc = start_sweep(sweep_argv(out, 10**6, *ONE_RUN))
     run_dir = out / "runs" / "target=0.3,seed=1"
     try:
         deadline = time.time() + 300
@@ -338,13 +340,7 @@ def test_a_stopped_sweep_leaves_no_process_behind(tmp_path, how):
     """One Ctrl-C (SIGINT to the terminal's process group) stops the sweep and everything it
     started; a sweep killed outright (SIGKILL, nothing of it runs) takes its runs with it."""
     out = tmp_path / "sweep"
-    argv = sweep_argv(out, 10**6, "--grid", "behavior.target=0.3", "--seeds", "1", "--no-report")
-    proc = subprocess.Popen(
-        [sys.executable, tiny_devlearn.__file__, *argv],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.STDOUT,
-        start_new_session=True,  # its own group, as a shell's foreground job
-    )
+    proc = start_sweep(sweep_argv(out, 10**6, *ONE_RUN))  # its own group, as a foreground job
     run_dir = out / "runs" / "target=0.3,seed=1"
     started: set[int] = set()
     try:

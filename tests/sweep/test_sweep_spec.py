@@ -124,15 +124,7 @@ def test_local_executor_gives_each_job_its_own_cores():
         LocalExecutor(len(cores) + 1)
 
 
-def error(cli, capsys, *argv: str) -> str:
-    capsys.readouterr()
-    assert cli(list(argv)) == 2
-    err = capsys.readouterr().err.strip()
-    assert err.startswith("devlearn: error: ") and "\n" not in err and "Traceback" not in err
-    return err
-
-
-def test_bad_input_is_one_line_and_starts_nothing(cli, capsys, tmp_path, monkeypatch):
+def test_bad_input_is_one_line_and_starts_nothing(cli, refused, tmp_path, monkeypatch):
     out = tmp_path / "sweep"
     base = ["sweep", "tiny", "--out", str(out), "--steps", "128"]
     cases = {
@@ -151,40 +143,40 @@ def test_bad_input_is_one_line_and_starts_nothing(cli, capsys, tmp_path, monkeyp
         "needs 999 cores but this machine gives": ["--cores", "999"],
     }  # fmt: skip
     for message, extra in cases.items():
-        assert message in error(cli, capsys, *base, *extra), message
-    assert "unknown behavior 'tinyy'" in error(cli, capsys, "sweep", "tinyy", "--out", str(out))
-    assert "a sweep needs its folder: --out DIR" in error(cli, capsys, "sweep", "tiny")
+        assert message in refused(cli, *base, *extra), message
+    assert "unknown behavior 'tinyy'" in refused(cli, "sweep", "tinyy", "--out", str(out))
+    assert "a sweep needs its folder: --out DIR" in refused(cli, "sweep", "tiny")
     assert not out.exists()
 
 
-def test_ray_missing_or_unreachable_is_one_line(cli, capsys, tmp_path, monkeypatch):
+def test_ray_missing_or_unreachable_is_one_line(cli, refused, tmp_path, monkeypatch):
     out = tmp_path / "sweep"
     base = ["sweep", "tiny", "--out", str(out), "--executor", "ray"]
     with monkeypatch.context() as patch:
         patch.setitem(sys.modules, "ray", None)  # as if not installed
-        err = error(cli, capsys, *base)
+        err = refused(cli, *base)
     assert "needs Ray, which is not installed: pip install 'devlearn[ray]'" in err
     pytest.importorskip("ray")
-    err = error(cli, capsys, *base, "--address", "127.0.0.1:9")
+    err = refused(cli, *base, "--address", "127.0.0.1:9")
     assert "cannot reach the Ray cluster at 127.0.0.1:9" in err
-    assert "--jobs is for the local executor" in error(cli, capsys, *base, "--jobs", "2")
+    assert "--jobs is for the local executor" in refused(cli, *base, "--jobs", "2")
     assert not out.exists()
 
 
-def test_a_folder_of_another_sweep_or_behaviour_is_refused(cli, capsys, tmp_path):
+def test_a_folder_of_another_sweep_or_behaviour_is_refused(cli, refused, tmp_path):
     out = tmp_path / "sweep"
     other = build_spec("other", {"out": str(out), "grid": ["behavior.target=0.3"]}, None)
     SweepFolder(other, None, "devlearn sweep other ...").close()
     before = sorted(p.name for p in out.iterdir())
-    err = error(cli, capsys, "sweep", "tiny", "--out", str(out))
+    err = refused(cli, "sweep", "tiny", "--out", str(out))
     assert f"sweep folder {out} holds a sweep of 'other', not 'tiny'" in err
-    err = error(cli, capsys, "sweep", "other", "--out", str(out), "--steps", "256")
+    err = refused(cli, "sweep", "other", "--out", str(out), "--steps", "256")
     assert "was started with other settings (train.steps was None, now 256)" in err
     assert sorted(p.name for p in out.iterdir()) == before
     run_dir = tmp_path / "a_run"
     run_dir.mkdir()
     (run_dir / "config.json").write_text("{}")
-    err = error(cli, capsys, "sweep", "tiny", "--out", str(run_dir))
+    err = refused(cli, "sweep", "tiny", "--out", str(run_dir))
     assert "is not a sweep folder (no readable sweep.json) and not empty" in err
 
 
@@ -245,13 +237,13 @@ def test_grid_varies_a_learned_reward_option_and_checks_it_up_front(tmp_path):
         plan_sweep(build_spec("self_touch", unknown, None), registry, [])
 
 
-def test_dry_run_checks_what_the_sweep_would_refuse(cli, capsys, tmp_path):
+def test_dry_run_checks_what_the_sweep_would_refuse(cli, refused, tmp_path):
     out = tmp_path / "sweep"
     base = ["sweep", "tiny", "--out", str(out), "--steps", "128", "--dry-run"]
-    assert "needs 99 cores but this machine gives" in error(cli, capsys, *base, "--cores", "99")
+    assert "needs 99 cores but this machine gives" in refused(cli, *base, "--cores", "99")
     long = "0." + "1" * 300
-    err = error(cli, capsys, *base, "--grid", f"behavior.target={long}")
+    err = refused(cli, *base, "--grid", f"behavior.target={long}")
     assert "its folder name would be" in err and "over the file system's 255" in err
-    err = error(cli, capsys, *base, "--seeds", "0-100000000")
+    err = refused(cli, *base, "--seeds", "0-100000000")
     assert "--seeds '0-100000000' lists more than 10,000 seeds" in err
     assert not out.exists()

@@ -55,6 +55,11 @@ def run_dir(registry, tmp_path):
     return out
 
 
+def eval_run(run_dir: Path, *options: str) -> int:
+    """``devlearn eval tiny --checkpoint RUN_DIR --episodes 1 OPTIONS``: its exit code."""
+    return main(["eval", "tiny", "--checkpoint", str(run_dir), "--episodes", "1", *options])
+
+
 def actions_of(registry, checkpoint, policy, seed=0):
     RecordingInfant.log = []
     summary = evaluate("tiny", checkpoint, 2, registry, seed=seed, progress=False, policy=policy)
@@ -121,7 +126,7 @@ def test_cli_baseline(registry, tmp_path, capsys):
 
 
 def test_run_folder_as_checkpoint(registry, run_dir, tmp_path, capsys):
-    assert main(["eval", "tiny", "--checkpoint", str(run_dir), "--episodes", "1"]) == 0
+    assert eval_run(run_dir) == 0
     printed = capsys.readouterr().out
     assert f"written to {run_dir / 'eval'}: eval.json, close.txt" in printed
     empty = tmp_path / "empty"
@@ -144,19 +149,7 @@ def test_summary_is_printed_when_writing_fails(registry, run_dir, tmp_path, caps
         raise OSError(28, "No space left on device")
 
     monkeypatch.setattr("devlearn.testing.fake_infant.CloseEvaluator.write_artifacts", full_disk)
-    code = main(
-        [
-            "eval",
-            "tiny",
-            "--checkpoint",
-            str(run_dir),
-            "--episodes",
-            "1",
-            "--json",
-            "--out",
-            str(tmp_path / "eval"),
-        ]
-    )
+    code = eval_run(run_dir, "--json", "--out", str(tmp_path / "eval"))
     captured = capsys.readouterr()
     assert code == 2 and "No space left on device" in captured.err
     assert json.loads(captured.out)["episodes"] == 1
@@ -214,23 +207,7 @@ def test_rest_start_overrides_the_eval_stage(registry, run_dir, tmp_path, capsys
             progress=False,
         )
     out = tmp_path / "rest"
-    assert (
-        main(
-            [
-                "eval",
-                "tiny",
-                "--checkpoint",
-                str(run_dir),
-                "--episodes",
-                "1",
-                "--start",
-                "rest",
-                "--out",
-                str(out),
-            ]
-        )
-        == 0
-    )
+    assert eval_run(run_dir, "--start", "rest", "--out", str(out)) == 0
     assert json.loads((out / "eval.json").read_text())["protocol"]["start"] == "rest"
 
 

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import functools
 import os
 import sys
 from pathlib import Path
@@ -11,22 +10,15 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "env"))
 
-import devlearn.plugins  # noqa: E402
 from devlearn.api.errors import UsageError  # noqa: E402
-from devlearn.cli import main  # noqa: E402
 from devlearn.config.run_config import RunConfig  # noqa: E402
-from devlearn.testing import registry_for  # noqa: E402
-from devlearn.testing.fake_infant import TinyBehavior, fake_infant_factory  # noqa: E402
+from devlearn.testing.fake_infant import TinyBehavior  # noqa: E402
 from devlearn.training.loggers import logger_config  # noqa: E402
 
 
 @pytest.fixture
-def cli(monkeypatch):
-    registry = registry_for(TinyBehavior)
-    monkeypatch.setattr(devlearn.plugins, "PluginRegistry", lambda *a, **k: registry)
-    fake = functools.partial(fake_infant_factory, episode_steps=10)
-    monkeypatch.setattr("devlearn.env.behavior_env.build_default_infant", fake)
-    return main
+def cli(cli_with):
+    return cli_with(TinyBehavior)
 
 
 def test_logger_config():

@@ -36,13 +36,10 @@ def real():
     """A calibration from real babbling, and its score on fresh babbling (segmentation)."""
     # The scene and babbling of runs before issue #29 (head free, hands raised at rest, actions
     # held 8 steps), where these figures were measured; BabyBench's scene: the README's table.
-    infant = build_infant("sitting", senses=("proprioception", "eyes"))
-    try:
+    with build_infant("sitting", senses=("proprioception", "eyes")) as infant:
         params = calibrate(babble(CALIBRATION_STEPS, seed=0, infant=infant, start="rest"))
         data, segmentation = held_out(infant, HELD_OUT_STEPS, seed=1, start="rest", hold_steps=8)
         yield params, score(HandDetector(params), data, segmentation)
-    finally:
-        infant.close()
 
 
 def test_babbling_finds_arm_correlated_tracks(real):

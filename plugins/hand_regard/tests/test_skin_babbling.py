@@ -24,8 +24,7 @@ TEST_EPISODES, TEST_EPISODE_STEPS = 2, 150
 @pytest.fixture(scope="module")
 def skin():
     """A calibration from real babbling on the skin infant and its score on test frames."""
-    infant = build_infant("sitting", senses=("proprioception", "eyes"), appearance="skin")
-    try:
+    with build_infant("sitting", senses=("proprioception", "eyes"), appearance="skin") as infant:
         # The scene and babbling of runs before issue #29, where the figures were measured.
         params = calibrate(babble(CALIBRATION_STEPS, seed=0, infant=infant, start="rest"))
         data, segmentation = held_out(
@@ -37,8 +36,6 @@ def skin():
             hold_steps=8,
         )
         yield params, score(HandDetector(params), data, segmentation)
-    finally:
-        infant.close()
 
 
 def test_babbling_finds_arm_correlated_skin_coloured_tracks(skin):
