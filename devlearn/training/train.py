@@ -24,7 +24,7 @@ from devlearn.config.resolve import (
     write_config_file,
 )
 from devlearn.config.run_config import RunConfig, to_rsl_rl
-from devlearn.env import DevVecEnv
+from devlearn.env import DevVecEnv, EnvSettings
 from devlearn.training.checkpoint import (
     LATEST,
     RESUME_KEYS,
@@ -284,8 +284,8 @@ def _build(ctx: RunContext) -> tuple[DevVecEnv, DevRunner]:
         "cpu",
         ctx.infant_factory,
         rank,
-        action_repeat=cfg.env.action_repeat,
         age_months=age,
+        settings=EnvSettings(action_repeat=cfg.env.action_repeat),  # the envs' one source
     )
     try:
         train_cfg = to_rsl_rl(cfg, behavior, list(env.observation_shapes))
