@@ -132,6 +132,12 @@ class BehaviorConfig:
     saved. Such a config loads, resumes and evaluates as trained
     (:func:`devlearn.config.run_config.from_dict`); a new run takes the field's default."""
 
+    LEGACY_REWARD_KEYS: ClassVar[dict[str, str]] = {}
+    """Old field -> where its value now lives in the ``rewards`` table (``TERM.weight`` or
+    ``TERM.params.NAME``), for fields moved there after runs were saved: a saved config that
+    still has them loads with the values moved
+    (:func:`devlearn.api.rewards.upgrade_saved_rewards`)."""
+
     def validate(self) -> None:
         """Check the values; called whenever a :class:`Behavior` is built on this config
         (``--set`` assigns fields after the dataclass was made, so ``__post_init__`` alone
