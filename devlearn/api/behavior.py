@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import inspect
+import math
 from abc import ABC, abstractmethod
 from collections.abc import Sequence
 from pathlib import Path
@@ -10,11 +12,13 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 
 from devlearn.api.curriculum import Curriculum, Stage
+from devlearn.api.errors import UsageError
 from devlearn.api.rewards import (
     BatchedIntrinsicReward,
     IntrinsicReward,
     StepContext,
     build_reward_terms,
+    reward_term_cfg,
 )
 
 if TYPE_CHECKING:
@@ -107,6 +111,74 @@ class RunMetrics:
         """Restore :meth:`state_dict`'s output."""
 
 
+WEIGHT_MAX = 1e6
+"""Largest magnitude of a reward term's weight (a larger one times a term's value overflows or
+drowns every other term; rewards are normalised anyway)."""
+
+
+class BehaviorConfig:
+    """A base for a behaviour's config dataclass (its ``config_class``) that declares what the
+    core reads of it besides the fields: a check of the values, and the values old runs were
+    trained with. Optional: a plain dataclass works as a config and gets neither.
+
+    The fields are the behaviour's options (``--set behavior.FIELD=VALUE``, each documented);
+    a ``rewards`` field of term name -> :class:`~devlearn.api.rewards.RewardTermCfg` declares
+    the reward terms (:meth:`Behavior.reward_terms`).
+    """
+
+    LEGACY_DEFAULTS: ClassVar[dict[str, Any]] = {}
+    """Field -> the value a saved config (a run's config.json, a checkpoint's config) that
+    lacks the field was trained with: a field added, or whose default changed, after runs were
+    saved. Such a config loads, resumes and evaluates as trained
+    (:func:`devlearn.config.run_config.from_dict`); a new run takes the field's default."""
+
+    LEGACY_REWARD_KEYS: ClassVar[dict[str, str]] = {}
+    """Old field -> where its value now lives in the ``rewards`` table (``TERM.weight`` or
+    ``TERM.params.NAME``), for fields moved there after runs were saved: a saved config that
+    still has them loads with the values moved
+    (:func:`devlearn.api.rewards.upgrade_saved_rewards`)."""
+
+    def validate(self) -> None:
+        """Check the values; called whenever a :class:`Behavior` is built on this config
+        (``--set`` assigns fields after the dataclass was made, so ``__post_init__`` alone
+        would miss them). Default: nothing to check.
+
+        Raises:
+            ValueError: A wrong value, named with the valid ones (one line).
+        """
+
+
+def check_reward_table(config: Any) -> None:
+    """Refuse a behaviour config whose ``rewards`` table names a class that no installed
+    behaviour or plugin defines (resolved by name among the registered terms, never imported:
+    a config or checkpoint is data), a weight out of bounds or a parameter the class does not
+    take. Every :class:`Behavior` checks its config so when built.
+
+    Raises:
+        UsageError: naming the ``behavior.rewards...`` key and what is valid.
+    """
+    for name, term in (getattr(config, "rewards", None) or {}).items():
+        term = reward_term_cfg(term)
+        try:
+            cls = term.term_class()
+        except UsageError as err:
+            raise UsageError(f"behavior.rewards.{name}.cls: {err}") from None
+        if not (math.isfinite(term.weight) and abs(term.weight) <= WEIGHT_MAX):
+            raise UsageError(
+                f"behavior.rewards.{name}.weight must be a finite number from -{WEIGHT_MAX:g} "
+                f"to {WEIGHT_MAX:g}, got {term.weight:g}"
+            )
+        accepted = inspect.signature(cls).parameters
+        if not any(p.kind is p.VAR_KEYWORD for p in accepted.values()):
+            valid = sorted(k for k in accepted if k not in ("self", "weight"))
+            for param in term.params:
+                if param not in accepted or param == "weight":
+                    raise UsageError(
+                        f"unknown parameter 'behavior.rewards.{name}.params.{param}' of "
+                        f"{cls.__name__}; valid: {', '.join(valid) or 'none'}"
+                    )
+
+
 class Behavior(ABC):
     """What the infant should learn: scene, senses, observations, rewards, curriculum, metrics.
 
@@ -164,7 +236,18 @@ class Behavior(ABC):
     as ``--set behavior.FIELD=VALUE``."""
 
     def __init__(self, config: Any | None = None) -> None:
+        """Build on ``config`` (the config class's defaults when None), checked: its
+        :meth:`BehaviorConfig.validate` and its reward table (:func:`check_reward_table`).
+
+        Raises:
+            ValueError: A value the config's ``validate`` refuses.
+            UsageError: A reward term that names no registered class, a weight out of bounds
+                or a parameter its class does not take.
+        """
         self.config = config if config is not None else self.config_class()
+        if isinstance(self.config, BehaviorConfig):
+            self.config.validate()
+        check_reward_table(self.config)
 
     def facts(self, infant: Infant) -> dict[str, Any]:
         """Compute per-step facts shared by observations, rewards and metrics (once a step)."""

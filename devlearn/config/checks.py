@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import inspect
 import math
 import os
 import re
@@ -12,7 +11,6 @@ from typing import TYPE_CHECKING, Any
 
 from devlearn.ages import check_age
 from devlearn.api.errors import UsageError
-from devlearn.api.rewards import reward_term_cfg
 from devlearn.config.growth import growth_schedule
 from devlearn.timing import EPISODE_STEPS, decision_rate_error
 
@@ -59,9 +57,6 @@ OVERSHOOT_MAX = 10
 """A run trains whole iterations, so a budget below one iteration trains one; beyond this many
 times the budget (``env.action_repeat=1000`` with ``--steps 1024`` trained 128,000 steps) the
 config is refused as a mistake."""
-WEIGHT_MAX = 1e6
-"""Largest magnitude of a reward term's weight (a larger one times a term's value overflows or
-drowns every other term; rewards are normalised anyway)."""
 
 
 def _whole(value: Any, option: str, low: int, high: int, low_note: str = "") -> None:
@@ -103,8 +98,7 @@ def check_config(cfg: RunConfig) -> None:
     if cfg.ppo.desired_kl is not None:
         _positive(cfg, "desired_kl")
     _check_batches(cfg)
-    _check_infant(cfg)
-    check_reward_terms(cfg.behavior)
+    _check_infant(cfg)  # the reward table: when its behaviour is built (check_reward_table)
 
 
 def _check_infant(cfg: RunConfig) -> None:
@@ -146,32 +140,6 @@ def _check_batches(cfg: RunConfig) -> None:
             f"{cfg.ppo.num_steps_per_env} decisions; advantages are normalised per mini-batch); "
             f"at most {max(1, rollout // 2)}"
         )
-
-
-def check_reward_terms(behavior_cfg: Any) -> None:
-    """Refuse a behaviour config whose ``rewards`` table names a class that no installed
-    behaviour or plugin defines (resolved by name among the registered terms, never imported:
-    a config or checkpoint is data)."""
-    for name, term in (getattr(behavior_cfg, "rewards", None) or {}).items():
-        term = reward_term_cfg(term)
-        try:
-            cls = term.term_class()
-        except UsageError as err:
-            raise UsageError(f"behavior.rewards.{name}.cls: {err}") from None
-        if not (math.isfinite(term.weight) and abs(term.weight) <= WEIGHT_MAX):
-            raise UsageError(
-                f"behavior.rewards.{name}.weight must be a finite number from -{WEIGHT_MAX:g} "
-                f"to {WEIGHT_MAX:g}, got {term.weight:g}"
-            )
-        accepted = inspect.signature(cls).parameters
-        if not any(p.kind is p.VAR_KEYWORD for p in accepted.values()):
-            valid = sorted(k for k in accepted if k not in ("self", "weight"))
-            for param in term.params:
-                if param not in accepted or param == "weight":
-                    raise UsageError(
-                        f"unknown parameter 'behavior.rewards.{name}.params.{param}' of "
-                        f"{cls.__name__}; valid: {', '.join(valid) or 'none'}"
-                    )
 
 
 def available_memory_mb() -> float | None:

@@ -13,14 +13,17 @@ from devlearn.config.checks import check_config
 from devlearn.config.run_config import (
     RunConfig,
     apply_preset,
+    build_behavior,
     finish_config,
-    fresh_config,
     from_dict,
+    scale_to_length,
+    start_config,
     to_dict,
 )
-from devlearn.config.values import apply_overrides
+from devlearn.config.values import apply_overrides, override_keys
 
 if TYPE_CHECKING:
+    from devlearn.api.behavior import Behavior
     from devlearn.plugins import PluginRegistry
 
 CONFIG_FILE = "config.json"
@@ -83,16 +86,38 @@ class RunRequest:
     reads one: keys it lacks take the values old runs were trained with)."""
 
 
+@dataclass
+class ResolvedRun:
+    """A resolved run: its checked config and the behaviour built on it (the one instance the
+    run trains, so the behaviour is built, and checks its config, once per run)."""
+
+    cfg: RunConfig
+    """The run config, checked."""
+    behavior: Behavior
+    """The behaviour built on ``cfg.behavior``."""
+
+
 def resolve_config(
     request: RunRequest,
     registry: PluginRegistry,
     read_checkpoint: CheckpointReader | None = None,
 ) -> RunConfig:
+    """The run config ``request`` asks for, checked: :func:`resolve_run`'s config, for a
+    command that needs no behaviour (``devlearn config``, a sweep's plan)."""
+    return resolve_run(request, registry, read_checkpoint).cfg
+
+
+def resolve_run(
+    request: RunRequest,
+    registry: PluginRegistry,
+    read_checkpoint: CheckpointReader | None = None,
+) -> ResolvedRun:
     """The run config ``request`` asks for, checked (every value in bounds, the learner's
-    head, spread bounds and decision rate, the behaviour's ``network()``), ready for
-    :func:`~devlearn.training.train.train`. Every command that builds a run's config builds it
-    here (``devlearn run``, ``config``, ``sweep``, ``eval``'s baselines, ``bench``, the
-    Gymnasium envs), so each checks what ``devlearn run`` checks.
+    head, spread bounds and decision rate, the behaviour's config and ``network()``), with the
+    behaviour built on it, ready for :func:`~devlearn.training.train.train`. Every command
+    that builds a run's config builds it here (``devlearn run``, ``config``, ``sweep``,
+    ``eval``'s baselines, ``bench``, the Gymnasium envs), so each checks what ``devlearn run``
+    checks.
 
     - fresh: defaults < the behaviour's ``train_defaults()`` < preset < top < overrides;
     - ``resume``: the run's ``config.json`` < top < overrides; the seed stays the run's;
@@ -130,6 +155,7 @@ def resolve_config(
     if (request.config_file or request.saved is not None) and request.preset:
         raise UsageError("--config starts from a resolved config; --preset does not apply to it")
     top = {k: v for k, v in request.top.items() if v is not None}
+    behavior: Behavior | None = None
     placed = {**top, "out_dir": request.out_dir} if request.out_dir else top
     if request.resume:
         cfg = _resumed(request, registry, top)
@@ -148,12 +174,18 @@ def resolve_config(
         cfg = _from_saved(data, request, registry, source, new_run=bool(request.config_file))
         apply_overrides(cfg, placed)
         apply_overrides(cfg, request.overrides)
-    else:
+    else:  # fresh: as fresh_config, keeping the behaviour it builds
         behavior_cls = registry.behavior(request.behavior)
-        cfg = fresh_config(behavior_cls, request.overrides, request.preset, **placed)
-    finish_config(cfg, registry.behavior(cfg.behavior_name))
+        cfg, explicit = start_config(behavior_cls, request.preset, **placed)
+        explicit |= override_keys(request.overrides)
+        apply_overrides(cfg, request.overrides)
+        behavior = build_behavior(cfg, behavior_cls)
+        scale_to_length(cfg, behavior, explicit)
+    if behavior is None:
+        behavior = build_behavior(cfg, registry.behavior(cfg.behavior_name))
+    finish_config(cfg, behavior)
     check_config(cfg)
-    return cfg
+    return ResolvedRun(cfg, behavior)
 
 
 def read_config_file(path: str | Path) -> dict[str, Any]:

@@ -8,10 +8,10 @@ import json
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
+from devlearn.api.behavior import BehaviorConfig, check_reward_table
 from devlearn.api.errors import UsageError
 from devlearn.api.rewards import upgrade_saved_rewards
-from devlearn.config.checks import check_reward_terms
-from devlearn.config.values import apply_overrides, convert, field_types
+from devlearn.config.values import apply_overrides, convert, field_types, override_keys
 
 if TYPE_CHECKING:
     from devlearn.api.behavior import Behavior
@@ -233,54 +233,82 @@ def fresh_config(
 ) -> RunConfig:
     """A new run's config, unchecked: defaults < the behaviour's ``train_defaults()`` < its
     preset ``preset`` < ``top`` < overrides, then the behaviour's
-    ``run_length_defaults(total_steps)`` for the keys neither the preset nor an override set.
-    Checked only by :func:`devlearn.config.resolve.resolve_config`, the one way a run's
-    config is built.
+    ``run_length_defaults(total_steps)`` for the keys neither the preset nor an override set
+    (:func:`start_config`, :func:`scale_to_length`: the steps
+    :func:`devlearn.config.resolve.resolve_config` takes, checking the result, for a run).
 
     Raises:
         UsageError: An unknown preset (the valid ones named) or a bad override.
     """
-    cfg = new_config(behavior_cls)
-    apply_overrides(cfg, behavior_cls(cfg.behavior).train_defaults())
-    explicit: set[str] = set()
-    if preset:
-        apply_preset(cfg, behavior_cls, preset)
-        explicit |= set(behavior_cls(cfg.behavior).presets()[preset])
-    apply_overrides(cfg, {k: v for k, v in top.items() if v is not None})
+    cfg, explicit = start_config(behavior_cls, preset, **top)
     apply_overrides(cfg, overrides or [])
-    given = overrides.items() if isinstance(overrides, dict) else (overrides or [])
-    explicit |= {str(o[0] if isinstance(o, tuple) else o).split("=", 1)[0].strip() for o in given}
-    # values that scale with the run's length, unless --set or the preset gave them
-    try:  # the behaviour checks its own fields when built: say so in one line
-        scaled = behavior_cls(cfg.behavior).run_length_defaults(int(cfg.total_steps))
-    except ValueError as err:
-        raise UsageError(f"{behavior_cls.name}: {err}") from None
-    apply_overrides(cfg, {k: v for k, v in scaled.items() if k not in explicit})
+    scale_to_length(cfg, build_behavior(cfg, behavior_cls), explicit | override_keys(overrides))
     return cfg
 
 
-def finish_config(cfg: RunConfig, behavior_cls: type[Behavior]) -> None:
-    """Check ``cfg`` against the network its behaviour builds under it and record the layout
-    the behaviour chooses where ``network.layout`` is empty (so config.json says it).
+def start_config(
+    behavior_cls: type[Behavior], preset: str | None = None, **top: Any
+) -> tuple[RunConfig, set[str]]:
+    """A new run's config before ``--set`` and the run-length defaults: defaults < the
+    behaviour's ``train_defaults()`` < its preset ``preset`` < ``top`` (None values skipped);
+    with the keys the preset sets (which :func:`scale_to_length` keeps).
+
+    Raises:
+        UsageError: An unknown preset (the valid ones named) or a bad value.
+    """
+    cfg = new_config(behavior_cls)
+    defaults = behavior_cls(cfg.behavior)  # the default config's: run settings are data
+    apply_overrides(cfg, defaults.train_defaults())
+    explicit: set[str] = set()
+    if preset:
+        apply_preset(cfg, behavior_cls, preset)
+        explicit |= set(defaults.presets()[preset])
+    apply_overrides(cfg, {k: v for k, v in top.items() if v is not None})
+    return cfg, explicit
+
+
+def scale_to_length(cfg: RunConfig, behavior: Behavior, keep: set[str]) -> None:
+    """Apply ``behavior.run_length_defaults(cfg.total_steps)`` (values that scale with the
+    run's length) to a new run's ``cfg``, except the keys in ``keep`` (what ``--set`` or the
+    preset gave). ``behavior`` is the one built on ``cfg.behavior``, so it sees the values."""
+    scaled = behavior.run_length_defaults(int(cfg.total_steps))
+    apply_overrides(cfg, {k: v for k, v in scaled.items() if k not in keep})
+
+
+def build_behavior(cfg: RunConfig, behavior_cls: type[Behavior]) -> Behavior:
+    """The behaviour a run of ``cfg`` trains, built on ``cfg.behavior`` (which it checks:
+    the config's ``validate`` and its reward table).
+
+    Raises:
+        UsageError: The behaviour refuses its config (one line naming the behaviour).
+    """
+    try:
+        return behavior_cls(cfg.behavior)
+    except (ValueError, TypeError) as err:
+        raise UsageError(f"{behavior_cls.name}: {err}") from None
+
+
+def finish_config(cfg: RunConfig, behavior: Behavior) -> None:
+    """Check ``cfg`` against the network ``behavior`` (the behaviour built on it) builds
+    under it and record the layout the behaviour chooses where ``network.layout`` is empty (so
+    config.json says it).
 
     Raises:
         UsageError: The behaviour's ``network()`` rejects the config, or the head, spread
             bounds or decision rate are invalid (:func:`check_learner`).
     """
+    name = type(behavior).name
     try:  # the spec checks its own values (e.g. the spread): say so before any env starts
-        behavior = behavior_cls(cfg.behavior)  # one instance answers both questions
         spec = behavior.network()
     except ValueError as err:
         raise UsageError(
-            f"{behavior_cls.name}: its network() rejects the config: {err} "
+            f"{name}: its network() rejects the config: {err} "
             "(set through --set behavior.FIELD=VALUE, e.g. behavior.max_std)"
         ) from err
     try:  # stage lengths are the behaviour's fields: a negative one fails here, not in a worker
         behavior.curriculum()
     except ValueError as err:
-        raise UsageError(
-            f"{behavior_cls.name}: its curriculum() rejects the config: {err}"
-        ) from err
+        raise UsageError(f"{name}: its curriculum() rejects the config: {err}") from err
     if not cfg.network.layout:
         cfg.network.layout = "shared" if spec.share else "separate"
     check_learner(cfg, spec)
@@ -361,7 +389,8 @@ def from_dict(
     A saved run's config (a checkpoint's, a run folder's): a key it lacks takes its default,
     except where the old runs were trained otherwise: a missing ``network`` section means
     :data:`LEGACY_NETWORK`, a core field of :data:`LEGACY_FIELDS` takes its value there, and a
-    behaviour field named in its config class's ``LEGACY_DEFAULTS`` (field -> value) that the
+    behaviour field named in its config class's
+    :attr:`~devlearn.api.behavior.BehaviorConfig.LEGACY_DEFAULTS` (field -> value) that the
     saved ``behavior`` section lacks takes that value (a default changed after those runs).
 
     ``new_run``: ``data`` is a new run's config file (``devlearn run --config``): a key it
@@ -380,10 +409,11 @@ def from_dict(
         # reward fields a config saved before issue #31 holds move into ``rewards``
         saved = upgrade_saved_rewards(saved, type(cfg.behavior))
         data = {**data, "behavior": saved}
-        legacy = {} if new_run else getattr(type(cfg.behavior), "LEGACY_DEFAULTS", {})
+        declared = isinstance(cfg.behavior, BehaviorConfig)
+        legacy = cfg.behavior.LEGACY_DEFAULTS if declared and not new_run else {}
         _fill(cfg.behavior, {k: v for k, v in legacy.items() if k not in saved}, "behavior.")
     _fill(cfg, data, "")
-    check_reward_terms(cfg.behavior)
+    check_reward_table(cfg.behavior)
     return cfg
 
 

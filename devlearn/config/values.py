@@ -241,6 +241,13 @@ def apply_overrides(cfg: Any, overrides: list[str] | dict[str, Any]) -> Any:
     return cfg
 
 
+def override_keys(overrides: list[str] | dict[str, Any] | None) -> set[str]:
+    """The dotted keys that ``overrides`` (as :func:`apply_overrides` takes them) sets."""
+    if isinstance(overrides, dict):
+        return {str(key).strip() for key in overrides}
+    return {text.partition("=")[0].strip() for text in overrides or []}
+
+
 def suggest_key(key: str, keys: list[str]) -> str | None:
     """The valid key closest to a mistyped ``key`` (by its last part, then as a whole)."""
     leaf = key.rsplit(".", 1)[-1]

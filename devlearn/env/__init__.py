@@ -5,12 +5,13 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 from devlearn.env.behavior_env import BehaviorEnv
+from devlearn.env.settings import EnvSettings
 from devlearn.env.workers import EnvWorkerError
 
 if TYPE_CHECKING:
     from devlearn.env.vec_env import DevVecEnv
 
-__all__ = ["BehaviorEnv", "DevVecEnv", "EnvWorkerError"]
+__all__ = ["BehaviorEnv", "DevVecEnv", "EnvSettings", "EnvWorkerError"]
 
 
 def __getattr__(name: str) -> Any:

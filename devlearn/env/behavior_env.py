@@ -21,6 +21,7 @@ from devlearn.env.guards import (
     check_reward,
     reward_within_bound,
 )
+from devlearn.env.settings import EnvSettings
 from devlearn.timing import decision_rate_error
 
 if TYPE_CHECKING:
@@ -70,10 +71,13 @@ class BehaviorEnv:
             tests pass a fake one.
         training: Passed to ``behavior.evaluator`` (False for ``devlearn eval``).
         index: This env's index on its rank (named by the reward and observation guards).
-        action_repeat: Physics steps per decision (:func:`step_batch`); must divide the
-            episode length, so every episode ends on a decision's last physics step.
+        action_repeat: Shorthand for ``settings=EnvSettings(action_repeat)``; not with
+            ``settings``.
         age_months: The body's age (``infant.age_months``; None: the default body), passed to
             the factory only when set, so factories that know no ages keep working.
+        settings: The run's settled env settings (default ``EnvSettings()``); its
+            ``action_repeat`` must divide the episode length, so every episode ends on a
+            decision's last physics step.
     """
 
     def __init__(
@@ -83,9 +87,12 @@ class BehaviorEnv:
         infant_factory: InfantFactory | None = None,
         training: bool = True,
         index: int = 0,
-        action_repeat: int = 1,
+        action_repeat: int | None = None,
         age_months: float | None = None,
+        settings: EnvSettings | None = None,
     ) -> None:
+        self.settings = env_settings(settings, action_repeat)
+        """The run's settled env settings (the decision rate)."""
         self.behavior = behavior
         self.index = index
         self._factory = infant_factory or build_default_infant
@@ -113,9 +120,13 @@ class BehaviorEnv:
         self.final_observation: dict[str, np.ndarray] | None = None
         """A copy of the last observation of the latest episode that ended (the env has reset
         since, so :meth:`step` returned the next episode's first); None before any ended."""
-        self.action_repeat = int(action_repeat)
         if error := decision_rate_error(self.action_repeat, self.episode_steps):
             raise ValueError(error)  # checked before any worker starts too (check_config)
+
+    @property
+    def action_repeat(self) -> int:
+        """Physics steps per decision (:attr:`settings`)."""
+        return self.settings.action_repeat
 
     def _build_infant(self) -> Any:
         options = self.behavior.infant_options()
@@ -301,6 +312,20 @@ def term_values(envs: list[BehaviorEnv], contexts: list[StepContext]) -> np.ndar
             check_reward(terms[k].name, float(raw[k, i]), envs[i].index, contexts[i].step)
     weights = np.array([term.weight for term in terms])[:, None]
     return weights * raw
+
+
+def env_settings(settings: EnvSettings | None, action_repeat: int | None = None) -> EnvSettings:
+    """``settings``, or the settings ``action_repeat`` gives (the shorthand of
+    :class:`BehaviorEnv` and :class:`~devlearn.env.vec_env.DevVecEnv`), or the defaults.
+
+    Raises:
+        TypeError: Both were given (two sources of one value).
+    """
+    if settings is not None and action_repeat is not None:
+        raise TypeError("give settings or action_repeat, not both")
+    if settings is not None:
+        return settings
+    return EnvSettings() if action_repeat is None else EnvSettings(int(action_repeat))
 
 
 def step_batch(

@@ -16,6 +16,7 @@ from devlearn.env.behavior_env import (
     EPISODE_RECORD,
     InfantFactory,
     batched_reward_terms,
+    env_settings,
     load_run_memories,
     merge_run_memories,
     run_memories,
@@ -25,6 +26,7 @@ from devlearn.env.workers import EpisodeInfos, WorkerPool, make_envs, step_envs
 
 if TYPE_CHECKING:
     from devlearn.api.behavior import Behavior
+    from devlearn.env.settings import EnvSettings
 
 
 class DevVecEnv(VecEnv):
@@ -46,10 +48,13 @@ class DevVecEnv(VecEnv):
         infant_factory: ``factory(scene, senses=...) -> Infant`` (default: the real infant);
             must be picklable when ``workers >= 1``.
         rank: Distributed rank for seeding (default: ``$RANK`` or 0).
-        action_repeat: Physics steps per ``step`` call, one action held over them (see
-            :func:`~devlearn.env.behavior_env.step_batch`); rewards are their sum.
+        action_repeat: Shorthand for ``settings=EnvSettings(action_repeat)``; not with
+            ``settings``.
         age_months: The body's age (months; None: the default body); :meth:`set_age`
             changes it.
+        settings: The run's settled env settings (default ``EnvSettings()``), handed down to
+            every env: its ``action_repeat`` physics steps per ``step`` call, one action held
+            over them (see :func:`~devlearn.env.behavior_env.step_batch`), rewards their sum.
     """
 
     def __init__(
@@ -61,25 +66,28 @@ class DevVecEnv(VecEnv):
         device: str = "cpu",
         infant_factory: InfantFactory | None = None,
         rank: int | None = None,
-        action_repeat: int = 1,
+        action_repeat: int | None = None,
         age_months: float | None = None,
+        settings: EnvSettings | None = None,
     ) -> None:
         if num_envs < 1:
             raise ValueError(f"num_envs must be at least 1, got {num_envs}")
         rank = int(os.environ.get("RANK", "0")) if rank is None else rank
         seeds = [seed + rank * num_envs + i for i in range(num_envs)]
+        self.settings = env_settings(settings, action_repeat)
+        """The run's settled env settings, as every env has them."""
         self.behavior_name = behavior.name
         self._pool: WorkerPool | None = None
         self._envs: list = []
         if workers > 0:
             self._pool = WorkerPool(
-                behavior, seeds, workers, infant_factory, action_repeat, age_months=age_months
+                behavior, seeds, workers, infant_factory, self.settings, age_months=age_months
             )
             spec = self._pool.spec
             self._merge_terms = batched_reward_terms(behavior)  # merge rules of the run memory
         else:
             self._envs = make_envs(
-                behavior, seeds, infant_factory, action_repeat=action_repeat, age_months=age_months
+                behavior, seeds, infant_factory, settings=self.settings, age_months=age_months
             )
             first = [env.reset() for env in self._envs]
             spec = env_spec(self._envs[0], first[0])

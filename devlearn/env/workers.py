@@ -26,6 +26,7 @@ from devlearn.env.behavior_env import (
 )
 from devlearn.env.buffers import attach, env_spec, write_obs
 from devlearn.env.guards import GuardError
+from devlearn.env.settings import EnvSettings
 
 if TYPE_CHECKING:
     from multiprocessing.connection import Connection
@@ -77,12 +78,13 @@ def make_envs(
     seeds: list[int],
     infant_factory: InfantFactory | None,
     offset: int = 0,
-    action_repeat: int = 1,
+    settings: EnvSettings | None = None,
     age_months: float | None = None,
     training: bool = True,
 ) -> list:
     """Build one BehaviorEnv per seed (indices ``offset...``), each with its own copy of the
-    behaviour, the decision rate ``action_repeat``, the body at ``age_months`` and an evaluator
+    behaviour, the run's ``settings`` (default ``EnvSettings()``), the body at ``age_months``
+    and an evaluator
     for ``training`` (False: ``devlearn eval``'s); the envs share their batched reward terms
     (one instance over all of them)."""
     envs = [
@@ -92,8 +94,8 @@ def make_envs(
             infant_factory,
             training=training,
             index=offset + i,
-            action_repeat=action_repeat,
             age_months=age_months,
+            settings=settings,
         )
         for i, s in enumerate(seeds)
     ]
@@ -116,7 +118,7 @@ def worker_main(
     seeds: list[int],
     offset: int,
     infant_factory: InfantFactory | None,
-    action_repeat: int = 1,
+    settings: EnvSettings | None = None,
     age_months: float | None = None,
     training: bool = True,
 ) -> None:
@@ -134,9 +136,7 @@ def worker_main(
     blocks: list = []
     arrays: dict[str, np.ndarray] = {}
     try:
-        envs = make_envs(
-            behavior, seeds, infant_factory, offset, action_repeat, age_months, training
-        )
+        envs = make_envs(behavior, seeds, infant_factory, offset, settings, age_months, training)
         first = [env.reset() for env in envs]
         conn.send(("ok", env_spec(envs[0], first[0])))
         while True:
@@ -229,7 +229,7 @@ class WorkerPool:
         seeds: One seed per env, in global order.
         workers: Number of processes (at most one per env).
         infant_factory: Picklable infant factory (None: the real infant).
-        action_repeat: Physics steps per step command (the decision rate).
+        settings: The run's settled env settings (the decision rate), handed to every env.
         age_months: The body's age (None: the default body).
         context: multiprocessing start method; ``spawn`` (default) imports everything afresh, so
             no parent state (threads, torch, open files) leaks into workers.
@@ -242,7 +242,7 @@ class WorkerPool:
         seeds: list[int],
         workers: int,
         infant_factory: InfantFactory | None = None,
-        action_repeat: int = 1,
+        settings: EnvSettings | None = None,
         context: str = "spawn",
         age_months: float | None = None,
         training: bool = True,
@@ -264,7 +264,7 @@ class WorkerPool:
                         chunk_seeds,
                         int(chunk[0]),
                         infant_factory,
-                        action_repeat,
+                        settings,
                         age_months,
                         training,
                     ),

@@ -37,6 +37,7 @@ import torch
 
 from devlearn.api.errors import UsageError
 from devlearn.env.behavior_env import step_batch
+from devlearn.env.settings import EnvSettings
 from devlearn.env.workers import WorkerPool, make_envs
 from devlearn.training.checkpoint import observation_batch
 
@@ -395,11 +396,12 @@ class Players:
         age_months: float | None = None,
     ) -> None:
         seeds = [seed] * slots  # every slot seeds its generator afresh anyway
+        settings = EnvSettings(action_repeat=action_repeat)
         self.envs: list[BehaviorEnv] = []
         self.pool: WorkerPool | None = None
         if workers == 0:
             self.envs = make_envs(
-                behavior, seeds, infant_factory, 0, action_repeat, age_months, training=False
+                behavior, seeds, infant_factory, 0, settings, age_months, training=False
             )
         else:
             self.pool = WorkerPool(
@@ -407,7 +409,7 @@ class Players:
                 seeds,
                 workers,
                 infant_factory,
-                action_repeat,
+                settings,
                 age_months=age_months,
                 training=False,
             )

@@ -166,7 +166,7 @@ class DevRunner:
         self.learned = (learned or LearnedRewards()).build(
             env.observation_shapes, env.num_actions, self.device
         )
-        self.action_repeat = int(cfg.env.action_repeat)
+        self.action_repeat = env.settings.action_repeat  # the envs' own (EnvSettings)
         self.reward_norm = None
         if cfg.ppo.normalize_rewards:
             self.reward_norm = RewardNormalizer(

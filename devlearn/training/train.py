@@ -16,9 +16,15 @@ import torch
 from devlearn.api.errors import UsageError
 from devlearn.config.checks import check_memory, check_out_dir, holds_run
 from devlearn.config.growth import growth_schedule, start_age
-from devlearn.config.resolve import CONFIG_FILE, RunRequest, resolve_config, write_config_file
+from devlearn.config.resolve import (
+    CONFIG_FILE,
+    ResolvedRun,
+    RunRequest,
+    resolve_run,
+    write_config_file,
+)
 from devlearn.config.run_config import RunConfig, to_rsl_rl
-from devlearn.env import DevVecEnv
+from devlearn.env import DevVecEnv, EnvSettings
 from devlearn.training.checkpoint import (
     LATEST,
     RESUME_KEYS,
@@ -42,6 +48,7 @@ from devlearn.training.run_folder import copy_metrics, start_up
 from devlearn.training.runner import DevRunner
 
 if TYPE_CHECKING:
+    from devlearn.api.behavior import Behavior
     from devlearn.env.behavior_env import InfantFactory
     from devlearn.plugins import PluginRegistry
 
@@ -92,6 +99,9 @@ class RunContext:
     """Infant builder for the envs (tests); None: the real infant."""
     progress: bool = True
     """Show the progress bar."""
+    behavior: Behavior | None = None
+    """The behaviour resolving built on ``cfg.behavior`` (:class:`ResolvedRun`); None: built
+    here from the config."""
 
 
 def default_run_dir(behavior_name: str) -> Path:
@@ -111,7 +121,7 @@ def check_resumable(cfg: RunConfig, checkpoint: dict[str, Any], path: str | Path
 
 
 def train(
-    cfg: RunConfig | None,
+    cfg: RunConfig | ResolvedRun | None,
     registry: PluginRegistry,
     *,
     resume: str | Path | None = None,
@@ -124,9 +134,10 @@ def train(
     """Train ``cfg.behavior_name`` with PPO; return where and how far it got.
 
     Args:
-        cfg: The run config, checked: from
-            :func:`~devlearn.config.resolve.resolve_config` (with ``resume``: None reads
-            the run's config.json).
+        cfg: The run, checked: :func:`~devlearn.config.resolve.resolve_run`'s (the config
+            and the behaviour built on it, which the run trains), or
+            :func:`~devlearn.config.resolve.resolve_config`'s config alone (the behaviour is
+            then built again from it); with ``resume``, None reads the run's config.json.
         registry: Plugin registry (``.behavior(name)``).
         resume: A run directory to continue from its newest complete checkpoint: step counter,
             curriculum stage, reward-term state, networks and optimiser are restored.
@@ -157,10 +168,15 @@ def train(
     # Config (and, when resuming, the checkpoint it continues from).
     checkpoint: dict[str, Any] | None = None
     ckpt_path: str | Path | None = None
+    behavior: Behavior | None = None
+    if resume is not None:
+        ckpt_path, checkpoint = resume_checkpoint(Path(resume))
+        cfg = cfg or resolve_run(RunRequest(resume=str(resume)), registry)
+    if isinstance(cfg, ResolvedRun):  # the behaviour resolving built, and checked, for it
+        cfg, behavior = cfg.cfg, cfg.behavior
     if resume is not None:
         run_dir = Path(resume)
-        ckpt_path, checkpoint = resume_checkpoint(run_dir)
-        cfg = cfg or resolve_config(RunRequest(resume=str(run_dir)), registry)
+        assert cfg is not None and checkpoint is not None and ckpt_path is not None
         check_resumable(cfg, checkpoint, ckpt_path)
     elif cfg is None:
         raise UsageError("train() needs a config or a run directory to resume")
@@ -191,7 +207,7 @@ def train(
     check_memory(cfg.num_envs, cfg.workers)
     ctx = RunContext(
         cfg, registry, run_dir, rank, world_size, device, learned,
-        checkpoint, ckpt_path, start_from, infant_factory, progress,
+        checkpoint, ckpt_path, start_from, infant_factory, progress, behavior,
     )  # fmt: skip
     with start_up(run_dir, replace=force and resume is None, owner=rank == 0):
         env, runner = _build(ctx)
@@ -232,7 +248,7 @@ def _build(ctx: RunContext) -> tuple[DevVecEnv, DevRunner]:
 
     # Behaviour: one-off preparation, then the resolved config is written next to the logs.
     # With several ranks, rank 0 prepares first; the others then reuse what it saved.
-    behavior = ctx.registry.create(cfg.behavior_name, cfg.behavior)
+    behavior = ctx.behavior or ctx.registry.create(cfg.behavior_name, cfg.behavior)
     run_dir.mkdir(parents=True, exist_ok=True)
     if rank == 0:
         remove_temporaries(run_dir)
@@ -268,8 +284,8 @@ def _build(ctx: RunContext) -> tuple[DevVecEnv, DevRunner]:
         "cpu",
         ctx.infant_factory,
         rank,
-        action_repeat=cfg.env.action_repeat,
         age_months=age,
+        settings=EnvSettings(action_repeat=cfg.env.action_repeat),  # the envs' one source
     )
     try:
         train_cfg = to_rsl_rl(cfg, behavior, list(env.observation_shapes))

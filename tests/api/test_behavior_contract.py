@@ -5,11 +5,23 @@ from __future__ import annotations
 
 import inspect
 import re
+from dataclasses import dataclass, field
 from pathlib import Path
 
+import pytest
+
 import devlearn
-from devlearn.api.behavior import BEHAVIOR_CORE, BEHAVIOR_OPTIONAL, Behavior, Evaluator
+from devlearn.api.behavior import (
+    BEHAVIOR_CORE,
+    BEHAVIOR_OPTIONAL,
+    Behavior,
+    BehaviorConfig,
+    Evaluator,
+)
+from devlearn.api.errors import UsageError
+from devlearn.api.rewards import RewardTermCfg
 from devlearn.testing import TinyBehavior
+from devlearn.testing.fake_infant import TinyConfig
 
 
 def public_members(cls: type) -> set[str]:
@@ -62,3 +74,62 @@ def test_the_class_source_lists_the_core_first():
         last_core = max(i for i, n in enumerate(written) if n in BEHAVIOR_CORE)
         first_optional = min(i for i, n in enumerate(written) if n in optional)
         assert last_core < first_optional, written
+
+
+class Hold(devlearn.IntrinsicReward):
+    """A reward term for the config checks below (pays nothing)."""
+
+    name = "hold"
+
+    def __init__(self, weight: float = 1.0, scale: float = 1.0) -> None:
+        super().__init__(weight)
+        self.scale = scale
+
+    def __call__(self, ctx: devlearn.StepContext) -> float:
+        return 0.0
+
+
+@dataclass
+class CheckedConfig(TinyConfig, BehaviorConfig):
+    """A tiny config that declares a check and a reward table."""
+
+    rewards: dict[str, RewardTermCfg] = field(
+        default_factory=lambda: {"hold": RewardTermCfg(Hold, 0.5)}
+    )
+
+    def validate(self) -> None:
+        if self.target < 0:
+            raise ValueError(f"target must be at least 0, got {self.target}")
+
+
+class Checked(TinyBehavior):
+    config_class = CheckedConfig
+
+
+def test_a_behaviour_checks_its_config_whenever_it_is_built():
+    # ``--set`` assigns fields after the config was made: the behaviour built on it checks
+    # them (its config's declared validate, and the reward table), whoever builds it.
+    assert Checked().config.rewards["hold"].weight == 0.5
+    config = CheckedConfig()
+    config.target = -1.0
+    with pytest.raises(ValueError, match="target must be at least 0, got -1.0"):
+        Checked(config)
+    config = CheckedConfig()
+    config.rewards["hold"].weight = 1e9
+    with pytest.raises(UsageError, match=r"behavior.rewards.hold.weight must be a finite"):
+        Checked(config)
+    config = CheckedConfig()
+    config.rewards["hold"].params["speed"] = 2.0
+    with pytest.raises(UsageError, match="'behavior.rewards.hold.params.speed' of Hold; valid"):
+        Checked(config)
+    config = CheckedConfig()
+    config.rewards["hold"].cls = "nowhere:Hold"
+    with pytest.raises(UsageError, match="behavior.rewards.hold.cls: unknown reward term class"):
+        Checked(config)
+
+
+def test_a_plain_dataclass_config_declares_nothing():
+    # BehaviorConfig is optional: a plain dataclass works and has no check or legacy values.
+    assert not isinstance(TinyConfig(), BehaviorConfig)
+    assert TinyBehavior(TinyConfig(target=-1.0)).config.target == -1.0
+    assert BehaviorConfig.LEGACY_DEFAULTS == {}

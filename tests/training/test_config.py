@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 import json
+from dataclasses import dataclass
+from typing import Any, ClassVar
 
 import pytest
 import tiny_run
 
+from devlearn.api.behavior import BehaviorConfig
 from devlearn.api.errors import UsageError
 from devlearn.config.run_config import (
     RunConfig,
@@ -117,15 +120,27 @@ def test_dict_round_trip_through_json():
         from_dict({**data, "ppo": {**data["ppo"], "bogus": 1}}, TinyBehavior)
 
 
-def test_legacy_defaults_fill_fields_an_old_saved_config_lacks(monkeypatch):
-    # A field added after a run was saved: that run loads with the legacy value, a run saved
-    # with the field keeps its own, and a config without a behaviour section gets defaults.
-    monkeypatch.setattr(TinyConfig, "LEGACY_DEFAULTS", {"target": 0.9}, raising=False)
-    data = to_dict(run_config(TinyBehavior, ["behavior.target=0.25"]))
-    assert from_dict(data, TinyBehavior).behavior.target == 0.25
+@dataclass
+class LegacyTinyConfig(TinyConfig, BehaviorConfig):
+    """The tiny config after its ``target`` default changed: old runs trained with 0.9."""
+
+    LEGACY_DEFAULTS: ClassVar[dict[str, Any]] = {"target": 0.9}
+
+
+class LegacyTiny(TinyBehavior):
+    config_class = LegacyTinyConfig
+
+
+def test_legacy_defaults_fill_fields_an_old_saved_config_lacks():
+    # A field added after a run was saved: that run loads with the legacy value its config
+    # class declares (BehaviorConfig.LEGACY_DEFAULTS), a run saved with the field keeps its
+    # own, a config without a behaviour section and a new run's config file get defaults.
+    data = to_dict(run_config(LegacyTiny, ["behavior.target=0.25"]))
+    assert from_dict(data, LegacyTiny).behavior.target == 0.25
     del data["behavior"]["target"]
-    assert from_dict(data, TinyBehavior).behavior.target == 0.9
-    assert from_dict({}, TinyBehavior).behavior.target == TinyConfig().target
+    assert from_dict(data, LegacyTiny).behavior.target == 0.9
+    assert from_dict(data, LegacyTiny, new_run=True).behavior.target == TinyConfig().target
+    assert from_dict({}, LegacyTiny).behavior.target == TinyConfig().target
 
 
 def test_to_rsl_rl():

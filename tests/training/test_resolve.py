@@ -11,7 +11,7 @@ import tiny_run
 import torch
 
 from devlearn.api.errors import UsageError
-from devlearn.config.resolve import RunRequest, resolve_config, write_config_file
+from devlearn.config.resolve import RunRequest, resolve_config, resolve_run, write_config_file
 from devlearn.config.run_config import to_dict
 from devlearn.env import BehaviorEnv
 from devlearn.testing.fake_infant import TinyBehavior
@@ -149,3 +149,36 @@ def test_checkpoint_opens_config_behaviour_and_actor(trained):
     assert action.shape == (env.action_dim,) and np.all(np.isfinite(action))
     with pytest.raises(UsageError, match="trained for 'tiny', not 'other'"):
         Checkpoint.open(trained / "checkpoint_latest.pt", REGISTRY, "other")
+
+
+def test_a_run_trains_the_one_behaviour_resolving_built_and_checked(tmp_path, monkeypatch):
+    # resolve_run builds the behaviour on the final config (after --set and the run-length
+    # defaults) and the run trains that instance: train builds none of its own.
+    request = RunRequest(
+        "tiny",
+        ["behavior.target=0.7"],
+        top={"total_steps": 32, "num_envs": 4, "workers": 0, "save_interval": 1},
+        out_dir=str(tmp_path / "run"),
+    )
+    resolved = resolve_run(request, REGISTRY)
+    assert isinstance(resolved.behavior, TinyBehavior)
+    assert resolved.behavior.config is resolved.cfg.behavior
+    assert resolved.behavior.config.target == 0.7
+    built: list[TinyBehavior] = []
+    init = TinyBehavior.__init__
+
+    def counted(self, config=None):
+        built.append(self)
+        init(self, config)
+
+    monkeypatch.setattr(TinyBehavior, "__init__", counted)
+    result = train(resolved, REGISTRY, infant_factory=tiny_run.factory, progress=False)
+    assert result.env_steps == 32
+    assert built == []
+    # a bare config (resolve_config's) still trains: its behaviour is built from it
+    cfg = resolve_config(
+        RunRequest("tiny", top=request.top, out_dir=str(tmp_path / "two")), REGISTRY
+    )
+    built.clear()
+    train(cfg, REGISTRY, infant_factory=tiny_run.factory, progress=False)
+    assert len(built) == 1

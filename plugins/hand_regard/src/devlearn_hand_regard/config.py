@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
+from devlearn.api.behavior import BehaviorConfig
 from devlearn.api.rewards import RewardTermCfg
 from devlearn_hand_regard.rewards import BilateralBalance, HandCount, HandMotion, LivingPenalty
 
@@ -42,7 +43,7 @@ HAND_ATTRIBUTION_CHOICES = ("visibility", "position")
 
 
 @dataclass
-class HandRegardConfig:
+class HandRegardConfig(BehaviorConfig):
     """Everything the hand_regard behaviour can be told; paper defaults unless noted."""
 
     LEGACY_DEFAULTS: ClassVar[dict[str, Any]] = {

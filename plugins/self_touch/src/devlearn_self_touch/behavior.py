@@ -47,9 +47,7 @@ class SelfTouch(Behavior):
     config_class = SelfTouchConfig
     headline_metric = "score"
 
-    def __init__(self, config: SelfTouchConfig | None = None) -> None:
-        super().__init__(config)
-        self.config.validate()  # ``--set`` assigns fields after construction
+    config: SelfTouchConfig  # checked by SelfTouchConfig.validate whenever built
 
     # --- observations -------------------------------------------------------------------
     def facts(self, infant: Infant) -> dict[str, Any]:

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
+from devlearn.api.behavior import BehaviorConfig
 from devlearn.api.rewards import RewardTermCfg
 from devlearn_self_touch.rewards import (
     LIFETIME_MEMORIES,
@@ -48,7 +49,7 @@ def paper_rewards() -> dict[str, RewardTermCfg]:
 
 
 @dataclass
-class SelfTouchConfig:
+class SelfTouchConfig(BehaviorConfig):
     """Options of :class:`devlearn_self_touch.SelfTouch`; overridable as ``--set behavior.X=V``.
 
     Defaults reproduce the paper (Baby Sophia, sec. II-A) unless a field says otherwise: the

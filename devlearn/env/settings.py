@@ -1,0 +1,28 @@
+"""EnvSettings: the settled values every environment of a run steps with, in one frozen object."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class EnvSettings:
+    """What a run's config settled for its environments (its ``env`` section), made once by
+    whoever builds the envs (the run from its resolved config, ``devlearn eval`` from the
+    policy's) and handed unchanged down the layers: :class:`~devlearn.env.vec_env.DevVecEnv`,
+    :class:`~devlearn.env.workers.WorkerPool`, each worker, :func:`~devlearn.env.workers.make_envs`
+    and every :class:`~devlearn.env.behavior_env.BehaviorEnv`, which reads it from here, so
+    that the runner and the envs read one value. Frozen: nothing below changes it.
+
+    The body's age is not here: it is where a growing run is (``set_age`` changes it), not a
+    setting.
+    """
+
+    action_repeat: int = 1
+    """Physics steps per decision: one action held over them, their rewards summed
+    (``env.action_repeat``; :func:`~devlearn.env.behavior_env.step_batch`). Must divide the
+    episode length (checked where the body is built)."""
+
+    def __post_init__(self) -> None:
+        if isinstance(self.action_repeat, bool) or not isinstance(self.action_repeat, int):
+            raise TypeError(f"action_repeat must be an int, got {self.action_repeat!r}")
