@@ -385,17 +385,19 @@ def build_reward_terms(
     ]
 
 
-def upgrade_saved_rewards(saved: Mapping[str, Any], config_class: type) -> dict[str, Any]:
+def upgrade_saved_rewards(
+    saved: Mapping[str, Any], moves: Mapping[str, str], config_class: type
+) -> dict[str, Any]:
     """A saved behaviour config (as a config file holds it) in today's form: fields that the
     config class has since moved into its ``rewards`` table moved there.
 
-    The class names them in ``LEGACY_REWARD_KEYS`` (old field -> ``TERM.weight`` or
-    ``TERM.params.NAME``, e.g. self-touch's ``weight_balance`` -> ``balance.weight``). A saved
+    ``moves`` is what the class declares in ``BehaviorConfig.LEGACY_REWARD_KEYS`` (old field ->
+    ``TERM.weight`` or ``TERM.params.NAME``, e.g. self-touch's ``weight_balance`` ->
+    ``balance.weight``; empty for a config that is not a ``BehaviorConfig``). A saved
     config with such fields and no ``rewards`` gets the class's default terms with those
     weights and params set from the old fields, so a run saved before the move loads and acts
     as trained. Anything else is returned unchanged.
     """
-    moves: Mapping[str, str] = getattr(config_class, "LEGACY_REWARD_KEYS", {})
     old = {key: saved[key] for key in moves if key in saved}
     upgraded = {key: value for key, value in saved.items() if key not in old}
     if not old:

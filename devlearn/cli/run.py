@@ -19,7 +19,7 @@ if TYPE_CHECKING:
 def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     """Resolve the config, train, print the run directory and a final summary."""
     from devlearn.cli.summary import finished_message, paper_budget, run_summary
-    from devlearn.config.resolve import RunRequest, resolve_config
+    from devlearn.config.resolve import RunRequest, resolve_run
     from devlearn.training.checkpoint import checkpoint_config
     from devlearn.training.train import default_run_dir, train
 
@@ -43,7 +43,8 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
         start_from=args.start_from or "",
         config_file=args.config or "",
     )
-    cfg = resolve_config(request, registry, checkpoint_config)
+    resolved = resolve_run(request, registry, checkpoint_config)  # the run trains its behaviour
+    cfg = resolved.cfg
     if not args.resume and not cfg.out_dir:
         cfg.out_dir = str(default_run_dir(cfg.behavior_name))
     if args.resume:
@@ -67,14 +68,14 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
 
     with StopRequests.installed():
         result = train(
-            cfg,
+            resolved,
             registry,
             resume=args.resume,
             start_from=args.start_from,
             force=args.force,
             started=started,
         )
-    budget = paper_budget(behavior_cls(cfg.behavior).presets())
+    budget = paper_budget(resolved.behavior.presets())
     metric = behavior_cls.headline_metric
     print(run_summary(result, cfg.behavior_name, metric, cfg.total_steps, cfg.num_envs, budget))
     return 0

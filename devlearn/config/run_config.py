@@ -407,9 +407,10 @@ def from_dict(
     saved = data.get("behavior")
     if isinstance(saved, dict) and cfg.behavior is not None:
         # reward fields a config saved before issue #31 holds move into ``rewards``
-        saved = upgrade_saved_rewards(saved, type(cfg.behavior))
-        data = {**data, "behavior": saved}
         declared = isinstance(cfg.behavior, BehaviorConfig)
+        moves = cfg.behavior.LEGACY_REWARD_KEYS if declared else {}
+        saved = upgrade_saved_rewards(saved, moves, type(cfg.behavior))
+        data = {**data, "behavior": saved}
         legacy = cfg.behavior.LEGACY_DEFAULTS if declared and not new_run else {}
         _fill(cfg.behavior, {k: v for k, v in legacy.items() if k not in saved}, "behavior.")
     _fill(cfg, data, "")
