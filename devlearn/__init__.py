@@ -16,7 +16,13 @@ from typing import TYPE_CHECKING
 from devlearn.lazy import lazy_getattr
 
 if TYPE_CHECKING:  # the same names, for type checkers (which do not run __getattr__)
-    from devlearn.api.behavior import Behavior, Evaluator, RunMetrics, evaluation_stage
+    from devlearn.api.behavior import (
+        Behavior,
+        BehaviorConfig,
+        Evaluator,
+        RunMetrics,
+        evaluation_stage,
+    )
     from devlearn.api.curriculum import Curriculum, Stage
     from devlearn.api.errors import UsageError
     from devlearn.api.hookspecs import hookimpl
@@ -49,6 +55,7 @@ _PUBLIC = {
     "BatchedFromPerEnv": "devlearn.api.rewards",
     "BatchedIntrinsicReward": "devlearn.api.rewards",
     "Behavior": "devlearn.api.behavior",
+    "BehaviorConfig": "devlearn.api.behavior",
     "evaluation_stage": "devlearn.api.behavior",
     "Curriculum": "devlearn.api.curriculum",
     "Evaluator": "devlearn.api.behavior",
@@ -85,6 +92,7 @@ __all__ = [
     "BatchedFromPerEnv",
     "BatchedIntrinsicReward",
     "Behavior",
+    "BehaviorConfig",
     "evaluation_stage",
     "Curriculum",
     "Evaluator",

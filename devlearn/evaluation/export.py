@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import contextlib
 import logging
-import os
 import warnings
 from collections.abc import Iterator
 from pathlib import Path
@@ -16,6 +15,7 @@ import torch.nn as nn
 
 from devlearn.api.errors import UsageError
 from devlearn.config.checks import unwritable
+from devlearn.files import replaced_atomically
 
 if TYPE_CHECKING:
     from devlearn.evaluation.scripted_policy import ObservationOrder
@@ -130,21 +130,17 @@ def export_policy(
     out = Path(out)
     check_out_file(out)
     inputs = example_inputs(policy, obs)
-    # written beside, then renamed: a failed write (a full disk) leaves no partial file
-    partial = out.with_name(f".{out.name}.partial-{os.getpid()}")
-    try:
-        with torch.no_grad(), known_exporter_noise_silenced():
-            if fmt == "torchscript":
-                traced = torch.jit.trace(policy, inputs, check_trace=False)
-                traced.save(str(partial), _extra_files=extra_files or {})
-            else:
-                _export_onnx(policy, inputs, partial)
-        os.replace(partial, out)
+    try:  # written beside, then renamed: a failed write (a full disk) leaves no partial file
+        with replaced_atomically(out) as partial:
+            with torch.no_grad(), known_exporter_noise_silenced():
+                if fmt == "torchscript":
+                    traced = torch.jit.trace(policy, inputs, check_trace=False)
+                    traced.save(str(partial), _extra_files=extra_files or {})
+                else:
+                    _export_onnx(policy, inputs, partial)
     except (OSError, RuntimeError) as exc:
         reason = getattr(exc, "strerror", None) or " ".join(str(exc).split())[:160]
         raise UsageError(f"cannot write {out}: {reason}") from None
-    finally:
-        partial.unlink(missing_ok=True)
     return out
 
 

@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from devlearn.config.resolve import RUN_CONFIG_FILE
+from devlearn.files import write_text_atomically
 
 LOG_TAIL_LINES = 15
 """Lines of a failed run's log shown in its record and on the console."""
@@ -84,9 +85,7 @@ class RunJob:
 def write_json(path: Path, data: dict[str, Any]) -> None:
     """Write JSON atomically (a reader never sees half a file)."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}-{threading.get_ident()}")
-    tmp.write_text(json.dumps(data, indent=2, default=float) + "\n")
-    os.replace(tmp, path)
+    write_text_atomically(path, json.dumps(data, indent=2, default=float) + "\n")
 
 
 def read_json(path: Path) -> dict[str, Any] | None:

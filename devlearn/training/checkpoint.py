@@ -24,6 +24,7 @@ from devlearn.ages import check_age
 from devlearn.api.errors import UsageError
 from devlearn.config.checks import STEPS_MAX
 from devlearn.config.run_config import from_dict, to_rsl_rl
+from devlearn.files import replaced_atomically
 
 if TYPE_CHECKING:
     from tensordict import TensorDict
@@ -51,7 +52,7 @@ RESUME_KEYS = (
 )
 """Keys a checkpoint must hold to resume training from it."""
 _PERIODIC = re.compile(r"^checkpoint_(\d+)\.pt$")
-_TEMPORARY = re.compile(r"^\.checkpoint_.*\.pt\.tmp-\d+$")
+_TEMPORARY = re.compile(r"^\.checkpoint_.*\.pt\.tmp-\d+(-\d+)?$")
 _DTYPE_CLASSES = (
     "Bool Int8 Int16 Int32 Int64 UInt8 UInt16 UInt32 UInt64 Byte UByte Short UShort Int UInt Long "
     "ULong LongLong ULongLong Float16 Float32 Float64 LongDouble Complex64 Complex128 "
@@ -78,17 +79,6 @@ def _global_names() -> set[str]:
     return names
 
 
-def _fsync_dir(directory: Path) -> None:
-    try:
-        fd = os.open(directory, os.O_RDONLY)
-    except OSError:
-        return
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
-
-
 def _write_error(path: Path, exc: OSError) -> UsageError:
     if exc.errno in (errno.ENOSPC, errno.EDQUOT):
         try:
@@ -109,23 +99,17 @@ def _write_error(path: Path, exc: OSError) -> UsageError:
 
 @contextlib.contextmanager
 def _replaced_atomically(path: Path) -> Iterator[Path]:
-    """Yield a temporary path beside ``path``; what the block writes there then replaces
-    ``path`` in one rename (the folder synced), so that a crash at any moment, kill -9
-    included, leaves the previous file or the new one, never a partial file under ``path``.
+    """devlearn's atomic writer (:func:`devlearn.files.replaced_atomically`) with a write error
+    worded for a run's user (a full disk: what is kept and how to go on).
 
     Raises:
         UsageError: The file cannot be written (disk full, read-only, ...); ``path`` is unchanged.
     """
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
     try:
-        yield tmp
-        os.replace(tmp, path)
+        with replaced_atomically(path) as tmp:
+            yield tmp
     except OSError as exc:
         raise _write_error(path, exc) from None
-    finally:
-        if tmp.exists():
-            tmp.unlink()
-    _fsync_dir(path.parent)
 
 
 def save_atomic(state: dict[str, Any], path: Path) -> None:

@@ -11,6 +11,8 @@ import shutil
 from collections.abc import Iterator
 from pathlib import Path
 
+from devlearn.files import write_text_atomically
+
 
 def forget_metrics_after(path: Path, step: int) -> None:
     """Drop ``metrics.jsonl`` rows past ``step`` (atomically): a killed run may have logged
@@ -24,9 +26,7 @@ def forget_metrics_after(path: Path, step: int) -> None:
                 kept.append(line)
         except (ValueError, KeyError, TypeError):
             pass  # a line cut short by the kill
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text("".join(line + "\n" for line in kept))
-    os.replace(tmp, path)
+    write_text_atomically(path, "".join(line + "\n" for line in kept))
 
 
 def copy_metrics(source_dir: Path, run_dir: Path, step: int) -> None:

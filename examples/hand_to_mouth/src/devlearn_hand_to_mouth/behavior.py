@@ -65,8 +65,9 @@ def hand_to_mouth_rewards() -> dict[str, RewardTermCfg]:
 
 
 @dataclass
-class HandToMouthConfig:
-    """Options of the hand_to_mouth behaviour."""
+class HandToMouthConfig(devlearn.BehaviorConfig):
+    """Options of the hand_to_mouth behaviour (a ``BehaviorConfig``: it declares the fields
+    configs saved before issue #31 held, ``LEGACY_REWARD_KEYS``)."""
 
     LEGACY_REWARD_KEYS: ClassVar[dict[str, str]] = {
         "contact_reward": "mouth_contact.params.contact_reward",
