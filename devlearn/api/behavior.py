@@ -404,16 +404,12 @@ class Behavior(ABC):
         """
         return {}
 
-    def presets(self) -> dict[str, dict[str, Any]]:
-        """Named sets of run-config overrides, chosen with ``devlearn run NAME --preset P``
-        (e.g. ``{"paper": {"behavior.max_std": 0.0}}``: the paper's values one switch away
-        from a default that differs). Applied over :meth:`train_defaults` and under the
-        command line's options and ``--set``; ``devlearn config NAME`` lists them.
-
-        Returns:
-            Preset name -> mapping of dotted RunConfig keys to values.
-        """
-        return {}
+    presets: ClassVar[dict[str, dict[str, Any]]] = {}
+    """Named sets of run-config overrides (data), chosen with ``devlearn run NAME --preset P``
+    (e.g. ``{"paper": {"behavior.max_std": 0.0}}``: the paper's values one switch away from a
+    default that differs): preset name -> dotted RunConfig keys -> values. Applied over
+    :meth:`train_defaults` and under the command line's options and ``--set``; ``devlearn
+    config NAME`` lists them. Default: none."""
 
     @classmethod
     def paper_results(cls, config: dict[str, Any]) -> tuple[str, dict[str, float]] | None:

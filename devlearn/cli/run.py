@@ -75,7 +75,7 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
             force=args.force,
             started=started,
         )
-    budget = paper_budget(resolved.behavior.presets())
+    budget = paper_budget(behavior_cls.presets)
     metric = behavior_cls.headline_metric
     print(run_summary(result, cfg.behavior_name, metric, cfg.total_steps, cfg.num_envs, budget))
     return 0

@@ -68,7 +68,7 @@ class RunRequest:
     overrides: list[str] = field(default_factory=list)
     """``--set KEY=VALUE`` items."""
     preset: str = ""
-    """A name from the behaviour's ``presets()`` (``--preset``)."""
+    """A name from the behaviour's ``presets`` (``--preset``)."""
     top: dict[str, Any] = field(default_factory=dict)
     """Top-level fields set by options (``total_steps``, ``num_envs``, ``workers``, ``seed``,
     ``device``, ``logger``); None values are skipped."""

@@ -262,7 +262,7 @@ def start_config(
     explicit: set[str] = set()
     if preset:
         apply_preset(cfg, behavior_cls, preset)
-        explicit |= set(defaults.presets()[preset])
+        explicit |= set(behavior_cls.presets[preset])
     apply_overrides(cfg, {k: v for k, v in top.items() if v is not None})
     return cfg, explicit
 
@@ -341,13 +341,13 @@ def head_max_std(spec: Any) -> float:
 
 
 def apply_preset(cfg: RunConfig, behavior_cls: type[Behavior], preset: str) -> RunConfig:
-    """Apply the behaviour's preset ``preset`` (its ``presets()``) to ``cfg`` in place and
+    """Apply the behaviour's preset ``preset`` (its ``presets``) to ``cfg`` in place and
     record its name in ``cfg.preset``.
 
     Raises:
         UsageError: The behaviour has no such preset (the valid ones are named).
     """
-    presets = behavior_cls(cfg.behavior).presets()
+    presets = behavior_cls.presets
     if preset not in presets:
         raise UsageError(
             f"unknown preset '{preset}' for {behavior_cls.name}; "

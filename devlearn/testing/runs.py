@@ -67,7 +67,7 @@ def run_config(
     Args:
         behavior: The behaviour class.
         overrides: ``--set`` items, e.g. ``["behavior.max_std=0.5"]``.
-        preset: One of the behaviour's ``presets()``; empty: none.
+        preset: One of the behaviour's ``presets``; empty: none.
         registry: Where the behaviour is registered (default: a registry of ``behavior``
             alone, :func:`~devlearn.testing.fixtures.registry_for`).
         top: Top-level fields of the run config; None values are skipped.

@@ -101,8 +101,7 @@ class PaperTiny(TinyBehavior):
 
     name = "tiny"
 
-    def presets(self):
-        return {"paper": {"total_steps": 320}, "other": {"seed": 3}}
+    presets = {"paper": {"total_steps": 320}, "other": {"seed": 3}}
 
 
 def test_the_summary_puts_the_run_beside_baselines_and_its_budget(

@@ -419,9 +419,17 @@ class StartAsValue(Probe):
     eval_start = "babybench"
 
 
+class PresetsAsMethod(Probe):
+    """Writes ``presets`` as a method (before issue #42), where the contract declares data."""
+
+    def presets(self):
+        return {"paper": {"total_steps": 320}}
+
+
 @pytest.mark.parametrize(
     "probe, message",
     [
+        (PresetsAsMethod, "PresetsAsMethod.presets must be a value, not a method"),
         (MisspelledHook, "MisspelledHook.eval_starts is no member .* did you mean eval_start"),
         (StartAsValue, "StartAsValue.eval_start must be a method"),
         (UndeclaredMergeProbe, "mergeable is False but merge\\(\\) is implemented"),

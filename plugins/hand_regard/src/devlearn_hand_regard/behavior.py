@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import warnings
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
@@ -43,6 +43,13 @@ DETECTOR_FILE = "hand_detector.json"
 """Name of the calibrated detector in a run directory."""
 STAGE_SHARE = 0.1
 """Share of a run each one-arm stage takes unless set (:meth:`HandRegard.run_length_defaults`)."""
+PAPER_STAGE_STEPS = (
+    HandRegardConfig.left_arm_steps,
+    HandRegardConfig.right_arm_steps,
+    HandRegardConfig.both_arms_steps,
+)
+"""The paper's stages (left arm, right arm, both; sec. II-B5): the config's defaults, 175k +
+175k + 1.5M physics steps (``--preset paper``)."""
 DEMO_STEPS = (3_000, 3_000, 24_000)
 """``devlearn run hand_regard`` without ``--steps``: a demonstration of a few minutes on a CPU,
 the paper's three stages in short (left arm, right arm, both); ``--preset paper`` is the
@@ -438,26 +445,23 @@ class HandRegard(Behavior):
             "behavior.both_arms_steps": total_steps - 2 * one_arm,
         }
 
-    def presets(self) -> dict[str, dict[str, Any]]:
-        """``paper``: the paper's network (``behavior.policy=cnn``, the eye CNNs) and run
-        length, 175k + 175k + 1.5M = 1.85M steps (sec. II-B5)."""
-        paper = HandRegardConfig()
-        steps = paper.left_arm_steps, paper.right_arm_steps, paper.both_arms_steps
-        return {
-            "paper": {
-                "behavior.policy": "cnn",
-                "behavior.left_arm_steps": steps[0],
-                "behavior.right_arm_steps": steps[1],
-                "behavior.both_arms_steps": steps[2],
-                "total_steps": sum(steps),
-                # the paper's policy head and shared trunk at BabyBench's 200 Hz
-                "network.head": "paper",
-                "network.layout": "shared",
-                "env.action_repeat": 1,
-                "ppo.entropy_coef": 0.005,
-                "ppo.schedule": "adaptive",
-            }
+    presets: ClassVar[dict[str, dict[str, Any]]] = {
+        "paper": {
+            "behavior.policy": "cnn",
+            "behavior.left_arm_steps": PAPER_STAGE_STEPS[0],
+            "behavior.right_arm_steps": PAPER_STAGE_STEPS[1],
+            "behavior.both_arms_steps": PAPER_STAGE_STEPS[2],
+            "total_steps": sum(PAPER_STAGE_STEPS),
+            # the paper's policy head and shared trunk at BabyBench's 200 Hz
+            "network.head": "paper",
+            "network.layout": "shared",
+            "env.action_repeat": 1,
+            "ppo.entropy_coef": 0.005,
+            "ppo.schedule": "adaptive",
         }
+    }
+    """``paper``: the paper's network (``behavior.policy=cnn``, the eye CNNs) and run length,
+    175k + 175k + 1.5M = 1.85M steps (sec. II-B5)."""
 
 
 def _check_choice(key: str, value: str, choices: tuple[str, ...]) -> None:

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
@@ -159,25 +159,24 @@ class SelfTouch(Behavior):
         steps, whatever the run's budget)."""
         return PAPER_RESULTS.get((config.get("behavior") or {}).get("curriculum", "two_stage"))
 
-    def presets(self) -> dict[str, dict[str, Any]]:
-        """``paper``: the paper's values where the default recipe differs (sec. II-A):
-        the unbounded softplus spread (``behavior.max_std`` 0; the default bounds it at 1.0)
-        and the full curriculum, 4M fixed-pose + 4M random-pose steps (``total_steps`` 8M;
-        the default is a short demonstration). The lifetime memory is the default's, shared:
-        the paper's "first-ever" and "first global" bonuses are one agent's. Runs published
-        before issue #20 also kept per-environment memory
-        (``--set behavior.lifetime_memory=per_env``)."""
-        return {
-            "paper": {
-                "behavior.max_std": 0.0,
-                "total_steps": 8_000_000,
-                # the paper's policy head (tanh mean, softplus spread) at BabyBench's 200 Hz,
-                # with the discount and rollouts this behaviour used at that rate
-                "network.head": "paper",
-                "network.layout": "shared",
-                "behavior.touch_count": "step",
-                "env.action_repeat": 1,
-                "ppo.num_steps_per_env": 128,
-                "ppo.gamma": 0.995,
-            }
+    presets: ClassVar[dict[str, dict[str, Any]]] = {
+        "paper": {
+            "behavior.max_std": 0.0,
+            "total_steps": 8_000_000,
+            # the paper's policy head (tanh mean, softplus spread) at BabyBench's 200 Hz,
+            # with the discount and rollouts this behaviour used at that rate
+            "network.head": "paper",
+            "network.layout": "shared",
+            "behavior.touch_count": "step",
+            "env.action_repeat": 1,
+            "ppo.num_steps_per_env": 128,
+            "ppo.gamma": 0.995,
         }
+    }
+    """``paper``: the paper's values where the default recipe differs (sec. II-A):
+    the unbounded softplus spread (``behavior.max_std`` 0; the default bounds it at 1.0)
+    and the full curriculum, 4M fixed-pose + 4M random-pose steps (``total_steps`` 8M;
+    the default is a short demonstration). The lifetime memory is the default's, shared:
+    the paper's "first-ever" and "first global" bonuses are one agent's. Runs published
+    before issue #20 also kept per-environment memory
+    (``--set behavior.lifetime_memory=per_env``)."""
