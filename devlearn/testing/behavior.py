@@ -70,14 +70,14 @@ def check_contract_members(behavior_cls: type[Behavior]) -> None:
     contract's default would then run instead, silently (``eval_starts`` for ``eval_start``)."""
     contract = [*BEHAVIOR_CORE, *(n for names in BEHAVIOR_OPTIONAL.values() for n in names)]
     for name in contract:
-        declared_method = callable(getattr(Behavior, name, None))
+        declared = getattr(Behavior, name, None)  # None: an annotation (name, config_class)
         written_method = callable(getattr(behavior_cls, name, None))
-        if declared_method:
+        if callable(declared):
             require(
                 written_method,
                 f"{behavior_cls.__name__}.{name} must be a method, as Behavior declares it",
             )
-        else:  # data (e.g. presets, a dict): a method there would be read as the data
+        elif declared is not None:  # data (presets, a dict): a method would be read as data
             require(
                 not written_method,
                 f"{behavior_cls.__name__}.{name} must be a value, not a method, as Behavior "
