@@ -297,18 +297,8 @@ def ablation_tables(out: Path) -> str:
     lines += _baseline_rows(out)
     lines += [_paper_row(arm) for arm in ("fixed_only", "random_only", "two_stage")]
     lines.append("\nDifferences of per-episode score (Welch 95% interval over seeds):\n")
-    from scipy import stats
-
     for a, b in itertools.combinations(arms, 2):
-        diff = statistics.mean(scores[a]) - statistics.mean(scores[b])
-        if min(len(scores[a]), len(scores[b])) < 2:
-            lines.append(f"- {a} - {b}: {diff:+.3f}")
-            continue
-        test = stats.ttest_ind(scores[a], scores[b], equal_var=False)
-        ci = test.confidence_interval()
-        lines.append(
-            f"- {a} - {b}: {diff:+.3f} [{ci.low:+.3f}, {ci.high:+.3f}] (p = {test.pvalue:.3f})"
-        )
+        lines.append(f"- {a} - {b}: {_welch(scores[a], scores[b], '.3f', p_value=True)}")
     order = sorted(arms, key=lambda a: -statistics.mean(scores[a]))
     lines.append(
         f"\nOrder by mean per-episode score: {' > '.join(order)} "
@@ -317,15 +307,18 @@ def ablation_tables(out: Path) -> str:
     return "\n".join(lines)
 
 
-def _welch(a: list[float], b: list[float]) -> str:
-    """``mean(a) - mean(b) [95% Welch interval]`` (the difference alone below 2 values each)."""
+def _welch(a: list[float], b: list[float], fmt: str = ".3g", p_value: bool = False) -> str:
+    """``mean(a) - mean(b) [95% Welch interval]`` (and its p-value), numbers as ``fmt``; the
+    difference alone below 2 values each."""
     from scipy import stats
 
     diff = statistics.mean(a) - statistics.mean(b)
     if min(len(a), len(b)) < 2:
-        return f"{diff:+.3g}"
-    ci = stats.ttest_ind(a, b, equal_var=False).confidence_interval()
-    return f"{diff:+.3g} [{ci.low:+.3g}, {ci.high:+.3g}]"
+        return f"{diff:+{fmt}}"
+    test = stats.ttest_ind(a, b, equal_var=False)
+    ci = test.confidence_interval()
+    text = f"{diff:+{fmt}} [{ci.low:+{fmt}}, {ci.high:+{fmt}}]"
+    return f"{text} (p = {test.pvalue:.3f})" if p_value else text
 
 
 PILOT_DIFFERENCES = (
