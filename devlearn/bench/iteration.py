@@ -154,32 +154,39 @@ CNN_RUN = ["behavior.policy=cnn"]
 """The paper's network for hand regard (each eye's image through a CNN), with the behaviour's
 other defaults: issue #29's CNN runs (8 envs x 64 decisions of 5 physics steps, separate actor
 and critic, 5 epochs of 4 mini-batches)."""
+CNN_ASYMMETRIC_RUN = [*CNN_RUN, "behavior.critic=proprio"]
+"""The same actor with an asymmetric critic (proprioception and the detector's output, no eye
+CNNs; issue #40)."""
+CNN_PATHS = {"hand_regard_cnn": CNN_RUN, "hand_regard_cnn_asym": CNN_ASYMMETRIC_RUN}
+"""The CNN paths ``devlearn bench`` measures in one run: figure-name prefix -> ``--set``."""
 
 
 def bench_cnn_path(
     registry: PluginRegistry, quick: bool, progress: Callable[[str], None]
 ) -> dict[str, Any]:
-    """Hand regard's CNN path (``behavior.policy=cnn``): each part's seconds per iteration
-    (``hand_regard_cnn_iteration_s``, :func:`iteration_profile` on one torch thread, as the
-    CNN runs trained), the update's cost per rollout sample
-    (``hand_regard_cnn_update_us_per_sample``) and end-to-end training steps/s
-    (``hand_regard_cnn_train_steps_per_s``, a short ``devlearn run``)."""
+    """Hand regard's CNN paths (:data:`CNN_PATHS`: the paper's network, and its actor with the
+    asymmetric critic), each: every part's seconds per iteration (``PREFIX_iteration_s``,
+    :func:`iteration_profile` on one torch thread, as the CNN runs trained), the update's
+    cost per rollout sample (``PREFIX_update_us_per_sample``) and end-to-end training steps/s
+    (``PREFIX_train_steps_per_s``, a short ``devlearn run``)."""
     from devlearn.bench.speed import bench_training
 
-    behavior = registry.create("hand_regard")
-    behavior.config.policy = "cnn"
-    progress("hand_regard (CNN): where an iteration's time goes")
-    profile = iteration_profile(
-        behavior, CNN_RUN, 20 if quick else 200, 8 if quick else None, registry=registry
-    )
-    result: dict[str, Any] = {
-        "hand_regard_cnn_iteration_s": {k: profile[k] for k in (*ITERATION_PARTS, "total")},
-        "hand_regard_cnn_update_us_per_sample": profile["update_us_per_sample"],
-    }
-    progress("hand_regard (CNN): end-to-end training")
+    result: dict[str, Any] = {}
     short = ["behavior.babbling_steps=300", "behavior.correlation_threshold=0", "torch_threads=1"]
-    settings = [arg for kv in (*CNN_RUN, *short) for arg in ("--set", kv)]
-    result["hand_regard_cnn_train_steps_per_s"] = bench_training(
-        "hand_regard", 2560 if quick else 3 * 2560, ["--envs", "8", *settings], progress
-    )
+    for prefix, overrides in CNN_PATHS.items():
+        behavior = registry.create("hand_regard")
+        for item in overrides:
+            key, value = item.removeprefix("behavior.").split("=")
+            setattr(behavior.config, key, value)
+        progress(f"{prefix}: where an iteration's time goes")
+        profile = iteration_profile(
+            behavior, overrides, 20 if quick else 200, 8 if quick else None, registry=registry
+        )
+        result[f"{prefix}_iteration_s"] = {k: profile[k] for k in (*ITERATION_PARTS, "total")}
+        result[f"{prefix}_update_us_per_sample"] = profile["update_us_per_sample"]
+        progress(f"{prefix}: end-to-end training")
+        settings = [arg for kv in (*overrides, *short) for arg in ("--set", kv)]
+        result[f"{prefix}_train_steps_per_s"] = bench_training(
+            "hand_regard", 2560 if quick else 3 * 2560, ["--envs", "8", *settings], progress
+        )
     return result

@@ -101,6 +101,18 @@ ROWS = (
         ">= 300 per core",
     ),
     Row("hand_regard_cnn_update_us_per_sample", "hand-regard CNN update/sample (1 thread)", "us"),
+    Row(
+        "hand_regard_cnn_asym_train_steps_per_s",
+        "hand-regard training, the paper's CNN actor, asymmetric critic (1 thread)",
+        "/s",
+        "-",
+        ">= 300 per core",
+    ),
+    Row(
+        "hand_regard_cnn_asym_update_us_per_sample",
+        "hand-regard CNN actor, asymmetric critic, update/sample (1 thread)",
+        "us",
+    ),
     Row("hand_regard_train_steps_per_s_old", "hand-regard training, before", "/s"),
     # evaluation, building, start-up, memory
     Row(

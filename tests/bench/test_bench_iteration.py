@@ -42,8 +42,13 @@ def test_the_evaluation_and_the_cnn_path_have_rows():
             "self_touch_eval_s": 18.5,
             "hand_regard_cnn_train_steps_per_s": 150.0,
             "hand_regard_cnn_update_us_per_sample": 29_000.0,
+            "hand_regard_cnn_asym_train_steps_per_s": 250.0,
+            "hand_regard_cnn_asym_update_us_per_sample": 15_000.0,
         }
     )
     assert "one env | 40 s |" in table and "automatic envs and workers | 18.5 s |" in table
     assert "| hand-regard training, the paper's CNN (1 thread) | 150 /s |" in table
     assert "| hand-regard CNN update/sample (1 thread) | 29,000 us |" in table
+    asymmetric = "the paper's CNN actor, asymmetric critic (1 thread) | 250 /s |"
+    assert f"| hand-regard training, {asymmetric}" in table
+    assert "asymmetric critic, update/sample (1 thread) | 15,000 us |" in table

@@ -19,7 +19,6 @@ def test_update_benchmark_reports_both_layouts():
     assert shared["parameters"] < separate["parameters"]
 
 
-
 def test_a_rollout_longer_than_the_behaviours_own_fits_the_storage():
     # devlearn bench collects 128 steps per env; the storage was built for the behaviour's
     # own ppo.num_steps_per_env (64 since the learner's defaults) and overflowed

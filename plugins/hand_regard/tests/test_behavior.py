@@ -271,3 +271,48 @@ def test_an_unusable_detector_file_is_one_line(tmp_path):
         behavior = HandRegard(HandRegardConfig(detector_file=str(path)))
         with pytest.raises(UsageError, match=f"behavior.detector_file {path}: .*{reason}"):
             behavior.detector  # noqa: B018 (loads the file)
+
+
+def test_asymmetric_critic_trains_without_eye_cnns(tmp_path, detector_file):
+    """``critic=proprio`` under the paper's CNN policy: the actor keeps both eye CNNs and the
+    proprioception MLP; the critic sees proprioception and the detector's output only, so
+    the update runs two eye CNNs, not four. A tiny run trains, and its policy file acts on
+    the actor's observations alone."""
+    from devlearn.testing import PluginRegistry, policy_network, run_config, train
+
+    overrides = [
+        "behavior.policy=cnn",
+        "behavior.critic=proprio",
+        f"behavior.detector_file={detector_file}",
+        "behavior.left_arm_steps=16",
+        "behavior.right_arm_steps=16",
+        "ppo.num_steps_per_env=8",
+        "ppo.num_mini_batches=2",
+        "env.action_repeat=1",
+    ]
+    cfg = run_config(
+        HandRegard, overrides, total_steps=48, num_envs=2, workers=0, seed=1, out_dir=tmp_path
+    )
+    assert cfg.network.layout == "separate"
+    behavior = HandRegard(cfg.behavior)
+    obs = BehaviorEnv(behavior, seed=0, infant_factory=FakeSittingInfant).reset()
+    assert set(obs) == {"left_eye", "right_eye", "proprioception", "hands_seen"}
+    assert behavior.obs_groups(list(obs)) == {
+        "actor": ["left_eye", "right_eye", "proprioception"],
+        "critic": ["proprioception", "hands_seen"],
+    }
+    result = train(cfg, PluginRegistry(), infant_factory=FakeSittingInfant, progress=False)
+    state = torch.load(result.run_dir / "checkpoint_latest.pt", weights_only=False)
+    actor = {k.split(".")[1] for k in state["actor_state_dict"] if k.startswith("encoders.")}
+    critic = {k.split(".")[1] for k in state["critic_state_dict"] if k.startswith("encoders.")}
+    assert actor == {"left_eye", "right_eye", "proprioception"}
+    assert critic == {"proprioception", "hands_seen"}
+    policy = policy_network(cfg, behavior, obs, 17, state["actor_state_dict"])
+    batch = {k: torch.as_tensor(v)[None] for k, v in obs.items() if k != "hands_seen"}
+    assert policy(batch).shape == (1, 17)
+
+
+def test_critic_choice_is_checked(behavior):
+    behavior.config.critic = "eyes"
+    with pytest.raises(UsageError, match="critic.*same.*proprio"):
+        behavior.network()

@@ -24,6 +24,7 @@ from devlearn_hand_regard import detector_store
 from devlearn_hand_regard.config import (
     APPEARANCE_CHOICES,
     BABBLING_ARMS_CHOICES,
+    CRITIC_CHOICES,
     HAND_ATTRIBUTION_CHOICES,
     NOT_IN_PAPER,
     POLICY_CHOICES,
@@ -37,7 +38,7 @@ from devlearn_hand_regard.evaluation import HandRegardEvaluator, paper_figures
 from devlearn_hand_regard.rewards import HANDS, hand_motion
 
 if TYPE_CHECKING:
-    from devlearn import Infant
+    from devlearn import Infant, SensorEncoder
 
 DETECTOR_FILE = "hand_detector.json"
 """Name of the calibrated detector in a run directory."""
@@ -140,6 +141,7 @@ class HandRegard(Behavior):
         _check_choice("start", cfg.start, START_CHOICES)
         _check_choice("eval_start", cfg.eval_start, START_CHOICES)
         _check_choice("policy", cfg.policy, POLICY_CHOICES)
+        _check_choice("critic", cfg.critic, CRITIC_CHOICES)
         _check_choice("babbling_arms", cfg.babbling_arms, BABBLING_ARMS_CHOICES)
         _check_choice("hand_attribution", cfg.hand_attribution, HAND_ATTRIBUTION_CHOICES)
         self.scene = cfg.scene  # the config may have changed since __init__
@@ -275,7 +277,8 @@ class HandRegard(Behavior):
 
     def observe(self, infant: Infant, facts: dict[str, Any]) -> dict[str, np.ndarray]:
         """``config.policy`` ``proprio``: ``proprioception`` and ``hands_seen`` (16,);
-        ``cnn``: ``left_eye``, ``right_eye`` (H, W, 3) uint8 and ``proprioception``."""
+        ``cnn``: ``left_eye``, ``right_eye`` (H, W, 3) uint8 and ``proprioception``, and
+        ``hands_seen`` for an asymmetric critic (``config.critic`` ``proprio``)."""
         proprioception = facts.get("proprioception")
         if proprioception is None:
             proprioception = np.asarray(infant.proprioception(), dtype=np.float32)
@@ -283,7 +286,22 @@ class HandRegard(Behavior):
             features = hand_features(facts["hand_detections"], facts["hand_masks"])
             return {"proprioception": proprioception, "hands_seen": features}
         eyes = facts["eyes"]
-        return {"left_eye": eyes[0], "right_eye": eyes[1], "proprioception": proprioception}
+        obs = {"left_eye": eyes[0], "right_eye": eyes[1], "proprioception": proprioception}
+        if self.config.critic == "proprio":
+            obs["hands_seen"] = hand_features(facts["hand_detections"], facts["hand_masks"])
+        return obs
+
+    def obs_groups(self, observation_names: list[str]) -> dict[str, list[str]]:
+        """The actor sees every observation but ``hands_seen`` under ``policy=cnn``; the
+        critic sees what the actor sees, or (``critic=proprio``) proprioception and
+        ``hands_seen`` alone."""
+        if self.config.policy != "cnn":
+            return super().obs_groups(observation_names)
+        actor = [name for name in observation_names if name != "hands_seen"]
+        if self.config.critic == "proprio":
+            critic = [n for n in observation_names if n in ("proprioception", "hands_seen")]
+            return {"actor": actor, "critic": critic}
+        return {"actor": actor, "critic": list(actor)}
 
     def network(self) -> NetworkSpec:
         """``config.policy``: ``cnn``, the paper's Model II network (sec. II-B3); ``proprio``,
@@ -295,6 +313,7 @@ class HandRegard(Behavior):
         """
         cfg = self.config
         _check_choice("policy", cfg.policy, POLICY_CHOICES)
+        _check_choice("critic", cfg.critic, CRITIC_CHOICES)
         _check_choice("babbling_arms", cfg.babbling_arms, BABBLING_ARMS_CHOICES)
         _check_choice("hand_attribution", cfg.hand_attribution, HAND_ATTRIBUTION_CHOICES)
         if cfg.policy == "proprio":
@@ -313,12 +332,15 @@ class HandRegard(Behavior):
         from devlearn_hand_regard.encoders import EyeCNNEncoder  # torch: only to build networks
 
         eye = EyeCNNEncoder()
+        encoders: dict[str, SensorEncoder] = {
+            "left_eye": eye,
+            "right_eye": eye,
+            "proprioception": MLPEncoder(tuple(cfg.proprioception_dims)),
+        }
+        if cfg.critic == "proprio":  # the asymmetric critic's view of the detector
+            encoders["hands_seen"] = MLPEncoder((32,))
         return NetworkSpec(
-            encoders={
-                "left_eye": eye,
-                "right_eye": eye,
-                "proprioception": MLPEncoder(tuple(cfg.proprioception_dims)),
-            },
+            encoders=encoders,
             fusion_dims=(cfg.fusion_dim,),  # 256 + 256 + 64 = 576 -> 256 (sec. II-B3)
             trunk_dims=(),  # the paper's heads sit directly on the fused features
             init_std=cfg.init_std,

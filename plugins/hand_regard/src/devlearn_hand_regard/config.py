@@ -36,6 +36,8 @@ START_CHOICES = ("babybench", "rest", "random")
 """Valid ``start`` and ``eval_start`` values (``devlearn.infant.starts.STARTS``)."""
 POLICY_CHOICES = ("proprio", "cnn")
 """Valid ``policy`` values."""
+CRITIC_CHOICES = ("same", "proprio")
+"""Valid ``critic`` values."""
 BABBLING_ARMS_CHOICES = ("alternate", "both")
 """Valid ``babbling_arms`` values."""
 HAND_ATTRIBUTION_CHOICES = ("visibility", "position")
@@ -94,6 +96,15 @@ class HandRegardConfig(BehaviorConfig):
     paper's network, sec. II-B3: a CNN per eye plus the proprioception MLP; ``--preset
     paper``). The CNN ends in global average pooling, which keeps what is seen but not where
     in the image it is."""
+    critic: str = "same"
+    """What the value function (the critic, used only in training) sees: ``same``, the
+    policy's observations (the paper's network: with ``policy=cnn`` the critic has eye CNNs
+    of its own), or ``proprio``, proprioception and the detector's output (``hands_seen``):
+    an asymmetric critic. The actor keeps its network and observations either way, so the
+    policy sees and acts as the paper's does; with ``policy=cnn`` the update then runs two
+    eye CNNs instead of four (issue #40: the update is most of a CNN iteration). Needs
+    ``network.layout=separate`` (the default): a shared body serves one set of
+    observations."""
 
     # --- the infant's look (the paper's "without manually defined skin-colors") ---------
     appearance: str = "mittens"
