@@ -311,6 +311,14 @@ def finish_config(cfg: RunConfig, behavior: Behavior) -> None:
         raise UsageError(f"{name}: its curriculum() rejects the config: {err}") from err
     if not cfg.network.layout:
         cfg.network.layout = "shared" if spec.share else "separate"
+    if cfg.network.layout == "shared":  # one body serves one set of observations
+        groups = behavior.obs_groups(list(spec.encoders))
+        if set(groups["actor"]) != set(groups["critic"]):
+            raise UsageError(
+                f"{name}: network.layout=shared needs the actor and the critic to see the same "
+                f"observations; this config's actor sees {groups['actor']}, its critic "
+                f"{groups['critic']}: use network.layout=separate"
+            )
     check_learner(cfg, spec)
 
 

@@ -316,3 +316,12 @@ def test_critic_choice_is_checked(behavior):
     behavior.config.critic = "eyes"
     with pytest.raises(UsageError, match="critic.*same.*proprio"):
         behavior.network()
+
+
+def test_an_asymmetric_critic_with_a_shared_body_is_refused_up_front():
+    from devlearn.testing import run_config
+
+    asymmetric = ["behavior.policy=cnn", "behavior.critic=proprio"]
+    with pytest.raises(UsageError, match="network.layout=shared needs the actor and the critic"):
+        run_config(HandRegard, [*asymmetric, "network.layout=shared"])
+    assert run_config(HandRegard, ["behavior.policy=cnn", "network.layout=shared"])
