@@ -62,22 +62,28 @@ def cli_startup_s(args: list[str], repeats: int = 3) -> float:
     return best
 
 
-def run_bench(
-    registry: PluginRegistry, quick: bool = False, progress: Callable[[str], None] = print
-) -> dict:
-    """Run every measurement; return the figures (see ``devlearn bench --help``)."""
-    n = 300 if quick else 2000
-    result_startup = {}
+def _startup(registry: PluginRegistry, quick: bool, progress: Callable[[str], None]) -> dict:
+    result = {}
     for name, args in STARTUP_COMMANDS.items():
         progress(f"start-up: devlearn {' '.join(args)}")
-        result_startup[f"startup_{name}_s"] = cli_startup_s(args, 1 if quick else 3)
+        result[f"startup_{name}_s"] = cli_startup_s(args, 1 if quick else 3)
+    return result
+
+
+def _infant(registry: PluginRegistry, quick: bool, progress: Callable[[str], None]) -> dict:
+    n = 300 if quick else 2000
     progress("infant: physics, touch, proprioception, eye render")
     result: dict[str, Any] = bench_infant(steps=n, frames=20 if quick else 100)
-    result.update(result_startup)
     result.update(touch_old_and_new(n))
     for scene in ("crib", "sitting"):
         progress(f"{scene}: physics-only steps (the ceiling)")
         result[f"physics_{scene}_steps_per_s"] = physics_ceiling(scene, 2 * n)
+    return result
+
+
+def _envs(registry: PluginRegistry, quick: bool, progress: Callable[[str], None]) -> dict:
+    n = 300 if quick else 2000
+    result: dict[str, Any] = {}
     behaviors = registry.behaviors()
     for name in ("self_touch", "hand_regard"):
         if name not in behaviors:
@@ -91,56 +97,118 @@ def run_bench(
         result.update(observations_old_and_new(behavior, steps, 20 if quick else 200))
         result[f"{name}_reference_steps_per_s"] = reference_env_steps_per_s(behavior, steps)
         key = f"physics_{behavior.scene}_steps_per_s"
-        if key not in result:  # a scene other than crib and sitting (hand regard's BabyBench's)
-            result[key] = physics_ceiling(behavior.scene, 2 * n)
-        ceiling = result[key]
+        ceiling = physics_ceiling(behavior.scene, 2 * n)
+        result[key] = ceiling
         result[f"{name}_fraction_of_ceiling"] = result[f"{name}_steps_per_s"] / ceiling
         progress(f"{name}: where a step's time goes")
         result[f"{name}_breakdown_ms"] = env_breakdown(behavior, steps)
+    return result
+
+
+def _vec(registry: PluginRegistry, quick: bool, progress: Callable[[str], None]) -> dict:
+    result: dict[str, Any] = {}
+    behavior = registry.behaviors()["self_touch"]()
+    for workers in (1, 2):
+        progress(f"self_touch: 16 environments over {workers} worker process(es)")
+        result[f"self_touch_vec_steps_per_s_{workers}_workers"] = bench_vec_env(
+            behavior, num_envs=16, workers=workers, steps=20 if quick else 200
+        )
+    # each worker runs on its own core: the ceiling is one crib's physics per worker
+    crib = physics_ceiling("crib", 600 if quick else 4000)
+    result["self_touch_vec_2_workers_fraction_of_ceiling"] = result[
+        "self_touch_vec_steps_per_s_2_workers"
+    ] / (2 * crib)
+    return result
+
+
+def _gym(registry: PluginRegistry, quick: bool, progress: Callable[[str], None]) -> dict:
+    progress("self_touch: the Gymnasium vector env beside DevVecEnv, 16 envs, 2 workers")
+    return bench_gym_vec_env("self_touch", 16, 2, 20 if quick else 200, registry=registry)
+
+
+def _train(registry: PluginRegistry, quick: bool, progress: Callable[[str], None]) -> dict:
+    behaviors = registry.behaviors()
+    result: dict[str, Any] = {}
     if "self_touch" in behaviors:
-        behavior = behaviors["self_touch"]()
-        for workers in (1, 2):
-            progress(f"self_touch: 16 environments over {workers} worker process(es)")
-            result[f"self_touch_vec_steps_per_s_{workers}_workers"] = bench_vec_env(
-                behavior, num_envs=16, workers=workers, steps=20 if quick else 200
-            )
-        # each worker runs on its own core: the ceiling is one crib's physics per worker
-        result["self_touch_vec_2_workers_fraction_of_ceiling"] = result[
-            "self_touch_vec_steps_per_s_2_workers"
-        ] / (2 * result["physics_crib_steps_per_s"])
-        progress("self_touch: the Gymnasium vector env beside DevVecEnv, 16 envs, 2 workers")
-        result.update(
-            bench_gym_vec_env("self_touch", 16, 2, 20 if quick else 200, registry=registry)
-        )
         progress("self_touch: end-to-end training (devlearn run defaults)")
-        result["self_touch_train_steps_per_s"] = bench_training(
-            "self_touch", 8192 if quick else 32768, [], progress
-        )
-        result.update(decision_rate(registry, "self_touch", 8192 if quick else 32768, [], progress))
-        result["self_touch_eval_episodes"] = episodes = 16 if quick else 100
-        for suffix, extra in (("_sequential", ["--envs", "1", "--workers", "0"]), ("", [])):
-            how = "one env in order" if suffix else "automatic envs and workers"
-            progress(f"self_touch: devlearn eval, {episodes} random-policy episodes, {how}")
-            result[f"self_touch_eval_s{suffix}"] = bench_evaluation("self_touch", episodes, extra)
+        steps = 8192 if quick else 32768
+        result["self_touch_train_steps_per_s"] = bench_training("self_touch", steps, [], progress)
+        result.update(decision_rate(registry, "self_touch", steps, [], progress))
     if "hand_regard" in behaviors:
         progress("hand_regard: end-to-end training (short babbling, any correlation accepted)")
         # prepare() babbles before training (10,000 rendered steps by default); a short babble
         # finds weaker correlations, so the threshold is dropped: speed does not depend on it.
         short = ["behavior.babbling_steps=300", "behavior.correlation_threshold=0"]
         extra = ["--envs", "8", *(arg for kv in short for arg in ("--set", kv))]
+        steps = 1024 if quick else 4096
         result["hand_regard_train_steps_per_s"] = bench_training(
-            "hand_regard", 1024 if quick else 4096, extra, progress
+            "hand_regard", steps, extra, progress
         )
-        result.update(
-            decision_rate(registry, "hand_regard", 1024 if quick else 4096, extra, progress)
+        result.update(decision_rate(registry, "hand_regard", steps, extra, progress))
+    return result
+
+
+def _eval(registry: PluginRegistry, quick: bool, progress: Callable[[str], None]) -> dict:
+    result: dict[str, Any] = {"self_touch_eval_episodes": 16 if quick else 100}
+    episodes = result["self_touch_eval_episodes"]
+    for suffix, extra in (("_sequential", ["--envs", "1", "--workers", "0"]), ("", [])):
+        how = "one env in order" if suffix else "automatic envs and workers"
+        progress(f"self_touch: devlearn eval, {episodes} random-policy episodes, {how}")
+        result[f"self_touch_eval_s{suffix}"] = bench_evaluation("self_touch", episodes, extra)
+    return result
+
+
+Section = Callable[["PluginRegistry", bool, Callable[[str], None]], dict]
+SECTIONS: dict[str, tuple[Section, tuple[str, ...]]] = {
+    "startup": (_startup, ()),
+    "infant": (_infant, ()),
+    "envs": (_envs, ()),
+    "vec": (_vec, ("self_touch",)),
+    "gym": (_gym, ("self_touch",)),
+    "train": (_train, ()),
+    "eval": (_eval, ("self_touch",)),
+    "learner": (bench_learner, ()),
+    "cnn": (bench_cnn_path, ("hand_regard",)),
+}
+"""``devlearn bench --only`` sections, in the order a full run measures them: name ->
+(measurement, the behaviours it needs installed)."""
+
+
+def run_bench(
+    registry: PluginRegistry,
+    quick: bool = False,
+    progress: Callable[[str], None] = print,
+    only: tuple[str, ...] = (),
+) -> dict:
+    """Run every measurement, or the :data:`SECTIONS` named in ``only``; return the figures
+    (see ``devlearn bench --help``).
+
+    Raises:
+        UsageError: ``only`` names a section that does not exist.
+    """
+    from devlearn.api.errors import UsageError
+
+    unknown = [name for name in only if name not in SECTIONS]
+    if unknown:
+        raise UsageError(
+            f"unknown bench section(s) {', '.join(unknown)}; valid: {', '.join(SECTIONS)}"
         )
-    result.update(bench_learner(registry, quick, progress))
-    if "hand_regard" in behaviors:
-        result.update(bench_cnn_path(registry, quick, progress))
+    behaviors = registry.behaviors()
+    result: dict[str, Any] = {}
+    for name, (measure, needs) in SECTIONS.items():
+        if only and name not in only:
+            continue
+        missing = [b for b in needs if b not in behaviors]
+        if missing:
+            progress(f"{name}: {', '.join(missing)} not installed, skipped")
+            continue
+        result.update(measure(registry, quick, progress))
     usage_self = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     usage_children = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
     # the largest resident set of any one process (this one, a training run or a worker)
     result["peak_memory_mb"] = max(usage_self, usage_children) / 1024.0
     result["machine"] = f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores"
     result["date"] = time.strftime("%Y-%m-%d")
+    if only:
+        result["sections"] = list(only)
     return result

@@ -172,8 +172,12 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     """Run the measurements with progress on stderr; print a table or JSON."""
     from devlearn.bench.run import run_bench
 
+    only = tuple(name.strip() for name in args.only.split(",") if name.strip())
     result = run_bench(
-        registry, quick=args.quick, progress=lambda m: print(f"bench: {m}", file=sys.stderr)
+        registry,
+        quick=args.quick,
+        progress=lambda m: print(f"bench: {m}", file=sys.stderr),
+        only=only,
     )
     print(json.dumps(result, indent=2) if args.json else format_table(result))
     return 0

@@ -254,6 +254,13 @@ COMMANDS: tuple[Command, ...] = (
         "bench",
         option("--json", help="print the figures as a JSON object"),
         option("--quick", action="store_true", help="fewer steps (rougher figures)"),
+        option(
+            "--only",
+            metavar="SECTIONS",
+            default="",
+            help="""measure only these sections, comma-separated (default: all, in this order):
+            startup, infant, envs, vec, gym, train, eval, learner, cnn""",
+        ),
         help="measure environment and training speed",
     ),
     Command(
