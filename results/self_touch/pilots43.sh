@@ -12,6 +12,8 @@
 #            ~+0.5 for each of its first ~9 onsets, so chattering in and out of contact pays
 #            (~2,600 touch onsets per simulated minute against the infants' ~40): the
 #            more-infant-like variant, judged by the likeness measures of every evaluation.
+#   rate:    a slower decision rate, a decision every 10 physics steps (50 ms, 20 Hz) instead
+#            of 5: the other more-infant-like variant the issue names (fewer, longer strokes).
 # Each final checkpoint is evaluated as in ablation.sh (100 random-pose episodes, eval seed 0,
 # 10-step settle, mean action; likeness measures included). A rerun resumes: a finished
 # evaluation is kept, a run with checkpoints goes on with --resume. From the repository root:
@@ -41,8 +43,9 @@ case $PILOT in
   control) change=() ;;
   balance) change=(--set behavior.rewards.balance.params.reward=30) ;;
   repeats) change=(--set behavior.rewards.touch_novelty.params.repeat_scale=0) ;;
+  rate) change=(--set env.action_repeat=10) ;;
   *)
-    echo "unknown pilot '$PILOT': control, balance, repeats or baselines" >&2
+    echo "unknown pilot '$PILOT': control, balance, repeats, rate or baselines" >&2
     exit 2
     ;;
 esac
