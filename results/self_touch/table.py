@@ -12,7 +12,7 @@ draws OUT/eval_curve.png (one line per seed, baselines as horizontal lines).
 row per arm, the paper's Table II and the difference of every pair of arms.
 
 ``pilots OUT``: issue #43's pilots (``pilots43.sh``): OUT/PILOT/seed=N/ run folders (PILOT
-control, balance or repeats) and OUT/baseline_{zero,random}/; prints the headline table, the
+control, balance, repeats or rate) and OUT/baseline_{zero,random}/; prints the headline table, the
 balance's sources (``balance.py``), the likeness measures (``likeness_table.py``) and each
 pilot's difference from the control.
 
@@ -333,7 +333,7 @@ PILOT_DIFFERENCES = (
 
 def pilot_tables(out: Path) -> str:
     pilots: dict[str, list[Path]] = {}
-    for pilot in ("control", "balance", "repeats"):
+    for pilot in ("control", "balance", "repeats", "rate"):
         runs = sorted(out.glob(f"{pilot}/seed=*"), key=lambda r: int(_seed(r)))
         runs = [r for r in runs if (r / "eval" / "eval.json").exists()]
         if runs:
