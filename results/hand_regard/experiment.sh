@@ -16,9 +16,13 @@
 # The paper's CNN policy (`behavior.policy=cnn`: the eyes' images through the paper's network,
 # the paper's reward) trains the same curriculum for seeds 1-2: whether the CPU variant's result
 # carries over to the paper's network (about 100 physics steps/s per core: ~1 h 45 min a run).
+# Issue #40's pilot, not in the default ARMS: cnn_asym, the same CNN actor with the asymmetric
+# critic (`behavior.critic=proprio`: proprioception and the detector's output, no eye CNNs),
+# seeds 1-2: whether the CNN arm's 614k-step result holds with the cheaper update.
 # Two runs at a time, one core each. From the repository root:
 #   bash results/hand_regard/experiment.sh OUT
-#   ARMS=cnn bash results/hand_regard/experiment.sh OUT   # one part: rewards curiosity cnn baselines
+#   ARMS=cnn bash results/hand_regard/experiment.sh OUT   # one part: rewards curiosity cnn
+#                                                         # cnn_asym baselines
 set -euo pipefail
 OUT=${1:?usage: experiment.sh OUT}
 ARMS=${ARMS:-rewards curiosity cnn baselines}
@@ -36,6 +40,9 @@ common=(--steps "$STEPS" --envs 8 --workers 0 --jobs 2 --episodes "$EPISODES" --
   --set behavior.reward=paper --set curiosity=forward_model "${common[@]}"
 ! has cnn || .venv/bin/devlearn sweep hand_regard --out "$OUT/cnn" --seeds 1,2 \
   --set behavior.reward=paper --set behavior.policy=cnn "${common[@]}"
+! has cnn_asym || .venv/bin/devlearn sweep hand_regard --out "$OUT/cnn_asym" --seeds 1,2 \
+  --set behavior.reward=paper --set behavior.policy=cnn --set behavior.critic=proprio \
+  "${common[@]}"
 for policy in zero random held_random; do
   for start in babybench random; do
     dir="$OUT/baseline_${policy}_$start"
