@@ -19,6 +19,7 @@
 # evaluation is kept, a run with checkpoints goes on with --resume. From the repository root:
 #   bash results/self_touch/pilots43.sh OUT PILOT SEED [STEPS]  # e.g. /work/sweeps/pil43 repeats 1
 #   bash results/self_touch/pilots43.sh OUT baselines            # zero and random, same protocol
+#                                                                # (and held 10 steps, rate's)
 # One run per core (each takes one: --workers 0, torch_threads=1); layout OUT/PILOT/seed=N/ (run;
 # eval/ its evaluation), OUT/baseline_{zero,random}/. ENVS (16), EPISODES (100) for smoke tests.
 set -euo pipefail
@@ -34,6 +35,8 @@ source "$(dirname "$0")/common.sh"
 if [[ $PILOT == baselines ]]; then
   for policy in zero random; do
     evaluate "$OUT/baseline_$policy" --policy "$policy"
+    # the rate pilot's protocol: an action held 10 physics steps
+    evaluate "$OUT/baseline_${policy}_k10" --policy "$policy" --set env.action_repeat=10
   done
   exit 0
 fi

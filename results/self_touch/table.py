@@ -152,7 +152,7 @@ def group_row(label: str, evals: list[dict[str, Any]], train: list[float | None]
 
 def _baseline_rows(out: Path) -> list[str]:
     rows = []
-    for suffix, where in (("", "random poses"), ("_rest", "rest pose")):
+    for suffix, where in (("", "random poses"), ("_k10", "random poses"), ("_rest", "rest pose")):
         for policy in ("zero", "random"):
             e = _load(out / f"baseline_{policy}{suffix}" / "eval.json")
             if e is not None:
@@ -342,9 +342,10 @@ def pilot_tables(out: Path) -> str:
         raise SystemExit(f"no finished runs (PILOT/seed=N/eval/eval.json) in {out}")
     evals = {p: [_load(r / "eval" / "eval.json") for r in runs] for p, runs in pilots.items()}
     baselines = {
-        f"{policy} actions": e
+        f"{policy} actions{label}": e
+        for suffix, label in (("", ""), ("_k10", ", held 10 steps (rate's)"))
         for policy in ("zero", "random")
-        if (e := _load(out / f"baseline_{policy}" / "eval.json")) is not None
+        if (e := _load(out / f"baseline_{policy}{suffix}" / "eval.json")) is not None
     }
     lines = [HEADLINE]
     for pilot, runs in pilots.items():
