@@ -24,7 +24,7 @@ LEARNERS = ("devlearn_ppo", "sb3_ppo", "sb3_sac")
 def _run_figures(run: Path) -> dict[str, float]:
     """Steps trained and seconds of learning of one run folder."""
     train = run / "train.json"
-    if train.exists():  # SB3 (examples/sb3/train.py)
+    if train.exists():  # SB3 (examples/sb3/train.py); devlearn runs as publish.sh writes them
         data = json.loads(train.read_text())
         return {"steps": data["env_steps"], "seconds": data["learn_s"]}
     rows = [json.loads(line) for line in (run / "metrics.jsonl").read_text().splitlines()]
