@@ -10,6 +10,8 @@ set -euo pipefail
 USAGE="usage: publish.sh OUT DEST"
 out=${1:?$USAGE}
 dest=${2:?$USAGE}
+# shellcheck source=results/publish_lib.sh
+source "$(dirname "$0")/../publish_lib.sh"
 shopt -s nullglob
 for run in "$out"/fixed/runs/*/ "$out"/grow/runs/*/; do
   run=${run%/}
@@ -22,16 +24,11 @@ for run in "$out"/fixed/runs/*/ "$out"/grow/runs/*/; do
   mkdir -p "$to"
   cp "$run/config.json" "$to/"
   [ ! -f "$out/$arm/records/$name.json" ] || cp "$out/$arm/records/$name.json" "$to/sweep_record.json"
-  awk -v last="$(wc -l < "$run/metrics.jsonl")" 'NR % 10 == 0 || NR == last' \
-    "$run/metrics.jsonl" > "$to/metrics.jsonl"
+  thin_log "$run/metrics.jsonl" "$to/metrics.jsonl" 10
   for age in 6 12 18; do
     mkdir -p "$to/at_${age}_months"
     cp "$run/at_${age}_months/eval.json" "$to/at_${age}_months/"
   done
   echo "published $arm/$name"
 done
-for base in "$out"/baseline_*/; do
-  [ -f "$base/eval.json" ] || continue
-  mkdir -p "$dest/$(basename "$base")"
-  cp "$base/eval.json" "$dest/$(basename "$base")/"
-done
+copy_baselines "$out" "$dest"

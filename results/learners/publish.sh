@@ -10,6 +10,8 @@ USAGE="usage: publish.sh OUT DEST"
 out=${1:?$USAGE}
 dest=${2:?$USAGE}
 PYTHON=${PYTHON:-.venv/bin/python}
+# shellcheck source=results/publish_lib.sh
+source "$(dirname "$0")/../publish_lib.sh"
 shopt -s nullglob
 for run in "$out"/devlearn_ppo/seed=*/ "$out"/sb3_ppo/seed=*/ "$out"/sb3_sac/seed=*/; do
   run=${run%/}
@@ -29,13 +31,8 @@ summary = {"learner": "devlearn_ppo", "env_steps": rows[-1]["step"], "learn_s": 
            "iterations": len(rows), "source": "metrics.jsonl: collect_s + update_s of every row"}
 open(sys.argv[2], "w").write(json.dumps(summary, indent=2) + "\n")
 PY
-    awk -v last="$(wc -l < "$run/metrics.jsonl")" 'NR % 10 == 0 || NR == last' \
-      "$run/metrics.jsonl" > "$dest/$name/metrics.jsonl"
+    thin_log "$run/metrics.jsonl" "$dest/$name/metrics.jsonl" 10
   fi
   echo "published $name"
 done
-for base in "$out"/baseline_*/; do
-  [ -f "$base/eval.json" ] || continue
-  mkdir -p "$dest/$(basename "$base")"
-  cp "$base/eval.json" "$dest/$(basename "$base")/"
-done
+copy_baselines "$out" "$dest"

@@ -8,6 +8,8 @@ set -euo pipefail
 USAGE="usage: publish_pilots.sh OUT DEST"
 out=${1:?$USAGE}
 dest=${2:?$USAGE}
+# shellcheck source=results/publish_lib.sh
+source "$(dirname "$0")/../publish_lib.sh"
 shopt -s nullglob
 for run in "$out"/*/seed=*/; do
   run=${run%/}
@@ -16,12 +18,7 @@ for run in "$out"/*/seed=*/; do
   mkdir -p "$dest/$name/eval"
   cp "$run/config.json" "$dest/$name/"
   cp "$run/eval/eval.json" "$dest/$name/eval/"
-  awk -v last="$(wc -l < "$run/metrics.jsonl")" 'NR % 50 == 0 || NR == last' \
-    "$run/metrics.jsonl" > "$dest/$name/metrics.jsonl"
+  thin_log "$run/metrics.jsonl" "$dest/$name/metrics.jsonl" 50
   echo "published $name"
 done
-for base in "$out"/baseline_*/; do
-  [ -f "$base/eval.json" ] || continue
-  mkdir -p "$dest/$(basename "$base")"
-  cp "$base/eval.json" "$dest/$(basename "$base")/"
-done
+copy_baselines "$out" "$dest"

@@ -1,0 +1,14 @@
+# Shared by the results/*/publish*.sh scripts (sourced, not run).
+
+thin_log() {  # thin_log SRC DEST EVERY: a training log's every EVERY-th row plus the last
+  awk -v last="$(wc -l < "$1")" -v every="$3" 'NR % every == 0 || NR == last' "$1" > "$2"
+}
+
+copy_baselines() {  # copy_baselines OUT DEST: every OUT/baseline_*/eval.json into DEST
+  local base
+  for base in "$1"/baseline_*/; do
+    [ -f "$base/eval.json" ] || continue
+    mkdir -p "$2/$(basename "$base")"
+    cp "$base/eval.json" "$2/$(basename "$base")/"
+  done
+}
