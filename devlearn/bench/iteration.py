@@ -174,10 +174,9 @@ def bench_cnn_path(
     result: dict[str, Any] = {}
     short = ["behavior.babbling_steps=300", "behavior.correlation_threshold=0", "torch_threads=1"]
     for prefix, overrides in CNN_PATHS.items():
+        # the behaviour built on the config the run resolves (its --set values checked)
         behavior = registry.create("hand_regard")
-        for item in overrides:
-            key, value = item.removeprefix("behavior.").split("=")
-            setattr(behavior.config, key, value)
+        behavior = type(behavior)(run_config(behavior, overrides, registry).behavior)
         progress(f"{prefix}: where an iteration's time goes")
         profile = iteration_profile(
             behavior, overrides, 20 if quick else 200, 8 if quick else None, registry=registry
