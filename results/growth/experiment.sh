@@ -33,11 +33,12 @@ arm() {  # arm NAME GRID: one sweep
     --set behavior.fixed_pose_steps=$((STEPS / 2)) --set behavior.random_pose_steps=$((STEPS / 2))
 }
 
-evaluate() {  # evaluate DIR ARGS...: one evaluation unless DIR/eval.json exists
+evaluate() {  # evaluate DIR ARGS...: one evaluation unless DIR/eval.json exists, JOBS at a time
   local dir=$1
   shift
-  [ -f "$dir/eval.json" ] || "$DEVLEARN" eval self_touch "$@" --episodes "$EPISODES" --seed 0 \
-    --json --out "$dir" > /dev/null
+  [ -f "$dir/eval.json" ] && return
+  while (($(jobs -rp | wc -l) >= JOBS)); do wait -n; done
+  "$DEVLEARN" eval self_touch "$@" --episodes "$EPISODES" --seed 0 --json --out "$dir" > /dev/null &
 }
 
 arm fixed "infant.age_months=$(IFS=,; echo "${AGES[*]}")"
@@ -55,3 +56,4 @@ for age in "${AGES[@]}"; do
     evaluate "$OUT/baseline_${policy}_${age}_months" --policy "$policy" --set infant.age_months="$age"
   done
 done
+wait
