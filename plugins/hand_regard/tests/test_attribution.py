@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from devlearn_hand_regard import HandRegard, HandRegardConfig
 from devlearn_hand_regard.attribution import (
+    _monomials,
     assign,
     fit_logistic,
     fit_visibility_model,
@@ -211,3 +212,29 @@ def test_new_runs_attribute_by_visibility_and_saved_configs_by_position(
     behavior = HandRegard(HandRegardConfig(detector_file=str(path), hand_attribution="position"))
     assert behavior.detector.attribution == "position"
     assert DetectorParams.load(path).visibility_model == model  # the JSON round trip
+
+
+def test_polynomial_features_are_the_products_of_each_monomials_factors():
+    """The one-gather path gives the very numbers of multiplying each monomial's factors
+    (the detector files' models were fitted that way), for any inputs and degree."""
+    rng = np.random.default_rng(0)
+    for k, degree in [(1, 1), (3, 2), (5, 3), (6, 3), (4, 4)]:
+        x = rng.normal(size=(200, k)) * 3
+        expected = np.stack([np.prod(x[:, list(m)], axis=1) for m in _monomials(k, degree)], axis=1)
+        np.testing.assert_array_equal(polynomial_features(x, degree), expected)
+    np.testing.assert_array_equal(polynomial_features(np.zeros((2, 3)), 0), np.ones((2, 1)))
+
+
+def test_the_detectors_compiled_predictor_is_the_models_prediction(model, synthetic_params):
+    params = DetectorParams(**{**vars(synthetic_params), "visibility_model": model})
+    detector = HandDetector(params, attribution="visibility")
+    for posture_ in (posture(0.9, -0.5), posture(-0.5, 0.9), posture(0.2, 0.3)):
+        np.testing.assert_array_equal(
+            detector.view_prior(posture_), predict_visibility(model, posture_)
+        )
+    zeros = [np.zeros_like(np.asarray(w)).tolist() for w in model["weights"]]
+    params.visibility_model = {**model, "weights": zeros}  # a new model: compiled anew
+    np.testing.assert_array_equal(detector.view_prior(posture(0.9, -0.5)), np.full((2, 2), 0.5))
+    without = DetectorParams(**{**vars(synthetic_params), "visibility_model": {}})
+    assert HandDetector(without).view_prior(posture(0.9, -0.5)) is None
+    assert HandDetector(None).view_prior(posture(0.9, -0.5)) is None

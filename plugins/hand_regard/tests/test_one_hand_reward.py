@@ -5,7 +5,9 @@ The infant, in BabyBench's scene with both arms active, holds one hand before bo
 run whose bilateral bonus was paid for one hand; and their mirror image for the right hand),
 the other hand out of view. The segmentation confirms the scene; the detector never reads it.
 With the hands told apart by posture (``visibility``) the absent hand is never detected, so
-``bilateral_balance`` never pays its bonus and only charges the visibility gap. The position
+``bilateral_balance`` never pays its bonus and only charges the visibility gap, and
+``reach_into_view`` (the absent hand's visibility expected from its posture) pays next to
+nothing: the hanging arm is not expected in view. The position
 rule (the detector of every run before issue #39) credits the held hand to the absent one (the
 left hand held: in the left eye, so the bonus is paid; the right hand held: in both eyes):
 that case is a strict xfail, the old reward hack kept in view.
@@ -18,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from devlearn_hand_regard import HandRegard, HandRegardConfig
-from devlearn_hand_regard.rewards import BilateralBalance, HandCount
+from devlearn_hand_regard.rewards import BilateralBalance, HandCount, ReachIntoView
 
 from devlearn import build_infant
 from devlearn.api.rewards import StepContext
@@ -95,7 +97,7 @@ def test_one_hand_before_both_eyes_earns_nothing_for_the_other(infant, attributi
     infant.reset(np.random.default_rng(0), start="babybench")
     behavior.on_episode_start(infant, np.random.default_rng(0))
     behavior.process_action(np.zeros(infant.action_dim), BOTH_ARMS)  # both arms move
-    balance, count = BilateralBalance(), HandCount()
+    balance, count, reach = BilateralBalance(), HandCount(), ReachIntoView(bonus=1.0)
     absent = 1 - held
     poses = LEFT_HAND_HELD if held == 0 else [mirrored(p) for p in LEFT_HAND_HELD]
     step = 0
@@ -116,6 +118,8 @@ def test_one_hand_before_both_eyes_earns_nothing_for_the_other(infant, attributi
             gap = abs(balance.visibility[0] - balance.visibility[1])
             assert value == pytest.approx(-balance.penalty * gap) and value <= 0.0
             assert count(ctx) <= 0.5  # the held hand in two eyes at most
+            # the hanging hand is not expected in view (by its posture, whatever the attribution)
+            assert reach(ctx) < 0.05, (step, facts["view_prior"].tolist())
             step += 1
     # the held hand was seen (the reward is not zero because nothing is detected at all)
     assert balance.visibility[held] > 0.1 and balance.visibility[absent] == 0.0

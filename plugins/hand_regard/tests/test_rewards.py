@@ -9,6 +9,7 @@ from devlearn_hand_regard.rewards import (
     HandCount,
     HandMotion,
     LivingPenalty,
+    ReachIntoView,
     active_hands,
     hand_motion,
     motion_reward,
@@ -97,3 +98,18 @@ def test_bilateral_balance_bonus_and_gap_penalty():
     # One-arm stages: the term is silent and its averages do not move.
     assert term(ctx([[1, 0], [0, 0]], LEFT)) == 0.0
     np.testing.assert_allclose(term.visibility, [0.19, 0.09])
+
+
+def test_reach_into_view_pays_for_the_hand_less_likely_in_view():
+    term = ReachIntoView(bonus=0.4)
+    context = ctx([[1, 0], [1, 0]])
+    # the left hand surely in view of the left eye, the right hand at best 0.3 likely
+    context.facts["view_prior"] = np.array([[0.99, 0.1], [0.6, 0.3]])
+    assert term(context) == pytest.approx(0.4 * 0.3)
+    context.facts["view_prior"] = np.array([[0.99, 0.0], [0.9, 0.0]])  # the other hangs
+    assert term(context) == 0.0
+    # one-arm stages, and a detector without a visibility model: nothing
+    context.facts["view_prior"] = np.ones((2, 2))
+    assert term(ctx([[1, 0], [1, 0]], LEFT)) == 0.0
+    assert term(StepContext(None, {}, {**context.facts, "view_prior": None}, 0, False, BOTH)) == 0
+    assert term(context) == pytest.approx(0.4)

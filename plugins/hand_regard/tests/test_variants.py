@@ -41,6 +41,15 @@ def test_bilateral_reward_adds_the_bilateral_term():
     assert terms[-1].weight == 0.5
 
 
+def test_reach_into_view_is_off_by_default_and_never_in_the_papers_reward():
+    config = HandRegardConfig(reward="bilateral")
+    assert config.rewards["reach_into_view"].weight == 0.0
+    config.rewards["reach_into_view"].weight = 1.0
+    assert _names(config) == PAPER_TERMS + ["bilateral_balance", "reach_into_view"]
+    config.reward = "paper"
+    assert _names(config) == PAPER_TERMS
+
+
 def test_reward_switch_on_the_command_line():
     from devlearn.testing import run_command
 

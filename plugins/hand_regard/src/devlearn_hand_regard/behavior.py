@@ -253,7 +253,8 @@ class HandRegard(Behavior):
             ``hand_masks`` (2 eyes, 2 hands, H, W) bool, each detected hand's pixels;
             ``hand_flow`` (2, 2) summed flow magnitude and ``hand_pixels`` (2, 2) pixel counts
             (see :class:`HandFlow`); ``hand_count`` int; ``image_width`` int; ``motion`` float,
-            m_t over both hands; ``proprioception`` (P,) float32.
+            m_t over both hands; ``proprioception`` (P,) float32; ``view_prior`` (2 eyes,
+            2 hands) P(eye sees hand | posture) or None (the detector's visibility model).
         """
         eyes = infant.eyes()
         # The posture tells which blob is which hand (the position model babbling learned);
@@ -271,6 +272,7 @@ class HandRegard(Behavior):
             "hand_count": int(detections.sum()),
             "image_width": int(eyes.shape[2]),
             "proprioception": proprioception,
+            "view_prior": self.detector.view_prior(proprioception),
         }
         facts["motion"] = hand_motion(facts, [0, 1])
         return facts
@@ -361,8 +363,9 @@ class HandRegard(Behavior):
 
     # --- rewards, actions, curriculum -------------------------------------------------------
     def reward_terms(self) -> list[IntrinsicReward | BatchedIntrinsicReward]:
-        """The config's ``rewards``: the paper's three terms, plus ``bilateral_balance`` when
-        ``config.reward`` is ``bilateral``; zero-weight terms are left out.
+        """The config's ``rewards``: the paper's three terms, plus our terms
+        (:data:`NOT_IN_PAPER`) when ``config.reward`` is ``bilateral``; zero-weight terms are
+        left out.
 
         Raises:
             UsageError: ``config.reward`` is not one of :data:`REWARD_CHOICES`.

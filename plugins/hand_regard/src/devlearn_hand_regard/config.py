@@ -7,19 +7,26 @@ from typing import Any, ClassVar
 
 from devlearn.api.behavior import BehaviorConfig
 from devlearn.api.rewards import RewardTermCfg
-from devlearn_hand_regard.rewards import BilateralBalance, HandCount, HandMotion, LivingPenalty
+from devlearn_hand_regard.rewards import (
+    BilateralBalance,
+    HandCount,
+    HandMotion,
+    LivingPenalty,
+    ReachIntoView,
+)
 
 APPEARANCE_CHOICES = ("two_colour_mittens", "mittens", "skin")
 """Valid ``appearance`` values (``devlearn.infant.scenes.APPEARANCES``)."""
 REWARD_CHOICES = ("paper", "bilateral")
 """Valid ``reward`` values."""
-NOT_IN_PAPER = ("bilateral_balance",)
+NOT_IN_PAPER = ("bilateral_balance", "reach_into_view")
 """Reward terms ``reward=paper`` leaves out (ours, the paper's future work)."""
 
 
 def hand_regard_rewards() -> dict[str, RewardTermCfg]:
     """The paper's three terms (sec. II-B4: R_t = R_hand + R_motion - 0.05) and our
-    ``bilateral_balance``, weight 1 each."""
+    ``bilateral_balance``, weight 1 each; our ``reach_into_view`` is there at weight 0 (off:
+    a pilot of issue #39, ``--set behavior.rewards.reach_into_view.weight=1``)."""
     return {
         "hand_count": RewardTermCfg(HandCount, 1.0),
         "motion": RewardTermCfg(HandMotion, 1.0),
@@ -27,6 +34,7 @@ def hand_regard_rewards() -> dict[str, RewardTermCfg]:
         "bilateral_balance": RewardTermCfg(
             BilateralBalance, 1.0, {"bonus": 0.25, "penalty": 0.5, "horizon": 200.0}
         ),
+        "reach_into_view": RewardTermCfg(ReachIntoView, 0.0, {"bonus": 0.25}),
     }
 
 
@@ -173,7 +181,10 @@ class HandRegardConfig(BehaviorConfig):
     ``bilateral_balance`` (not in the paper, its future work; only while both arms are
     active: ``bonus`` on steps where each hand is detected by at least one eye, minus
     ``penalty`` per unit of |v_left - v_right|, the gap between the hands' recent visibility,
-    exponential moving averages over ``horizon`` steps). A term of weight 0 is left out."""
+    exponential moving averages over ``horizon`` steps) and ``reach_into_view`` (ours, off
+    by default: ``bonus`` times the posture-predicted visibility of the hand less likely in
+    view, a gradient toward both hands in view; both-arm stages only). A term of weight 0 is
+    left out."""
 
     # --- curriculum (sec. II-B5) ----------------------------------------------------------
     left_arm_steps: int = 175_000

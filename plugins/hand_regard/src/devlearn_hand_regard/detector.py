@@ -16,7 +16,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-from devlearn_hand_regard.attribution import assign, predict_visibility
+from devlearn_hand_regard.attribution import VisibilityPredictor, assign
 
 FORMAT_VERSION = 2
 """2: no static-body masks (the mittens made them unnecessary); 1 files are refused."""
@@ -174,6 +174,17 @@ class HandDetector:
         self.params = params
         self.max_hands = max_hands
         self.attribution = attribution
+        self._predictor: tuple[dict[str, Any], VisibilityPredictor] | None = None
+
+    def view_prior(self, proprioception: np.ndarray) -> np.ndarray | None:
+        """P(eye e sees hand h | posture), (2 eyes, 2 hands), from the visibility model
+        babbling learned (:mod:`attribution`); None without one. Compiled once per model."""
+        model = self.params.visibility_model if self.params is not None else None
+        if not model:
+            return None
+        if self._predictor is None or self._predictor[0] is not model:
+            self._predictor = (model, VisibilityPredictor(model))
+        return self._predictor[1](proprioception)
 
     def colour_mask(self, image: np.ndarray, side: int | None = None) -> np.ndarray:
         """Return (H, W) bool: pixels inside the learned hand colour boxes of an RGB image
@@ -291,7 +302,7 @@ class HandDetector:
         by_colour = self.params is not None and bool(self.params.side_hsv_ranges)
         likelihood = None  # (2 eyes, 2 hands) P(eye sees hand | posture), when attributing so
         if self.attribution == "visibility" and self.params and proprioception is not None:
-            likelihood = predict_visibility(self.params.visibility_model, proprioception)
+            likelihood = self.view_prior(proprioception)
         for eye in range(n_eyes):
             attributed: list[list[Blob]]
             if by_colour:  # each hand is the largest blob of its own colour

@@ -2,7 +2,8 @@
 
 The paper's reward is ``R_t = R_hand + R_motion - 0.05``; each part is its own term here so
 that it is logged on its own (``reward/hand_count``, ``reward/motion``,
-``reward/living_penalty``). ``bilateral_balance`` is our addition (the paper's future work).
+``reward/living_penalty``). ``bilateral_balance`` and ``reach_into_view`` are our additions
+(the paper's future work: both hands in view).
 
 Facts read (computed once per step by :meth:`HandRegard.facts`):
     ``hand_detections``: (2 eyes, 2 hands) bool, detector output, hands ordered [left, right].
@@ -10,6 +11,8 @@ Facts read (computed once per step by :meth:`HandRegard.facts`):
         over each detected hand's pixels.
     ``hand_pixels``: (2 eyes, 2 hands) int, number of pixels of each detected hand.
     ``image_width``: int, eye image width in pixels (normalises the motion).
+    ``view_prior``: (2 eyes, 2 hands) float or None, P(eye sees hand | posture) from the
+        visibility model the infant learned while babbling (``attribution.py``).
 """
 
 from __future__ import annotations
@@ -147,3 +150,34 @@ class BilateralBalance(IntrinsicReward):
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
         self.visibility = np.asarray(state["visibility"], dtype=float).copy()
+
+
+class ReachIntoView(IntrinsicReward):
+    """Extra term (ours, issue #39): shaping toward both hands in view, from the infant's own
+    expectation of what it will see.
+
+    Pays ``bonus * min_h max_e P(eye e sees hand h | posture)``: the predicted visibility of
+    the hand less likely in view, read from the visibility model the infant learned from its
+    own one-arm babbling (``view_prior``; no segmentation, no image). With one hand held
+    before the eyes and the other hanging it pays about nothing; it rises as the other arm
+    lifts its hand toward view, a gradient where the hand count pays only once that hand is
+    detected. It is 0 in one-arm stages and without a visibility model. Being a prediction it
+    can be fooled (a posture the model wrongly expects in view), so ``bonus`` stays below
+    what seeing the second hand adds to the hand count (0.5 to 1.5).
+
+    Args:
+        weight: Term weight.
+        bonus: Reward when both hands are surely expected in view.
+    """
+
+    name = "reach_into_view"
+
+    def __init__(self, weight: float = 1.0, bonus: float = 0.25) -> None:
+        super().__init__(weight)
+        self.bonus = float(bonus)
+
+    def __call__(self, ctx: StepContext) -> float:
+        prior = ctx.facts.get("view_prior")
+        if prior is None or len(active_hands(ctx.stage)) < 2:
+            return 0.0
+        return self.bonus * float(np.min(np.max(prior, axis=0)))
