@@ -68,3 +68,39 @@ def test_segmentation_matches_mujoco_segmentation_mode(sitting):
                 assert np.array_equal(ours[e], reference)
         finally:
             renderer.disable_segmentation_rendering()
+
+
+_RENDER_SCRIPT = """
+import hashlib, os, sys
+import numpy as np
+import devlearn
+from devlearn import build_infant
+infant = build_infant("sitting_babybench", senses=("proprioception", "eyes"))
+infant.reset(np.random.default_rng(0), start="babybench")
+rng, digest = np.random.default_rng(1), hashlib.sha256()
+for _ in range(20):
+    infant.step(rng.uniform(-1, 1, infant.action_dim))
+    digest.update(infant.eyes().tobytes())
+print(os.environ["LP_NUM_THREADS"], digest.hexdigest())
+"""
+
+
+def test_the_rasteriser_draws_in_the_calling_thread_and_the_eyes_see_the_same(tmp_path):
+    """``import devlearn`` asks Mesa's llvmpipe (EGL without a GPU) for no rasteriser threads
+    unless the user chose a number; the eye images are the same bytes either way."""
+    import os
+    import subprocess
+    import sys
+
+    env = {k: v for k, v in os.environ.items() if k not in ("LP_NUM_THREADS", "MUJOCO_GL")}
+    outputs = []
+    for threads in (None, "2"):
+        run_env = env if threads is None else {**env, "LP_NUM_THREADS": threads}
+        done = subprocess.run(
+            [sys.executable, "-c", _RENDER_SCRIPT], env=run_env, capture_output=True, text=True
+        )
+        assert done.returncode == 0, done.stderr[-2000:]
+        outputs.append(done.stdout.split())
+    (default_threads, default_images), (chosen_threads, chosen_images) = outputs
+    assert default_threads == "0" and chosen_threads == "2"
+    assert default_images == chosen_images
