@@ -30,6 +30,7 @@ SHORT = ("LL", "RL", "LR", "RR")
 GROUPS = (
     ("paper reward (the control)", "reward=paper,seed=*"),
     ("ours: paper + bilateral term", "reward=bilateral,seed=*"),
+    ("ours: paper + bilateral + reach_into_view", "reward=reach,seed=*"),
     ("paper + forward_model curiosity", "curiosity=forward_model,seed=*"),
     ("paper reward, the paper's CNN policy", "policy=cnn,seed=*"),
 )
