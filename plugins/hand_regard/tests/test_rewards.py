@@ -113,3 +113,21 @@ def test_reach_into_view_pays_for_the_hand_less_likely_in_view():
     assert term(ctx([[1, 0], [1, 0]], LEFT)) == 0.0
     assert term(StepContext(None, {}, {**context.facts, "view_prior": None}, 0, False, BOTH)) == 0
     assert term(context) == pytest.approx(0.4)
+
+
+def test_reach_into_view_temperature_flattens_the_log_odds():
+    context = ctx([[1, 0], [1, 0]])
+    context.facts["view_prior"] = np.array([[0.99, 1e-6], [0.9, 1e-8]])  # the other hangs
+    plain, tempered = ReachIntoView(bonus=1.0), ReachIntoView(bonus=1.0, temperature=4.0)
+    assert plain(context) == pytest.approx(1e-6)
+    # logit(1e-6) = -13.8: / 4 -> sigmoid(-3.45) = 0.031, a slope the hanging arm can climb
+    assert tempered(context) == pytest.approx(1 / (1 + np.exp(np.log(1e6 - 1) / 4)), rel=1e-9)
+    context.facts["view_prior"] = np.array([[0.99, 0.5], [0.9, 0.2]])  # even odds: unchanged
+    assert tempered(context) == pytest.approx(0.5)
+    higher = np.array([[0.99, 0.9], [0.9, 0.2]])
+    assert (
+        tempered(StepContext(None, {}, {**context.facts, "view_prior": higher}, 0, False, BOTH))
+        < 0.9
+    )
+    with pytest.raises(ValueError, match="temperature must be > 0"):
+        ReachIntoView(temperature=0)

@@ -165,19 +165,32 @@ class ReachIntoView(IntrinsicReward):
     can be fooled (a posture the model wrongly expects in view), so ``bonus`` stays below
     what seeing the second hand adds to the hand count (0.5 to 1.5).
 
+    The model's probabilities fall off exponentially away from the postures where a hand is
+    seen (a hanging arm's hand is ~1e-4 likely in view), which leaves little to climb;
+    ``temperature`` T > 1 pays on the flattened ``sigmoid(logit(P) / T)`` instead, the same
+    order of postures with a slope that reaches the hanging arm.
+
     Args:
         weight: Term weight.
         bonus: Reward when both hands are surely expected in view.
+        temperature: Divides the model's log-odds (1: its probabilities as they are).
     """
 
     name = "reach_into_view"
 
-    def __init__(self, weight: float = 1.0, bonus: float = 0.25) -> None:
+    def __init__(self, weight: float = 1.0, bonus: float = 0.25, temperature: float = 1.0) -> None:
         super().__init__(weight)
-        self.bonus = float(bonus)
+        if temperature <= 0:
+            raise ValueError(f"reach_into_view temperature must be > 0, got {temperature}")
+        self.bonus, self.temperature = float(bonus), float(temperature)
 
     def __call__(self, ctx: StepContext) -> float:
         prior = ctx.facts.get("view_prior")
         if prior is None or len(active_hands(ctx.stage)) < 2:
             return 0.0
-        return self.bonus * float(np.min(np.max(prior, axis=0)))
+        p = float(np.min(np.max(prior, axis=0)))
+        if self.temperature != 1.0:
+            p = min(max(p, 1e-300), 1.0 - 1e-16)
+            logit = np.log(p) - np.log1p(-p)
+            p = float(1.0 / (1.0 + np.exp(-logit / self.temperature)))
+        return self.bonus * p
