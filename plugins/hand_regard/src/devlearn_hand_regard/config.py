@@ -34,7 +34,7 @@ def hand_regard_rewards() -> dict[str, RewardTermCfg]:
         "bilateral_balance": RewardTermCfg(
             BilateralBalance, 1.0, {"bonus": 0.25, "penalty": 0.5, "horizon": 200.0}
         ),
-        "reach_into_view": RewardTermCfg(ReachIntoView, 0.0, {"bonus": 0.25}),
+        "reach_into_view": RewardTermCfg(ReachIntoView, 0.0, {"bonus": 0.25, "temperature": 1.0}),
     }
 
 
