@@ -9,9 +9,10 @@
 # 1,850,880). Arms (ARMS, any of):
 #   paper      the paper's reward (hand count, motion, living penalty);
 #   bilateral  + our bilateral_balance term;
-#   reach      + bilateral_balance + reach_into_view at weight 2 (the posture-predicted
-#              visibility of the hand less likely in view, up to 0.5 a step).
-# One sweep per arm, the arms side by side, one run per core (JOBS arms at once); each sweep
+#   reach      + bilateral_balance + reach_into_view at weight 2, temperature 4 (the
+#              posture-predicted visibility of the hand less likely in view, its log-odds
+#              flattened 4x, up to 0.5 a step): the pilots' best both-hands arm (i39_pilot/).
+# One sweep per arm, the arms side by side, one run per core; each sweep
 # trains its seeds in turn and evaluates each on 10 episodes from BabyBench's start (eval/), then
 # from random starts (eval_random/); the zero, random and held-random baselines under the same
 # detector and protocols. Restartable: a rerun resumes every sweep (an interrupted run continues
@@ -33,7 +34,7 @@ settings() {  # settings ARM: the arm's --set options
   case $1 in
     paper) echo "--set behavior.reward=paper" ;;
     bilateral) echo "--set behavior.reward=bilateral" ;;
-    reach) echo "--set behavior.reward=bilateral --set behavior.rewards.reach_into_view.weight=2" ;;
+    reach) echo "--set behavior.reward=bilateral --set behavior.rewards.reach_into_view.weight=2 --set behavior.rewards.reach_into_view.params.temperature=4" ;;
     *) echo "unknown arm '$1'; valid: paper bilateral reach" >&2; return 2 ;;
   esac
 }

@@ -31,6 +31,7 @@ GROUPS = (
     ("paper reward (the control)", "reward=paper,seed=*"),
     ("ours: paper + bilateral term", "reward=bilateral,seed=*"),
     ("ours: paper + bilateral + reach_into_view", "reward=reach,seed=*"),
+    ("ours: paper + bilateral + reach_into_view, T = 4", "reward=reach_t4,seed=*"),
     ("paper + forward_model curiosity", "curiosity=forward_model,seed=*"),
     ("paper reward, the paper's CNN policy", "policy=cnn,seed=*"),
 )
