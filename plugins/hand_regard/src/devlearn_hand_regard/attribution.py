@@ -86,8 +86,6 @@ def polynomial_features(x: np.ndarray, degree: int = DEGREE) -> np.ndarray:
     a product per monomial took about a millisecond (this runs every step of a hand-regard run).
     """
     x = np.asarray(x, dtype=float)
-    if degree == 0:
-        return np.ones((len(x), 1))
     padded = np.concatenate([np.ones((len(x), 1)), x], axis=1)
     return np.prod(padded[:, _monomial_index(x.shape[1], degree)], axis=2)
 
@@ -199,6 +197,10 @@ def fit_visibility_model(
     return model
 
 
+_ARRAY_KEYS = ("low", "high", "mean", "scale", "weights")
+"""The model's per-hand lists that :class:`VisibilityPredictor` turns into arrays."""
+
+
 class VisibilityPredictor:
     """:func:`fit_visibility_model`'s model with its lists turned into arrays once, for the
     per-step prediction (:meth:`__call__`, the same numbers as :func:`predict_visibility`)."""
@@ -220,9 +222,6 @@ class VisibilityPredictor:
             logits = polynomial_features(z[None], self.degree)[0] @ self.weights[hand]
             out[:, hand] = 1.0 / (1.0 + np.exp(-logits))
         return out
-
-
-_ARRAY_KEYS = ("low", "high", "mean", "scale", "weights")
 
 
 def predict_visibility(model: dict[str, Any], proprioception: np.ndarray) -> np.ndarray:

@@ -261,7 +261,10 @@ class HandRegard(Behavior):
         # in a one-arm stage the other arm hangs still, out of view, so a blob is the moving
         # arm's hand (the infant knows which arm it moves).
         proprioception = np.asarray(infant.proprioception(), dtype=np.float32)
-        detections, masks = self.detector.detect(eyes, proprioception, self._moving_hands)
+        view_prior = self.detector.view_prior(proprioception)  # once: attribution and rewards
+        detections, masks = self.detector.detect(
+            eyes, proprioception, self._moving_hands, view_prior=view_prior
+        )
         flow, pixels = self._flow.update(eyes, masks)
         facts = {
             "eyes": eyes,
@@ -272,7 +275,7 @@ class HandRegard(Behavior):
             "hand_count": int(detections.sum()),
             "image_width": int(eyes.shape[2]),
             "proprioception": proprioception,
-            "view_prior": self.detector.view_prior(proprioception),
+            "view_prior": view_prior,
         }
         facts["motion"] = hand_motion(facts, [0, 1])
         return facts

@@ -278,6 +278,7 @@ class HandDetector:
         eyes: np.ndarray,
         proprioception: np.ndarray | None = None,
         hands: list[int] | None = None,
+        view_prior: np.ndarray | None = None,
     ) -> tuple[np.ndarray, np.ndarray]:
         """Detect and attribute the hands in both eyes: by each hand's own colour when the
         calibration learned two (``side_hsv_ranges``), else as ``attribution`` says: by the
@@ -292,6 +293,8 @@ class HandDetector:
             hands: The hands that can be in view (0 left, 1 right; default both): with one,
                 the largest hand blob is that hand (a one-arm curriculum stage, the other
                 arm hanging out of view).
+            view_prior: :meth:`view_prior` of ``proprioception`` when the caller has it
+                already (computed here otherwise).
         Returns:
             detections: (2 eyes, 2 hands) bool, hands ordered [left, right].
             masks: (2 eyes, 2 hands, H, W) bool, each detected hand's pixels.
@@ -302,7 +305,7 @@ class HandDetector:
         by_colour = self.params is not None and bool(self.params.side_hsv_ranges)
         likelihood = None  # (2 eyes, 2 hands) P(eye sees hand | posture), when attributing so
         if self.attribution == "visibility" and self.params and proprioception is not None:
-            likelihood = self.view_prior(proprioception)
+            likelihood = view_prior if view_prior is not None else self.view_prior(proprioception)
         for eye in range(n_eyes):
             attributed: list[list[Blob]]
             if by_colour:  # each hand is the largest blob of its own colour
