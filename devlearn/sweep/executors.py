@@ -50,7 +50,10 @@ class LocalExecutor:
     """Runs on this machine, ``jobs`` at a time, each pinned to its own ``cores_per_run`` cores.
 
     A 2-core machine runs two single-core runs (``--workers 0`` or ``1``) or one run with two
-    worker processes at a time. Asking for more jobs than fit shares the cores (no pinning).
+    worker processes at a time. The runs are pinned only when they fill the machine (no room for
+    another run): asking for more jobs than fit shares the cores, and so does asking for fewer
+    (``--jobs 1`` on two cores), since pinning would put every such sweep's run on the first
+    core: two sweeps side by side on one core.
     """
 
     name = "local"
@@ -58,8 +61,10 @@ class LocalExecutor:
     def __init__(self, cores_per_run: int, jobs: int | None = None) -> None:
         cores = local_cores(cores_per_run)
         self.jobs = jobs or max(1, len(cores) // cores_per_run)
-        self.pinned = self.jobs * cores_per_run <= len(cores)
+        spare = len(cores) - self.jobs * cores_per_run  # cores no run of this sweep holds
+        self.pinned = 0 <= spare < cores_per_run
         self.cores_per_run = cores_per_run
+        self.cores = len(cores)
         self._free: queue.Queue = queue.Queue()
         for i in range(self.jobs):
             chunk = cores[i * cores_per_run : (i + 1) * cores_per_run]
@@ -70,7 +75,12 @@ class LocalExecutor:
 
     def describe(self) -> str:
         """One phrase for the sweep's header line."""
-        share = "pinned" if self.pinned else "shared, more jobs than cores"
+        if self.pinned:
+            share = "pinned"
+        elif self.jobs * self.cores_per_run > self.cores:
+            share = "shared, more jobs than cores"
+        else:
+            share = "not pinned, fewer jobs than cores: the system places them"
         return f"{self.jobs} at a time on this machine ({self.cores_per_run} core(s) each, {share})"
 
     def _execute(self, job: RunJob) -> dict[str, Any]:

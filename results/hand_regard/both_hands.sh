@@ -11,8 +11,12 @@
 #   bilateral  + our bilateral_balance term;
 #   reach      + bilateral_balance + reach_into_view at weight 2, temperature 4 (the
 #              posture-predicted visibility of the hand less likely in view, its log-odds
-#              flattened 4x, up to 0.5 a step): the pilots' best both-hands arm (i39_pilot/).
-# One sweep per arm, the arms side by side, one run per core; each sweep
+#              flattened 4x, up to 0.5 a step): the pilots' best both-hands arm (i39_pilot/);
+#   cnn        the paper's reward with the paper's policy network (each eye's image through the
+#              paper's CNN, `behavior.policy=cnn`) and the critic of the commit's default
+#              (issue #40's proof: the CNN arm at the paper's budget; not in the default ARMS).
+# One sweep per arm, the arms side by side, one run per core (JOBS runs at a time per arm:
+# JOBS=2 for a single arm on two cores); each sweep
 # trains its seeds in turn and evaluates each on 10 episodes from BabyBench's start (eval/), then
 # from random starts (eval_random/); the zero, random and held-random baselines under the same
 # detector and protocols. Restartable: a rerun resumes every sweep (an interrupted run continues
@@ -27,6 +31,7 @@ STAGE=${STAGE:-175000}
 ARMS=${ARMS:-paper reach}
 EPISODES=${EPISODES:-10}
 ENVS=${ENVS:-8}
+JOBS=${JOBS:-1}
 DEVLEARN=${DEVLEARN:-.venv/bin/devlearn}
 DET=results/hand_regard/detector/babybench_mittens_sides_detector.json
 
@@ -35,7 +40,8 @@ settings() {  # settings ARM: the arm's --set options
     paper) echo "--set behavior.reward=paper" ;;
     bilateral) echo "--set behavior.reward=bilateral" ;;
     reach) echo "--set behavior.reward=bilateral --set behavior.rewards.reach_into_view.weight=2 --set behavior.rewards.reach_into_view.params.temperature=4" ;;
-    *) echo "unknown arm '$1'; valid: paper bilateral reach" >&2; return 2 ;;
+    cnn) echo "--set behavior.reward=paper --set behavior.policy=cnn" ;;
+    *) echo "unknown arm '$1'; valid: paper bilateral reach cnn" >&2; return 2 ;;
   esac
 }
 
@@ -44,7 +50,7 @@ arm() {  # arm NAME: one sweep, its runs in turn, then their random-start evalua
   extra=$(settings "$1")
   # shellcheck disable=SC2086  # extra is a list of options
   "$DEVLEARN" sweep hand_regard --out "$OUT/$1" --seeds "$SEEDS" --steps "$STEPS" \
-    --envs "$ENVS" --workers 0 --jobs 1 --episodes "$EPISODES" --eval-seed 0 --no-report \
+    --envs "$ENVS" --workers 0 --jobs "$JOBS" --episodes "$EPISODES" --eval-seed 0 --no-report \
     --set torch_threads=1 --set behavior.detector_file="$DET" \
     --set behavior.left_arm_steps="$STAGE" --set behavior.right_arm_steps="$STAGE" $extra
   for run in "$OUT/$1"/runs/*/; do

@@ -1,13 +1,16 @@
 #!/usr/bin/env bash
 # Publish issue #39 item 4's runs (both_hands.sh's OUT) into DEST, named as table.py reads them
-# (reward=ARM,seed=N): per run its config, the sweep's record (command, commit, host, wall time
-# of every attempt), its training log thinned to every 10th iteration plus the last, and its
-# evaluations (eval/ from BabyBench's start, eval_random/ from random starts); the baselines;
-# and for each RUN named (e.g. each arm's median seed) its policy file (`devlearn slim`: weights,
-# config and the detector) and a video of one evaluation episode from BabyBench's start. A run
-# not yet evaluated is skipped, so seeds can be published as sessions finish them.
+# (arm paper: reward=paper,seed=N; bilateral: reward=bilateral,seed=N; reach, the pilots'
+# temperature-4 arm: reward=reach_t4,seed=N; cnn: policy=cnn,seed=N): per run its config, the
+# sweep's record (command, commit, host, wall time of every attempt), its training log thinned to
+# every 10th iteration plus the last, and its evaluations (eval/ from BabyBench's start,
+# eval_random/ from random starts); the baselines; and for each RUN named (e.g. each arm's median
+# seed) its policy file (`devlearn slim`: weights, config and the detector) and a video of one
+# evaluation episode from BabyBench's start. A run not yet evaluated is skipped, so seeds can be
+# published as sessions finish them.
 #   bash results/hand_regard/both_hands_publish.sh OUT DEST [RUN ...]
 #   bash results/hand_regard/both_hands_publish.sh /work/sweeps/hr39 results/hand_regard/i39 'reward=paper,seed=3'
+#   (RUN: a published name, as above)
 set -euo pipefail
 USAGE="usage: both_hands_publish.sh OUT DEST [RUN ...]"
 out=${1:?$USAGE}
@@ -17,10 +20,25 @@ DEVLEARN=${DEVLEARN:-.venv/bin/devlearn}
 # shellcheck source=results/publish_lib.sh
 source "$(dirname "$0")/../publish_lib.sh"
 shopt -s nullglob
+published() {  # published ARM: the name table.py reads for the arm's runs (before ,seed=N)
+  case $1 in
+    reach) echo "reward=reach_t4" ;;
+    cnn) echo "policy=cnn" ;;
+    *) echo "reward=$1" ;;
+  esac
+}
+arm_of() {  # arm_of NAME: the both_hands.sh arm of a published name
+  for arm in "$out"/*/; do
+    arm=$(basename "$arm")
+    [ "$(published "$arm")" != "${1%%,*}" ] || { echo "$arm"; return; }
+  done
+  echo "no arm of $out is published as ${1%%,*}" >&2
+  return 2
+}
 for run in "$out"/*/runs/*/; do
   run=${run%/}
   arm=$(basename "$(dirname "$(dirname "$run")")")
-  name="reward=$arm,$(basename "$run")"
+  name="$(published "$arm"),$(basename "$run")"
   [ -f "$run/eval/eval.json" ] || { echo "$run: not evaluated yet, skipped" >&2; continue; }
   to=$dest/$name
   mkdir -p "$to/eval"
@@ -35,9 +53,8 @@ for run in "$out"/*/runs/*/; do
   echo "published $name"
 done
 copy_baselines "$out" "$dest"
-for name in "$@"; do  # reward=ARM,seed=N
-  arm=${name#reward=}
-  arm=${arm%%,*}
+for name in "$@"; do  # e.g. reward=paper,seed=N
+  arm=$(arm_of "$name")
   run="$out/$arm/runs/${name#*,}"
   [ -d "$run" ] || { echo "no run $run for $name" >&2; exit 2; }
   "$DEVLEARN" slim "$run" --out "$dest/$name/policy.pt"

@@ -124,6 +124,23 @@ def test_local_executor_gives_each_job_its_own_cores():
         LocalExecutor(len(cores) + 1)
 
 
+@pytest.mark.skipif(len(available_cores()) < 2, reason="needs two cores")
+def test_a_sweep_that_leaves_cores_free_does_not_pin_its_runs():
+    """Two `--jobs 1` sweeps side by side (one per arm) once ran on the first core both, the
+    second core idle: a sweep pins its runs only when they fill the machine."""
+    one = LocalExecutor(1, jobs=1)
+    try:
+        assert not one.pinned and one._free.get() is None
+        assert "not pinned" in one.describe()
+    finally:
+        one.close()
+    crowded = LocalExecutor(1, jobs=len(available_cores()) + 1)
+    try:
+        assert not crowded.pinned and "more jobs than cores" in crowded.describe()
+    finally:
+        crowded.close()
+
+
 def test_bad_input_is_one_line_and_starts_nothing(cli, refused, tmp_path, monkeypatch):
     out = tmp_path / "sweep"
     base = ["sweep", "tiny", "--out", str(out), "--steps", "128"]
