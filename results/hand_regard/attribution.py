@@ -17,8 +17,9 @@ eval``; and the share of steps a pair is credited while that hand shows no pixel
   ``results/hand_regard/i29/*/policy.pt``): each policy runs ``devlearn eval``'s protocol (10
   episodes of 1,000 steps from BabyBench's start, eval seed 0, its mean action) with the
   detector it was published with, so the frames are those of its published evaluation; the
-  frames it sees (one per decision) are recorded and scored by its own detector (the
-  ``position`` attribution, as published) and by the new one (``--detector``, ``visibility``).
+  frames it sees (one per decision) are recorded and scored by its own calibration under both
+  rules: ``position`` (issue #29's) and ``visibility`` (issue #39's: its own visibility model,
+  or for a policy published before issue #39, ``--detector``'s).
 
 Writes ``attribution.json`` (every figure) and ``attribution.md`` (the tables) in ``--out``.
 The segmentation is read here only, never by a detector.
@@ -172,13 +173,16 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         rows += [table_rows(label, rule, entry[rule]) for rule in ("position", "visibility")]
     out["policies"] = {}
     for path in policies:
-        name = Path(path).parent.name
+        name = f"{Path(path).parent.parent.name}/{Path(path).parent.name}"
         recorded = policy_frames(Path(path), args.episodes, registry)
         data, segmentation = recorded["data"], recorded["segmentation"]
-        own = Checkpoint.open(Path(path), registry, "hand_regard").behavior().detector
+        own = Checkpoint.open(Path(path), registry, "hand_regard").behavior().detector.params
+        # both rules with the policy's own calibration; a policy published before issue #39
+        # has no visibility model, so the new rule is --detector's (the same calibration's)
+        sides = HandDetector(own, attribution="visibility") if own.visibility_model else new
         entry = {
-            "position": brief(score(own, data, segmentation)),
-            "visibility": brief(score(new, data, segmentation)),
+            "position": brief(score(HandDetector(own), data, segmentation)),
+            "visibility": brief(score(sides, data, segmentation)),
             "published_pixels": recorded["summary"]["criteria"]["pixels"]["visibility"],
         }
         out["policies"][name] = entry
