@@ -112,11 +112,14 @@ def visibility_table(root: Path, measure: str, folder: str, start: str) -> list[
 
 def per_run_table(root: Path) -> list[str]:
     """Each run: seed, steps, the pairs under `detector` and `pixels` and the four averages from
-    BabyBench's start, the generalisation average, and the commit it was evaluated on."""
+    BabyBench's start, the largest share of steps a pair is credited while its hand is not in
+    view under `pixels` (under 20 of its pixels: detected share x (1 - precision)), the
+    generalisation average, and the commit it was evaluated on."""
     rows = [
         "| arm | seed | steps | detector LL / RL / LR / RR | `pixels` LL / RL / LR / RR | detector "
-        "| pixels | babybench | cone | detector, random starts | evaluated on |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
+        "| pixels | babybench | cone | steps a pair is credited, its hand not in `pixels`, worst "
+        "| detector, random starts | evaluated on |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for label, pattern in GROUPS:
         for e in runs(root, pattern):
@@ -132,10 +135,15 @@ def per_run_table(root: Path) -> list[str]:
                 else "-"
             )
             code = (e["protocol"].get("code") or {}).get("commit") or "?"
+            absent = max(  # detected, and the hand shows fewer than 20 pixels in that eye
+                e["criteria"]["detector"]["visibility"][p]
+                * (1 - (e["detector_agreement"][p]["precision"] or 0.0))
+                for p in PAIRS
+            )
             rows.append(
                 f"| {label} | {e['training_seed']} | {e['checkpoint_env_steps']:,} | {pairs} | "
                 + " | ".join(averages)
-                + f" | {general} | {code[:7]} |"
+                + f" | {100 * absent:.1f}% | {general} | {code[:7]} |"
             )
     return rows
 
