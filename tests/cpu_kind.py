@@ -39,6 +39,10 @@ def to_record(path: Path) -> Path:
 
 REFERENCE_KIND: dict[str, str] = {
     "plugins__hand_to_mouth__runs__seed-3.npz": "genuineintel-avx512",
+    **{  # issue #39's policies, recorded when they were published
+        f"hand_regard__i39__{run}.npz": "authenticamd-avx512"
+        for run in ["reward-paper_seed-3", *(f"reward-reach_t4_seed-{s}" for s in range(1, 6))]
+    },
 }
 """The CPU kind a reference recording was made on, where it is known and not the AMD machine of
 the first recordings: a machine of another kind has no recording to compare with."""
