@@ -61,10 +61,9 @@ class LocalExecutor:
     def __init__(self, cores_per_run: int, jobs: int | None = None) -> None:
         cores = local_cores(cores_per_run)
         self.jobs = jobs or max(1, len(cores) // cores_per_run)
-        spare = len(cores) - self.jobs * cores_per_run  # cores no run of this sweep holds
-        self.pinned = 0 <= spare < cores_per_run
+        self.spare = len(cores) - self.jobs * cores_per_run  # cores no run of this sweep holds
+        self.pinned = 0 <= self.spare < cores_per_run
         self.cores_per_run = cores_per_run
-        self.cores = len(cores)
         self._free: queue.Queue = queue.Queue()
         for i in range(self.jobs):
             chunk = cores[i * cores_per_run : (i + 1) * cores_per_run]
@@ -77,7 +76,7 @@ class LocalExecutor:
         """One phrase for the sweep's header line."""
         if self.pinned:
             share = "pinned"
-        elif self.jobs * self.cores_per_run > self.cores:
+        elif self.spare < 0:
             share = "shared, more jobs than cores"
         else:
             share = "not pinned, fewer jobs than cores: the system places them"

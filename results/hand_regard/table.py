@@ -186,10 +186,7 @@ def pattern(e: dict, measure: str) -> str:
         and e["criteria"][measure]["average"] >= BOTH_HANDS[1]
     ):
         return "both"
-    hands = (
-        ("left_eye_left_hand", "right_eye_left_hand"),
-        ("left_eye_right_hand", "right_eye_right_hand"),
-    )
+    hands = (PAIRS[:2], PAIRS[2:])  # each hand in the left eye and the right
     return "one" if any(min(v[a], v[b]) >= ONE_HAND for a, b in hands) else "-"
 
 
