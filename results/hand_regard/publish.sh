@@ -5,16 +5,28 @@
 # baselines; and, for the runs named, the policy file (`devlearn slim`: weights, config and the
 # detector) and a video of one evaluation episode from BabyBench's start.
 #
+# DEST (default results/hand_regard/i29) publishes elsewhere: issue #40's pilot (the cnn_asym
+# arm, published as policy=cnn,critic=proprio,seed=N) went to results/hand_regard/i40_pilot.
+# Training logs are thinned to every 5th iteration plus the last.
+#
 #   bash results/hand_regard/publish.sh OUT [RUN_NAME ...]
 #   bash results/hand_regard/publish.sh /work/sweeps/hr29 'reward=paper,seed=2' 'policy=cnn,seed=1' ...
+#   DEST=results/hand_regard/i40_pilot bash results/hand_regard/publish.sh /work/sweeps/hr40p
 set -euo pipefail
 cd "$(dirname "$0")/../.."
+# shellcheck source=results/publish_lib.sh
+source results/publish_lib.sh
 sweep=${1:?usage: publish.sh OUT [RUN_NAME ...]}
 shift
-dest=results/hand_regard/i29
+dest=${DEST:-results/hand_regard/i29}
 mkdir -p "$dest"
 prefix() {  # the published name's prefix of a sweep's arm (its runs are named seed=N)
-  case $1 in curiosity) echo "curiosity=forward_model," ;; cnn) echo "policy=cnn," ;; *) echo "" ;; esac
+  case $1 in
+    curiosity) echo "curiosity=forward_model," ;;
+    cnn) echo "policy=cnn," ;;
+    cnn_asym) echo "policy=cnn,critic=proprio," ;;
+    *) echo "" ;;
+  esac
 }
 for run in "$sweep"/*/runs/*/; do
   [ -d "$run" ] || continue
@@ -22,7 +34,8 @@ for run in "$sweep"/*/runs/*/; do
   [ -f "$run/eval/eval.json" ] || { echo "$run: not evaluated yet, skipped" >&2; continue; }
   out="$dest/$(prefix "$(basename "$(dirname "$(dirname "$run")")")")$name"
   mkdir -p "$out/eval"
-  cp "$run/config.json" "$run/metrics.jsonl" "$out/"
+  cp "$run/config.json" "$out/"
+  thin_log "$run/metrics.jsonl" "$out/metrics.jsonl" 5
   cp "$run/eval/eval.json" "$out/eval/"
   if [ -f "$run/eval_random/eval.json" ]; then
     mkdir -p "$out/eval_random" && cp "$run/eval_random/eval.json" "$out/eval_random/"
@@ -37,6 +50,7 @@ done
 for name in "$@"; do  # as published: reward=paper,seed=2, curiosity=forward_model,seed=1, policy=cnn,seed=1
   case $name in
     curiosity=*) run="$sweep/curiosity/runs/${name#*,}" ;;
+    policy=cnn,critic=proprio,*) run="$sweep/cnn_asym/runs/${name##*,}" ;;
     policy=cnn,*) run="$sweep/cnn/runs/${name#*,}" ;;
     *) run="$sweep/rewards/runs/$name" ;;
   esac

@@ -34,6 +34,7 @@ GROUPS = (
     ("ours: paper + bilateral + reach_into_view, T = 4", "reward=reach_t4,seed=*"),
     ("paper + forward_model curiosity", "curiosity=forward_model,seed=*"),
     ("paper reward, the paper's CNN policy", "policy=cnn,seed=*"),
+    ("paper reward, the paper's CNN actor, asymmetric critic", "policy=cnn,critic=proprio,seed=*"),
 )
 """(label, run-folder pattern) of the arms; the folders are found anywhere under the root."""
 BASELINES = (("zero", "zero action"), ("random", "random action"), ("held_random", "held random"))
