@@ -150,13 +150,14 @@ def iteration_profile(
     return result
 
 
-CNN_RUN = ["behavior.policy=cnn"]
-"""The paper's network for hand regard (each eye's image through a CNN), with the behaviour's
-other defaults: issue #29's CNN runs (8 envs x 64 decisions of 5 physics steps, separate actor
-and critic, 5 epochs of 4 mini-batches)."""
-CNN_ASYMMETRIC_RUN = [*CNN_RUN, "behavior.critic=proprio"]
+CNN_RUN = ["behavior.policy=cnn", "behavior.critic=same"]
+"""The paper's network for hand regard (each eye's image through a CNN) for the actor and the
+critic alike, with the behaviour's other defaults: issue #29's CNN runs (8 envs x 64 decisions
+of 5 physics steps, separate actor and critic, 5 epochs of 4 mini-batches); ``--preset paper``'s
+critic."""
+CNN_ASYMMETRIC_RUN = ["behavior.policy=cnn", "behavior.critic=proprio"]
 """The same actor with an asymmetric critic (proprioception and the detector's output, no eye
-CNNs; issue #40)."""
+CNNs): ``behavior.policy=cnn``'s default since issue #40."""
 CNN_PATHS = {"hand_regard_cnn": CNN_RUN, "hand_regard_cnn_asym": CNN_ASYMMETRIC_RUN}
 """The CNN paths ``devlearn bench`` measures in one run: figure-name prefix -> ``--set``."""
 

@@ -37,6 +37,7 @@ PUBLISHED = {
 # git history to keep the tree small.
 LEGACY_CNN = [
     "behavior.policy=cnn",
+    "behavior.critic=same",
     "network.layout=separate",
     "network.legacy_uint8_scale=true",
     "network.head=paper",

@@ -26,6 +26,7 @@ ROOT = Path(__file__).resolve().parents[2]
 DATA = Path(__file__).resolve().parent / "data"
 LEGACY_CNN = [
     "behavior.policy=cnn",
+    "behavior.critic=same",
     "network.layout=separate",
     "network.legacy_uint8_scale=true",
     "network.head=paper",

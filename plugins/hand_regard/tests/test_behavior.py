@@ -175,11 +175,17 @@ def test_a_stored_detector_travels_to_workers(synthetic_params, tmp_path):
 
 
 def test_cnn_policy_sees_the_eyes(behavior):
+    """The actor sees the eyes and proprioception; the default (asymmetric) critic adds the
+    detector's output, which the paper's critic (``critic=same``) does without."""
     behavior.config.policy = "cnn"
     env = BehaviorEnv(behavior, seed=0, infant_factory=FakeSittingInfant)
     obs = env.reset()
-    assert set(obs) == {"left_eye", "right_eye", "proprioception"}
+    assert set(obs) == {"left_eye", "right_eye", "proprioception", "hands_seen"}
+    assert behavior.obs_groups(list(obs))["actor"] == ["left_eye", "right_eye", "proprioception"]
     assert obs["left_eye"].shape == (64, 64, 3) and obs["left_eye"].dtype == np.uint8
+    behavior.config.critic = "same"
+    obs = BehaviorEnv(behavior, seed=0, infant_factory=FakeSittingInfant).reset()
+    assert set(obs) == {"left_eye", "right_eye", "proprioception"}
 
 
 def test_proprio_policy_sees_the_detector_output(behavior):
@@ -324,4 +330,26 @@ def test_an_asymmetric_critic_with_a_shared_body_is_refused_up_front():
     asymmetric = ["behavior.policy=cnn", "behavior.critic=proprio"]
     with pytest.raises(UsageError, match="network.layout=shared needs the actor and the critic"):
         run_config(HandRegard, [*asymmetric, "network.layout=shared"])
-    assert run_config(HandRegard, ["behavior.policy=cnn", "network.layout=shared"])
+    assert run_config(
+        HandRegard, ["behavior.policy=cnn", "behavior.critic=same", "network.layout=shared"]
+    )
+    with pytest.raises(UsageError, match="network.layout=shared needs"):  # the default critic
+        run_config(HandRegard, ["behavior.policy=cnn", "network.layout=shared"])
+
+
+def test_the_cnn_policy_trains_with_the_asymmetric_critic_unless_told_or_saved_otherwise():
+    """Issue #40: ``policy=cnn`` gets the critic without eye CNNs by default; the paper preset
+    keeps the paper's critic, and a config saved before the key existed loads as trained."""
+    from devlearn.config.run_config import from_dict, to_dict
+    from devlearn.testing import run_config
+
+    fresh = run_config(HandRegard, ["behavior.policy=cnn"])
+    assert fresh.behavior.critic == "proprio"
+    groups = HandRegard(fresh.behavior).obs_groups(
+        ["left_eye", "right_eye", "proprioception", "hands_seen"]
+    )
+    assert groups["critic"] == ["proprioception", "hands_seen"]
+    assert run_config(HandRegard, preset="paper").behavior.critic == "same"
+    saved = to_dict(fresh)
+    del saved["behavior"]["critic"]  # as issue #29's CNN runs saved theirs
+    assert from_dict(saved, HandRegard).behavior.critic == "same"

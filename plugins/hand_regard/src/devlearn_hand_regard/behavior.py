@@ -476,6 +476,7 @@ class HandRegard(Behavior):
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         "paper": {
             "behavior.policy": "cnn",
+            "behavior.critic": "same",  # the paper's critic: eye CNNs of its own
             "behavior.left_arm_steps": PAPER_STAGE_STEPS[0],
             "behavior.right_arm_steps": PAPER_STAGE_STEPS[1],
             "behavior.both_arms_steps": PAPER_STAGE_STEPS[2],
@@ -488,8 +489,8 @@ class HandRegard(Behavior):
             "ppo.schedule": "adaptive",
         }
     }
-    """``paper``: the paper's network (``behavior.policy=cnn``, the eye CNNs) and run length,
-    175k + 175k + 1.5M = 1.85M steps (sec. II-B5)."""
+    """``paper``: the paper's network (``behavior.policy=cnn``, the eye CNNs, for the actor
+    and the critic alike) and run length, 175k + 175k + 1.5M = 1.85M steps (sec. II-B5)."""
 
 
 def _check_choice(key: str, value: str, choices: tuple[str, ...]) -> None:

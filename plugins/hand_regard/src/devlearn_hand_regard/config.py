@@ -65,6 +65,7 @@ class HandRegardConfig(BehaviorConfig):
         "policy": "cnn",
         "babbling_arms": "both",
         "hand_attribution": "position",
+        "critic": "same",
     }
     """Values for keys a saved config lacks: runs saved before these keys existed were trained
     with mittens and the bilateral term, in the ``sitting`` scene from its rest pose, with the
@@ -104,15 +105,18 @@ class HandRegardConfig(BehaviorConfig):
     paper's network, sec. II-B3: a CNN per eye plus the proprioception MLP; ``--preset
     paper``). The CNN ends in global average pooling, which keeps what is seen but not where
     in the image it is."""
-    critic: str = "same"
-    """What the value function (the critic, used only in training) sees: ``same``, the
-    policy's observations (the paper's network: with ``policy=cnn`` the critic has eye CNNs
-    of its own), or ``proprio``, proprioception and the detector's output (``hands_seen``):
-    an asymmetric critic. The actor keeps its network and observations either way, so the
-    policy sees and acts as the paper's does; with ``policy=cnn`` the update then runs two
-    eye CNNs instead of four (issue #40: the update is most of a CNN iteration). Needs
-    ``network.layout=separate`` (the default): a shared body serves one set of
-    observations."""
+    critic: str = "proprio"
+    """What the value function (the critic, used only in training) sees under
+    ``policy=cnn``: ``proprio`` (the default since issue #40), proprioception and the
+    detector's output (``hands_seen``), an asymmetric critic; or ``same``, the policy's
+    observations (the paper's network: the critic has eye CNNs of its own; ``--preset
+    paper``). The actor keeps its network and observations either way, so the policy sees
+    and acts as the paper's does; the asymmetric critic's update runs two eye CNNs instead
+    of four, 1.7x faster end to end, and kept issue #29's result in issue #40's pilot
+    (``results/hand_regard/README.md``). ``proprio`` needs ``network.layout=separate`` (the
+    default): a shared body serves one set of observations. Under ``policy=proprio`` both
+    values give the critic the policy's observations. Configs saved before the key existed
+    trained with ``same``."""
 
     # --- the infant's look (the paper's "without manually defined skin-colors") ---------
     appearance: str = "mittens"
