@@ -340,8 +340,8 @@ def test_an_asymmetric_critic_with_a_shared_body_is_refused_up_front():
 def test_the_cnn_policy_trains_with_the_asymmetric_critic_unless_told_or_saved_otherwise():
     """Issue #40: ``policy=cnn`` gets the critic without eye CNNs by default; the paper preset
     keeps the paper's critic, and a config saved before the key existed loads as trained."""
-    from devlearn.testing.runs import from_dict, to_dict
     from devlearn.testing import run_config
+    from devlearn.testing.runs import from_dict, to_dict
 
     fresh = run_config(HandRegard, ["behavior.policy=cnn"])
     assert fresh.behavior.critic == "proprio"
