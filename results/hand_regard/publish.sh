@@ -20,19 +20,30 @@ sweep=${1:?usage: publish.sh OUT [RUN_NAME ...]}
 shift
 dest=${DEST:-results/hand_regard/i29}
 mkdir -p "$dest"
-prefix() {  # the published name's prefix of a sweep's arm (its runs are named seed=N)
-  case $1 in
-    curiosity) echo "curiosity=forward_model," ;;
-    cnn) echo "policy=cnn," ;;
-    cnn_asym) echo "policy=cnn,critic=proprio," ;;
-    *) echo "" ;;
+published_name() {  # published_name RUN: its name in DEST (the sweep's runs are named seed=N)
+  local arm
+  arm=$(basename "$(dirname "$(dirname "$1")")")
+  case $arm in
+    curiosity) echo "curiosity=forward_model,$(basename "$1")" ;;
+    cnn) echo "policy=cnn,$(basename "$1")" ;;
+    cnn_asym) echo "policy=cnn,critic=proprio,$(basename "$1")" ;;
+    *) basename "$1" ;;
   esac
+}
+run_named() {  # run_named NAME: the sweep's run published as NAME
+  local run
+  for run in "$sweep"/*/runs/*/; do
+    [ "$(published_name "${run%/}")" != "$1" ] || { echo "${run%/}"; return; }
+  done
+  echo "no run of $sweep is published as $1" >&2
+  return 2
 }
 for run in "$sweep"/*/runs/*/; do
   [ -d "$run" ] || continue
+  run=${run%/}
   name=$(basename "$run")
   [ -f "$run/eval/eval.json" ] || { echo "$run: not evaluated yet, skipped" >&2; continue; }
-  out="$dest/$(prefix "$(basename "$(dirname "$(dirname "$run")")")")$name"
+  out="$dest/$(published_name "$run")"
   mkdir -p "$out/eval"
   cp "$run/config.json" "$out/"
   thin_log "$run/metrics.jsonl" "$out/metrics.jsonl" 5
@@ -42,18 +53,9 @@ for run in "$sweep"/*/runs/*/; do
   fi
   cp "$(dirname "$(dirname "$run")")/records/$name.json" "$out/sweep_record.json"
 done
-for base in "$sweep"/baseline_*/; do
-  [ -d "$base" ] || continue
-  mkdir -p "$dest/$(basename "$base")"
-  cp "$base/eval.json" "$dest/$(basename "$base")/"
-done
+copy_baselines "$sweep" "$dest"
 for name in "$@"; do  # as published: reward=paper,seed=2, curiosity=forward_model,seed=1, policy=cnn,seed=1
-  case $name in
-    curiosity=*) run="$sweep/curiosity/runs/${name#*,}" ;;
-    policy=cnn,critic=proprio,*) run="$sweep/cnn_asym/runs/${name##*,}" ;;
-    policy=cnn,*) run="$sweep/cnn/runs/${name#*,}" ;;
-    *) run="$sweep/rewards/runs/$name" ;;
-  esac
+  run=$(run_named "$name")
   .venv/bin/devlearn slim "$run" --out "$dest/$name/policy.pt"
   .venv/bin/devlearn eval hand_regard --checkpoint "$dest/$name/policy.pt" --episodes 1 \
     --seed 0 --video "$dest/$name/episode.mp4" --out "$(mktemp -d)" > /dev/null
