@@ -25,3 +25,22 @@ for turn in 1 2; do
   timed "$new" "new_one_env_t$turn" --envs 1 --workers 0
 done
 cat "$out/times.txt"
+# the results: every eval.json against the old code's first, less what names the code, the file,
+# the age (recorded since issue #41) and the execution (envs, workers, wall seconds)
+/work/main/.venv/bin/python - "$out" <<'PY'
+import json, sys
+from pathlib import Path
+
+def measured(path):
+    d = json.loads(path.read_text())
+    for key in ("checkpoint", "age_months", "execution"):
+        d.pop(key, None)
+    d["protocol"].pop("code", None)
+    d["protocol"].pop("age_months", None)
+    return d
+
+out = Path(sys.argv[1])
+ref = measured(out / "old_t1" / "eval.json")
+for path in sorted(out.glob("*/eval.json")):
+    print(path.parent.name, "identical to old_t1" if measured(path) == ref else "DIFFERS from old_t1")
+PY
