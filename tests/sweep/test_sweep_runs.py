@@ -4,6 +4,7 @@ and the same numbers on a local Ray instance as on the local executor."""
 from __future__ import annotations
 
 import contextlib
+import fcntl
 import hashlib
 import io
 import json
@@ -53,6 +54,24 @@ def start_sweep(argv: list[str], stdout: Any = subprocess.PIPE) -> subprocess.Po
         stderr=subprocess.STDOUT,
         start_new_session=True,
     )
+
+
+def wait_unlocked(lock_path: Path, timeout: float = 60.0) -> None:
+    """Wait until no process holds the sweep's run lock ``lock_path``: a killed sweep's training
+    child gets its SIGKILL with the sweep, but may take a moment longer to exit and let go."""
+    deadline = time.time() + timeout
+    with open(lock_path) as lock:
+        while True:
+            try:
+                fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                assert time.time() < deadline, (
+                    f"{lock_path} still held {timeout:.0f} s after the kill"
+                )
+                time.sleep(0.05)
+                continue
+            fcntl.flock(lock, fcntl.LOCK_UN)
+            return
 
 
 def run_cli(argv: list[str]) -> tuple[int, str, str]:
@@ -200,6 +219,7 @@ def test_killed_in_its_second_run_a_restart_finishes_without_retraining_the_firs
             time.sleep(0.02)
         os.killpg(proc.pid, signal.SIGKILL)  # the sweep and its running training, as a crash
         proc.wait(timeout=30)
+        wait_unlocked(out / "records" / f"{NAMES[1]}.lock")  # the training has exited too
     finally:
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
