@@ -12,3 +12,12 @@ copy_baselines() {  # copy_baselines OUT DEST: every OUT/baseline_*/eval.json in
     cp "$base/eval.json" "$2/$(basename "$base")/"
   done
 }
+
+run_named() {  # run_named OUT NAMER NAME: the run OUT/*/runs/* that `NAMER RUN` publishes as NAME
+  local run
+  for run in "$1"/*/runs/*/; do
+    [ "$("$2" "${run%/}")" != "$3" ] || { echo "${run%/}"; return; }
+  done
+  echo "no run of $1 is published as $3" >&2
+  return 2
+}

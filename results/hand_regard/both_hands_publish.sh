@@ -20,25 +20,19 @@ DEVLEARN=${DEVLEARN:-.venv/bin/devlearn}
 # shellcheck source=results/publish_lib.sh
 source "$(dirname "$0")/../publish_lib.sh"
 shopt -s nullglob
-published() {  # published ARM: the name table.py reads for the arm's runs (before ,seed=N)
-  case $1 in
-    reach) echo "reward=reach_t4" ;;
-    cnn) echo "policy=cnn" ;;
-    *) echo "reward=$1" ;;
+published_name() {  # published_name RUN: the name table.py reads for a both_hands.sh run
+  local arm
+  arm=$(basename "$(dirname "$(dirname "$1")")")
+  case $arm in
+    reach) echo "reward=reach_t4,$(basename "$1")" ;;
+    cnn) echo "policy=cnn,$(basename "$1")" ;;
+    *) echo "reward=$arm,$(basename "$1")" ;;
   esac
-}
-arm_of() {  # arm_of NAME: the both_hands.sh arm of a published name
-  for arm in "$out"/*/; do
-    arm=$(basename "$arm")
-    [ "$(published "$arm")" != "${1%%,*}" ] || { echo "$arm"; return; }
-  done
-  echo "no arm of $out is published as ${1%%,*}" >&2
-  return 2
 }
 for run in "$out"/*/runs/*/; do
   run=${run%/}
   arm=$(basename "$(dirname "$(dirname "$run")")")
-  name="$(published "$arm"),$(basename "$run")"
+  name=$(published_name "$run")
   [ -f "$run/eval/eval.json" ] || { echo "$run: not evaluated yet, skipped" >&2; continue; }
   to=$dest/$name
   mkdir -p "$to/eval"
@@ -54,9 +48,7 @@ for run in "$out"/*/runs/*/; do
 done
 copy_baselines "$out" "$dest"
 for name in "$@"; do  # e.g. reward=paper,seed=N
-  arm=$(arm_of "$name")
-  run="$out/$arm/runs/${name#*,}"
-  [ -d "$run" ] || { echo "no run $run for $name" >&2; exit 2; }
+  run=$(run_named "$out" published_name "$name")
   "$DEVLEARN" slim "$run" --out "$dest/$name/policy.pt"
   "$DEVLEARN" eval hand_regard --checkpoint "$dest/$name/policy.pt" --episodes 1 --seed 0 \
     --video "$dest/$name/episode.mp4" --out "$(mktemp -d)" > /dev/null

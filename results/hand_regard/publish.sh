@@ -30,14 +30,6 @@ published_name() {  # published_name RUN: its name in DEST (the sweep's runs are
     *) basename "$1" ;;
   esac
 }
-run_named() {  # run_named NAME: the sweep's run published as NAME
-  local run
-  for run in "$sweep"/*/runs/*/; do
-    [ "$(published_name "${run%/}")" != "$1" ] || { echo "${run%/}"; return; }
-  done
-  echo "no run of $sweep is published as $1" >&2
-  return 2
-}
 for run in "$sweep"/*/runs/*/; do
   [ -d "$run" ] || continue
   run=${run%/}
@@ -55,7 +47,7 @@ for run in "$sweep"/*/runs/*/; do
 done
 copy_baselines "$sweep" "$dest"
 for name in "$@"; do  # as published: reward=paper,seed=2, curiosity=forward_model,seed=1, policy=cnn,seed=1
-  run=$(run_named "$name")
+  run=$(run_named "$sweep" published_name "$name")
   .venv/bin/devlearn slim "$run" --out "$dest/$name/policy.pt"
   .venv/bin/devlearn eval hand_regard --checkpoint "$dest/$name/policy.pt" --episodes 1 \
     --seed 0 --video "$dest/$name/episode.mp4" --out "$(mktemp -d)" > /dev/null
