@@ -4,11 +4,13 @@
 # (this commit: automatic envs and workers; and --envs 1 --workers 0, one env in order), two
 # alternating turns, wall time by /usr/bin/time. Each code in its own git worktree.
 #   bash docs/bench-2026-12-06d/eval_old_new.sh OLD_TREE NEW_TREE OUT
+# PYTHON (default: this checkout's .venv/bin/python) runs both codes: the same packages for both.
 set -euo pipefail
 old=${1:?usage: eval_old_new.sh OLD_TREE NEW_TREE OUT}
 new=${2:?usage: eval_old_new.sh OLD_TREE NEW_TREE OUT}
 out=${3:?usage: eval_old_new.sh OLD_TREE NEW_TREE OUT}
 EPISODES=${EPISODES:-100}
+PYTHON=${PYTHON:-$(cd "$(dirname "$0")/../.." && pwd)/.venv/bin/python}
 POLICY=results/self_touch/i30/curriculum/runs/seed=4/policy.pt
 mkdir -p "$out"
 timed() {  # timed TREE LABEL [eval options]: one evaluation, its wall and CPU seconds appended
@@ -16,7 +18,7 @@ timed() {  # timed TREE LABEL [eval options]: one evaluation, its wall and CPU s
   shift 2
   local pp="$tree:$tree/plugins/self_touch/src:$tree/plugins/hand_regard/src:$tree/plugins/curiosity/src:$tree/examples/hand_to_mouth/src"
   (cd "$tree" && PYTHONPATH=$pp /usr/bin/time -f "$label wall_s=%e user_s=%U sys_s=%S" -a -o "$out/times.txt" \
-    /work/main/.venv/bin/python -m devlearn.cli eval self_touch --checkpoint "$tree/$POLICY" \
+    "$PYTHON" -m devlearn.cli eval self_touch --checkpoint "$tree/$POLICY" \
     --episodes "$EPISODES" --seed 0 --out "$out/$label" "$@" > /dev/null 2>&1)
 }
 for turn in 1 2; do
@@ -27,7 +29,7 @@ done
 cat "$out/times.txt"
 # the results: every eval.json against the old code's first, less what names the code, the file,
 # the age (recorded since issue #41) and the execution (envs, workers, wall seconds)
-/work/main/.venv/bin/python - "$out" <<'PY'
+"$PYTHON" - "$out" <<'PY'
 import json, sys
 from pathlib import Path
 
