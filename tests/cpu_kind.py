@@ -43,6 +43,8 @@ REFERENCE_KIND: dict[str, str] = {
         f"hand_regard__i39__{run}.npz": "authenticamd-avx512"
         for run in ["reward-paper_seed-3", *(f"reward-reach_t4_seed-{s}" for s in range(1, 6))]
     },
+    # issue #40's median CNN policy, recorded when it was published
+    "hand_regard__i40__policy-cnn_seed-4.npz": "authenticamd-avx512",
 }
 """The CPU kind a reference recording was made on, where it is known and not the AMD machine of
 the first recordings: a machine of another kind has no recording to compare with."""
