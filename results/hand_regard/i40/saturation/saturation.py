@@ -20,16 +20,17 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 from pathlib import Path
 
 import numpy as np
 import torch
 
-from devlearn.api.behavior import evaluation_stage
+from devlearn.api.stats import mean_ci
 from devlearn.env import BehaviorEnv
+from devlearn.evaluation.episodes import prepare_env
+from devlearn.evaluation.evaluate import EvalRequest, evaluation_conditions, open_subject
 from devlearn.plugins import PluginRegistry
-from devlearn.training.checkpoint import Checkpoint, observation_batch
+from devlearn.training.checkpoint import observation_batch
 
 
 def expected_clipped(mu: np.ndarray, sigma: np.ndarray) -> np.ndarray:
@@ -42,36 +43,38 @@ def expected_clipped(mu: np.ndarray, sigma: np.ndarray) -> np.ndarray:
 
 
 def play(path: Path, action: str, episodes: int, registry: PluginRegistry) -> dict:
-    opened = Checkpoint.open(path, registry, "hand_regard")
-    repeat = opened.config.env.action_repeat
-    env = BehaviorEnv(opened.behavior(), 0, training=False, action_repeat=repeat)
+    # the setting `devlearn eval --checkpoint PATH --seed 0 --envs 1 --workers 0` plays in
+    request = EvalRequest(behavior="hand_regard", checkpoint=path, episodes=episodes)
+    subject = open_subject(request, registry)
+    conditions = evaluation_conditions(request, subject)
+    repeat = subject.config.env.action_repeat
+    env = BehaviorEnv(subject.behavior, request.seed, training=False, action_repeat=repeat)
     try:
-        env.infant.start = "babybench"
-        steps = int(opened.state.get("total_steps") or 1_850_880)
-        env.set_stage(evaluation_stage(env.behavior, steps))
-        env.rng = np.random.default_rng(0)
+        prepare_env(env, conditions.stage, conditions.infant_start)
+        env.rng = np.random.default_rng(request.seed)
         obs = env.reset()
-        actor = opened.actor(obs, env.action_dim)
-        sigma = actor.distribution.current_std().detach().numpy().astype(np.float64)
+        actor = subject.opened.actor(obs, env.action_dim)
+        distribution = actor.distribution
+        sigma = distribution.current_std().detach().numpy().astype(np.float64)
         mus, pixels = [], []
         while len(pixels) < episodes:
             with torch.inference_mode():
                 batch = observation_batch(obs)
-                mu = actor.mlp(actor.encode({k: batch[k] for k in actor.obs_groups}))[0]
-            mu = mu.numpy().astype(np.float64)
+                raw = actor.mlp(actor.encode({k: batch[k] for k in actor.obs_groups}))
+                mean_action = distribution.deterministic_output(raw)[0].numpy()
+            mu = raw[0].numpy().astype(np.float64)
             mus.append(mu)
-            act = np.clip(mu, -1, 1) if action == "mean" else expected_clipped(mu, sigma)
-            obs, *_, info = env.step(act.astype(np.float32))
+            act = mean_action if action == "mean" else expected_clipped(mu, sigma)
+            obs, *_, info = env.step(np.asarray(act, dtype=np.float32))
             if info is not None and "metrics/average_pixels" in info:
                 pixels.append(float(info["metrics/average_pixels"]))
         m = np.abs(np.stack(mus))
         past = m > 1.0
-        mean = float(np.mean(pixels))
-        half = 2.262 * float(np.std(pixels, ddof=1)) / math.sqrt(len(pixels))  # t(0.975, 9)
+        spread = mean_ci(pixels)
         return {
             "pixels_per_episode": pixels,
-            "pixels_mean": mean,
-            "pixels_ci95": [mean - half, mean + half] if episodes == 10 else None,
+            "pixels_mean": spread["mean"],
+            "pixels_ci95": [spread["ci_low"], spread["ci_high"]],
             "share_of_mean_past_bounds": float(past.mean()),
             "mean_excess_where_past": float((m[past] - 1.0).mean()) if past.any() else 0.0,
             "components_past_on_most_decisions": int((past.mean(axis=0) > 0.5).sum()),
