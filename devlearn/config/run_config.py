@@ -56,6 +56,10 @@ class PPOConfig:
     ``results/learner/README.md``). A saved config without this field means False."""
     reward_clip: float = 10.0
     """Bound on a normalised reward (with ``normalize_rewards``)."""
+    adam_eps: float = 1e-8
+    """Adam's epsilon (torch's default 1e-8; SB3 and cleanrl use 1e-5)."""
+    normalize_advantage_per_mini_batch: bool = False
+    """Standardise advantages in each mini-batch (SB3) instead of once over the rollout."""
 
 
 @dataclass
@@ -84,13 +88,35 @@ class NetworkConfig:
     ``paper``."""
     min_std: float = 0.05
     """Lower bound of the ``gaussian`` head's spread (exploration never vanishes)."""
+    init_std: float = 0.0
+    """Spread at initialisation; 0: the behaviour's ``NetworkSpec.init_std``."""
+    encoders: str = "behavior"
+    """``behavior``: each observation through the encoder the behaviour's ``NetworkSpec`` gives
+    it; ``flat``: every observation flattened and concatenated straight into the fusion and
+    trunk layers (SB3's ``MultiInputPolicy``: one MLP over all senses)."""
+    activation: str = "relu"
+    """Activation of the encoders' MLPs, fusion and trunk (``relu``, ``tanh``, ``elu``...)."""
+    init: str = "torch"
+    """Weight initialisation: ``torch`` (PyTorch's default, then the head's small last layer) or
+    ``orthogonal`` (SB3 and cleanrl: gain sqrt(2) in hidden layers, 1 on the value output, 0.01
+    on the policy's mean)."""
+    normalize: str = "behavior"
+    """Observations standardised by running statistics: ``behavior`` (those the behaviour's
+    ``NetworkSpec.normalize`` names) or ``all``."""
 
 
 LEGACY_NETWORK = NetworkConfig(layout="separate", legacy_uint8_scale=True, head="paper")
 """What a saved config without a ``network`` section was trained with."""
 
-HEADS = ("gaussian", "paper")
-"""Valid values of :attr:`NetworkConfig.head`."""
+HEADS = ("gaussian", "paper", "free", "squashed")
+"""Valid values of :attr:`NetworkConfig.head`: the bounded Gaussian, the paper's, the free
+Gaussian (SB3's) and the tanh-squashed Gaussian (:mod:`devlearn.training.distribution`)."""
+ENCODERS = ("behavior", "flat")
+"""Valid values of :attr:`NetworkConfig.encoders`."""
+INITS = ("torch", "orthogonal")
+"""Valid values of :attr:`NetworkConfig.init`."""
+NORMALIZE = ("behavior", "all")
+"""Valid values of :attr:`NetworkConfig.normalize`."""
 
 LEGACY_FIELDS: dict[str, Any] = {
     "ppo.normalize_rewards": False,
@@ -329,17 +355,46 @@ def check_learner(cfg: RunConfig, spec: Any) -> None:
         UsageError: naming the ``--set`` key and what is valid.
     """
     net = cfg.network
-    if net.head not in HEADS:
-        raise UsageError(f"unknown network.head '{net.head}'; valid: {', '.join(HEADS)}")
-    if net.head == "gaussian" and not 0 < net.min_std < min(spec.init_std, head_max_std(spec)):
+    for key, value, valid in (
+        ("head", net.head, HEADS),
+        ("encoders", net.encoders, ENCODERS),
+        ("init", net.init, INITS),
+        ("normalize", net.normalize, NORMALIZE),
+    ):
+        if value not in valid:
+            raise UsageError(f"unknown network.{key} '{value}'; valid: {', '.join(valid)}")
+    from rsl_rl.utils import resolve_nn_activation
+
+    try:
+        resolve_nn_activation(net.activation)
+    except ValueError as err:
+        raise UsageError(f"network.activation: {err}") from None
+    if net.init_std < 0:
         raise UsageError(
-            f"network.min_std must be above 0 and below the initial spread {spec.init_std} "
+            f"network.init_std must be 0 (the behaviour's) or above, got {net.init_std}"
+        )
+    init_std = initial_std(cfg, spec)
+    if net.head == "gaussian" and not 0 < net.min_std < min(init_std, head_max_std(spec)):
+        raise UsageError(
+            f"network.min_std must be above 0 and below the initial spread {init_std} "
             f"and the bound {head_max_std(spec)}; got {net.min_std}"
         )
+    if net.head == "gaussian" and not init_std < head_max_std(spec):
+        raise UsageError(
+            f"network.init_std must be below the spread's bound {head_max_std(spec)}, "
+            f"got {init_std}"
+        )
+    if cfg.ppo.adam_eps <= 0:
+        raise UsageError(f"ppo.adam_eps must be above 0, got {cfg.ppo.adam_eps}")
     if cfg.env.action_repeat < 1:
         raise UsageError(f"env.action_repeat must be at least 1, got {cfg.env.action_repeat}")
     if cfg.ppo.normalize_rewards and not cfg.ppo.reward_clip > 0:
         raise UsageError(f"ppo.reward_clip must be above 0, got {cfg.ppo.reward_clip}")
+
+
+def initial_std(cfg: RunConfig, spec: Any) -> float:
+    """The policy's spread at initialisation: ``network.init_std``, or the behaviour's."""
+    return float(cfg.network.init_std or spec.init_std)
 
 
 def head_max_std(spec: Any) -> float:
@@ -441,6 +496,27 @@ def shared_layout(cfg: RunConfig, spec: Any) -> bool:
     return layouts[cfg.network.layout]
 
 
+def learner_spec(spec: Any, net: NetworkConfig) -> Any:
+    """The behaviour's NetworkSpec as the run's ``network`` section shapes it: flat encoders
+    (every observation flattened into the fusion layers), the encoders' activation, every
+    observation normalised. The defaults return ``spec`` itself."""
+    from devlearn.api.sensors import FlattenEncoder, MLPEncoder
+
+    if net.encoders == "flat":
+        encoders = {name: FlattenEncoder() for name in spec.encoders}
+    else:
+        encoders = {
+            name: MLPEncoder(enc.hidden_dims, net.activation)
+            if isinstance(enc, MLPEncoder) and net.activation != enc.activation
+            else enc
+            for name, enc in spec.encoders.items()
+        }
+    normalize = tuple(spec.encoders) if net.normalize == "all" else tuple(spec.normalize)
+    if encoders == spec.encoders and normalize == tuple(spec.normalize):
+        return spec
+    return dataclasses.replace(spec, encoders=encoders, normalize=normalize)
+
+
 def to_rsl_rl(cfg: RunConfig, behavior: Any, observation_names: list[str] | None = None) -> dict:
     """Return rsl-rl 5.5.1's ``train_cfg`` for this run.
 
@@ -456,7 +532,7 @@ def to_rsl_rl(cfg: RunConfig, behavior: Any, observation_names: list[str] | None
         behavior: The behaviour instance.
         observation_names: Observation names (default: the spec's encoder names).
     """
-    spec = behavior.network()
+    spec = learner_spec(behavior.network(), cfg.network)
     names = list(observation_names or spec.encoders)
     ppo = dataclasses.asdict(cfg.ppo)
     num_steps = ppo.pop("num_steps_per_env")
@@ -468,17 +544,27 @@ def to_rsl_rl(cfg: RunConfig, behavior: Any, observation_names: list[str] | None
         "spec": spec,
         "shared": shared,
         "legacy_uint8_scale": cfg.network.legacy_uint8_scale,
+        "activation": cfg.network.activation,
+        "init": cfg.network.init,
     }
-    if cfg.network.head == "paper":
+    init_std = initial_std(cfg, spec)
+    head = cfg.network.head
+    if head == "paper":
         distribution = {
             "class_name": "devlearn.training.networks:TanhSoftplusGaussian",
-            "init_std": spec.init_std,
+            "init_std": init_std,
             "max_std": spec.max_std,
+        }
+    elif head in ("free", "squashed"):
+        distribution = {
+            "class_name": "devlearn.training.distribution:"
+            + ("FreeGaussian" if head == "free" else "SquashedGaussian"),
+            "init_std": init_std,
         }
     else:
         distribution = {
             "class_name": "devlearn.training.distribution:BoundedGaussian",
-            "init_std": spec.init_std,
+            "init_std": init_std,
             "min_std": cfg.network.min_std,
             "max_std": head_max_std(spec),
         }

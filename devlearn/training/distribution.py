@@ -1,4 +1,6 @@
-"""The policy's tanh-mean, softplus-spread Gaussian (paper, sec. II-A4)."""
+"""The policy's action distributions: the paper's tanh-mean, softplus-spread Gaussian (sec.
+II-A4), the bounded Gaussian, the free Gaussian of SB3 and cleanrl, and the tanh-squashed Gaussian
+(issue #54)."""
 
 from __future__ import annotations
 
@@ -193,3 +195,89 @@ class BoundedGaussian(DiagonalNormal):
         with torch.no_grad():
             head.weight.mul_(0.01)
             head.bias.zero_()
+
+
+class FreeGaussian(DiagonalNormal):
+    """Diagonal Gaussian with a linear mean and a free state-independent log-spread (SB3's and
+    cleanrl's PPO head): ``mean = W_mu h + b_mu``, ``std = exp(p)`` per action with ``p`` a
+    learned parameter, no bounds. The env clips samples to [-1, 1]; the deterministic action is
+    the mean clipped the same way, so a mean past a bound plays the bound.
+
+    Args:
+        output_dim: Action size.
+        init_std: Spread at initialisation (SB3: 1.0).
+    """
+
+    def __init__(self, output_dim: int, init_std: float = 1.0) -> None:
+        super().__init__(output_dim)
+        if not init_std > 0:
+            raise ValueError(f"init_std must be above 0, got {init_std}")
+        self.init_std = float(init_std)
+        self.log_std = nn.Parameter(torch.full((output_dim,), math.log(init_std)))
+        self._distribution: Normal | None = None
+        Normal.set_default_validate_args(False)
+
+    @property
+    def input_dim(self) -> int:
+        """The MLP outputs the mean only."""
+        return self.output_dim
+
+    def current_std(self) -> torch.Tensor:
+        """(output_dim,) spread."""
+        return torch.exp(self.log_std)
+
+    def update(self, mlp_output: torch.Tensor) -> None:
+        self._distribution = Normal(mlp_output, self.current_std().expand_as(mlp_output))
+
+    def deterministic_output(self, mlp_output: torch.Tensor) -> torch.Tensor:
+        """The mean as the env applies it: clipped to [-1, 1]."""
+        return mlp_output.clamp(-1.0, 1.0)
+
+    def as_deterministic_output_module(self) -> nn.Module:
+        return nn.Hardtanh()
+
+    def init_mlp_weights(self, mlp: nn.Sequential) -> None:
+        """Start near mean 0: small weights and zero bias on the mean's layer."""
+        head = cast(nn.Linear, mlp[-1])
+        with torch.no_grad():
+            head.weight.mul_(0.01)
+            head.bias.zero_()
+
+
+SQUASH_EDGE = 1.0 - 1e-6
+"""Squashed actions are kept inside +-this so that atanh stays finite."""
+
+
+class SquashedGaussian(FreeGaussian):
+    """A Gaussian squashed by ``tanh``: ``u ~ N(W_mu h + b_mu, exp(p))``, action ``a = tanh(u)``
+    (SAC's head, used here for PPO). Samples never leave (-1, 1), so the env's clip never acts
+    and nothing past a bound is invisible to the gradient; the log-probability carries the
+    change of variables, ``log p(a) = log N(atanh a) - sum log(1 - a^2)``, and the entropy is
+    estimated from one reparameterised sample (``-log p(a)``), which falls as samples pile up at
+    the bounds (a Gaussian entropy would keep rewarding a spread that only saturates). The
+    deterministic action is ``tanh`` of the mean. ``params`` are the Gaussian's (mean, std)
+    before squashing (the KL of the adaptive schedule is the same before and after).
+    """
+
+    def sample(self) -> torch.Tensor:
+        return torch.tanh(self._distribution.sample()).clamp(-SQUASH_EDGE, SQUASH_EDGE)  # type: ignore[union-attr]
+
+    @property
+    def entropy(self) -> torch.Tensor:
+        dist = self._distribution
+        assert dist is not None
+        squashed = torch.tanh(dist.rsample()).clamp(-SQUASH_EDGE, SQUASH_EDGE)
+        return -self.log_prob(squashed)
+
+    def log_prob(self, outputs: torch.Tensor) -> torch.Tensor:
+        a = outputs.clamp(-SQUASH_EDGE, SQUASH_EDGE)
+        # log|d tanh(u)/du| = log(1 - tanh(u)^2), in a form that is stable near the bounds
+        u = torch.atanh(a)
+        log_det = 2.0 * (math.log(2.0) - u - F.softplus(-2.0 * u))
+        return (self._distribution.log_prob(u) - log_det).sum(dim=-1)  # type: ignore[union-attr]
+
+    def deterministic_output(self, mlp_output: torch.Tensor) -> torch.Tensor:
+        return torch.tanh(mlp_output)
+
+    def as_deterministic_output_module(self) -> nn.Module:
+        return nn.Tanh()
