@@ -123,6 +123,14 @@ LEGACY_FIELDS: dict[str, Any] = {
     "network.head": "paper",
     "env.action_repeat": 1,
     "ppo.schedule": "adaptive",
+    # issue #54's learner fields: every run saved before them was trained with these
+    "ppo.adam_eps": 1e-8,
+    "ppo.normalize_advantage_per_mini_batch": False,
+    "network.init_std": 0.0,
+    "network.encoders": "behavior",
+    "network.activation": "relu",
+    "network.init": "torch",
+    "network.normalize": "behavior",
 }
 """Core fields a saved run's config may lack, and the value its run was trained with (the
 default changed when the field was added, issue #28): such a config loads as trained. A new
