@@ -148,10 +148,12 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     The summary is printed even when writing the files failed (then exit code 2).
     """
     from devlearn.evaluation.evaluate import (
+        PARALLEL_MIN_EPISODES,
         EvalRequest,
         Evaluation,
         EvalWriteError,
         default_out_dir,
+        paying_workers,
         resolve_checkpoint,
     )
 
@@ -162,6 +164,15 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     seed = _count(args.seed, "--seed", 0, SEED_MAX)
     envs = None if args.envs is None else _count(args.envs, "--envs", 1, ENVS_MAX)
     workers = None if args.workers is None else _count(args.workers, "--workers", 0, ENVS_MAX)
+    if workers and paying_workers(episodes, workers) < workers:
+        kept = paying_workers(episodes, workers)
+        print(
+            f"note: --workers {workers} for {episodes} episodes: "
+            + (f"{kept} workers" if kept else "played in this process")
+            + f" (a worker repays its start-up from {PARALLEL_MIN_EPISODES} episodes on)",
+            file=sys.stderr,
+        )
+        workers = kept
     checkpoint = resolve_checkpoint(args.checkpoint) if args.checkpoint else None
     request = EvalRequest(  # checked before any folder is made
         behavior=args.behavior,

@@ -198,6 +198,17 @@ def available_cores() -> int:
     return os.cpu_count() or 1
 
 
+def paying_workers(episodes: int, workers: int) -> int:
+    """The env workers that repay their start-up for ``episodes`` episodes, at most
+    ``workers``: one per :data:`PARALLEL_MIN_EPISODES` episodes, and none where that leaves one
+    (a lone worker only adds its start-up and round trips to one process's work). ``devlearn
+    eval`` asks no more of :func:`parallelism`, so that asking for more workers never makes a
+    small evaluation slower (issue #55); the API keeps what it is asked (tests of the worker
+    path use few episodes)."""
+    workers = min(workers, episodes // PARALLEL_MIN_EPISODES)
+    return workers if workers > 1 else 0
+
+
 def parallelism(
     episodes: int,
     envs: int | None,
@@ -211,7 +222,7 @@ def parallelism(
     :data:`PARALLEL_MIN_EPISODES` episodes per core on (fewer would not repay a worker's
     start-up), else none; :data:`ENVS_PER_WORKER` envs per worker, one without workers. There
     are never more envs than episodes nor more workers than envs; one env plays in this
-    process.
+    process. (``devlearn eval`` also caps workers it is asked for: :func:`paying_workers`.)
 
     Raises:
         UsageError: Several envs asked of a behaviour whose evaluator does not merge.
