@@ -119,20 +119,34 @@ def is_counter(key: str) -> bool:
 
 
 def run_headline(run_dir: Path, registry: PluginRegistry | None) -> str | None:
-    """The metrics key of the run's behaviour's headline (``metrics/score``), when its
-    config.json names an installed behaviour that declares one."""
+    """The metrics key of the run's behaviour's headline, the per-episode mean as evaluation
+    measures it (``metrics/episode_score_mean``,
+    :func:`~devlearn.training.runner_metrics.headline_key`), when its config.json names an
+    installed behaviour that declares one."""
+    from devlearn.training.runner_metrics import headline_key
+
     try:
         name = json.loads((run_dir / "config.json").read_text())["behavior_name"]
         headline = registry.behavior(name).headline_metric if registry is not None else ""
     except (OSError, ValueError, KeyError, TypeError, UsageError):
         return None
-    return f"metrics/{headline}" if headline else None
+    return headline_key(headline) if headline else None
+
+
+def legacy_headline(key: str | None) -> str | None:
+    """What a run logged before :func:`run_headline`'s key existed (``metrics/score`` for
+    ``metrics/episode_score_mean``): the same per-episode mean under the behaviour's name."""
+    if not key or not key.startswith("metrics/episode_") or not key.endswith("_mean"):
+        return None
+    return "metrics/" + key.removeprefix("metrics/episode_").removesuffix("_mean")
 
 
 def default_run_metrics(every: set[str], headline: str | None, health: bool) -> list[str]:
     """What ``devlearn curve RUN`` draws: the headline, the reward, the behaviour's other
     metrics (no counters) and, with ``health``, the learner's health."""
     first = [k for k in (headline, "mean_reward") if k in every]
+    if headline not in every and legacy_headline(headline) in every:  # a run from before
+        first.insert(0, str(legacy_headline(headline)))
     rest = sorted(k for k in every if k.startswith("metrics/") and not is_counter(k))
     keys = first + [k for k in rest if k not in first]
     if health:

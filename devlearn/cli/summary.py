@@ -7,7 +7,9 @@ import shlex
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from devlearn.evaluation.report import headline_of
 from devlearn.training.checkpoint import LATEST
+from devlearn.training.runner_metrics import EPISODES_AVERAGED, headline_key
 
 if TYPE_CHECKING:
     from devlearn.config.run_config import RunConfig
@@ -29,10 +31,13 @@ def _rows(run_dir: Path) -> list[dict[str, Any]]:
 def headline(rows: list[dict[str, Any]], metric: str) -> tuple[str, Any, Any]:
     """The metric to show, its first logged value and its last (None where never logged).
 
-    ``metric`` is the behaviour's ``headline_metric`` (logged as ``metrics/<metric>``); without
-    one, or before any episode logged it, the mean episode reward.
+    ``metric`` is the behaviour's ``headline_metric``, logged per episode as evaluation
+    measures it (:func:`~devlearn.training.runner_metrics.headline_key`,
+    ``metrics/episode_<metric>_mean``; runs from before that logged ``metrics/<metric>``);
+    without one, or before any episode logged it, the mean episode reward.
     """
-    for key in (f"metrics/{metric}" if metric else "", "mean_reward"):
+    keys = (headline_key(metric), f"metrics/{metric}") if metric else ()
+    for key in (*keys, "mean_reward"):
         values = [r[key] for r in rows if key and r.get(key) is not None]
         if values:
             return key, values[0], values[-1]
@@ -60,15 +65,18 @@ def baseline_dirs(behavior_name: str) -> dict[str, Path]:
 
 
 def _baseline_values(behavior_name: str, metric: str) -> dict[str, Any]:
-    """The headline ``metric`` of the baseline evaluations already in their default folders."""
+    """The headline of the baseline evaluations already in their default folders, as ``devlearn
+    eval`` headlines it (:func:`~devlearn.evaluation.report.headline_of`: the per-episode
+    mean), so that it stands beside the run's per-episode figure."""
     found = {}
     for policy, folder in baseline_dirs(behavior_name).items():
         try:
             summary = json.loads((folder / "eval.json").read_text())
         except (OSError, ValueError):
             continue
-        if isinstance(summary, dict) and isinstance(summary.get(metric), (int, float)):
-            found[policy] = summary[metric]
+        head = headline_of(summary, metric) if isinstance(summary, dict) else None
+        if head is not None:
+            found[policy] = head[1]
     return found
 
 
@@ -110,8 +118,10 @@ def run_summary(
         )
     else:
         lines.append(
-            f"  {key}  {_number(last)} now, {_number(first)} at the start (step {first_step:,}), "
-            "over training episodes"
+            f"  {key.removeprefix('metrics/')}  {_number(last)} now, {_number(first)} at the "
+            f"start (step {first_step:,}), per episode over the last {EPISODES_AVERAGED} "
+            "training episodes (actions sampled, the stage's start; devlearn eval measures it "
+            "with the mean action under the evaluation protocol)"
         )
     stages: dict[str, int] = {}  # the curriculum stages the run went through, with where
     for row in rows:
@@ -133,7 +143,10 @@ def run_summary(
     dirs = baseline_dirs(behavior_name)
     if baselines:
         shown = ", ".join(f"{p} {_number(v)} ({dirs[p]})" for p, v in baselines.items())
-        lines.append(f"  baselines   {metric} under the evaluation protocol: {shown}")
+        lines.append(
+            f"  baselines   {headline_key(metric).removeprefix('metrics/')} under the "
+            f"evaluation protocol: {shown}"
+        )
     more = max(2 * total_steps, total_steps + 1)
     eval_dir = shlex.quote(str(run_dir / "eval"))
     lines += [

@@ -117,6 +117,12 @@ INITS = ("torch", "orthogonal")
 """Valid values of :attr:`NetworkConfig.init`."""
 NORMALIZE = ("behavior", "all")
 """Valid values of :attr:`NetworkConfig.normalize`."""
+ACTIVATIONS = (
+    "elu", "selu", "relu", "crelu", "lrelu", "tanh", "sigmoid", "softplus", "gelu", "swish",
+    "mish", "identity",
+)  # fmt: skip
+"""Valid values of :attr:`NetworkConfig.activation`: rsl-rl 5.5.1's activation names
+(``rsl_rl.utils.resolve_nn_activation``; listed here so that checking a config loads no torch)."""
 
 LEGACY_FIELDS: dict[str, Any] = {
     "ppo.normalize_rewards": False,
@@ -371,12 +377,10 @@ def check_learner(cfg: RunConfig, spec: Any) -> None:
     ):
         if value not in valid:
             raise UsageError(f"unknown network.{key} '{value}'; valid: {', '.join(valid)}")
-    from rsl_rl.utils import resolve_nn_activation
-
-    try:
-        resolve_nn_activation(net.activation)
-    except ValueError as err:
-        raise UsageError(f"network.activation: {err}") from None
+    if net.activation not in ACTIVATIONS:
+        raise UsageError(
+            f"unknown network.activation '{net.activation}'; valid: {', '.join(ACTIVATIONS)}"
+        )
     if net.init_std < 0:
         raise UsageError(
             f"network.init_std must be 0 (the behaviour's) or above, got {net.init_std}"

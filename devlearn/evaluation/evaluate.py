@@ -524,6 +524,7 @@ class Evaluation:
                 results = self.play(players, plan, episode_steps)
             evaluator, episode_metrics, started = merged_results(results)
             summary = self.measures(subject, conditions, evaluator, started)
+            per_episode_headline(summary, episode_metrics, subject.behavior.headline_metric)
             summary["execution"] = {
                 "envs": conditions.envs,
                 "workers": conditions.workers,
@@ -672,6 +673,26 @@ class Evaluation:
             raise EvalWriteError(
                 f"evaluated, but writing to {out} failed: {exc.strerror or exc}", summary
             ) from None
+
+
+def per_episode_headline(
+    summary: dict[str, Any], episodes: list[dict[str, float]], headline: str
+) -> None:
+    """Add the headline's per-episode mean, spread and 95% t-interval over ``episodes``
+    (``episode_<headline>_mean``, ``_std``, ``_ci_low``, ``_ci_high``) where the evaluator
+    reports none: the figure training logs under the same name
+    (:func:`~devlearn.training.runner_metrics.headline_key`), for every behaviour (issue #55).
+    Nothing is added where an episode lacks the figure."""
+    from devlearn.api.stats import mean_ci
+
+    if not headline or f"episode_{headline}_mean" in summary:
+        return
+    values = [e[headline] for e in episodes if headline in e]
+    if not values or len(values) != len(episodes):
+        return
+    stats = mean_ci(values)
+    for name in ("mean", "std", "ci_low", "ci_high"):
+        summary[f"episode_{headline}_{name}"] = stats[name]
 
 
 def evaluate(

@@ -150,7 +150,7 @@ def test_eval_prints_a_short_summary_led_by_the_headline(cli, tmp_path, capsys, 
     lines = capsys.readouterr().out.splitlines()
     assert lines[0] == f"tiny: {out / 'checkpoint_latest.pt'} (64 training steps)"
     assert lines[1].startswith("  2 episodes from rest starts, eval seed 0")
-    assert lines[2].startswith("  headline  close = ")  # the behaviour's headline, first
+    assert lines[2].startswith("  headline  episode_close_mean = ")  # the per-episode headline
     assert lines[3].startswith("  baselines zero ") and "(same start)" in lines[3]
     assert any(line.startswith(f"  all figures: {out / 'eval' / 'eval.json'}") for line in lines)
     assert len(lines) <= 7 and all(len(line) < 300 for line in lines)  # no raw dump

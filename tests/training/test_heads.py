@@ -135,6 +135,16 @@ def test_a_bad_knob_is_refused_naming_what_is_valid(setting, message):
         config("unused", 256, setting)
 
 
+def test_the_valid_activations_are_rsl_rls():
+    from rsl_rl.utils import resolve_nn_activation
+
+    from devlearn.config.run_config import ACTIVATIONS
+
+    assert all(resolve_nn_activation(name) is not None for name in ACTIVATIONS)
+    with pytest.raises(ValueError):
+        resolve_nn_activation("gelu2")
+
+
 def test_a_run_saved_before_the_knobs_loads_as_it_was_trained():
     knobs = ["network.encoders=flat", "network.init=orthogonal", "network.activation=tanh",
              "ppo.adam_eps=1e-5", "network.init_std=0.9", "network.normalize=all",
