@@ -514,6 +514,7 @@ def learner_spec(spec: Any, net: NetworkConfig) -> Any:
     observation normalised. The defaults return ``spec`` itself."""
     from devlearn.api.sensors import FlattenEncoder, MLPEncoder
 
+    encoders: dict[str, Any]
     if net.encoders == "flat":
         encoders = {name: FlattenEncoder() for name in spec.encoders}
     else:
