@@ -66,15 +66,21 @@ def _toml() -> ModuleType:
     return tomli
 
 
+def load_toml(path: Path, what: str = "sweep file") -> dict[str, Any]:
+    """The tables of a TOML file; UsageError (naming ``what`` and the file) when it cannot be
+    read or is not TOML."""
+    try:
+        return dict(_toml().loads(path.read_text()))
+    except OSError as exc:
+        raise UsageError(f"cannot read {what} {path}: {exc.strerror or exc}") from None
+    except ValueError as exc:  # tomllib.TOMLDecodeError
+        raise UsageError(f"{what} {path} is not valid TOML: {exc}") from None
+
+
 def read_sweep_file(path: str | Path) -> dict[str, Any]:
     """Read and check a TOML sweep file: known keys only, the right kinds of values."""
     path = Path(path)
-    try:
-        data = _toml().loads(path.read_text())
-    except OSError as exc:
-        raise UsageError(f"cannot read sweep file {path}: {exc.strerror or exc}") from None
-    except ValueError as exc:  # tomllib.TOMLDecodeError
-        raise UsageError(f"sweep file {path} is not valid TOML: {exc}") from None
+    data = load_toml(path)
     for section, keys in SECTIONS.items():
         table = data if not section else data.get(section, {})
         if not isinstance(table, dict):
