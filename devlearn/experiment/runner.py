@@ -102,7 +102,7 @@ class ExperimentFolder(RunFolder):
         info.setdefault("starts", []).append({**start, "file_sha256": spec.sha256})
         super().__init__(out, "experiment", EXPERIMENT_INFO, info)
         write_text_atomically(out / EXPERIMENT_COPY, spec.text)
-        self.first_commit = info["commit"].get("commit")
+        self.first_commit = (info.get("commit") or {}).get("commit")
         self.commit = version.get("commit")
 
 
@@ -146,7 +146,8 @@ def run_experiment(
     plan = plan_experiment(spec, out, registry, global_args)
     saved = check_experiment_folder(spec, plan.out)
     kind = executor or spec.executor
-    jobs = jobs if jobs is not None else spec.jobs
+    if jobs is None and kind == "local":  # the file's jobs are the local executor's
+        jobs = spec.jobs
     address = address or spec.address
     if kind == "local" and address is not None:
         raise UsageError("--address is for --executor ray")

@@ -118,7 +118,7 @@ class Progress:
             if state == "training":
                 if state == before and time.monotonic() - when < self.interval:
                     continue
-                detail = "starting" if job.trainer is None else "(its learner logs no steps here)"
+                detail = "starting" if job.trainer is None else "(its trainer reports no steps)"
                 if row:
                     detail = f"{row.get('step', 0):,}/{totals[job.name]:,} steps"
                     if "steps_per_s" in row:
@@ -132,7 +132,8 @@ class Progress:
                 detail += f"  ETA {_duration(eta)} (all training left)"
             self.line(state, name, detail)
         if eta is not None:
-            self.bar.set_postfix_str(f"ETA {_duration(eta)}")
+            failed = f", {self.failed} failed" if self.failed else ""
+            self.bar.set_postfix_str(f"ETA {_duration(eta)}{failed}")
 
     def finished(self, record: dict[str, Any], sweep_dir: Path) -> None:
         """A run ended: done, failed (with its log's last lines) or interrupted."""
