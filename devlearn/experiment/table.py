@@ -157,7 +157,7 @@ def markdown(table: dict[str, Any]) -> str:
         key = headline if isinstance(headline, str) else " / ".join(headline)
         seconds = any(arm["learn_s"] for arm in protocol["arms"])
         lines += [f"## {protocol['protocol']}: {protocol['description']}", ""]
-        header = ["", "seeds", f"{key}: mean [95% interval over seeds]", "per seed"]
+        header = ["policy", "seeds", f"{key}: mean [95% interval over seeds]", "per seed"]
         header += ["s of learning"] if seconds else []
         lines += ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
         for arm in protocol["arms"]:

@@ -75,9 +75,12 @@ class Progress:
             self.stream.flush()
 
     def _result(self, record: dict[str, Any]) -> str:
-        summary = record.get("eval") or {}
-        shown = [self.headline] if self.headline in summary else []
-        values = [f"{k}={_number(summary[k])}" for k in shown]
+        """Wall time and the headline, as ``devlearn eval``'s summary picks it (the per-episode
+        mean where the evaluator reports one)."""
+        from devlearn.evaluation.report import headline_of
+
+        found = headline_of(record.get("eval") or {}, self.headline or "")
+        values = [f"{found[0]}={_number(found[1])}"] if found else []
         return "  ".join([f"{record.get('wall_s', 0):.1f} s", *values])
 
     def earlier(self, record: dict[str, Any]) -> None:
