@@ -1,4 +1,5 @@
-"""run_sweep(): check everything, then train and evaluate every run, then write the report."""
+"""run_sweep(): check everything, then train and evaluate every run, then write the report;
+execute_runs(), the loop over a folder's runs that experiments (devlearn.experiment) share."""
 
 from __future__ import annotations
 
