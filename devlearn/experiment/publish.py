@@ -39,7 +39,10 @@ CURVE_ROWS = 50
 """Most rows of a published training curve (every k-th row of metrics.jsonl, and the last)."""
 CURVE_COLUMNS = ("step", "iteration", "stage", "mean_reward", "collect_s", "update_s")
 """metrics.jsonl columns a published curve keeps, with the behaviour's headline
-(``metrics/HEADLINE``, ``metrics/training_HEADLINE``)."""
+(``metrics/HEADLINE``, its per-episode mean ``metrics/episode_HEADLINE_mean`` and
+``metrics/training_HEADLINE``, those a run logs)."""
+HEADLINE_COLUMNS = ("{headline}", "episode_{headline}_mean", "training_{headline}")
+"""The headline's metrics.jsonl columns a published curve keeps (after ``metrics/``)."""
 LEARNING_FILE = "learning.json"
 """A published run's steps trained and seconds of learning."""
 CURVE_FILE = "curve.jsonl"
@@ -75,7 +78,8 @@ def thin_curve(rows: list[dict[str, Any]], headline: str) -> list[dict[str, Any]
     if not rows:
         return []
     every = max(1, math.ceil(len(rows) / CURVE_ROWS))
-    columns = [*CURVE_COLUMNS, f"metrics/{headline}", f"metrics/training_{headline}"]
+    columns = [*CURVE_COLUMNS, *(f"metrics/{k}" for k in HEADLINE_COLUMNS)]
+    columns = [c.format(headline=headline) for c in columns]
     kept = [r for i, r in enumerate(rows) if (i + 1) % every == 0 or i == len(rows) - 1]
     return [{k: row[k] for k in columns if k in row} for row in kept]
 

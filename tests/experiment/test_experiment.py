@@ -61,6 +61,8 @@ rows = [{{ label = "near (paper)", value = 0.5, low = 0.4, high = 0.6 }}]
 launcher = {LAUNCHER}
 """
 ARMS = ("near", "far")
+HEADLINE = "episode_close_mean"
+"""tiny's headline as devlearn eval's summary names it: the per-episode mean of ``close``."""
 SEEDS = (1, 2)
 
 
@@ -126,7 +128,7 @@ def test_an_experiment_runs_restarts_publishes_and_tabulates(tmp_path):
     assert code == 0, stdout
     after = attempts(out)
     assert after == {**before, "far,seed=2": [*before["far,seed=2"], "eval"]}
-    assert json.loads(eval_json.read_text())["close"] == json.loads(kept)["close"]
+    assert json.loads(eval_json.read_text())[HEADLINE] == json.loads(kept)[HEADLINE]
 
     code, stdout, stderr = run_cli(["experiment", "publish", str(out), str(dest)])
     assert code == 0, stderr
@@ -153,13 +155,13 @@ def test_an_experiment_runs_restarts_publishes_and_tabulates(tmp_path):
             curve = [
                 json.loads(x) for x in (dest / arm / seed / "curve.jsonl").read_text().splitlines()
             ]
-            assert curve[-1]["step"] == rows[-1]["step"] and "metrics/close" in curve[-1]
+            assert curve[-1]["step"] == rows[-1]["step"] and f"metrics/{HEADLINE}" in curve[-1]
     assert (dest / "experiment.toml").read_text() == TINY
     published_info = json.loads((dest / "experiment.json").read_text())
     assert published_info["commit"] == head.stdout.strip() and published_info["missing"] == []
     assert not list(dest.rglob("checkpoint_*.pt")) and not list(dest.rglob("metrics.jsonl"))
     for arm in ARMS:
-        values = {s: evaluations[f"{arm},seed={s}"]["close"] for s in SEEDS}
+        values = {s: evaluations[f"{arm},seed={s}"][HEADLINE] for s in SEEDS}
         chosen = published_info["policies"][arm]
         assert chosen["seed"] == sorted(SEEDS, key=lambda s: (values[s], s))[0]  # lower median
         assert (dest / arm / "policy.pt").is_file()
@@ -167,19 +169,20 @@ def test_an_experiment_runs_restarts_publishes_and_tabulates(tmp_path):
     code, text, stderr = run_cli(["experiment", "table", str(dest), "--json"])
     assert code == 0, stderr
     (table,) = json.loads(text)["protocols"]
-    assert table["headline"] == "close"
+    assert table["headline"] == HEADLINE
     for row, arm in zip(table["arms"], ARMS):
-        values = [evaluations[f"{arm},seed={s}"]["close"] for s in SEEDS]
+        values = [evaluations[f"{arm},seed={s}"][HEADLINE] for s in SEEDS]
         mean, low, high = t_interval(values)
         assert row["arm"] == arm and row["n"] == 2
         assert row["seeds"] == {str(s): v for s, v in zip(SEEDS, values)}
         assert (row["mean"], row["ci_low"], row["ci_high"]) == pytest.approx((mean, low, high))
+    zero = evaluations["baseline_zero"]
     assert table["baselines"] == [
         {
             "baseline": "zero",
-            "value": evaluations["baseline_zero"]["close"],
-            "ci_low": None,
-            "ci_high": None,
+            "value": zero[HEADLINE],
+            "ci_low": zero[HEADLINE.replace("_mean", "_ci_low")],  # its interval over episodes
+            "ci_high": zero[HEADLINE.replace("_mean", "_ci_high")],
         }
     ]
     assert table["references"][0]["source"] == "a made-up table, row 3"
@@ -190,7 +193,7 @@ def test_an_experiment_runs_restarts_publishes_and_tabulates(tmp_path):
     for arm, row in zip(ARMS, table["arms"]):
         interval = f"{row['mean']:.4g} [{row['ci_low']:.4g}, {row['ci_high']:.4g}]"
         assert interval in rows[arm], rows[arm]
-    assert f"{evaluations['baseline_zero']['close']:.4g}" in rows["zero actions (baseline)"]
+    assert f"{zero[HEADLINE]:.4g}" in rows["zero actions (baseline)"]
     assert "0.5 [0.4, 0.6]" in rows["near (paper) (reference [1])"]
     assert "- [1] a made-up table, row 3" in text
 
@@ -322,12 +325,12 @@ def test_the_learners_experiment_file_checks_with_the_real_behaviour(tmp_path, c
 
 def test_published_curves_are_thinned_and_the_policy_seed_is_the_median():
     rows = [
-        {"step": i, "mean_reward": 0.0, "metrics/close": 0.5, "loss/value": 1.0}
+        {"step": i, "mean_reward": 0.0, "metrics/episode_close_mean": 0.5, "loss/value": 1.0}
         for i in range(1, 501)
     ]
     curve = thin_curve(rows, "close")
     assert len(curve) <= CURVE_ROWS + 1 and curve[-1]["step"] == 500
-    assert set(curve[0]) == {"step", "mean_reward", "metrics/close"}
+    assert set(curve[0]) == {"step", "mean_reward", "metrics/episode_close_mean"}
     assert median_seed({1: 0.3, 2: 0.1, 3: 0.2}) == 3
     assert median_seed({1: 0.3, 2: 0.1, 3: 0.2, 4: 0.4}) == 3  # the lower middle one
     assert median_seed({5: 0.2, 4: 0.2, 3: 0.2}) == 4
