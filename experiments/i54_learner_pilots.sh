@@ -27,6 +27,9 @@ declare -A ARM=(
   [gclip]="ppo.max_grad_norm=0.5"
   [std02]="network.init_std=0.2"
   [std01]="network.init_std=0.1"
+  [final]="network.final_std=0.1"
+  [free_final]="network.head=free network.init_std=1.0 network.final_std=0.1"
+  [sb3like_final]="network.encoders=flat network.activation=tanh network.init=orthogonal network.head=free network.init_std=1.0 ppo.adam_eps=1e-5 ppo.normalize_advantage_per_mini_batch=true network.final_std=0.1"
   [free_ent0]="network.head=free network.init_std=1.0 ppo.entropy_coef=0"
   [sb3like_ent0]="network.encoders=flat network.activation=tanh network.init=orthogonal network.head=free network.init_std=1.0 ppo.adam_eps=1e-5 ppo.normalize_advantage_per_mini_batch=true ppo.entropy_coef=0"
 )

@@ -90,6 +90,11 @@ class NetworkConfig:
     """Lower bound of the ``gaussian`` head's spread (exploration never vanishes)."""
     init_std: float = 0.0
     """Spread at initialisation; 0: the behaviour's ``NetworkSpec.init_std``."""
+    final_std: float = 0.0
+    """A ceiling on the spread that falls log-linearly from the initial spread to this value
+    over the run (``gaussian`` and ``free`` heads; :func:`devlearn.training.distribution.
+    spread_cap`): exploration wide at first, and at the end a policy whose mean action is its
+    behaviour (issue #54). 0: no ceiling."""
     encoders: str = "behavior"
     """``behavior``: each observation through the encoder the behaviour's ``NetworkSpec`` gives
     it; ``flat``: every observation flattened and concatenated straight into the fusion and
@@ -133,6 +138,7 @@ LEGACY_FIELDS: dict[str, Any] = {
     "ppo.adam_eps": 1e-8,
     "ppo.normalize_advantage_per_mini_batch": False,
     "network.init_std": 0.0,
+    "network.final_std": 0.0,
     "network.encoders": "behavior",
     "network.activation": "relu",
     "network.init": "torch",
@@ -396,6 +402,14 @@ def check_learner(cfg: RunConfig, spec: Any) -> None:
             f"network.init_std must be below the spread's bound {head_max_std(spec)}, "
             f"got {init_std}"
         )
+    if net.final_std and net.head not in ("gaussian", "free"):
+        raise UsageError(f"network.final_std needs network.head gaussian or free, not '{net.head}'")
+    floor = net.min_std if net.head == "gaussian" else 0.0
+    if net.final_std and not floor <= net.final_std < init_std:
+        raise UsageError(
+            f"network.final_std must lie in [{floor}, {init_std}) (the spread's lower bound "
+            f"and its initial value), got {net.final_std}"
+        )
     if cfg.ppo.adam_eps <= 0:
         raise UsageError(f"ppo.adam_eps must be above 0, got {cfg.ppo.adam_eps}")
     if cfg.env.action_repeat < 1:
@@ -581,6 +595,8 @@ def to_rsl_rl(cfg: RunConfig, behavior: Any, observation_names: list[str] | None
             "min_std": cfg.network.min_std,
             "max_std": head_max_std(spec),
         }
+    if cfg.network.final_std:
+        distribution["final_std"] = cfg.network.final_std
     return {
         "algorithm": {
             "class_name": "devlearn.training.ppo:UniqueParamPPO",

@@ -21,11 +21,39 @@ def inverse_softplus(y: float) -> float:
     return y + math.log(-math.expm1(-y))
 
 
+def spread_cap(start: float, final: float, progress: float) -> float:
+    """The ceiling on the policy's spread at ``progress`` (0 to 1) through the run: falling
+    log-linearly from ``start`` (the head's initial spread) to ``final`` (issue #54: a policy
+    that explores widely at first and whose mean action is its behaviour at the end)."""
+    progress = min(max(progress, 0.0), 1.0)
+    return math.exp(math.log(start) + (math.log(final) - math.log(start)) * progress)
+
+
 class DiagonalNormal(Distribution):
-    """What both policy heads share: a diagonal Normal set by :meth:`update`, sampled, scored
-    and compared dimension by dimension (summed over actions)."""
+    """What every policy head shares: a diagonal Normal set by :meth:`update`, sampled, scored
+    and compared dimension by dimension (summed over actions).
+
+    With ``final_std`` set (:meth:`set_progress`), the spread is capped by a ceiling that falls
+    from the initial spread to ``final_std`` over the run (:func:`spread_cap`); the cap is a
+    function of the run's progress, not a learned parameter, so it is not saved with the
+    weights and a checkpoint's cap follows from its steps and config.
+    """
 
     _distribution: Normal | None = None
+    final_std: float = 0.0
+    """The spread's ceiling at the end of the run; 0: no ceiling."""
+    std_cap: float = math.inf
+    """The ceiling now (:meth:`set_progress`)."""
+
+    def set_progress(self, progress: float) -> None:
+        """Set the spread's ceiling for ``progress`` (0 to 1) through the run (no-op without
+        ``final_std``)."""
+        if self.final_std > 0:
+            self.std_cap = spread_cap(getattr(self, "init_std", 1.0), self.final_std, progress)
+
+    def capped(self, std: torch.Tensor) -> torch.Tensor:
+        """``std`` under the ceiling (unchanged without one)."""
+        return std.clamp(max=self.std_cap) if math.isfinite(self.std_cap) else std
 
     def sample(self) -> torch.Tensor:
         return self._distribution.sample()  # type: ignore[union-attr]
@@ -155,9 +183,20 @@ class BoundedGaussian(DiagonalNormal):
     """
 
     def __init__(
-        self, output_dim: int, init_std: float = 0.5, min_std: float = 0.05, max_std: float = 1.0
+        self,
+        output_dim: int,
+        init_std: float = 0.5,
+        min_std: float = 0.05,
+        max_std: float = 1.0,
+        final_std: float = 0.0,
     ) -> None:
         super().__init__(output_dim)
+        if final_std and not min_std <= final_std < init_std:
+            raise ValueError(
+                f"final_std must lie in [min_std, init_std) = [{min_std}, {init_std}), "
+                f"got {final_std}"
+            )
+        self.final_std = float(final_std)
         if not 0 < min_std < init_std < max_std:
             raise ValueError(
                 f"the spread needs 0 < min_std < init_std < max_std; got min_std={min_std}, "
@@ -180,7 +219,8 @@ class BoundedGaussian(DiagonalNormal):
         return torch.exp(self._log_min + self._log_span * torch.sigmoid(self.std_param))
 
     def update(self, mlp_output: torch.Tensor) -> None:
-        self._distribution = Normal(mlp_output, self.current_std().expand_as(mlp_output))
+        std = self.capped(self.current_std())
+        self._distribution = Normal(mlp_output, std.expand_as(mlp_output))
 
     def deterministic_output(self, mlp_output: torch.Tensor) -> torch.Tensor:
         """The mean as the env applies it: clipped to [-1, 1]."""
@@ -208,11 +248,13 @@ class FreeGaussian(DiagonalNormal):
         init_std: Spread at initialisation (SB3: 1.0).
     """
 
-    def __init__(self, output_dim: int, init_std: float = 1.0) -> None:
+    def __init__(self, output_dim: int, init_std: float = 1.0, final_std: float = 0.0) -> None:
         super().__init__(output_dim)
         if not init_std > 0:
             raise ValueError(f"init_std must be above 0, got {init_std}")
-        self.init_std = float(init_std)
+        if final_std and not 0 < final_std < init_std:
+            raise ValueError(f"final_std must lie in (0, init_std={init_std}), got {final_std}")
+        self.init_std, self.final_std = float(init_std), float(final_std)
         self.log_std = nn.Parameter(torch.full((output_dim,), math.log(init_std)))
         self._distribution: Normal | None = None
         Normal.set_default_validate_args(False)
@@ -227,7 +269,8 @@ class FreeGaussian(DiagonalNormal):
         return torch.exp(self.log_std)
 
     def update(self, mlp_output: torch.Tensor) -> None:
-        self._distribution = Normal(mlp_output, self.current_std().expand_as(mlp_output))
+        std = self.capped(self.current_std())
+        self._distribution = Normal(mlp_output, std.expand_as(mlp_output))
 
     def deterministic_output(self, mlp_output: torch.Tensor) -> torch.Tensor:
         """The mean as the env applies it: clipped to [-1, 1]."""

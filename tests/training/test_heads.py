@@ -4,6 +4,7 @@ what it claims; runs saved before them load as trained."""
 
 from __future__ import annotations
 
+import json
 import math
 
 import pytest
@@ -61,7 +62,7 @@ def test_the_squashed_heads_entropy_falls_as_its_samples_pile_up_at_the_bounds()
         dist = SquashedGaussian(1, init_std=std)
         dist.update(torch.zeros(20000, 1))
         torch.manual_seed(1)
-        return float(dist.entropy.mean())
+        return float(dist.entropy.mean().detach())
 
     assert entropy(0.8) > entropy(3.0) > entropy(10.0)
 
@@ -162,3 +163,55 @@ def test_a_run_saved_before_the_knobs_loads_as_it_was_trained():
     assert (old.network.init_std, old.network.normalize) == (0.0, "behavior")
     assert (old.ppo.adam_eps, old.ppo.normalize_advantage_per_mini_batch) == (1e-8, False)
     assert math.isclose(old.ppo.adam_eps, 1e-8)
+
+
+def test_the_spread_ceiling_falls_from_the_initial_spread_to_the_final_one():
+    from devlearn.training.distribution import BoundedGaussian, spread_cap
+
+    assert spread_cap(0.5, 0.05, 0.0) == pytest.approx(0.5)
+    assert spread_cap(0.5, 0.05, 0.5) == pytest.approx(math.sqrt(0.5 * 0.05))  # log-linear
+    assert spread_cap(0.5, 0.05, 1.0) == pytest.approx(0.05)
+    assert spread_cap(0.5, 0.05, 7.0) == pytest.approx(0.05)  # past the run's end: the final
+    dist = BoundedGaussian(3, init_std=0.5, min_std=0.05, max_std=1.0, final_std=0.1)
+    with torch.no_grad():
+        dist.std_param[:] = 1e4  # the learned spread at its upper bound, 1.0
+    mean = torch.zeros(2, 3)
+    dist.update(mean)
+    assert torch.allclose(dist.std, torch.ones(2, 3))  # no ceiling before the run says where
+    dist.set_progress(1.0)
+    dist.update(mean)
+    assert torch.allclose(dist.std, torch.full((2, 3), 0.1))
+    free = FreeGaussian(3, init_std=1.0)
+    free.set_progress(1.0)  # without final_std: no ceiling
+    free.update(mean)
+    assert torch.allclose(free.std, torch.ones(2, 3))
+    with pytest.raises(ValueError, match="final_std"):
+        BoundedGaussian(3, init_std=0.5, final_std=0.6)
+
+
+def test_a_run_with_a_spread_ceiling_trains_and_its_checkpoint_plays_at_its_steps(tmp_path):
+    from tiny_run import factory, registry
+
+    from devlearn.env import BehaviorEnv
+    from devlearn.training import train
+    from devlearn.training.checkpoint import Checkpoint
+    from devlearn.training.distribution import spread_cap
+
+    cfg = config(tmp_path / "run", 256, "network.final_std=0.1")
+    train(cfg, registry(), infant_factory=factory, progress=False)
+    rows = [json.loads(line) for line in (tmp_path / "run" / "metrics.jsonl").open()]
+    stds = [r["health/std_max"] for r in rows]
+    # each iteration collected under the ceiling of where it started: 0.5 -> 0.1 over 8
+    assert stds[0] == pytest.approx(0.5, rel=0.02) and stds[-1] < 0.5 * stds[0]
+    for row, std in zip(rows, stds):
+        start = (row["step"] - 32) / 256
+        assert std <= spread_cap(0.5, 0.1, start) * 1.0001
+    opened = Checkpoint.open(tmp_path / "run" / "checkpoint_latest.pt", registry(), "tiny")
+    env = BehaviorEnv(opened.behavior(), 0, factory, training=False)
+    actor = opened.actor(env.reset(), env.action_dim)
+    env.close()
+    assert actor.distribution.std_cap == pytest.approx(0.1)  # a finished run: the final spread
+    with pytest.raises(UsageError, match="network.final_std must lie in"):
+        config("unused", 256, "network.final_std=0.9")
+    with pytest.raises(UsageError, match="needs network.head gaussian or free"):
+        config("unused", 256, "network.head=squashed", "network.final_std=0.1")
