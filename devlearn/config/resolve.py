@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
 
 from devlearn.api.errors import UsageError
+from devlearn.api.json_files import read_json_object
 from devlearn.config.checks import check_config
 from devlearn.config.run_config import (
     RunConfig,
@@ -189,23 +190,14 @@ def resolve_run(
 
 
 def read_config_file(path: str | Path) -> dict[str, Any]:
-    """A saved run config (``config.json``, ``run_config.json``) as a dict.
+    """A saved run config (``config.json``, ``run_config.json``) as a dict, read by the guarded
+    reader (:func:`~devlearn.api.json_files.read_json_object`).
 
     Raises:
-        UsageError: The file is missing, not JSON, or not a JSON object.
+        UsageError: The file is missing, not a regular file, too large, not JSON, nested too
+            deeply, or not a JSON object.
     """
-    path = Path(path)
-    try:
-        data = json.loads(path.read_text())
-    except (OSError, ValueError) as exc:
-        raise UsageError(f"cannot read {path}: {exc}") from None
-    except RecursionError:
-        raise UsageError(f"cannot read {path}: its JSON is nested too deeply") from None
-    if not isinstance(data, dict):
-        raise UsageError(
-            f"{path} is not a run config: it holds a JSON {type(data).__name__}, not an object"
-        )
-    return data
+    return read_json_object(path, "a run config")
 
 
 def write_config_file(cfg: RunConfig, path: str | Path) -> Path:

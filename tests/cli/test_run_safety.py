@@ -603,6 +603,39 @@ def test_a_deeply_nested_config_file_is_one_line(refused, terms_cli, tmp_path):
     assert "its JSON is nested too deeply" in err
 
 
+def test_json_a_command_is_given_is_read_with_guards(refused, cli, run_dir, tmp_path):
+    # issue #55, fault 8: `--config /dev/zero` read until the OOM killer stopped it, and JSON
+    # nested 100k deep was a RecursionError traceback in `eval --compare`, `report` and
+    # `--set`; one guarded reader refuses each with one line
+    deep = tmp_path / "deep"
+    deep.mkdir()
+    (deep / "eval.json").write_text("[" * 100_000 + "]" * 100_000)
+    fifo = tmp_path / "fifo.json"
+    os.mkfifo(fifo)
+    big = tmp_path / "big.json"
+    with open(big, "wb") as f:
+        f.truncate(65 << 20)  # sparse: 65 MiB of zeros
+    out = tmp_path / "new"
+    checkpoint = str(run_dir / "checkpoint_latest.pt")
+    for argv, expected in [  # what ran away on today's code last: /dev/zero, the pipe
+        (["eval", "tiny", "--checkpoint", checkpoint, "--episodes", "1", "--out", str(out),
+          "--compare", str(deep)], "its JSON is nested too deeply"),
+        (["report", str(deep), "--out", str(out)], "its JSON is nested too deeply"),
+        (["run", "tiny", "--out", str(out), "--set",
+          "curiosity=" + "[" * 60_000 + "]" * 60_000], "nested too deeply"),
+        (["run", "tiny", "--config", str(tmp_path), "--out", str(out)],
+         f"cannot read {tmp_path}: a folder, not a file"),
+        (["run", "tiny", "--config", str(big), "--out", str(out)],
+         f"cannot read {big}: 68,157,440 bytes, more than the 67,108,864"),
+        (["run", "tiny", "--config", str(fifo), "--out", str(out)],
+         f"cannot read {fifo}: a pipe, not a file"),
+        (["run", "tiny", "--config", "/dev/zero", "--out", str(out)],
+         "cannot read /dev/zero: a character device, not a file"),
+    ]:  # fmt: skip
+        assert expected in refused(cli, *argv), argv
+    assert not out.exists()
+
+
 @pytest.mark.parametrize(
     ("change", "expected"),
     [
