@@ -1,8 +1,8 @@
 """The one guarded reader of the JSON files a command is given (configs, evaluations, metrics,
-detector files, sweep records): a regular file only (``/dev/zero`` or a pipe would be read until
-memory runs out), at most a size cap, nested at most :data:`MAX_DEPTH` levels (deeper JSON
-raised RecursionError in the parser, or later in any code that walks it). Every failure is one
-:class:`~devlearn.api.errors.UsageError` line naming the file and the cause."""
+detector files, sweep records): a regular file only (``/dev/zero`` was read until memory ran
+out, a pipe waits for a writer), at most a size cap, nested at most :data:`MAX_DEPTH` levels
+(deeper JSON raised RecursionError in the parser, or later in any code that walks it). Every
+failure is one :class:`~devlearn.api.errors.UsageError` line naming the file and the cause."""
 
 from __future__ import annotations
 
