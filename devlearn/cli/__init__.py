@@ -95,6 +95,12 @@ def main(argv: list[str] | None = None) -> int:
     for error in registry.errors:
         print(f"devlearn: warning: {error}", file=sys.stderr)
     try:
+        unknown = [name for name in args.disable_plugin if name not in registry.plugins]
+        if unknown:  # a typo would leave the plugin it meant enabled, silently
+            installed = ", ".join(sorted(registry.plugins)) or "none"
+            raise UsageError(
+                f"--disable-plugin {unknown[0]}: no such plugin; installed: {installed}"
+            )
         command = next(c for c in COMMANDS if c.name == args.command)
         return int(importlib.import_module(command.module).run(args, registry) or 0)
     except UsageError as exc:

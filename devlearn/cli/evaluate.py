@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from devlearn.api.errors import UsageError
+from devlearn.api.json_files import read_json
 from devlearn.cli.folders import removed_on_failure
 
 if TYPE_CHECKING:
@@ -124,10 +125,12 @@ def _baselines(behavior: str, compare: list[str]) -> dict[str, dict]:
     for folder in folders:
         path = folder / "eval.json" if folder.is_dir() else folder
         try:
-            data = json.loads(path.read_text())
-        except (OSError, ValueError):
+            data = read_json(path)
+        except UsageError as err:
             if compare:
-                raise UsageError(f"--compare {folder}: no readable eval.json there") from None
+                raise UsageError(
+                    f"--compare {folder}: no readable eval.json there ({err})"
+                ) from None
             continue
         if isinstance(data, dict) and data.get("behavior") == behavior:
             name = str(data.get("policy") or folder)

@@ -16,6 +16,9 @@ if TYPE_CHECKING:
 def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     """Write the picture and print its path (``registry`` is unused)."""
     del registry
+    from devlearn.env.rendering import require_rendering
+
+    require_rendering(f"devlearn picture {args.what}")  # every picture is a render
     from devlearn.infant.pictures import body_map_picture, eyes_picture, growth_picture
 
     draw: dict[str, Callable[[str], Path]] = {

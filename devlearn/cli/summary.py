@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
-import json
 import shlex
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+<<<<<<< HEAD
 from devlearn.evaluation.report import headline_of
+=======
+from devlearn.api.errors import UsageError
+from devlearn.api.json_files import read_json, read_json_lines
+>>>>>>> fix55-checks
 from devlearn.training.checkpoint import LATEST
 from devlearn.training.runner_metrics import EPISODES_AVERAGED, headline_key
 
@@ -19,13 +23,10 @@ def _rows(run_dir: Path) -> list[dict[str, Any]]:
     path = run_dir / "metrics.jsonl"
     if not path.exists():
         return []
-    rows = []
-    for line in path.read_text().splitlines():
-        try:
-            rows.append(json.loads(line))
-        except ValueError:  # a line cut short by a kill: skip it
-            continue
-    return rows
+    try:
+        return read_json_lines(path)[0]  # a line cut short by a kill: skipped
+    except UsageError:
+        return []
 
 
 def headline(rows: list[dict[str, Any]], metric: str) -> tuple[str, Any, Any]:
@@ -71,8 +72,8 @@ def _baseline_values(behavior_name: str, metric: str) -> dict[str, Any]:
     found = {}
     for policy, folder in baseline_dirs(behavior_name).items():
         try:
-            summary = json.loads((folder / "eval.json").read_text())
-        except (OSError, ValueError):
+            summary = read_json(folder / "eval.json")
+        except UsageError:
             continue
         head = headline_of(summary, metric) if isinstance(summary, dict) else None
         if head is not None:

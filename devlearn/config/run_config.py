@@ -194,10 +194,15 @@ class InfantConfig:
     iteration boundary where the age changes, every env rebuilds its physics at the new age
     and carries on with the same joint angles and velocities; the policy, optimiser and
     reward memories carry over, checkpoints record the age and a resumed run continues at its
-    schedule's age (``--steps`` changed on resume stretches the schedule). Excludes
-    ``age_months``."""
+    schedule's age. A resume keeps the schedule (another ``infant.growth`` is refused; with
+    another ``--steps`` the schedule keeps the steps it spans, ``growth_steps``, so the age
+    never goes back). Excludes ``age_months``."""
     growth_every: int = 0
     """Steps per piece of an ``A->B`` growth schedule (0: 24 pieces over the run)."""
+    growth_steps: int = 0
+    """Steps the growth schedule spans (0: the run's ``total_steps``); past them the body keeps
+    the last age. A run resumed with another ``--steps`` records its old ``total_steps`` here,
+    so that its body's age at every step stays what the schedule gave it."""
 
 
 @dataclass

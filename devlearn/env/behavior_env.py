@@ -21,6 +21,7 @@ from devlearn.env.guards import (
     check_reward,
     reward_within_bound,
 )
+from devlearn.env.rendering import check_senses_render
 from devlearn.env.settings import EnvSettings
 from devlearn.timing import decision_rate_error
 
@@ -40,7 +41,11 @@ def build_default_infant(scene: str, senses: tuple[str, ...], **options: Any) ->
     """Build the real infant (imported lazily so this module imports without it).
 
     ``options`` are the behaviour's :meth:`~devlearn.api.behavior.Behavior.infant_options`.
+
+    Raises:
+        UsageError: ``senses`` include the eyes and ``MUJOCO_GL`` names no backend.
     """
+    check_senses_render(senses, "the infant")
     from devlearn.infant import build_infant
 
     return build_infant(scene, senses=senses, **options)

@@ -25,6 +25,7 @@ from devlearn.api.errors import UsageError
 from devlearn.config.resolve import RunRequest, resolve_config
 from devlearn.config.run_config import RunConfig, fresh_config, to_dict
 from devlearn.env.behavior_env import BehaviorEnv
+from devlearn.env.rendering import check_senses_render, require_rendering
 from devlearn.evaluation.episodes import (
     VIDEO_FPS,
     ActorPolicy,
@@ -501,8 +502,12 @@ class Evaluation:
             EvalWriteError: The episodes ran but writing files failed (carries the summary).
         """
         request = self.request
+        if request.video is not None:
+            require_rendering("--video")
         out = prepare_out_dir(request.out_dir) if request.out_dir is not None else None
         subject = open_subject(request, self.registry)
+        if self.infant_factory is None:  # before any env or worker renders
+            check_senses_render(subject.behavior.senses, subject.behavior.name)
         torch.manual_seed(request.seed)
         threads = torch.get_num_threads()
         # A batch of one gains nothing from more threads, and several threads on a core that

@@ -17,6 +17,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from devlearn.api.errors import UsageError
+from devlearn.api.json_files import read_json as read_json_file
 from devlearn.config.resolve import RUN_CONFIG_FILE
 from devlearn.files import write_text_atomically
 
@@ -105,10 +107,11 @@ def write_json(path: Path, data: dict[str, Any]) -> None:
 
 
 def read_json(path: Path) -> dict[str, Any] | None:
-    """A JSON object from ``path``, or None if it is missing or unreadable."""
+    """A JSON object from ``path``, or None if it is missing or unreadable (the guarded
+    reader's refusals included: :func:`devlearn.api.json_files.read_json`)."""
     try:
-        data = json.loads(Path(path).read_text())
-    except (OSError, ValueError):
+        data = read_json_file(path)
+    except UsageError:
         return None
     return data if isinstance(data, dict) else None
 

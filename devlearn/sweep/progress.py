@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import sys
 import time
 from pathlib import Path
@@ -10,6 +9,8 @@ from typing import Any, TextIO
 
 from tqdm import tqdm
 
+from devlearn.api.errors import UsageError
+from devlearn.api.json_files import parse_json
 from devlearn.sweep.job import RunJob, read_json
 
 TRAINING_LINE_S = 30.0
@@ -26,9 +27,11 @@ def last_metrics(run_dir: Path) -> dict[str, Any] | None:
         return None
     for line in reversed(lines):
         try:
-            return json.loads(line)
-        except ValueError:  # a line being written
+            row = parse_json(line, "a metrics row")
+        except UsageError:  # a line being written
             continue
+        if isinstance(row, dict):
+            return row
     return None
 
 

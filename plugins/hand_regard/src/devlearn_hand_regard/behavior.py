@@ -163,13 +163,13 @@ class HandRegard(Behavior):
         path = Path(run_dir) / DETECTOR_FILE
         given = self.config.detector_file
         if not path.exists() and given:
-            if not Path(given).is_file():
+            if not Path(given).exists():
                 raise UsageError(
                     f"hand_regard: behavior.detector_file {given} does not exist; give a "
                     "detector JSON (e.g. a run's hand_detector.json) or leave it empty to "
                     "calibrate by babbling"
                 )
-            DetectorParams.load(given).save(path)
+            read_detector_file(given).save(path)
         elif not path.exists():
             detector_store.calibrate_by_babbling(self.config).save(path)
         self.config.detector_file = str(path.resolve())
@@ -194,7 +194,11 @@ class HandRegard(Behavior):
         """
         stored = artifacts.get("hand_detector")
         if stored is not None:
-            self._detector = self._make_detector(DetectorParams.from_dict(stored))
+            try:
+                params = DetectorParams.from_dict(stored, source="the checkpoint's hand detector")
+            except ValueError as err:
+                raise UsageError(f"hand_regard: {err}") from None
+            self._detector = self._make_detector(params)
             return
         name = self.config.detector_file
         if not name:
@@ -208,13 +212,7 @@ class HandRegard(Behavior):
         if self._detector is None:
             params = None
             if self.config.detector_file:
-                try:
-                    params = DetectorParams.load(self.config.detector_file)
-                except (OSError, ValueError, TypeError) as err:  # missing, not JSON, not ours
-                    reason = getattr(err, "strerror", None) or err
-                    raise UsageError(
-                        f"hand_regard: behavior.detector_file {self.config.detector_file}: {reason}"
-                    ) from None
+                params = read_detector_file(self.config.detector_file)
             else:
                 warnings.warn(
                     "hand_regard: no calibrated hand detector (config.detector_file is empty); "
@@ -498,3 +496,19 @@ def _check_choice(key: str, value: str, choices: tuple[str, ...]) -> None:
         raise UsageError(
             f"hand_regard: unknown behavior.{key} '{value}'; valid: {', '.join(choices)}"
         )
+
+
+def read_detector_file(path: str) -> DetectorParams:
+    """The detector ``behavior.detector_file`` names, every value checked
+    (:meth:`DetectorParams.load`).
+
+    Raises:
+        UsageError: One line naming ``behavior.detector_file``, the file and the cause
+            (missing, not a regular file, not JSON, nested too deeply, a value no calibration
+            writes: a NaN area, an empty or NaN colour box list...).
+    """
+    try:
+        return DetectorParams.load(path)
+    except (UsageError, ValueError) as err:
+        reason = str(err).removeprefix(f"{path}: ")
+        raise UsageError(f"hand_regard: behavior.detector_file {path}: {reason}") from None
