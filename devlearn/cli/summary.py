@@ -6,12 +6,9 @@ import shlex
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-<<<<<<< HEAD
-from devlearn.evaluation.report import headline_of
-=======
 from devlearn.api.errors import UsageError
 from devlearn.api.json_files import read_json, read_json_lines
->>>>>>> fix55-checks
+from devlearn.evaluation.report import headline_of
 from devlearn.training.checkpoint import LATEST
 from devlearn.training.runner_metrics import EPISODES_AVERAGED, headline_key
 
