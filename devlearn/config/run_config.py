@@ -97,8 +97,9 @@ class NetworkConfig:
     behaviour (issue #54). 0: no ceiling."""
     encoders: str = "behavior"
     """``behavior``: each observation through the encoder the behaviour's ``NetworkSpec`` gives
-    it; ``flat``: every observation flattened and concatenated straight into the fusion and
-    trunk layers (SB3's ``MultiInputPolicy``: one MLP over all senses)."""
+    it; ``flat``: every vector observation (an ``MLPEncoder``'s) flattened and concatenated
+    straight into the fusion and trunk layers, images keeping their encoders (SB3's
+    ``MultiInputPolicy``: one MLP over the vector senses)."""
     activation: str = "relu"
     """Activation of the encoders' MLPs, fusion and trunk (``relu``, ``tanh``, ``elu``...)."""
     init: str = "torch"
@@ -534,8 +535,11 @@ def learner_spec(spec: Any, net: NetworkConfig) -> Any:
     from devlearn.api.sensors import FlattenEncoder, MLPEncoder
 
     encoders: dict[str, Any]
-    if net.encoders == "flat":
-        encoders = {name: FlattenEncoder() for name in spec.encoders}
+    if net.encoders == "flat":  # vector senses only: an image keeps its CNN (as SB3's extractor)
+        encoders = {
+            name: FlattenEncoder() if isinstance(enc, MLPEncoder) else enc
+            for name, enc in spec.encoders.items()
+        }
     else:
         encoders = {
             name: MLPEncoder(enc.hidden_dims, net.activation)

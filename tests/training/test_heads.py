@@ -103,6 +103,18 @@ def test_flat_encoders_feed_every_observation_to_one_mlp():
         isinstance(m, nn.ReLU) for m in layers
     )
     assert learner_spec(base, config("unused").network) is base  # the defaults change nothing
+    from devlearn.api.sensors import SensorEncoder
+
+    class Eye(SensorEncoder):  # an image's encoder (a CNN) is kept by flat
+        def build(self, obs_shape):
+            return nn.Flatten()
+
+        def out_dim(self, obs_shape):
+            return 4
+
+    eye = Eye()
+    with_eye = NetworkSpec({"a": MLPEncoder((8,)), "eyes": eye})
+    assert learner_spec(with_eye, cfg.network).encoders["eyes"] is eye
 
 
 def test_the_knobs_reach_rsl_rl_and_the_optimiser():
