@@ -23,7 +23,7 @@ from devlearn.env.guards import (
 )
 from devlearn.env.rendering import check_senses_render
 from devlearn.env.settings import EnvSettings
-from devlearn.timing import decision_rate_error
+from devlearn.timing import decision_rate_error, physics_steps
 
 if TYPE_CHECKING:
     from devlearn.api.behavior import Behavior
@@ -61,7 +61,7 @@ def batched_reward_terms(behavior: Behavior) -> list[BatchedIntrinsicReward]:
 class BehaviorEnv:
     """A single sub-environment: one infant, one behaviour's reward terms and one evaluator.
 
-    The environment resets itself: after ``infant.episode_steps`` steps the episode times out,
+    The environment resets itself: after :attr:`episode_steps` steps the episode times out,
     its summary is returned as ``episode_info`` and a new episode begins (random initial pose
     when the stage options say ``random_pose``).
 
@@ -114,7 +114,8 @@ class BehaviorEnv:
         self.evaluator = behavior.evaluator(training=training)
         self.stage: dict[str, Any] = dict(behavior.curriculum().stage.options)
         self.action_dim = int(self.infant.action_dim)
-        self.episode_steps = int(self.infant.episode_steps)
+        self.episode_steps = episode_length(self.infant, behavior, self.settings)
+        """Physics steps per episode (:func:`episode_length`)."""
         self.step_dt = float(self.infant.control_timestep)
         self.episode_step = 0
         self._sums = {term.name: 0.0 for term in self.terms}
@@ -317,6 +318,22 @@ def term_values(envs: list[BehaviorEnv], contexts: list[StepContext]) -> np.ndar
             check_reward(terms[k].name, float(raw[k, i]), envs[i].index, contexts[i].step)
     weights = np.array([term.weight for term in terms])[:, None]
     return weights * raw
+
+
+def episode_length(infant: Any, behavior: Behavior, settings: EnvSettings) -> int:
+    """Physics steps per episode: ``settings.episode_seconds`` (an evaluation's session), else
+    the behaviour's :meth:`~devlearn.api.behavior.Behavior.episode_seconds`, converted with
+    the body's physics step, else the infant's own ``episode_steps`` (5 s).
+
+    Raises:
+        ValueError: The seconds are not a whole number of physics steps.
+    """
+    seconds = settings.episode_seconds
+    if seconds is None:
+        seconds = behavior.episode_seconds()
+    if seconds is None:
+        return int(infant.episode_steps)
+    return physics_steps(seconds, float(infant.physics_timestep))
 
 
 def env_settings(settings: EnvSettings | None, action_repeat: int | None = None) -> EnvSettings:

@@ -381,7 +381,7 @@ class CodedTouches:
         either = np.zeros(len(regions), dtype=bool)
         for i, limb in enumerate(LIMBS):
             hand = i < len(HANDS)
-            body = regions[:, i].any(axis=1) if hand else limbs[:, i, :-1].any(axis=1)
+            body = np.asarray((regions[:, i] if hand else limbs[:, i, :-1]).any(axis=1))
             where = None if areas is None else areas[:, i]
             coded = self.streams[limb, "body"].code(
                 body, gap, where, regions[:, i] if hand else None
@@ -461,14 +461,15 @@ class CodedTouches:
                 _figures(streams, minutes, rate)["touches_per_minute"] if seen else None
             )
         if self.region_area is not None:
-            areas = sum(s.touch_areas for s in hands)
+            areas = hands[0].touch_areas + hands[1].touch_areas
             out["touches_by_area"] = _by_area(areas)
             out["touch_share_by_area"] = _shares(areas, int(areas.sum()))
             out["time_share_by_area"] = _shares(
                 self.either_hand.area_frames, self.either_hand.frames
             )
             out["transitions"] = {
-                here: _by_area(row) for here, row in zip(AREAS, sum(s.transitions for s in hands))
+                here: _by_area(row)
+                for here, row in zip(AREAS, hands[0].transitions + hands[1].transitions)
             }
         names = self.region_names or [f"region_{j:02d}" for j in range(NUM_REGIONS)]
         limbs: dict[str, Any] = {}
