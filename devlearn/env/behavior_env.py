@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from devlearn.api.errors import UsageError
 from devlearn.api.rewards import (
     BatchContext,
     BatchedFromPerEnv,
@@ -326,14 +327,17 @@ def episode_length(infant: Any, behavior: Behavior, settings: EnvSettings) -> in
     the body's physics step, else the infant's own ``episode_steps`` (5 s).
 
     Raises:
-        ValueError: The seconds are not a whole number of physics steps.
+        UsageError: The seconds are not a whole number of physics steps (one line).
     """
-    seconds = settings.episode_seconds
+    seconds, whose = settings.episode_seconds, "the evaluation's session"
     if seconds is None:
-        seconds = behavior.episode_seconds()
+        seconds, whose = behavior.episode_seconds(), f"{type(behavior).name}'s episode_seconds()"
     if seconds is None:
         return int(infant.episode_steps)
-    return physics_steps(seconds, float(infant.physics_timestep))
+    try:
+        return physics_steps(seconds, float(infant.physics_timestep))
+    except ValueError as err:
+        raise UsageError(f"{whose}: {err}") from None
 
 
 def env_settings(settings: EnvSettings | None, action_repeat: int | None = None) -> EnvSettings:

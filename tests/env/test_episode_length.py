@@ -97,7 +97,7 @@ def test_the_infant_a_behaviour_and_a_session_set_the_episode_length():
 def test_an_episode_must_be_whole_decisions():
     with pytest.raises(ValueError, match="episode_seconds must be above 0"):
         EnvSettings(episode_seconds=0.0)
-    with pytest.raises(ValueError, match="not a whole number of physics steps"):
+    with pytest.raises(UsageError, match="the evaluation's session: 0.0123 s is not a whole"):
         BehaviorEnv(TinyBehavior(), 0, factory, settings=EnvSettings(1, 0.0123))
     with pytest.raises(ValueError, match="action_repeat=5 must divide the episode \\(4 physics"):
         BehaviorEnv(TinyBehavior(), 0, factory, settings=EnvSettings(5, 0.02))
