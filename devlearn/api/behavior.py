@@ -227,9 +227,10 @@ class Behavior(ABC):
     that does nothing special, in groups:
 
     ===================  =====================================================================
-    episode              ``senses``, ``infant_options``, ``on_episode_start``, ``before_step``,
-                         ``process_action``, ``obs_groups``: the body a behaviour reads and
-                         hooks around every reset and step
+    episode              ``senses``, ``infant_options``, ``episode_seconds``,
+                         ``on_episode_start``, ``before_step``, ``process_action``,
+                         ``obs_groups``: the body a behaviour reads, how long an episode
+                         lasts, and hooks around every reset and step
     batching             ``facts_every_physics_step``, ``batch_facts``, ``batch_observe``: how
                          facts are computed with a decision rate and over a worker's envs
     run settings         ``train_defaults``, ``run_length_defaults``, ``presets``,
@@ -327,6 +328,12 @@ class Behavior(ABC):
         """Keyword arguments for :func:`devlearn.infant.build_infant` beyond the scene and
         senses, e.g. ``{"appearance": "skin"}``: how the infant looks, without building it."""
         return {}
+
+    def episode_seconds(self) -> float | None:
+        """Simulated seconds per episode (the environment converts them with the body's
+        physics step; a whole number of decisions), or None (the default): the infant's own,
+        BabyBench's 5 s. ``devlearn eval --session S`` overrides it for an evaluation."""
+        return None
 
     def on_episode_start(self, infant: Infant, rng: np.random.Generator) -> None:
         """Called at the start of every episode, after the infant's reset, before its first
@@ -534,6 +541,7 @@ BEHAVIOR_OPTIONAL: dict[str, tuple[str, ...]] = {
     "episode": (
         "senses",
         "infant_options",
+        "episode_seconds",
         "on_episode_start",
         "before_step",
         "process_action",

@@ -178,6 +178,14 @@ COMMANDS: tuple[Command, ...] = (
             (random joint angles: generalisation)""",
         ),
         option(
+            "--session",
+            metavar="SECONDS",
+            help="""play every episode as one session of SECONDS simulated seconds, without a
+            reset inside (e.g. --session 300 --start rest: the 5-minute sessions from rest that
+            infant studies code); default: the behaviour's episodes (5 s). eval.json records it
+            as protocol.session_s, and its per-episode figures are then per session""",
+        ),
+        option(
             "--action",
             choices=("mean", "sample"),
             default="mean",

@@ -23,6 +23,22 @@ ENVS_MAX = 1024
 """Largest ``--envs`` and ``--workers``."""
 
 
+EPISODE_SECONDS = 5.0
+"""A behaviour's usual episode (BabyBench's 5 s), the unit :func:`paying_workers` counts."""
+SESSION_MAX = 86_400.0
+"""Longest ``--session``: a simulated day (seconds)."""
+
+
+def _seconds(text: str, option: str, maximum: float) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise UsageError(f"{option} must be a number of seconds, got '{text}'") from None
+    if not 0 < value <= maximum:
+        raise UsageError(f"{option} must be above 0 and at most {maximum:g} seconds, got {text}")
+    return value
+
+
 def _count(text: str, option: str, minimum: int, maximum: int) -> int:
     try:
         value = int(text)
@@ -63,7 +79,9 @@ def human_summary(
     lines = [
         f"{summary.get('behavior')}: {who}"
         + (f" ({trained:,} training steps{learner})" if summary.get("checkpoint") else ""),
-        f"  {protocol.get('episodes', summary.get('episodes'))} episodes from "
+        f"  {protocol.get('episodes', summary.get('episodes'))} "
+        + (f"sessions of {protocol['session_s']:g} s" if protocol.get("session_s") else "episodes")
+        + " from "
         f"{summary.get('start')} starts, eval seed {protocol.get('seed')}, "
         f"{protocol.get('action', '')} action",
     ]
@@ -167,8 +185,11 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     seed = _count(args.seed, "--seed", 0, SEED_MAX)
     envs = None if args.envs is None else _count(args.envs, "--envs", 1, ENVS_MAX)
     workers = None if args.workers is None else _count(args.workers, "--workers", 0, ENVS_MAX)
-    if workers and paying_workers(episodes, workers) < workers:
-        kept = paying_workers(episodes, workers)
+    session = None if args.session is None else _seconds(args.session, "--session", SESSION_MAX)
+    # a session repays a worker's start-up as the 5 s episodes it lasts would
+    lengths = 1 if session is None else max(1, round(session / EPISODE_SECONDS))
+    if workers and paying_workers(episodes * lengths, workers) < workers:
+        kept = paying_workers(episodes * lengths, workers)
         print(
             f"note: --workers {workers} for {episodes} episodes: "
             + (f"{kept} workers" if kept else "played in this process")
@@ -188,6 +209,7 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
         overrides=tuple(args.overrides),
         envs=envs,
         workers=workers,
+        session=session,
         video=args.video,
     )
     out_dir = Path(args.out) if args.out else default_out_dir(request)

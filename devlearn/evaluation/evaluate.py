@@ -26,6 +26,7 @@ from devlearn.config.resolve import RunRequest, resolve_config
 from devlearn.config.run_config import RunConfig, fresh_config, to_dict
 from devlearn.env.behavior_env import BehaviorEnv
 from devlearn.env.rendering import check_senses_render, require_rendering
+from devlearn.env.settings import EnvSettings
 from devlearn.evaluation.episodes import (
     VIDEO_FPS,
     ActorPolicy,
@@ -41,6 +42,7 @@ from devlearn.evaluation.episodes import (
     prepare_env,
 )
 from devlearn.evaluation.scripted_policy import ScriptedPolicy
+from devlearn.timing import decision_rate_error, physics_steps
 from devlearn.training.checkpoint import LATEST, Checkpoint, is_scripted_policy
 
 if TYPE_CHECKING:
@@ -270,6 +272,10 @@ class EvalRequest:
             at age A (by default a checkpoint is evaluated at the age it last trained at).
         envs: Envs playing episodes at once (None: automatic, see :func:`parallelism`).
         workers: Env worker processes they are split over (0: this process; None: automatic).
+        session: Play every episode as one session of this many simulated seconds, without a
+            reset inside (``--session 300 --start rest``: the 5-minute sessions from rest that
+            infant studies code); None: the behaviour's episodes (5 s). Recorded as
+            ``protocol.session_s``; the per-episode figures are then per session.
         video: Write an MP4 of the first episode here (needs imageio-ffmpeg).
         out_dir: Write ``eval.json`` and the evaluator's artifacts here (checked to be
             writable before any episode runs); None: write nothing.
@@ -285,6 +291,7 @@ class EvalRequest:
     overrides: tuple[str, ...] = ()
     envs: int | None = 1
     workers: int | None = 0
+    session: float | None = None
     video: str | Path | None = None
     out_dir: str | Path | None = None
 
@@ -317,6 +324,8 @@ class EvalRequest:
         ):
             if value is not None and value < least:
                 raise UsageError(f"--{name} must be at least {least}, got {value}")
+        if self.session is not None and not self.session > 0:
+            raise UsageError(f"--session must be above 0 seconds, got {self.session}")
 
     @property
     def ages(self) -> list[str]:
@@ -365,12 +374,14 @@ class EvalConditions:
             infant's own (where it trained).
         envs: Envs playing the episodes (slots).
         workers: Env worker processes (0: this process).
+        settings: The envs' settings: the checkpoint's decision rate, a session's length.
     """
 
     stage: dict[str, Any]
     infant_start: str | None
     envs: int
     workers: int
+    settings: EnvSettings = EnvSettings()
 
 
 def default_out_dir(request: EvalRequest) -> Path:
@@ -433,9 +444,18 @@ def evaluation_conditions(
     both.
 
     Raises:
-        UsageError: Several envs asked of a behaviour whose evaluator does not merge.
+        UsageError: Several envs asked of a behaviour whose evaluator does not merge; a
+            session that is not a whole number of decisions.
     """
     behavior = subject.behavior
+    repeat = subject.config.env.action_repeat
+    if request.session is not None:  # checked for BabyBench's 5 ms step; the env checks its own
+        try:
+            steps = physics_steps(request.session)
+        except ValueError as err:
+            raise UsageError(f"--session: {err}") from None
+        if error := decision_rate_error(repeat, steps):
+            raise UsageError(f"--session {request.session:g}: {error}")
     stage = evaluation_stage(behavior, subject.stage_steps)
     infant_start = None
     if request.start != "stage":
@@ -453,7 +473,7 @@ def evaluation_conditions(
         behavior.evaluator(training=False).mergeable,
         cores,
     )
-    return EvalConditions(stage, infant_start, envs, workers)
+    return EvalConditions(stage, infant_start, envs, workers, EnvSettings(repeat, request.session))
 
 
 class Evaluation:
@@ -522,7 +542,7 @@ class Evaluation:
                 conditions.workers,
                 request.seed,
                 self.infant_factory,
-                subject.config.env.action_repeat,
+                conditions.settings,
                 subject.age_months,
             ) as players:
                 plan, episode_steps = self.plan(subject, conditions, players)
@@ -562,8 +582,8 @@ class Evaluation:
                 request.seed,
                 self.infant_factory,
                 training=False,
-                action_repeat=repeat,
                 age_months=subject.age_months,
+                settings=conditions.settings,
             )
         )
         try:
@@ -657,6 +677,7 @@ class Evaluation:
                 "start_option": request.start,
                 "settle_steps": 0,
                 "action_repeat": subject.config.env.action_repeat,
+                "session_s": request.session,
                 "age_months": subject.age_months,
                 **evaluator.protocol(),
                 "checkpoint_env_steps": steps,
@@ -716,6 +737,7 @@ def evaluate(
     action: str = "mean",
     envs: int | None = 1,
     workers: int | None = 0,
+    session: float | None = None,
 ) -> dict[str, Any]:
     """``Evaluation(EvalRequest(...), registry, infant_factory, progress).run()``: a
     convenience for scripts and tests (arguments as :class:`EvalRequest`'s attributes)."""
@@ -730,6 +752,7 @@ def evaluate(
         overrides=tuple(overrides or ()),
         envs=envs,
         workers=workers,
+        session=session,
         video=video,
         out_dir=out_dir,
     )

@@ -118,14 +118,20 @@ class SelfTouch(Behavior):
     def reward_terms(self) -> list[IntrinsicReward | BatchedIntrinsicReward]:
         """R_t = R_touch + R_geom + R_milestones + R_balance (sec. II-A3): the config's
         ``rewards``, fresh instances (batched: computed once per worker over its envs), the
-        novelty terms told ``lifetime_memory`` and ``touch_count``."""
+        novelty terms told ``lifetime_memory``, touch novelty ``touch_count`` and the repeat
+        pay's clock in seconds (``repeat_crossing_s``, ``repeat_steepness_s``)."""
         c = self.config
         memory = {"lifetime_memory": c.lifetime_memory}
-        shared = {
-            "touch_novelty": {**memory, "touch_count": c.touch_count},
+        clock = {"crossing_s": c.repeat_crossing_s, "steepness_s": c.repeat_steepness_s}
+        shared: dict[str, dict[str, Any]] = {
+            "touch_novelty": {**memory, "touch_count": c.touch_count, **clock},
             "contact_novelty": memory,
         }
         return build_reward_terms(c.rewards, shared)
+
+    def episode_seconds(self) -> float | None:
+        """``episode_s`` (None: the infant's 5 s, BabyBench's)."""
+        return self.config.episode_s
 
     def curriculum(self) -> Curriculum:
         """``two_stage``: fixed pose for ``fixed_pose_steps``, then random initial poses;
