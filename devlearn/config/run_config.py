@@ -56,10 +56,12 @@ class PPOConfig:
     ``results/learner/README.md``). A saved config without this field means False."""
     reward_clip: float = 10.0
     """Bound on a normalised reward (with ``normalize_rewards``)."""
-    adam_eps: float = 1e-8
-    """Adam's epsilon (torch's default 1e-8; SB3 and cleanrl use 1e-5)."""
-    normalize_advantage_per_mini_batch: bool = False
-    """Standardise advantages in each mini-batch (SB3) instead of once over the rollout."""
+    adam_eps: float = 1e-5
+    """Adam's epsilon (SB3's and cleanrl's 1e-5, :data:`LEARNER_EVIDENCE`; torch's default
+    1e-8 before issue #54)."""
+    normalize_advantage_per_mini_batch: bool = True
+    """Standardise advantages in each mini-batch (SB3, :data:`LEARNER_EVIDENCE`) instead of
+    once over the rollout (before issue #54)."""
 
 
 @dataclass
@@ -77,9 +79,13 @@ class NetworkConfig:
     fix did (the eye CNN divided its already-scaled input again). A saved config without a
     ``network`` section means True, so those checkpoints see the input they were trained on;
     new runs use [0, 1] images."""
-    head: str = "gaussian"
-    """The policy's action distribution. ``gaussian``: a mean that is a plain linear output and
-    one state-independent spread per action, bounded to [``min_std``, the behaviour's
+    head: str = "free"
+    """The policy's action distribution; ``free`` by default (:data:`LEARNER_EVIDENCE`: with
+    ``final_std`` its mean action is its behaviour; ``gaussian`` before issue #54).
+
+    ``free``: a linear mean and one free state-independent log-spread per action (SB3's and
+    cleanrl's). ``squashed``: that Gaussian squashed by ``tanh``. ``gaussian``: a linear mean
+    and one state-independent spread per action, bounded to [``min_std``, the behaviour's
     ``max_std`` (1.0 where it sets none)] by a sigmoid; actions are clipped by the env, and a
     mean past a bound stops being pushed once no sample falls inside (it cannot saturate).
     ``paper``: the paper's ``tanh`` mean with a state-dependent softplus spread (sec. II-A4),
@@ -88,24 +94,27 @@ class NetworkConfig:
     ``paper``."""
     min_std: float = 0.05
     """Lower bound of the ``gaussian`` head's spread (exploration never vanishes)."""
-    init_std: float = 0.0
-    """Spread at initialisation; 0: the behaviour's ``NetworkSpec.init_std``."""
-    final_std: float = 0.0
+    init_std: float = 1.0
+    """Spread at initialisation (SB3's 1.0, :data:`LEARNER_EVIDENCE`); 0: the behaviour's
+    ``NetworkSpec.init_std`` (every run before issue #54)."""
+    final_std: float = 0.1
     """A ceiling on the spread that falls log-linearly from the initial spread to this value
     over the run (``gaussian`` and ``free`` heads; :func:`devlearn.training.distribution.
     spread_cap`): exploration wide at first, and at the end a policy whose mean action is its
-    behaviour (issue #54). 0: no ceiling."""
-    encoders: str = "behavior"
-    """``behavior``: each observation through the encoder the behaviour's ``NetworkSpec`` gives
-    it; ``flat``: every vector observation (an ``MLPEncoder``'s) flattened and concatenated
-    straight into the fusion and trunk layers, images keeping their encoders (SB3's
-    ``MultiInputPolicy``: one MLP over the vector senses)."""
-    activation: str = "relu"
-    """Activation of the encoders' MLPs, fusion and trunk (``relu``, ``tanh``, ``elu``...)."""
-    init: str = "torch"
-    """Weight initialisation: ``torch`` (PyTorch's default, then the head's small last layer) or
-    ``orthogonal`` (SB3 and cleanrl: gain sqrt(2) in hidden layers, 1 on the value output, 0.01
-    on the policy's mean)."""
+    behaviour (issue #54; 0.1 by default, :data:`LEARNER_EVIDENCE`). 0: no ceiling."""
+    encoders: str = "flat"
+    """How senses are encoded; ``flat`` by default (:data:`LEARNER_EVIDENCE`; ``behavior``
+    before issue #54). ``behavior``: each observation through the encoder the behaviour's
+    ``NetworkSpec`` gives it; ``flat``: every vector observation (an ``MLPEncoder``'s) flattened
+    and concatenated straight into the fusion and trunk layers, images keeping their encoders
+    (SB3's ``MultiInputPolicy``: one MLP over the vector senses)."""
+    activation: str = "tanh"
+    """Activation of the encoders' MLPs, fusion and trunk (``tanh`` by default, SB3's,
+    :data:`LEARNER_EVIDENCE`; ``relu`` before issue #54; ``elu``...)."""
+    init: str = "orthogonal"
+    """Weight initialisation; ``orthogonal`` by default (:data:`LEARNER_EVIDENCE`). ``torch``:
+    PyTorch's default, then the head's small last layer; ``orthogonal``: SB3's and cleanrl's,
+    gain sqrt(2) in hidden layers, 1 on the value output, 0.01 on the policy's mean."""
     normalize: str = "behavior"
     """Observations standardised by running statistics: ``behavior`` (those the behaviour's
     ``NetworkSpec.normalize`` names) or ``all``."""
@@ -149,13 +158,18 @@ LEGACY_FIELDS: dict[str, Any] = {
 default changed when the field was added, issue #28): such a config loads as trained. A new
 run's config file (``devlearn run --config``) takes today's defaults instead."""
 
-LEARNER_EVIDENCE = "results/learner/README.md"
-"""Where the core's learner defaults come from: issue #28's pilots and audit (a decision every
-5 physics steps, ``env.action_repeat=5``; a discount of 0.99 per decision and rollouts of 64
-decisions; a fixed learning rate; separate actor and critic; rewards normalised by the running
-spread of the return; the bounded Gaussian head). Every behaviour gets them; a behaviour
-overrides in ``train_defaults`` only what its own evidence supports (issue #38: a third-party
-behaviour learned with these and not with the old defaults)."""
+LEARNER_EVIDENCE = "results/learners/README.md"
+"""Where the core's learner defaults come from: issue #28's pilots and audit
+(``results/learner/README.md``: a decision every 5 physics steps, ``env.action_repeat=5``; a
+discount of 0.99 per decision and rollouts of 64 decisions; a fixed learning rate; separate
+actor and critic; rewards normalised by the running spread of the return) and issue #54's
+pilots (``results/learners/README.md``: one flat tanh MLP per network over the vector senses,
+orthogonal initialisation, Adam's epsilon 1e-5 and advantages standardised per mini-batch, as
+SB3's PPO; a free state-independent spread starting at 1.0 under a ceiling that falls to 0.1
+over the run, so that the mean action is the behaviour). Every behaviour gets them; a
+behaviour overrides in ``train_defaults`` only what its own evidence supports (issue #38: a
+third-party behaviour learned with these and not with the old defaults; hand regard keeps
+issue #28's learner, on which its results stand)."""
 
 
 @dataclass
