@@ -94,14 +94,15 @@ class NetworkConfig:
     ``paper``."""
     min_std: float = 0.05
     """Lower bound of the ``gaussian`` head's spread (exploration never vanishes)."""
-    init_std: float = 1.0
-    """Spread at initialisation (SB3's 1.0, :data:`LEARNER_EVIDENCE`); 0: the behaviour's
-    ``NetworkSpec.init_std`` (every run before issue #54)."""
+    init_std: float = 0.0
+    """Spread at initialisation; 0: the head's own, 1.0 for ``free`` and ``squashed`` (SB3's,
+    :data:`LEARNER_EVIDENCE`), the behaviour's ``NetworkSpec.init_std`` for ``gaussian`` and
+    ``paper`` (0.5 unless it says)."""
     final_std: float = 0.1
     """A ceiling on the spread that falls log-linearly from the initial spread to this value
-    over the run (``gaussian`` and ``free`` heads; :func:`devlearn.training.distribution.
-    spread_cap`): exploration wide at first, and at the end a policy whose mean action is its
-    behaviour (issue #54; 0.1 by default, :data:`LEARNER_EVIDENCE`). 0: no ceiling."""
+    over the run (every head; :func:`devlearn.training.distribution.spread_cap`): exploration
+    wide at first, and at the end a policy whose mean action is its behaviour (issue #54; 0.1
+    by default, :data:`LEARNER_EVIDENCE`). 0: no ceiling."""
     encoders: str = "flat"
     """How senses are encoded; ``flat`` by default (:data:`LEARNER_EVIDENCE`; ``behavior``
     before issue #54). ``behavior``: each observation through the encoder the behaviour's
@@ -126,6 +127,9 @@ LEGACY_NETWORK = NetworkConfig(layout="separate", legacy_uint8_scale=True, head=
 HEADS = ("gaussian", "paper", "free", "squashed")
 """Valid values of :attr:`NetworkConfig.head`: the bounded Gaussian, the paper's, the free
 Gaussian (SB3's) and the tanh-squashed Gaussian (:mod:`devlearn.training.distribution`)."""
+FREE_INIT_STD = 1.0
+"""The free and squashed heads' initial spread where ``network.init_std`` is 0 (SB3's
+``log_std_init = 0``)."""
 ENCODERS = ("behavior", "flat")
 """Valid values of :attr:`NetworkConfig.encoders`."""
 INITS = ("torch", "orthogonal")
@@ -147,7 +151,6 @@ LEGACY_FIELDS: dict[str, Any] = {
     # issue #54's learner fields: every run saved before them was trained with these
     "ppo.adam_eps": 1e-8,
     "ppo.normalize_advantage_per_mini_batch": False,
-    "network.init_std": 0.0,
     "network.final_std": 0.0,
     "network.encoders": "behavior",
     "network.activation": "relu",
@@ -422,8 +425,6 @@ def check_learner(cfg: RunConfig, spec: Any) -> None:
             f"network.init_std must be below the spread's bound {head_max_std(spec)}, "
             f"got {init_std}"
         )
-    if net.final_std and net.head not in ("gaussian", "free"):
-        raise UsageError(f"network.final_std needs network.head gaussian or free, not '{net.head}'")
     floor = net.min_std if net.head == "gaussian" else 0.0
     if net.final_std and not floor <= net.final_std < init_std:
         raise UsageError(
@@ -439,8 +440,11 @@ def check_learner(cfg: RunConfig, spec: Any) -> None:
 
 
 def initial_std(cfg: RunConfig, spec: Any) -> float:
-    """The policy's spread at initialisation: ``network.init_std``, or the behaviour's."""
-    return float(cfg.network.init_std or spec.init_std)
+    """The policy's spread at initialisation: ``network.init_std``, else the head's own (1.0
+    for the free and squashed heads, SB3's; the behaviour's for the others)."""
+    if cfg.network.init_std:
+        return float(cfg.network.init_std)
+    return FREE_INIT_STD if cfg.network.head in ("free", "squashed") else float(spec.init_std)
 
 
 def head_max_std(spec: Any) -> float:
@@ -618,7 +622,7 @@ def to_rsl_rl(cfg: RunConfig, behavior: Any, observation_names: list[str] | None
             "min_std": cfg.network.min_std,
             "max_std": head_max_std(spec),
         }
-    if cfg.network.final_std:
+    if cfg.network.final_std:  # absent otherwise: configs from before issue #54 build as then
         distribution["final_std"] = cfg.network.final_std
     return {
         "algorithm": {

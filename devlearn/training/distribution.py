@@ -103,6 +103,7 @@ class TanhSoftplusGaussian(DiagonalNormal):
         init_std: Standard deviation at initialisation (sets the softplus bias).
         min_std: Small positive floor added to the standard deviation.
         max_std: Upper bound on the standard deviation; 0: unbounded (the paper).
+        final_std: The spread's ceiling at the end of the run (:meth:`set_progress`); 0: none.
     """
 
     def __init__(
@@ -111,10 +112,16 @@ class TanhSoftplusGaussian(DiagonalNormal):
         init_std: float = 0.5,
         min_std: float = 1e-3,
         max_std: float = 0.0,
+        final_std: float = 0.0,
     ) -> None:
         super().__init__(output_dim)
         check_spread(init_std, max_std, min_std)
-        self.init_std = float(init_std)
+        if final_std and not min_std <= final_std < init_std:
+            raise ValueError(
+                f"final_std must lie in [min_std, init_std) = [{min_std}, {init_std}), "
+                f"got {final_std}"
+            )
+        self.init_std, self.final_std = float(init_std), float(final_std)
         self.min_std = float(min_std)
         self.max_std = float(max_std)
         self._distribution: Normal | None = None
@@ -131,7 +138,7 @@ class TanhSoftplusGaussian(DiagonalNormal):
             std = F.softplus(raw_std) + self.min_std
         else:
             std = self.min_std + (self.max_std - self.min_std) * torch.sigmoid(raw_std)
-        self._distribution = Normal(torch.tanh(raw_mean), std)
+        self._distribution = Normal(torch.tanh(raw_mean), self.capped(std))
 
     def deterministic_output(self, mlp_output: torch.Tensor) -> torch.Tensor:
         return torch.tanh(mlp_output[..., 0, :])

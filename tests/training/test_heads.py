@@ -95,14 +95,16 @@ def test_flat_encoders_feed_every_observation_to_one_mlp():
     assert [built[n](obs[n]).shape[-1] for n in obs] == [5, 12]  # no layers: flattened only
     assert not any(isinstance(m, nn.Linear) for m in built["a"].modules())
     assert flat.normalize == ("a",) and flat.fusion_dims == base.fusion_dims
-    every = config("unused", 256, "network.normalize=all", "network.activation=tanh")
+    every = config("unused", 256, "network.normalize=all", "network.activation=tanh",
+                   "network.encoders=behavior")  # fmt: skip
     shaped = learner_spec(base, every.network)
     assert shaped.normalize == ("a", "b")
     layers = shaped.encoders["a"].build((5,))
     assert any(isinstance(m, nn.Tanh) for m in layers) and not any(
         isinstance(m, nn.ReLU) for m in layers
     )
-    assert learner_spec(base, config("unused").network) is base  # the defaults change nothing
+    old = config("unused", 256, "network.encoders=behavior", "network.activation=relu").network
+    assert learner_spec(base, old) is base  # issue #28's settings change nothing
     from devlearn.api.sensors import SensorEncoder
 
     class Eye(SensorEncoder):  # an image's encoder (a CNN) is kept by flat
@@ -125,7 +127,10 @@ def test_the_knobs_reach_rsl_rl_and_the_optimiser():
     assert train["actor"]["distribution_cfg"] == {
         "class_name": "devlearn.training.distribution:SquashedGaussian",
         "init_std": 0.8,
+        "final_std": 0.1,  # the default ceiling
     }
+    free = to_rsl_rl(config("unused"), TinyBehavior(cfg.behavior))["actor"]["distribution_cfg"]
+    assert free["init_std"] == 1.0 and free["final_std"] == 0.1  # the free head's own start
     assert train["actor"]["init"] == train["critic"]["init"] == "orthogonal"
     assert train["algorithm"]["adam_eps"] == 1e-5
     assert train["algorithm"]["normalize_advantage_per_mini_batch"] is True
@@ -209,7 +214,8 @@ def test_a_run_with_a_spread_ceiling_trains_and_its_checkpoint_plays_at_its_step
     from devlearn.training.checkpoint import Checkpoint
     from devlearn.training.distribution import spread_cap
 
-    cfg = config(tmp_path / "run", 256, "network.final_std=0.1")
+    cfg = config(tmp_path / "run", 256, "network.head=gaussian", "network.init_std=0.5",
+                 "network.final_std=0.1")  # fmt: skip
     train(cfg, registry(), infant_factory=factory, progress=False)
     rows = [json.loads(line) for line in (tmp_path / "run" / "metrics.jsonl").open()]
     stds = [r["health/std_max"] for r in rows]
@@ -224,6 +230,6 @@ def test_a_run_with_a_spread_ceiling_trains_and_its_checkpoint_plays_at_its_step
     env.close()
     assert actor.distribution.std_cap == pytest.approx(0.1)  # a finished run: the final spread
     with pytest.raises(UsageError, match="network.final_std must lie in"):
-        config("unused", 256, "network.final_std=0.9")
-    with pytest.raises(UsageError, match="needs network.head gaussian or free"):
-        config("unused", 256, "network.head=squashed", "network.final_std=0.1")
+        config("unused", 256, "network.final_std=1.5")  # above the free head's 1.0
+    with pytest.raises(UsageError, match="network.final_std must lie in"):
+        config("unused", 256, "network.head=gaussian", "network.final_std=0.01")  # < min_std

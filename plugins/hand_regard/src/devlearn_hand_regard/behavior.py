@@ -91,7 +91,6 @@ ISSUE_28_LEARNER: dict[str, Any] = {
     "network.activation": "relu",
     "network.init": "torch",
     "network.head": "gaussian",
-    "network.init_std": 0.0,
     "network.final_std": 0.0,
     "ppo.adam_eps": 1e-8,
     "ppo.normalize_advantage_per_mini_batch": False,

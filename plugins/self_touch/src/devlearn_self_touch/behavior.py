@@ -173,6 +173,14 @@ class SelfTouch(Behavior):
             # with the discount and rollouts this behaviour used at that rate
             "network.head": "paper",
             "network.layout": "shared",
+            # the paper's Model I network: per-sense ReLU encoders, torch's initialisation,
+            # Adam's default epsilon, no ceiling on the spread (issue #54's core defaults not)
+            "network.encoders": "behavior",
+            "network.activation": "relu",
+            "network.init": "torch",
+            "network.final_std": 0.0,
+            "ppo.adam_eps": 1e-8,
+            "ppo.normalize_advantage_per_mini_batch": False,
             "behavior.touch_count": "step",
             "env.action_repeat": 1,
             "ppo.num_steps_per_env": 128,
