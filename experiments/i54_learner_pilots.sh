@@ -51,7 +51,9 @@ for arm in "${ARMS[@]}"; do
       policy=$run/policy.pt
     else
       if [ ! -f "$run/done" ]; then
-        sets=(--set torch_threads=1)
+        # the fixed-pose stage for the whole run, as issue #45's runs (the default before
+        # issue #55 scaled the stages to the run)
+        sets=(--set torch_threads=1 --set behavior.fixed_pose_steps=4000000)
         for kv in ${ARM[$arm]}; do sets+=(--set "$kv"); done
         if [ -f "$run/checkpoint_latest.pt" ]; then
           "$DEVLEARN" run self_touch --resume "$run" > "$log" 2>&1

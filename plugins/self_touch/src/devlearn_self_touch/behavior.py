@@ -145,6 +145,18 @@ class SelfTouch(Behavior):
         fixed.steps = int(self.config.fixed_pose_steps)
         return Curriculum([fixed, random])
 
+    def run_length_defaults(self, total_steps: int) -> dict[str, Any]:
+        """The two stages as halves of the run, as the paper's 4M + 4M are of its 8M (sec.
+        II-A5), so that a run of any length reaches the random poses it is evaluated from
+        (issue #55: a short run used to spend all of it in the fixed pose, 4M steps by
+        default, and scored below random); ``--set behavior.fixed_pose_steps=...`` keeps its
+        own."""
+        fixed = int(total_steps) // 2
+        return {
+            "behavior.fixed_pose_steps": fixed,
+            "behavior.random_pose_steps": int(total_steps) - fixed,
+        }
+
     def eval_stage(self) -> dict[str, Any]:
         """Evaluation starts every episode from a random initial pose (sec. II-A6)."""
         return {"random_pose": True}

@@ -177,10 +177,11 @@ class SelfTouchConfig(BehaviorConfig):
     """``"two_stage"`` (fixed pose then random pose), ``"fixed_only"`` or ``"random_only"``
     (the paper's ablation, Table II)."""
     fixed_pose_steps: int = 4_000_000
-    """Environment steps (all environments) of stage 1, fixed initial pose (paper: 4M)."""
+    """Environment steps (all environments) of stage 1, fixed initial pose (paper: 4M). A new
+    run's default is half its ``total_steps`` (``SelfTouch.run_length_defaults``)."""
     random_pose_steps: int = 4_000_000
-    """Environment steps of stage 2, random initial joint angles (paper: 4M). Informational:
-    the last stage lasts until training ends (set total_steps = 8M for the paper's run)."""
+    """Environment steps of stage 2, random initial joint angles (paper: 4M; a new run's
+    default: the other half). Informational: the last stage lasts until training ends."""
 
     # --- metrics (BabyBench's scoring) ----------------------------------------------------
     training_score_episodes: int = 10_000
