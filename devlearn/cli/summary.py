@@ -134,8 +134,8 @@ def run_summary(
     if budget is not None and total_steps < budget[1]:
         lines.append(
             f"  budget      {total_steps:,} steps, {100 * total_steps / budget[1]:.2g}% of a full "
-            f"run ({budget[1]:,}, --preset {budget[0]}): a demonstration, whose evaluation may "
-            "well score at or below the random baseline"
+            f"run ({budget[1]:,}, --preset {budget[0]}): a demonstration; compare its "
+            "evaluation with the baselines below"
         )
     baselines = _baseline_values(behavior_name, metric) if metric else {}
     dirs = baseline_dirs(behavior_name)

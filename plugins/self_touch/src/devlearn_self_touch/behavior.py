@@ -30,6 +30,10 @@ if TYPE_CHECKING:
     from devlearn import Infant
 
 
+DEFAULT_STEPS = 1_024_000
+"""``devlearn run self_touch``'s budget (:meth:`SelfTouch.train_defaults`)."""
+
+
 class SelfTouch(Behavior):
     """Self-touch: the infant lying in its crib learns to touch its own body (sec. II-A).
 
@@ -144,6 +148,13 @@ class SelfTouch(Behavior):
             return Curriculum([random])
         fixed.steps = int(self.config.fixed_pose_steps)
         return Curriculum([fixed, random])
+
+    def train_defaults(self) -> dict[str, Any]:
+        """The default run (``devlearn run self_touch``): 1,024,000 steps, a few minutes on two
+        cores, long enough that its evaluation shows learning (issue #55: at least twice the
+        random policy's per-episode score; the 150,000 steps before scored below it). The
+        paper's run is ``--preset paper`` (8M)."""
+        return {"total_steps": DEFAULT_STEPS}
 
     def run_length_defaults(self, total_steps: int) -> dict[str, Any]:
         """The two stages as halves of the run, as the paper's 4M + 4M are of its 8M (sec.
