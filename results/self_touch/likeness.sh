@@ -5,6 +5,8 @@
 # the repository root: bash results/self_touch/likeness.sh OUT; then
 #   python results/self_touch/likeness_table.py OUT
 set -euo pipefail
+# Seeds 1, 2, 3 and 5's policy files are in git history since issue #54: restore them first
+# (results/self_touch/README.md, "Where and on what it ran").
 OUT=${1:?usage: likeness.sh OUT}
 EPISODES=${EPISODES:-50}
 DEVLEARN=${DEVLEARN:-.venv/bin/devlearn}
