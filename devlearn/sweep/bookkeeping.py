@@ -13,11 +13,10 @@ Layout::
 from __future__ import annotations
 
 import datetime
-import fcntl
-import os
 from typing import Any
 
 from devlearn.api.errors import UsageError
+from devlearn.files import lock_exclusively
 from devlearn.sweep.job import RunJob, read_json, write_json
 from devlearn.sweep.spec import SweepSpec
 
@@ -78,18 +77,7 @@ class SweepFolder:
     def __init__(self, spec: SweepSpec, saved: dict[str, Any] | None, command: str) -> None:
         self.path = spec.out
         self.path.mkdir(parents=True, exist_ok=True)
-        self._lock = open(self.path / LOCK_FILE, "a+")
-        try:
-            fcntl.flock(self._lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            self._lock.seek(0)
-            holder = self._lock.read().strip() or "another process"
-            self._lock.close()
-            raise UsageError(f"sweep folder {self.path} is in use by {holder}") from None
-        self._lock.seek(0)
-        self._lock.truncate()
-        self._lock.write(f"pid {os.getpid()}\n")
-        self._lock.flush()
+        self._lock = lock_exclusively(self.path / LOCK_FILE, f"sweep folder {self.path}")
         now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
         info = saved or {"what": spec.what(), "created": now, "starts": []}
         info.update(
