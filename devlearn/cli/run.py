@@ -26,6 +26,11 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     behavior_cls = registry.behavior(args.behavior)
     if args.resume and args.force:
         raise UsageError("--force and --resume exclude each other (--force replaces a run)")
+    from devlearn.training.run_folder import check_not_in_use
+
+    for folder in (args.resume, args.out):  # another run trains there: refused before any work
+        if folder:
+            check_not_in_use(Path(folder))
     request = RunRequest(
         behavior=args.behavior,
         overrides=args.overrides,
