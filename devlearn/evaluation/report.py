@@ -13,6 +13,8 @@ import numpy as np
 
 from devlearn.api.errors import UsageError
 from devlearn.api.stats import CONFIDENCE, mean_ci
+from devlearn.config.checks import check_out_dir
+from devlearn.files import check_replaceable, write_atomically, write_text_atomically
 
 PaperResults = Callable[[str, dict[str, Any]], "tuple[str, dict[str, float]] | None"]
 """(behaviour name, a run's config) -> (column label, the paper's figures) or None: the named
@@ -23,6 +25,8 @@ ConfigLoader = Callable[[str, dict[str, Any]], dict[str, Any]]
 rename upgraded, missing keys filled as the run was trained): in the CLI, the behaviour's
 ``from_dict`` then ``to_dict``. Configs of the same recipe then compare equal however old."""
 
+REPORT_FILES = ("report.md", "report.png")
+"""The files :func:`write_report` writes in its folder."""
 BASELINES = ("zero", "random", "held_random")
 """Baseline policies (``devlearn eval BEHAVIOR --policy ...``) shown beside every variant."""
 NOT_VARIANT = frozenset(
@@ -280,8 +284,14 @@ def write_report(
         "notes": [...]}``; intervals are 95% Student-t over seeds (over evaluations for the
         baselines), None for a single seed; kinds are ``variant``, ``baseline``, ``paper``.
     Raises:
-        UsageError: An empty or missing folder, mixed behaviours, no checkpoint evaluation.
+        UsageError: An empty or missing folder, mixed behaviours, no checkpoint evaluation; an
+            ``out_dir`` where the report cannot be written (checked first: a file, a report
+            file that is a device or FIFO, no permission).
     """
+    out = Path(out_dir)
+    check_out_dir(out)
+    for name in REPORT_FILES:
+        check_replaceable(out / name)
     evaluations, notes = collect(paths)
     columns, more = group(evaluations, as_loaded)
     notes += more
@@ -345,10 +355,12 @@ def write_report(
         "table": table,
         "notes": notes,
     }
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "report.md").write_text(markdown(result, evaluations))
-    draw_report(result, out / "report.png")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        write_text_atomically(out / "report.md", markdown(result, evaluations))
+        draw_report(result, out / "report.png")
+    except OSError as exc:
+        raise UsageError(f"cannot write the report to {out}: {exc.strerror or exc}") from None
     return result
 
 
@@ -465,5 +477,7 @@ def draw_report(result: dict[str, Any], path: Path) -> Path:
         ax.set_xticks(x, ticks, fontsize=7, rotation=20)
         ax.set_title(metric, fontsize=9)
     fig.suptitle(f"{result['behavior']}: mean and 95% interval over seeds", fontsize=10)
-    fig.savefig(path, dpi=110, metadata={"Software": None})
+    write_atomically(
+        path, lambda f: fig.savefig(f, format="png", dpi=110, metadata={"Software": None})
+    )
     return path
