@@ -61,16 +61,20 @@ def test_a_fifo_or_a_device_is_never_replaced(tmp_path):
     if os.geteuid() == 0:
         assert stat.S_ISCHR(os.lstat(tmp_path / "null").st_mode)
     assert not [p for p in tmp_path.iterdir() if ".tmp-" in p.name]  # nothing written
+    for path in targets:
+        if path != tmp_path:
+            path.unlink()  # no FIFO left for a later test's folder scan to block on
 
 
 def test_a_target_made_a_fifo_while_the_block_wrote_is_left_alone(tmp_path):
     from devlearn.api.errors import UsageError
 
-    path = tmp_path / "eval.json"
+    path = tmp_path / "record.json"
     with pytest.raises(UsageError, match="it is a FIFO"), replaced_atomically(path) as tmp:
         tmp.write_text("{}")
         os.mkfifo(path)
     assert stat.S_ISFIFO(os.lstat(path).st_mode) and sorted(tmp_path.iterdir()) == [path]
+    path.unlink()
 
 
 HOLD = """

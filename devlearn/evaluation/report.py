@@ -165,6 +165,8 @@ def collect(paths: Sequence[str | Path]) -> tuple[list[tuple[Path, dict]], list[
         near = path.resolve().parent
         behaviors = {d.get("behavior") for d in found.values()}
         for file in sorted([*near.glob("*/eval.json"), *near.parent.glob("*/eval.json")]):
+            if not file.is_file():
+                continue  # a FIFO under that name would block the read for ever
             data = _read(file)  # a baseline beside it, of the same behaviour
             if data is not None and data.get("policy") in BASELINES:
                 if data.get("behavior") in behaviors:

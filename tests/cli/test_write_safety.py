@@ -114,6 +114,7 @@ def fifo() -> Iterator:
     """``fifo(path)``: make a FIFO at ``path`` with a reader that drains it, so that a command
     which wrongly writes into it goes on (and fails the test) instead of blocking forever."""
     readers: list[int] = []
+    made: list[Path] = []
     stop = threading.Event()
 
     def drain() -> None:
@@ -131,6 +132,7 @@ def fifo() -> Iterator:
     def make(path: Path) -> Path:
         path.parent.mkdir(parents=True, exist_ok=True)
         os.mkfifo(path)
+        made.append(path)
         readers.append(os.open(path, os.O_RDONLY | os.O_NONBLOCK))
         return path
 
@@ -139,6 +141,9 @@ def fifo() -> Iterator:
     thread.join()
     for fd in readers:
         os.close(fd)
+    for path in made:  # no FIFO named eval.json left for a later folder scan to block on
+        if path.exists() and is_fifo(path):
+            path.unlink()
 
 
 def is_fifo(path: Path) -> bool:
