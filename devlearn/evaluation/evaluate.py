@@ -130,8 +130,8 @@ def prepare_out_dir(out_dir: str | Path) -> Path:
 
 
 def check_video(video: str | Path) -> None:
-    """Refuse a ``--video`` path that cannot take a video, before any episode runs: another
-    extension than :data:`~devlearn.evaluation.episodes.VIDEO_FORMATS`', a folder, a device or
+    """Refuse a ``--video`` path that cannot take a video, before any episode runs: an
+    extension not in :data:`~devlearn.evaluation.episodes.VIDEO_FORMATS`, a folder, a device or
     FIFO, a place where no file can be created; or no ffmpeg to encode it.
 
     Raises:
