@@ -15,6 +15,7 @@ import contextlib
 import fcntl
 import os
 import re
+import shutil
 import stat
 import tempfile
 import threading
@@ -141,6 +142,18 @@ def write_bytes_atomically(path: Path, data: bytes | bytearray | memoryview) -> 
         OSError: It cannot be written (a full disk, no permission); ``path`` is unchanged.
     """
     write_atomically(path, lambda f: f.write(data))
+
+
+def copy_atomically(source: Path, path: Path) -> None:
+    """Copy the file ``source``'s bytes to ``path`` through :func:`replaced_atomically`, synced
+    before the rename (a published evaluation, a policy file).
+
+    Raises:
+        NotARegularFileError: ``path`` is a device, FIFO, socket or folder.
+        OSError: ``source`` cannot be read or ``path`` written; ``path`` is unchanged.
+    """
+    with open(source, "rb") as src:
+        write_atomically(path, lambda f: shutil.copyfileobj(src, f))
 
 
 def write_text_atomically(path: Path, text: str) -> None:

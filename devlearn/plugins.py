@@ -22,6 +22,7 @@ import pluggy
 from devlearn.api import hookspecs
 from devlearn.api.behavior import Behavior
 from devlearn.api.errors import UsageError
+from devlearn.api.json_files import read_json
 from devlearn.files import write_text_atomically
 
 if TYPE_CHECKING:  # torch-based: imported when a plugin registers one (it has loaded torch)
@@ -39,27 +40,29 @@ def settings_path() -> Path:
     return Path(base) / "plugins.json"
 
 
+def _saved_disabled(path: Path) -> set[str]:
+    """The plugin names the settings file ``path`` disables; none where it is missing or
+    unreadable (:func:`~devlearn.api.json_files.read_json`) or holds no list of names."""
+    if not path.exists():
+        return set()
+    try:
+        data = read_json(path)
+    except UsageError:
+        return set()
+    names = data.get("disabled", []) if isinstance(data, dict) else []
+    return {n for n in names if isinstance(n, str)} if isinstance(names, list) else set()
+
+
 def disabled_plugins() -> set[str]:
     """Names disabled by ``DEVLEARN_DISABLE_PLUGINS`` (comma-separated) or the settings file."""
     names = {n.strip() for n in os.environ.get(DISABLE_ENV, "").split(",") if n.strip()}
-    path = settings_path()
-    if path.exists():
-        try:
-            names |= set(json.loads(path.read_text()).get("disabled", []))
-        except (OSError, ValueError):
-            pass
-    return names
+    return names | _saved_disabled(settings_path())
 
 
 def set_plugin_disabled(name: str, disabled: bool) -> Path:
     """Persistently disable (or re-enable) a plugin by name; return the settings file."""
     path = settings_path()
-    current: set[str] = set()
-    if path.exists():
-        try:
-            current = set(json.loads(path.read_text()).get("disabled", []))
-        except (OSError, ValueError):
-            current = set()
+    current = _saved_disabled(path)
     current = current | {name} if disabled else current - {name}
     path.parent.mkdir(parents=True, exist_ok=True)
     write_text_atomically(path, json.dumps({"disabled": sorted(current)}, indent=2) + "\n")

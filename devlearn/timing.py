@@ -24,3 +24,21 @@ def decision_rate_error(action_repeat: int, episode_steps: int = EPISODE_STEPS) 
         f"env.action_repeat={action_repeat} must divide the episode ({episode_steps} physics "
         f"steps), e.g. {', '.join(map(str, valid))}"
     )
+
+
+def physics_steps(seconds: float, physics_timestep: float = PHYSICS_TIMESTEP) -> int:
+    """The physics steps in ``seconds`` of simulated time (300 s at 5 ms: 60,000).
+
+    Raises:
+        ValueError: ``seconds`` is not a whole number of physics steps (to a millionth of a
+            step), or less than one, named with the nearest whole one.
+    """
+    steps = float(seconds) / float(physics_timestep)
+    whole = round(steps)
+    if whole < 1 or abs(steps - whole) > 1e-6:
+        nearest = max(whole, 1) * float(physics_timestep)
+        raise ValueError(
+            f"{seconds:g} s is not a whole number of physics steps of {physics_timestep:g} s "
+            f"(the nearest: {nearest:g} s)"
+        )
+    return int(whole)

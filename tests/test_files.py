@@ -11,7 +11,12 @@ import threading
 
 import pytest
 
-from devlearn.files import replaced_atomically, temporary_name, write_text_atomically
+from devlearn.files import (
+    copy_atomically,
+    replaced_atomically,
+    temporary_name,
+    write_text_atomically,
+)
 from devlearn.training.checkpoint import remove_temporaries
 
 
@@ -75,6 +80,26 @@ def test_a_target_made_a_fifo_while_the_block_wrote_is_left_alone(tmp_path):
         os.mkfifo(path)
     assert stat.S_ISFIFO(os.lstat(path).st_mode) and sorted(tmp_path.iterdir()) == [path]
     path.unlink()
+
+
+def test_a_copy_is_atomic_and_never_replaces_a_fifo(tmp_path):
+    """What ``devlearn experiment publish`` copies (evaluations, configs, a policy file)."""
+    from devlearn.api.errors import UsageError
+
+    source, copy = tmp_path / "eval.json", tmp_path / "copy.json"
+    source.write_bytes(b'{"a": 1}' * 10_000)
+    copy_atomically(source, copy)
+    assert copy.read_bytes() == source.read_bytes()
+    fifo = tmp_path / "fifo.json"
+    os.mkfifo(fifo)
+    with pytest.raises(UsageError, match="it is a FIFO"):
+        copy_atomically(source, fifo)
+    assert stat.S_ISFIFO(os.lstat(fifo).st_mode)
+    fifo.unlink()
+    with pytest.raises(FileNotFoundError):
+        copy_atomically(tmp_path / "missing", copy)
+    assert copy.read_bytes() == source.read_bytes()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["copy.json", "eval.json"]
 
 
 HOLD = """

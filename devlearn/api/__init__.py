@@ -12,6 +12,8 @@
 - :mod:`~devlearn.api.hookspecs`: every hook a plugin may implement (its reference doc).
 - :mod:`~devlearn.api.errors`: :class:`UsageError`, the one-line error the CLI reports.
 - :mod:`~devlearn.api.stats`: mean and t-interval of a sample (an evaluator's per-episode spread).
+- :mod:`~devlearn.api.json_files`: the guarded reader of the JSON files a command is given
+  (regular files of bounded size and nesting; each refusal one :class:`UsageError` line).
 
 This layer imports nothing of the infant, environments, training, evaluation or CLI (the
 infant's type only for annotations); ``lint-imports`` checks it (docs/architecture.md).

@@ -18,6 +18,7 @@ from devlearn.api.rewards import (
     IntrinsicReward,
     StepContext,
     build_reward_terms,
+    listed_term,
     reward_term_cfg,
 )
 
@@ -148,21 +149,45 @@ class BehaviorConfig:
         """
 
 
+def declared_terms(config: Any) -> list[str]:
+    """The reward-term classes a behaviour config's ``rewards`` table may name: those its
+    config class's defaults declare (``type(config)().rewards``; a term such a table leaves
+    unpaid is declared with weight 0, as hand regard's ``reach_into_view``), each one a
+    listed term (:func:`~devlearn.api.rewards.registered_terms`). Another behaviour's term
+    reads facts this behaviour never computes, and a private or abstract class is no term:
+    neither fits.
+
+    Returns:
+        Class paths ``module:QualName``, sorted (empty for a config without ``rewards``).
+    """
+    defaults = getattr(type(config)(), "rewards", None) or {}
+    paths = {str(reward_term_cfg(term).cls) for term in defaults.values()}
+    return sorted(path for path in paths if listed_term(path) is not None)
+
+
 def check_reward_table(config: Any) -> None:
-    """Refuse a behaviour config whose ``rewards`` table names a class that no installed
-    behaviour or plugin defines (resolved by name among the registered terms, never imported:
-    a config or checkpoint is data), a weight out of bounds or a parameter the class does not
-    take. Every :class:`Behavior` checks its config so when built.
+    """Refuse a behaviour config whose ``rewards`` table names a class its behaviour does not
+    declare (:func:`declared_terms`: resolved by name among the registered terms, never
+    imported: a config or checkpoint is data), a weight out of bounds or a parameter the class
+    does not take. Every :class:`Behavior` checks its config so when built, and so does every
+    saved config read (:func:`devlearn.config.run_config.from_dict`: ``--config``, ``--resume``,
+    a checkpoint's config, the Gymnasium envs' overrides): the one check of a reward table.
 
     Raises:
         UsageError: naming the ``behavior.rewards...`` key and what is valid.
     """
-    for name, term in (getattr(config, "rewards", None) or {}).items():
+    table = getattr(config, "rewards", None) or {}
+    valid = declared_terms(config) if table else []
+    for name, term in table.items():
         term = reward_term_cfg(term)
-        try:
-            cls = term.term_class()
-        except UsageError as err:
-            raise UsageError(f"behavior.rewards.{name}.cls: {err}") from None
+        if str(term.cls) not in valid:
+            shown = repr(term.cls) if len(repr(term.cls)) <= 80 else repr(term.cls)[:77] + "..."
+            raise UsageError(
+                f"behavior.rewards.{name}.cls: unknown reward term class {shown}: a config "
+                "names only the reward terms its behaviour declares; valid: "
+                f"{', '.join(valid) or 'none'}"
+            )
+        cls = term.term_class()
         if not (math.isfinite(term.weight) and abs(term.weight) <= WEIGHT_MAX):
             raise UsageError(
                 f"behavior.rewards.{name}.weight must be a finite number from -{WEIGHT_MAX:g} "
@@ -170,12 +195,12 @@ def check_reward_table(config: Any) -> None:
             )
         accepted = inspect.signature(cls).parameters
         if not any(p.kind is p.VAR_KEYWORD for p in accepted.values()):
-            valid = sorted(k for k in accepted if k not in ("self", "weight"))
+            valid_params = sorted(k for k in accepted if k not in ("self", "weight"))
             for param in term.params:
                 if param not in accepted or param == "weight":
                     raise UsageError(
                         f"unknown parameter 'behavior.rewards.{name}.params.{param}' of "
-                        f"{cls.__name__}; valid: {', '.join(valid) or 'none'}"
+                        f"{cls.__name__}; valid: {', '.join(valid_params) or 'none'}"
                     )
 
 
@@ -202,9 +227,10 @@ class Behavior(ABC):
     that does nothing special, in groups:
 
     ===================  =====================================================================
-    episode              ``senses``, ``infant_options``, ``on_episode_start``, ``before_step``,
-                         ``process_action``, ``obs_groups``: the body a behaviour reads and
-                         hooks around every reset and step
+    episode              ``senses``, ``infant_options``, ``episode_seconds``,
+                         ``on_episode_start``, ``before_step``, ``process_action``,
+                         ``obs_groups``: the body a behaviour reads, how long an episode
+                         lasts, and hooks around every reset and step
     batching             ``facts_every_physics_step``, ``batch_facts``, ``batch_observe``: how
                          facts are computed with a decision rate and over a worker's envs
     run settings         ``train_defaults``, ``run_length_defaults``, ``presets``,
@@ -302,6 +328,12 @@ class Behavior(ABC):
         """Keyword arguments for :func:`devlearn.infant.build_infant` beyond the scene and
         senses, e.g. ``{"appearance": "skin"}``: how the infant looks, without building it."""
         return {}
+
+    def episode_seconds(self) -> float | None:
+        """Simulated seconds per episode (the environment converts them with the body's
+        physics step; a whole number of decisions), or None (the default): the infant's own,
+        BabyBench's 5 s. ``devlearn eval --session S`` overrides it for an evaluation."""
+        return None
 
     def on_episode_start(self, infant: Infant, rng: np.random.Generator) -> None:
         """Called at the start of every episode, after the infant's reset, before its first
@@ -509,6 +541,7 @@ BEHAVIOR_OPTIONAL: dict[str, tuple[str, ...]] = {
     "episode": (
         "senses",
         "infant_options",
+        "episode_seconds",
         "on_episode_start",
         "before_step",
         "process_action",

@@ -35,16 +35,29 @@ def _register_term(cls: type) -> None:
     _TERM_CLASSES[term_path(cls)] = cls
 
 
-def registered_terms() -> list[str]:
-    """The paths a config's ``cls`` may name: every concrete, public reward-term class that the
-    installed behaviours and plugins (or the caller's own code) defined."""
-    return sorted(
-        path
-        for path, cls in _TERM_CLASSES.items()
-        if not inspect.isabstract(cls)
+def _listed(cls: type) -> bool:
+    """Whether a config may name the registered class ``cls``: a concrete, public term, not
+    the core's adapter :class:`BatchedFromPerEnv` (it wraps a term, it is none)."""
+    return (
+        not inspect.isabstract(cls)
         and not any(part.startswith("_") for part in cls.__qualname__.split("."))
         and cls is not BatchedFromPerEnv
     )
+
+
+def registered_terms() -> list[str]:
+    """The paths a config's ``cls`` may name: every concrete, public reward-term class that the
+    installed behaviours and plugins (or the caller's own code) defined. A behaviour's config
+    names only those of them its own defaults declare
+    (:func:`devlearn.api.behavior.check_reward_table`)."""
+    return sorted(path for path, cls in _TERM_CLASSES.items() if _listed(cls))
+
+
+def listed_term(path: str) -> type | None:
+    """The class of :func:`registered_terms` that ``path`` names, or None: an unknown path,
+    or a registered class no config may name (private, abstract, the adapter)."""
+    found = _TERM_CLASSES.get(path)
+    return found if found is not None and _listed(found) else None
 
 
 @dataclass
@@ -330,13 +343,14 @@ class RewardTermCfg:
     def term_class(self) -> type[IntrinsicReward] | type[BatchedIntrinsicReward]:
         """The class :attr:`cls` names, among the reward-term classes the installed behaviours
         and plugins defined (:func:`registered_terms`). Nothing is imported: a path that names
-        no such class is refused, whatever module it names.
+        no such class is refused, whatever module it names, and so is a registered class no
+        config may name (a private or abstract one, the adapter :class:`BatchedFromPerEnv`).
 
         Raises:
-            UsageError: The path names no registered reward-term class (one line, naming the
+            UsageError: The path names no listed reward-term class (one line, naming the
                 valid ones).
         """
-        found = _TERM_CLASSES.get(str(self.cls))
+        found = listed_term(str(self.cls))
         if found is None:
             shown = repr(self.cls) if len(repr(self.cls)) <= 80 else repr(self.cls)[:77] + "..."
             raise UsageError(

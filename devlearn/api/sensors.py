@@ -37,28 +37,49 @@ class SensorEncoder(ABC):
 
 
 class MLPEncoder(SensorEncoder):
-    """A flat observation through Linear+ReLU layers.
+    """A flat observation through Linear+activation layers.
 
     Args:
         hidden_dims: Layer sizes, e.g. ``(128, 256)`` for the paper's 68 -> 128 -> 256 touch MLP.
+        activation: The layers' activation, by rsl-rl's name (``relu``, ``tanh``, ``elu``...).
     """
 
-    def __init__(self, hidden_dims: tuple[int, ...] = (256,)) -> None:
+    activation: str = "relu"  # what encoders pickled before the argument existed used
+
+    def __init__(self, hidden_dims: tuple[int, ...] = (256,), activation: str = "relu") -> None:
         if not hidden_dims:
             raise ValueError("MLPEncoder needs at least one layer size")
         self.hidden_dims = tuple(int(d) for d in hidden_dims)
+        self.activation = activation
 
     def build(self, obs_shape: tuple[int, ...]) -> nn.Module:
         import torch.nn as nn
+        from rsl_rl.utils import resolve_nn_activation
 
         layers: list[nn.Module] = [nn.Flatten()]
         in_dim = 1
         for d in obs_shape:
             in_dim *= int(d)
         for d in self.hidden_dims:
-            layers += [nn.Linear(in_dim, d), nn.ReLU()]
+            layers += [nn.Linear(in_dim, d), resolve_nn_activation(self.activation)]
             in_dim = d
         return nn.Sequential(*layers)
 
     def out_dim(self, obs_shape: tuple[int, ...]) -> int:
         return self.hidden_dims[-1]
+
+
+class FlattenEncoder(SensorEncoder):
+    """No layers of its own: the observation flattened, straight into the fusion layers (SB3's
+    ``MultiInputPolicy`` feeds every vector observation to one MLP this way)."""
+
+    def build(self, obs_shape: tuple[int, ...]) -> nn.Module:
+        import torch.nn as nn
+
+        return nn.Flatten()
+
+    def out_dim(self, obs_shape: tuple[int, ...]) -> int:
+        size = 1
+        for d in obs_shape:
+            size *= int(d)
+        return size

@@ -164,6 +164,109 @@ def bench_update(
     }
 
 
+@without_user_warnings
+def bench_sb3_update(
+    behavior: Behavior,
+    num_envs: int,
+    num_steps: int,
+    repeats: int = 2,
+    threads: int = 1,
+    registry: PluginRegistry | None = None,
+) -> dict[str, Any] | None:
+    """Stable-Baselines3's PPO update on a rollout of the same size and settings, per sample:
+    the comparison of issue #54 (``examples/sb3/train.py``'s learner: one flat MLP per network
+    over the concatenated observations, hidden layers the behaviour's fusion and trunk sizes,
+    devlearn's PPO values). Random observations and rewards, as :func:`bench_update`.
+
+    Returns:
+        ``update_us_per_sample`` and ``parameters``; None where SB3 is not installed
+        (``pip install devlearn[sb3]``).
+    """
+    try:
+        import gymnasium as gym
+        from stable_baselines3 import PPO
+        from stable_baselines3.common.vec_env import DummyVecEnv
+    except ImportError:
+        return None
+    import torch
+
+    from devlearn.env import BehaviorEnv
+    from devlearn.training.process import update_threads
+
+    env = BehaviorEnv(behavior, seed=0)
+    first = env.reset()
+    action_dim = env.action_dim
+    env.close()
+    cfg = run_config(behavior, [], registry)
+    spec = behavior.network()
+    net = [*spec.fusion_dims, *spec.trunk_dims]
+    obs_space = gym.spaces.Dict(
+        {
+            k: gym.spaces.Box(-np.inf, np.inf, np.shape(v), np.float32)
+            for k, v in first.items()
+            if np.asarray(v).dtype != np.uint8
+        }
+    )
+    act_space = gym.spaces.Box(-1.0, 1.0, (action_dim,), np.float32)
+
+    class Blank(gym.Env):  # spaces only: the rollout is filled by hand below
+        observation_space, action_space = obs_space, act_space
+
+        def reset(self, *, seed: int | None = None, options: Any = None) -> Any:
+            return obs_space.sample(), {}
+
+        def step(self, action: Any) -> Any:
+            return obs_space.sample(), 0.0, False, False, {}
+
+    ppo = cfg.ppo
+    model = PPO(
+        "MultiInputPolicy",
+        DummyVecEnv([Blank] * num_envs),
+        n_steps=num_steps,
+        batch_size=num_envs * num_steps // ppo.num_mini_batches,
+        n_epochs=ppo.num_learning_epochs,
+        learning_rate=ppo.learning_rate,
+        gamma=ppo.gamma,
+        gae_lambda=ppo.lam,
+        clip_range=ppo.clip_param,
+        clip_range_vf=ppo.clip_param,
+        ent_coef=ppo.entropy_coef,
+        vf_coef=ppo.value_loss_coef,
+        max_grad_norm=ppo.max_grad_norm,
+        policy_kwargs={"net_arch": {"pi": net, "vf": net}},
+        device="cpu",
+        seed=0,
+    )
+    model._setup_learn(num_envs * num_steps)  # noqa: SLF001 (the logger train() writes to)
+    gen = torch.Generator().manual_seed(0)
+    buffer = model.rollout_buffer
+    best = float("inf")
+    with update_threads(threads):
+        for k in range(repeats + 1):
+            buffer.reset()
+            for _ in range(num_steps):
+                obs: Any = {
+                    name: torch.randn((num_envs, *(space.shape or ())), generator=gen).numpy()
+                    for name, space in obs_space.spaces.items()
+                }
+                with torch.no_grad():
+                    actions, values, log_prob = model.policy(model.policy.obs_to_tensor(obs)[0])
+                rewards = torch.randn(num_envs, generator=gen).numpy()
+                starts = np.zeros(num_envs, dtype=np.float32)
+                buffer.add(obs, actions.numpy(), rewards, starts, values, log_prob)
+            buffer.compute_returns_and_advantage(values, np.zeros(num_envs, dtype=bool))
+            start = time.perf_counter()
+            model.train()
+            took = time.perf_counter() - start
+            if k > 0:
+                best = min(best, took)
+    params = sum(p.numel() for p in model.policy.parameters() if p.requires_grad)
+    return {
+        "update_us_per_sample": 1e6 * best / (num_envs * num_steps),
+        "parameters": float(params),
+    }
+
+
 OLD_LEARNER = ["network.layout=separate", "torch_threads=1", "update_threads=1"]
 """``--set`` options that train as before the shared layout and automatic threads."""
 
@@ -174,8 +277,10 @@ def bench_learner(registry: PluginRegistry, quick: bool, progress: Callable[[str
     Old: separate actor and critic, one torch thread (the defaults before the shared layout).
     New: ``devlearn run`` defaults (shared body, automatic threads; the update benchmark uses
     all cores). Keys ``<behavior>_update_us_per_sample[_old]`` and
-    ``<behavior>_train_steps_per_s[_old]``; hand regard trains with 8 envs and a short
-    babbling (speed does not depend on the detector's quality).
+    ``<behavior>_train_steps_per_s[_old]``; for self-touch also the run's defaults and
+    Stable-Baselines3's PPO on the same rollout, one thread each
+    (``self_touch_update_us_per_sample[_sb3]_1thread``, issue #54); hand regard trains with 8
+    envs and a short babbling (speed does not depend on the detector's quality).
     """
     from devlearn.training.process import learner_threads
 
@@ -191,6 +296,18 @@ def bench_learner(registry: PluginRegistry, quick: bool, progress: Callable[[str
             figures = bench_update(behavior, layout, envs, steps, repeats, threads, registry)
             result[f"{name}_update_us_per_sample{suffix}"] = figures["update_us_per_sample"]
             result[f"{name}_inference_ms_per_step{suffix}"] = figures["inference_ms_per_step"]
+    if "self_touch" in behaviors:  # the same rollout's update in SB3's PPO (issue #54)
+        envs, steps = rollouts["self_touch"]
+        progress("self_touch: PPO update, Stable-Baselines3 (the same rollout), 1 thread")
+        behavior, repeats = behaviors["self_touch"](), 1 if quick else 2
+        for threads_used, suffix in ((1, "_1thread"),):
+            mine = bench_update(behavior, "separate", envs, steps, repeats, threads_used, registry)
+            result[f"self_touch_update_us_per_sample{suffix}"] = mine["update_us_per_sample"]
+            sb3 = bench_sb3_update(behavior, envs, steps, repeats, threads_used, registry)
+            if sb3 is not None:
+                result[f"self_touch_update_us_per_sample_sb3{suffix}"] = sb3["update_us_per_sample"]
+                result["self_touch_parameters_sb3"] = sb3["parameters"]
+            result["self_touch_parameters"] = mine["parameters"]
     old = [arg for kv in OLD_LEARNER for arg in ("--set", kv)]
     if "self_touch" in behaviors:
         progress("self_touch: end-to-end training, old learner (separate networks, 1 thread)")

@@ -9,7 +9,7 @@ import sys
 from typing import NoReturn
 
 from devlearn.api.errors import UsageError
-from devlearn.cli.commands import COMMANDS, OneOf
+from devlearn.cli.commands import COMMANDS, Command, OneOf
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -38,15 +38,26 @@ def build_parser() -> argparse.ArgumentParser:
         dest="command", metavar="COMMAND", parser_class=OneLineParser
     )
     for command in COMMANDS:
-        p = subparsers.add_parser(command.name, help=command.help, description=command.description)
-        for entry in command.options:
-            if isinstance(entry, OneOf):
-                group = p.add_mutually_exclusive_group(required=entry.required)
-                for option in entry.options:
-                    group.add_argument(*option.flags, **option.kwargs)
-            else:
-                p.add_argument(*entry.flags, **entry.kwargs)
+        _add_command(subparsers, command)
     return parser
+
+
+def _add_command(subparsers: argparse._SubParsersAction, command: Command) -> None:
+    """One sub-command's parser, with its options (and its actions' parsers)."""
+    p = subparsers.add_parser(command.name, help=command.help, description=command.description)
+    for entry in command.options:
+        if isinstance(entry, OneOf):
+            group = p.add_mutually_exclusive_group(required=entry.required)
+            for option in entry.options:
+                group.add_argument(*option.flags, **option.kwargs)
+        else:
+            p.add_argument(*entry.flags, **entry.kwargs)
+    if command.actions:
+        actions = p.add_subparsers(
+            dest="action", metavar="ACTION", parser_class=OneLineParser, required=True
+        )
+        for action in command.actions:
+            _add_command(actions, action)
 
 
 def follow_parent() -> None:
@@ -84,6 +95,12 @@ def main(argv: list[str] | None = None) -> int:
     for error in registry.errors:
         print(f"devlearn: warning: {error}", file=sys.stderr)
     try:
+        unknown = [name for name in args.disable_plugin if name not in registry.plugins]
+        if unknown:  # a typo would leave the plugin it meant enabled, silently
+            installed = ", ".join(sorted(registry.plugins)) or "none"
+            raise UsageError(
+                f"--disable-plugin {unknown[0]}: no such plugin; installed: {installed}"
+            )
         command = next(c for c in COMMANDS if c.name == args.command)
         return int(importlib.import_module(command.module).run(args, registry) or 0)
     except UsageError as exc:

@@ -34,7 +34,9 @@ class Command:
     """A sub-command, written as argparse takes it: its name, its options in the order its
     help lists them, what ``devlearn --help`` (``help``) and ``devlearn NAME --help``
     (``description``) say, and the module whose ``run(args, registry)`` it calls
-    (``devlearn/cli/<module>.py``; by default the command's name)."""
+    (``devlearn/cli/<module>.py``; by default the command's name). A command with
+    ``actions`` (``devlearn experiment run|publish|table``) takes one of them next, each a
+    Command of its own options; the module's ``run`` finds it in ``args.action``."""
 
     def __init__(
         self,
@@ -43,12 +45,14 @@ class Command:
         help: str,
         description: str | None = None,
         module: str = "",
+        actions: tuple[Command, ...] = (),
     ) -> None:
         self.name = name
         self.options = options
         self.help = help
         self.description = description
         self.module = f"devlearn.cli.{module or name}"
+        self.actions = actions
 
 
 SET_HELP = "override a config field, e.g. ppo.learning_rate=3e-4 (repeatable)"
@@ -172,6 +176,14 @@ COMMANDS: tuple[Command, ...] = (
             settled state + 10 seeded random-action steps, as BabyBench's reset); rest (that
             state alone, every episode: a deterministic policy then repeats one episode); random
             (random joint angles: generalisation)""",
+        ),
+        option(
+            "--session",
+            metavar="SECONDS",
+            help="""play every episode as one session of SECONDS simulated seconds, without a
+            reset inside (e.g. --session 300 --start rest: the 5-minute sessions from rest that
+            infant studies code); default: the behaviour's episodes (5 s). eval.json records it
+            as protocol.session_s, and its per-episode figures are then per session""",
         ),
         option(
             "--action",
@@ -413,6 +425,69 @@ COMMANDS: tuple[Command, ...] = (
         then devlearn report compares them. Started again, a sweep keeps finished runs and
         continues unfinished ones from their checkpoints. Settings can come from a TOML sweep
         file (--file); options given here win.""",
+    ),
+    Command(
+        "experiment",
+        help="run, publish and tabulate an experiment declared in a TOML file",
+        description="""An experiment file (docs/experiments.md) declares the behaviour, the arms
+        (--set values, a preset, or learner = "sb3_ppo"), seeds, budget, evaluation protocols,
+        baselines and reference figures. `run` trains and evaluates it, `publish` keeps what a
+        reader needs, `table` prints the comparison.""",
+        actions=(
+            Command(
+                "run",
+                option("file", metavar="FILE", help="the experiment file (TOML)"),
+                option("out", metavar="OUT", help="the experiment folder (new, or to restart)"),
+                option(
+                    "--dry-run",
+                    action="store_true",
+                    help="check the file and every arm's config; list the runs; start nothing",
+                ),
+                option(
+                    "--jobs", metavar="N", help="local: runs at a time (default: as cores allow)"
+                ),
+                option(
+                    "--executor",
+                    choices=("local", "ray"),
+                    help="where runs execute (default: the file's [executor] kind, else local)",
+                ),
+                option(
+                    "--address",
+                    metavar="auto|HOST:PORT",
+                    help="ray: the cluster to use (default: start a local Ray instance)",
+                ),
+                help="train every arm x seed, evaluate under every protocol, with the baselines",
+                description="""Check the experiment file (every arm's config resolved as
+                devlearn run would, every protocol as devlearn eval would), then train every arm
+                x seed and evaluate each under every protocol, and the baselines once per
+                protocol, in OUT; records the commit and the file there. Started again, finished
+                steps are kept and unfinished runs continue from their checkpoints.""",
+            ),
+            Command(
+                "publish",
+                option("out", metavar="OUT", help="the experiment folder"),
+                option(
+                    "dest",
+                    metavar="DEST",
+                    help="where to publish (an earlier publication is replaced)",
+                ),
+                help="keep the evaluations, configs, curves and one policy per arm",
+                description="""Copy what a reader needs from OUT into DEST: every eval.json (arms x
+                seeds x protocols, baselines x protocols), per run its config, seconds of learning
+                and a thinned training curve, one policy file per arm (its median seed under the
+                first protocol), the experiment file and the commit.""",
+            ),
+            Command(
+                "table",
+                option("dest", metavar="DEST", help="a publication (devlearn experiment publish)"),
+                option("--json", help="print the figures as JSON"),
+                option("--out", metavar="FILE", help="also write the tables (or JSON) to FILE"),
+                help="print the comparison as markdown tables (or JSON)",
+                description="""Per protocol, every arm's headline as the mean and 95% t-interval
+                over seeds with each seed's value, its seconds of learning where recorded, the
+                baselines under the same protocol and the references with their source.""",
+            ),
+        ),
     ),
 )
 """The sub-commands, in the order ``devlearn --help`` lists them."""

@@ -11,12 +11,14 @@ behaviour's headline and its per-episode mean (with its 95% interval) unless ``-
 from __future__ import annotations
 
 import argparse
-import json
+import math
 import os
+import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from devlearn.api.errors import UsageError
+from devlearn.api.json_files import read_json, read_json_lines, read_json_object
 
 if TYPE_CHECKING:
     from devlearn.plugins import PluginRegistry
@@ -25,17 +27,42 @@ SMOOTH_MAX = 100_000
 """Largest ``--smooth`` window (iterations)."""
 
 
+def is_step(value: Any) -> bool:
+    """Whether ``value`` is an environment step count a run can log: a whole number from 0
+    to the longest run (:data:`~devlearn.config.checks.STEPS_MAX`)."""
+    from devlearn.config.checks import STEPS_MAX
+
+    number = isinstance(value, int | float) and not isinstance(value, bool)
+    return number and math.isfinite(value) and value == int(value) and 0 <= value <= STEPS_MAX
+
+
+def figures(row: dict) -> dict[str, float]:
+    """The numbers of a metrics row or an evaluation, by key: strings, lists, tables and
+    booleans are nothing to draw."""
+    return {k: v for k, v in row.items() if isinstance(v, int | float) and not isinstance(v, bool)}
+
+
 def read_metrics(run_dir: Path) -> list[dict]:
-    """Return the rows of ``run_dir/metrics.jsonl`` (one dict per iteration)."""
+    """Return the rows of ``run_dir/metrics.jsonl`` (one dict per iteration, its numbers).
+
+    A line that is no row (garbled, not a JSON object, without a ``step`` a run can log) is
+    skipped with a warning naming it; a last line cut short by a kill is skipped quietly.
+
+    Raises:
+        UsageError: No metrics.jsonl, an unreadable one, or none of its lines a row.
+    """
     path = run_dir / "metrics.jsonl"
     if not path.exists():
         raise UsageError(f"{path} does not exist; pass a folder made by `devlearn run`")
-    rows = []
-    for line in path.read_text().splitlines():
-        try:
-            rows.append(json.loads(line))
-        except ValueError:
-            continue  # a line cut short by a kill
+    found, bad = read_json_lines(path, keep=lambda row: is_step(row.get("step")))
+    rows = [figures(row) for row in found]
+    if bad:
+        shown = ", ".join(map(str, bad[:5])) + (", ..." if len(bad) > 5 else "")
+        print(
+            f"devlearn: warning: {path}: skipped {len(bad)} line(s) ({shown}): not a metrics "
+            "row (a JSON object with a whole 'step' from 0)",
+            file=sys.stderr,
+        )
     if not rows:
         raise UsageError(f"{path} holds no complete rows yet")
     return rows
@@ -50,14 +77,20 @@ def read_evaluations(eval_dirs: list[Path]) -> list[dict]:
             raise UsageError(
                 f"{eval_dir} holds neither metrics.jsonl (a run) nor eval.json (an evaluation)"
             )
-        summary = json.loads(path.read_text())
+        summary = read_json_object(path, "an evaluation")
         if "checkpoint_env_steps" not in summary:
             raise UsageError(
                 f"{path} has no checkpoint_env_steps (older evaluations lack it): "
                 "evaluate the checkpoint again"
             )
-        numbers = {k: v for k, v in summary.items() if isinstance(v, (int, float))}
-        protocol = summary.get("protocol") if isinstance(summary.get("protocol"), dict) else {}
+        if not is_step(summary["checkpoint_env_steps"]):
+            raise UsageError(
+                f"{path}: checkpoint_env_steps {summary['checkpoint_env_steps']!r} is not a step "
+                "count (a whole number from 0)"
+            )
+        numbers = figures(summary)
+        protocol = summary.get("protocol")
+        protocol = protocol if isinstance(protocol, dict) else {}
         rows.append(
             {
                 **numbers,
@@ -119,20 +152,34 @@ def is_counter(key: str) -> bool:
 
 
 def run_headline(run_dir: Path, registry: PluginRegistry | None) -> str | None:
-    """The metrics key of the run's behaviour's headline (``metrics/score``), when its
-    config.json names an installed behaviour that declares one."""
+    """The metrics key of the run's behaviour's headline, the per-episode mean as evaluation
+    measures it (``metrics/episode_score_mean``,
+    :func:`~devlearn.training.runner_metrics.headline_key`), when its config.json names an
+    installed behaviour that declares one."""
+    from devlearn.training.runner_metrics import headline_key
+
     try:
-        name = json.loads((run_dir / "config.json").read_text())["behavior_name"]
+        name = read_json(run_dir / "config.json")["behavior_name"]
         headline = registry.behavior(name).headline_metric if registry is not None else ""
     except (OSError, ValueError, KeyError, TypeError, UsageError):
         return None
-    return f"metrics/{headline}" if headline else None
+    return headline_key(headline) if headline else None
+
+
+def legacy_headline(key: str | None) -> str | None:
+    """What a run logged before :func:`run_headline`'s key existed (``metrics/score`` for
+    ``metrics/episode_score_mean``): the same per-episode mean under the behaviour's name."""
+    if not key or not key.startswith("metrics/episode_") or not key.endswith("_mean"):
+        return None
+    return "metrics/" + key.removeprefix("metrics/episode_").removesuffix("_mean")
 
 
 def default_run_metrics(every: set[str], headline: str | None, health: bool) -> list[str]:
     """What ``devlearn curve RUN`` draws: the headline, the reward, the behaviour's other
     metrics (no counters) and, with ``health``, the learner's health."""
     first = [k for k in (headline, "mean_reward") if k in every]
+    if headline not in every and legacy_headline(headline) in every:  # a run from before
+        first.insert(0, str(legacy_headline(headline)))
     rest = sorted(k for k in every if k.startswith("metrics/") and not is_counter(k))
     keys = first + [k for k in rest if k not in first]
     if health:
@@ -182,8 +229,10 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     import numpy as np
-    from matplotlib.backend_bases import FigureCanvasBase
 
+    chosen = picture_path(args.out) if args.out else None  # refused before any work
+    if chosen is not None:
+        check_out_file(chosen)  # a folder, a FIFO, a missing or unwritable folder
     runs: list[tuple[Any, list[dict]]]  # (run folder, rows), then (label, rows) by start
     runs, evaluations = _load([list(args.run_dirs), *(args.vs or [])])
     every = {k for _, rows in runs for r in rows for k in r if not k.startswith("_")}
@@ -199,9 +248,8 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
         raise UsageError(f"no such metric(s) {unknown}; valid: {', '.join(sorted(every))}")
     if not 1 <= args.smooth <= SMOOTH_MAX:
         raise UsageError(f"--smooth must be from 1 to {SMOOTH_MAX}, got {args.smooth}")
-    out = Path(args.out or default_out(list(args.run_dirs), evaluations))
-    kinds = FigureCanvasBase.get_supported_filetypes()  # png, pdf, svg...
-    check_out_file(out, suffixes=tuple(f".{kind}" for kind in kinds))
+    out = chosen or default_out(list(args.run_dirs), evaluations)
+    check_out_file(out)  # the default beside the runs too, before the drawing
     # constrained layout places the title above the first panel, never over it
     fig, axes = plt.subplots(
         len(keys), 1, figsize=(7, 2.4 * len(keys)), squeeze=False, layout="constrained"
@@ -255,3 +303,25 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
         plt.close(fig)
     print(out)
     return 0
+
+
+def picture_path(out: str | Path) -> Path:
+    """The file ``--out`` names, as matplotlib writes it: ``PATH.png`` for a name without a
+    suffix (matplotlib adds it; the path printed is the one written).
+
+    Raises:
+        UsageError: A suffix matplotlib writes no picture for (the valid ones named).
+    """
+    from matplotlib.figure import Figure
+
+    path = Path(out)
+    formats = sorted(Figure().canvas.get_supported_filetypes())
+    suffix = path.suffix.lower().removeprefix(".")
+    if not suffix:
+        return path.with_name(path.name + ".png")
+    if suffix not in formats:
+        raise UsageError(
+            f"--out {out}: no picture format '{suffix}'; give a file ending in one of "
+            f"{', '.join('.' + f for f in formats)}"
+        )
+    return path

@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from devlearn.api.errors import UsageError
+from devlearn.api.json_files import read_json
 from devlearn.cli.folders import removed_on_failure
 
 if TYPE_CHECKING:
@@ -20,6 +21,22 @@ EPISODES_MAX = 1_000_000
 """Largest ``--episodes``."""
 ENVS_MAX = 1024
 """Largest ``--envs`` and ``--workers``."""
+
+
+EPISODE_SECONDS = 5.0
+"""A behaviour's usual episode (BabyBench's 5 s), the unit :func:`paying_workers` counts."""
+SESSION_MAX = 86_400.0
+"""Longest ``--session``: a simulated day (seconds)."""
+
+
+def _seconds(text: str, option: str, maximum: float) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise UsageError(f"{option} must be a number of seconds, got '{text}'") from None
+    if not 0 < value <= maximum:
+        raise UsageError(f"{option} must be above 0 and at most {maximum:g} seconds, got {text}")
+    return value
 
 
 def _count(text: str, option: str, minimum: int, maximum: int) -> int:
@@ -62,7 +79,9 @@ def human_summary(
     lines = [
         f"{summary.get('behavior')}: {who}"
         + (f" ({trained:,} training steps{learner})" if summary.get("checkpoint") else ""),
-        f"  {protocol.get('episodes', summary.get('episodes'))} episodes from "
+        f"  {protocol.get('episodes', summary.get('episodes'))} "
+        + (f"sessions of {protocol['session_s']:g} s" if protocol.get("session_s") else "episodes")
+        + " from "
         f"{summary.get('start')} starts, eval seed {protocol.get('seed')}, "
         f"{protocol.get('action', '')} action",
     ]
@@ -124,10 +143,12 @@ def _baselines(behavior: str, compare: list[str]) -> dict[str, dict]:
     for folder in folders:
         path = folder / "eval.json" if folder.is_dir() else folder
         try:
-            data = json.loads(path.read_text())
-        except (OSError, ValueError):
+            data = read_json(path)
+        except UsageError as err:
             if compare:
-                raise UsageError(f"--compare {folder}: no readable eval.json there") from None
+                raise UsageError(
+                    f"--compare {folder}: no readable eval.json there ({err})"
+                ) from None
             continue
         if isinstance(data, dict) and data.get("behavior") == behavior:
             name = str(data.get("policy") or folder)
@@ -148,10 +169,12 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     The summary is printed even when writing the files failed (then exit code 2).
     """
     from devlearn.evaluation.evaluate import (
+        PARALLEL_MIN_EPISODES,
         EvalRequest,
         Evaluation,
         EvalWriteError,
         default_out_dir,
+        paying_workers,
         resolve_checkpoint,
     )
 
@@ -162,6 +185,18 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     seed = _count(args.seed, "--seed", 0, SEED_MAX)
     envs = None if args.envs is None else _count(args.envs, "--envs", 1, ENVS_MAX)
     workers = None if args.workers is None else _count(args.workers, "--workers", 0, ENVS_MAX)
+    session = None if args.session is None else _seconds(args.session, "--session", SESSION_MAX)
+    # a session repays a worker's start-up as the 5 s episodes it lasts would
+    lengths = 1 if session is None else max(1, round(session / EPISODE_SECONDS))
+    if workers and paying_workers(episodes * lengths, workers) < workers:
+        kept = paying_workers(episodes * lengths, workers)
+        print(
+            f"note: --workers {workers} for {episodes} episodes: "
+            + (f"{kept} workers" if kept else "played in this process")
+            + f" (a worker repays its start-up from {PARALLEL_MIN_EPISODES} episodes on)",
+            file=sys.stderr,
+        )
+        workers = kept
     checkpoint = resolve_checkpoint(args.checkpoint) if args.checkpoint else None
     request = EvalRequest(  # checked before any folder is made
         behavior=args.behavior,
@@ -174,6 +209,7 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
         overrides=tuple(args.overrides),
         envs=envs,
         workers=workers,
+        session=session,
         video=args.video,
     )
     out_dir = Path(args.out) if args.out else default_out_dir(request)

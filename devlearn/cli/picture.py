@@ -21,6 +21,7 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     from pathlib import Path
 
     from devlearn.api.errors import UsageError
+    from devlearn.env.rendering import require_rendering
     from devlearn.files import check_out_file, write_bytes_atomically
     from devlearn.infant.pictures import (
         IMAGE_SUFFIXES,
@@ -37,6 +38,7 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     }
     out = Path(args.out)
     check_out_file(out, suffixes=IMAGE_SUFFIXES, parents=True)
+    require_rendering(f"devlearn picture {args.what}")  # every picture is a render
     data = encode_picture(draw[args.what](), out.suffix.lower())
     try:
         out.parent.mkdir(parents=True, exist_ok=True)

@@ -31,10 +31,15 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
         except UsageError:
             return config  # a config this version cannot read: compared as saved
 
+    import sys
+
     from devlearn.cli.folders import removed_on_failure
 
+    skipped: list[str] = []
     with removed_on_failure(args.out):
-        write_report(args.paths, args.out, paper_results, as_loaded)
+        write_report(args.paths, args.out, paper_results, as_loaded, skipped)
+    for reason in skipped:  # a stray file beside the evaluations: left out, said so
+        print(f"devlearn: warning: left out an evaluation beside them: {reason}", file=sys.stderr)
     print((Path(args.out) / "report.md").read_text(), end="")
     print(f"written to {args.out}: report.md, report.png")
     return 0

@@ -54,6 +54,8 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     )
     resolved = resolve_run(request, registry, checkpoint_config)  # the run trains its behaviour
     cfg = resolved.cfg
+    for note in resolved.notes:
+        print(f"devlearn: note: {note}", file=sys.stderr)
     if not args.resume and not cfg.out_dir:
         cfg.out_dir = str(default_run_dir(cfg.behavior_name))
     if args.resume:

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
-import json
 import shlex
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from devlearn.api.errors import UsageError
+from devlearn.api.json_files import read_json, read_json_lines
+from devlearn.evaluation.report import headline_of
 from devlearn.training.checkpoint import LATEST
+from devlearn.training.runner_metrics import EPISODES_AVERAGED, headline_key
 
 if TYPE_CHECKING:
     from devlearn.config.run_config import RunConfig
@@ -17,22 +20,22 @@ def _rows(run_dir: Path) -> list[dict[str, Any]]:
     path = run_dir / "metrics.jsonl"
     if not path.exists():
         return []
-    rows = []
-    for line in path.read_text().splitlines():
-        try:
-            rows.append(json.loads(line))
-        except ValueError:  # a line cut short by a kill: skip it
-            continue
-    return rows
+    try:
+        return read_json_lines(path)[0]  # a line cut short by a kill: skipped
+    except UsageError:
+        return []
 
 
 def headline(rows: list[dict[str, Any]], metric: str) -> tuple[str, Any, Any]:
     """The metric to show, its first logged value and its last (None where never logged).
 
-    ``metric`` is the behaviour's ``headline_metric`` (logged as ``metrics/<metric>``); without
-    one, or before any episode logged it, the mean episode reward.
+    ``metric`` is the behaviour's ``headline_metric``, logged per episode as evaluation
+    measures it (:func:`~devlearn.training.runner_metrics.headline_key`,
+    ``metrics/episode_<metric>_mean``; runs from before that logged ``metrics/<metric>``);
+    without one, or before any episode logged it, the mean episode reward.
     """
-    for key in (f"metrics/{metric}" if metric else "", "mean_reward"):
+    keys = (headline_key(metric), f"metrics/{metric}") if metric else ()
+    for key in (*keys, "mean_reward"):
         values = [r[key] for r in rows if key and r.get(key) is not None]
         if values:
             return key, values[0], values[-1]
@@ -60,15 +63,18 @@ def baseline_dirs(behavior_name: str) -> dict[str, Path]:
 
 
 def _baseline_values(behavior_name: str, metric: str) -> dict[str, Any]:
-    """The headline ``metric`` of the baseline evaluations already in their default folders."""
+    """The headline of the baseline evaluations already in their default folders, as ``devlearn
+    eval`` headlines it (:func:`~devlearn.evaluation.report.headline_of`: the per-episode
+    mean), so that it stands beside the run's per-episode figure."""
     found = {}
     for policy, folder in baseline_dirs(behavior_name).items():
         try:
-            summary = json.loads((folder / "eval.json").read_text())
-        except (OSError, ValueError):
+            summary = read_json(folder / "eval.json")
+        except UsageError:
             continue
-        if isinstance(summary, dict) and isinstance(summary.get(metric), (int, float)):
-            found[policy] = summary[metric]
+        head = headline_of(summary, metric) if isinstance(summary, dict) else None
+        if head is not None:
+            found[policy] = head[1]
     return found
 
 
@@ -110,8 +116,10 @@ def run_summary(
         )
     else:
         lines.append(
-            f"  {key}  {_number(last)} now, {_number(first)} at the start (step {first_step:,}), "
-            "over training episodes"
+            f"  {key.removeprefix('metrics/')}  {_number(last)} now, {_number(first)} at the "
+            f"start (step {first_step:,}), per episode over the last {EPISODES_AVERAGED} "
+            "training episodes (actions sampled, the stage's start; devlearn eval measures it "
+            "with the mean action under the evaluation protocol)"
         )
     stages: dict[str, int] = {}  # the curriculum stages the run went through, with where
     for row in rows:
@@ -133,7 +141,10 @@ def run_summary(
     dirs = baseline_dirs(behavior_name)
     if baselines:
         shown = ", ".join(f"{p} {_number(v)} ({dirs[p]})" for p, v in baselines.items())
-        lines.append(f"  baselines   {metric} under the evaluation protocol: {shown}")
+        lines.append(
+            f"  baselines   {headline_key(metric).removeprefix('metrics/')} under the "
+            f"evaluation protocol: {shown}"
+        )
     more = max(2 * total_steps, total_steps + 1)
     eval_dir = shlex.quote(str(run_dir / "eval"))
     lines += [

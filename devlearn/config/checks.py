@@ -109,6 +109,7 @@ def _check_infant(cfg: RunConfig) -> None:
         except ValueError as err:
             raise UsageError(str(err)) from None
     _whole(cfg.infant.growth_every, "infant.growth_every", 0, STEPS_MAX, "0: 24 pieces")
+    _whole(cfg.infant.growth_steps, "infant.growth_steps", 0, STEPS_MAX, "0: total_steps")
     growth_schedule(cfg)
 
 

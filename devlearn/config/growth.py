@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 from dataclasses import dataclass
@@ -35,18 +36,22 @@ class GrowthSchedule:
     Attributes:
         ages: The age (months) of each piece (or stage), in order.
         by_stage: One age per curriculum stage (the last age for any later stage).
+        steps: The steps the pieces span (``infant.growth_steps``); 0: the run's.
     """
 
     ages: tuple[float, ...]
     by_stage: bool = False
+    steps: int = 0
 
     def age_at(self, env_steps: int, total_steps: int, stage: int = 0) -> float:
         """The age at ``env_steps`` environment steps of a ``total_steps`` run (the last
-        piece's from the end on), or in curriculum stage ``stage`` (index from 0)."""
+        piece's from the end of the schedule's :attr:`steps`, or of the run, on), or in
+        curriculum stage ``stage`` (index from 0)."""
         if self.by_stage:
             piece = stage
         else:
-            piece = int(env_steps) * len(self.ages) // max(int(total_steps), 1)
+            span = self.steps or int(total_steps)
+            piece = int(env_steps) * len(self.ages) // max(span, 1)
         return self.ages[min(piece, len(self.ages) - 1)]
 
 
@@ -98,13 +103,58 @@ def growth_schedule(cfg: RunConfig) -> GrowthSchedule | None:
     Raises:
         UsageError: A bad schedule, or one given together with ``infant.age_months``.
     """
-    schedule = parse_growth(cfg.infant.growth, cfg.infant.growth_every, cfg.total_steps)
+    span = cfg.infant.growth_steps or cfg.total_steps
+    schedule = parse_growth(cfg.infant.growth, cfg.infant.growth_every, span)
+    if schedule is not None:
+        schedule = dataclasses.replace(schedule, steps=span)
     if schedule is not None and cfg.infant.age_months is not None:
         raise UsageError(
             "infant.age_months and infant.growth exclude each other (a growing body's age "
             "comes from its schedule); set one of them"
         )
     return schedule
+
+
+GROWTH_KEYS = ("growth", "growth_every", "growth_steps")
+"""The ``infant`` fields that make a growth schedule: what a resumed run keeps."""
+
+
+def keep_growth_on_resume(saved: RunConfig, resumed: RunConfig, run: str) -> str | None:
+    """Check a resumed run's growth schedule against its saved one, in place: the schedule a
+    run grew by is the one it goes on with, so that the body's age never goes back (a
+    schedule over another ``--steps`` gave 14 months where the run had reached 18).
+
+    A changed ``infant.growth``, ``growth_every`` or ``growth_steps`` is refused. With another
+    ``total_steps`` the schedule keeps the steps it spanned: ``resumed.infant.growth_steps`` is
+    set to them (recorded in config.json, so later resumes keep them too).
+
+    Returns:
+        A note saying so when the span was fixed here (None otherwise).
+    Raises:
+        UsageError: A growth key changed (the saved and the new values named, and how to grow
+            otherwise: a new run from the checkpoint).
+    """
+    for key in GROWTH_KEYS:
+        before, after = getattr(saved.infant, key), getattr(resumed.infant, key)
+        if before != after:
+            raise UsageError(
+                f"run {run} grows by infant.{key}={before!r}, which a resumed run keeps (its "
+                f"body's age goes on from its step), not {after!r}; for another schedule start "
+                f"a new run from its checkpoint: --from {run}/checkpoint_latest.pt --out NEW_DIR"
+            )
+    schedule = growth_schedule(saved)
+    if schedule is None or schedule.by_stage or saved.infant.growth_steps:
+        return None  # by stage, or already fixed: the steps change no age
+    if resumed.total_steps == saved.total_steps:
+        return None
+    resumed.infant.growth_steps = saved.total_steps
+    last = growth_schedule(resumed)
+    assert last is not None
+    return (
+        f"run {run} keeps its growth schedule over its first {saved.total_steps:,} steps "
+        f"(infant.growth_steps, recorded in config.json); its body stays at "
+        f"{last.ages[-1]:g} months after them"
+    )
 
 
 def start_age(cfg: RunConfig, env_steps: int = 0, stage: int = 0) -> float | None:

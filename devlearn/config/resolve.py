@@ -3,13 +3,16 @@
 
 from __future__ import annotations
 
+import copy
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
 
 from devlearn.api.errors import UsageError
+from devlearn.api.json_files import read_json_object
 from devlearn.config.checks import check_config
+from devlearn.config.growth import keep_growth_on_resume
 from devlearn.config.run_config import (
     RunConfig,
     apply_preset,
@@ -96,6 +99,9 @@ class ResolvedRun:
     """The run config, checked."""
     behavior: Behavior
     """The behaviour built on ``cfg.behavior``."""
+    notes: list[str] = field(default_factory=list)
+    """What resolving decided that the user did not say (a resumed growing run's schedule kept
+    over its steps), for the command to print."""
 
 
 def resolve_config(
@@ -157,9 +163,10 @@ def resolve_run(
         raise UsageError("--config starts from a resolved config; --preset does not apply to it")
     top = {k: v for k, v in request.top.items() if v is not None}
     behavior: Behavior | None = None
+    notes: list[str] = []
     placed = {**top, "out_dir": request.out_dir} if request.out_dir else top
     if request.resume:
-        cfg = _resumed(request, registry, top)
+        cfg = _resumed(request, registry, top, notes)
     elif request.start_from:
         if read_checkpoint is None:
             raise TypeError(
@@ -186,27 +193,18 @@ def resolve_run(
         behavior = build_behavior(cfg, registry.behavior(cfg.behavior_name))
     finish_config(cfg, behavior)
     check_config(cfg)
-    return ResolvedRun(cfg, behavior)
+    return ResolvedRun(cfg, behavior, notes)
 
 
 def read_config_file(path: str | Path) -> dict[str, Any]:
-    """A saved run config (``config.json``, ``run_config.json``) as a dict.
+    """A saved run config (``config.json``, ``run_config.json``) as a dict, read by the guarded
+    reader (:func:`~devlearn.api.json_files.read_json_object`).
 
     Raises:
-        UsageError: The file is missing, not JSON, or not a JSON object.
+        UsageError: The file is missing, not a regular file, too large, not JSON, nested too
+            deeply, or not a JSON object.
     """
-    path = Path(path)
-    try:
-        data = json.loads(path.read_text())
-    except (OSError, ValueError) as exc:
-        raise UsageError(f"cannot read {path}: {exc}") from None
-    except RecursionError:
-        raise UsageError(f"cannot read {path}: its JSON is nested too deeply") from None
-    if not isinstance(data, dict):
-        raise UsageError(
-            f"{path} is not a run config: it holds a JSON {type(data).__name__}, not an object"
-        )
-    return data
+    return read_json_object(path, "a run config")
 
 
 def write_config_file(cfg: RunConfig, path: str | Path) -> Path:
@@ -243,14 +241,19 @@ def _from_saved(
     return from_dict(data, registry.behavior(name), new_run)
 
 
-def _resumed(request: RunRequest, registry: PluginRegistry, top: dict[str, Any]) -> RunConfig:
+def _resumed(
+    request: RunRequest, registry: PluginRegistry, top: dict[str, Any], notes: list[str]
+) -> RunConfig:
     run_dir = Path(request.resume)
     if not run_dir.is_dir():
         raise UsageError(f"run directory {run_dir} does not exist")
     cfg = _from_saved(read_config_file(run_dir / CONFIG_FILE), request, registry, f"run {run_dir}")
+    saved = copy.deepcopy(cfg)
     recorded_seed = cfg.seed
     apply_overrides(cfg, top)
     apply_overrides(cfg, request.overrides)
+    if note := keep_growth_on_resume(saved, cfg, str(run_dir)):  # the age never goes back
+        notes.append(note)
     if cfg.seed != recorded_seed:
         raise UsageError(
             f"run {run_dir} was trained with seed {recorded_seed}, which a resumed run keeps "

@@ -56,6 +56,12 @@ class PPOConfig:
     ``results/learner/README.md``). A saved config without this field means False."""
     reward_clip: float = 10.0
     """Bound on a normalised reward (with ``normalize_rewards``)."""
+    adam_eps: float = 1e-5
+    """Adam's epsilon (SB3's and cleanrl's 1e-5, :data:`LEARNER_EVIDENCE`; torch's default
+    1e-8 before issue #54)."""
+    normalize_advantage_per_mini_batch: bool = True
+    """Standardise advantages in each mini-batch (SB3, :data:`LEARNER_EVIDENCE`) instead of
+    once over the rollout (before issue #54)."""
 
 
 @dataclass
@@ -73,9 +79,13 @@ class NetworkConfig:
     fix did (the eye CNN divided its already-scaled input again). A saved config without a
     ``network`` section means True, so those checkpoints see the input they were trained on;
     new runs use [0, 1] images."""
-    head: str = "gaussian"
-    """The policy's action distribution. ``gaussian``: a mean that is a plain linear output and
-    one state-independent spread per action, bounded to [``min_std``, the behaviour's
+    head: str = "free"
+    """The policy's action distribution; ``free`` by default (:data:`LEARNER_EVIDENCE`: with
+    ``final_std`` its mean action is its behaviour; ``gaussian`` before issue #54).
+
+    ``free``: a linear mean and one free state-independent log-spread per action (SB3's and
+    cleanrl's). ``squashed``: that Gaussian squashed by ``tanh``. ``gaussian``: a linear mean
+    and one state-independent spread per action, bounded to [``min_std``, the behaviour's
     ``max_std`` (1.0 where it sets none)] by a sigmoid; actions are clipped by the env, and a
     mean past a bound stops being pushed once no sample falls inside (it cannot saturate).
     ``paper``: the paper's ``tanh`` mean with a state-dependent softplus spread (sec. II-A4),
@@ -84,31 +94,85 @@ class NetworkConfig:
     ``paper``."""
     min_std: float = 0.05
     """Lower bound of the ``gaussian`` head's spread (exploration never vanishes)."""
+    init_std: float = 0.0
+    """Spread at initialisation; 0: the head's own, 1.0 for ``free`` and ``squashed`` (SB3's,
+    :data:`LEARNER_EVIDENCE`), the behaviour's ``NetworkSpec.init_std`` for ``gaussian`` and
+    ``paper`` (0.5 unless it says)."""
+    final_std: float = 0.1
+    """A ceiling on the spread that falls log-linearly from the initial spread to this value
+    over the run (every head; :func:`devlearn.training.distribution.spread_cap`): exploration
+    wide at first, and at the end a policy whose mean action is its behaviour (issue #54; 0.1
+    by default, :data:`LEARNER_EVIDENCE`). 0: no ceiling."""
+    encoders: str = "flat"
+    """How senses are encoded; ``flat`` by default (:data:`LEARNER_EVIDENCE`; ``behavior``
+    before issue #54). ``behavior``: each observation through the encoder the behaviour's
+    ``NetworkSpec`` gives it; ``flat``: every vector observation (an ``MLPEncoder``'s) flattened
+    and concatenated straight into the fusion and trunk layers, images keeping their encoders
+    (SB3's ``MultiInputPolicy``: one MLP over the vector senses)."""
+    activation: str = "tanh"
+    """Activation of the encoders' MLPs, fusion and trunk (``tanh`` by default, SB3's,
+    :data:`LEARNER_EVIDENCE`; ``relu`` before issue #54; ``elu``...)."""
+    init: str = "orthogonal"
+    """Weight initialisation; ``orthogonal`` by default (:data:`LEARNER_EVIDENCE`). ``torch``:
+    PyTorch's default, then the head's small last layer; ``orthogonal``: SB3's and cleanrl's,
+    gain sqrt(2) in hidden layers, 1 on the value output, 0.01 on the policy's mean."""
+    normalize: str = "behavior"
+    """Observations standardised by running statistics: ``behavior`` (those the behaviour's
+    ``NetworkSpec.normalize`` names) or ``all``."""
 
 
 LEGACY_NETWORK = NetworkConfig(layout="separate", legacy_uint8_scale=True, head="paper")
 """What a saved config without a ``network`` section was trained with."""
 
-HEADS = ("gaussian", "paper")
-"""Valid values of :attr:`NetworkConfig.head`."""
+HEADS = ("gaussian", "paper", "free", "squashed")
+"""Valid values of :attr:`NetworkConfig.head`: the bounded Gaussian, the paper's, the free
+Gaussian (SB3's) and the tanh-squashed Gaussian (:mod:`devlearn.training.distribution`)."""
+FREE_INIT_STD = 1.0
+"""The free and squashed heads' initial spread where ``network.init_std`` is 0 (SB3's
+``log_std_init = 0``)."""
+ENCODERS = ("behavior", "flat")
+"""Valid values of :attr:`NetworkConfig.encoders`."""
+INITS = ("torch", "orthogonal")
+"""Valid values of :attr:`NetworkConfig.init`."""
+NORMALIZE = ("behavior", "all")
+"""Valid values of :attr:`NetworkConfig.normalize`."""
+ACTIVATIONS = (
+    "elu", "selu", "relu", "crelu", "lrelu", "tanh", "sigmoid", "softplus", "gelu", "swish",
+    "mish", "identity",
+)  # fmt: skip
+"""Valid values of :attr:`NetworkConfig.activation`: rsl-rl 5.5.1's activation names
+(``rsl_rl.utils.resolve_nn_activation``; listed here so that checking a config loads no torch)."""
 
 LEGACY_FIELDS: dict[str, Any] = {
     "ppo.normalize_rewards": False,
     "network.head": "paper",
     "env.action_repeat": 1,
     "ppo.schedule": "adaptive",
+    # issue #54's learner fields: every run saved before them was trained with these
+    "ppo.adam_eps": 1e-8,
+    "ppo.normalize_advantage_per_mini_batch": False,
+    "network.final_std": 0.0,
+    "network.encoders": "behavior",
+    "network.activation": "relu",
+    "network.init": "torch",
+    "network.normalize": "behavior",
 }
 """Core fields a saved run's config may lack, and the value its run was trained with (the
 default changed when the field was added, issue #28): such a config loads as trained. A new
 run's config file (``devlearn run --config``) takes today's defaults instead."""
 
-LEARNER_EVIDENCE = "results/learner/README.md"
-"""Where the core's learner defaults come from: issue #28's pilots and audit (a decision every
-5 physics steps, ``env.action_repeat=5``; a discount of 0.99 per decision and rollouts of 64
-decisions; a fixed learning rate; separate actor and critic; rewards normalised by the running
-spread of the return; the bounded Gaussian head). Every behaviour gets them; a behaviour
-overrides in ``train_defaults`` only what its own evidence supports (issue #38: a third-party
-behaviour learned with these and not with the old defaults)."""
+LEARNER_EVIDENCE = "results/learners/README.md"
+"""Where the core's learner defaults come from: issue #28's pilots and audit
+(``results/learner/README.md``: a decision every 5 physics steps, ``env.action_repeat=5``; a
+discount of 0.99 per decision and rollouts of 64 decisions; a fixed learning rate; separate
+actor and critic; rewards normalised by the running spread of the return) and issue #54's
+pilots (``results/learners/README.md``: one flat tanh MLP per network over the vector senses,
+orthogonal initialisation, Adam's epsilon 1e-5 and advantages standardised per mini-batch, as
+SB3's PPO; a free state-independent spread starting at 1.0 under a ceiling that falls to 0.1
+over the run, so that the mean action is the behaviour). Every behaviour gets them; a
+behaviour overrides in ``train_defaults`` only what its own evidence supports (issue #38: a
+third-party behaviour learned with these and not with the old defaults; hand regard keeps
+issue #28's learner, on which its results stand)."""
 
 
 @dataclass
@@ -148,10 +212,15 @@ class InfantConfig:
     iteration boundary where the age changes, every env rebuilds its physics at the new age
     and carries on with the same joint angles and velocities; the policy, optimiser and
     reward memories carry over, checkpoints record the age and a resumed run continues at its
-    schedule's age (``--steps`` changed on resume stretches the schedule). Excludes
-    ``age_months``."""
+    schedule's age. A resume keeps the schedule (another ``infant.growth`` is refused; with
+    another ``--steps`` the schedule keeps the steps it spans, ``growth_steps``, so the age
+    never goes back). Excludes ``age_months``."""
     growth_every: int = 0
     """Steps per piece of an ``A->B`` growth schedule (0: 24 pieces over the run)."""
+    growth_steps: int = 0
+    """Steps the growth schedule spans (0: the run's ``total_steps``); past them the body keeps
+    the last age. A run resumed with another ``--steps`` records its old ``total_steps`` here,
+    so that its body's age at every step stays what the schedule gave it."""
 
 
 @dataclass
@@ -329,17 +398,53 @@ def check_learner(cfg: RunConfig, spec: Any) -> None:
         UsageError: naming the ``--set`` key and what is valid.
     """
     net = cfg.network
-    if net.head not in HEADS:
-        raise UsageError(f"unknown network.head '{net.head}'; valid: {', '.join(HEADS)}")
-    if net.head == "gaussian" and not 0 < net.min_std < min(spec.init_std, head_max_std(spec)):
+    for key, value, valid in (
+        ("head", net.head, HEADS),
+        ("encoders", net.encoders, ENCODERS),
+        ("init", net.init, INITS),
+        ("normalize", net.normalize, NORMALIZE),
+    ):
+        if value not in valid:
+            raise UsageError(f"unknown network.{key} '{value}'; valid: {', '.join(valid)}")
+    if net.activation not in ACTIVATIONS:
         raise UsageError(
-            f"network.min_std must be above 0 and below the initial spread {spec.init_std} "
+            f"unknown network.activation '{net.activation}'; valid: {', '.join(ACTIVATIONS)}"
+        )
+    if net.init_std < 0:
+        raise UsageError(
+            f"network.init_std must be 0 (the behaviour's) or above, got {net.init_std}"
+        )
+    init_std = initial_std(cfg, spec)
+    if net.head == "gaussian" and not 0 < net.min_std < min(init_std, head_max_std(spec)):
+        raise UsageError(
+            f"network.min_std must be above 0 and below the initial spread {init_std} "
             f"and the bound {head_max_std(spec)}; got {net.min_std}"
         )
+    if net.head == "gaussian" and not init_std < head_max_std(spec):
+        raise UsageError(
+            f"network.init_std must be below the spread's bound {head_max_std(spec)}, "
+            f"got {init_std}"
+        )
+    floor = net.min_std if net.head == "gaussian" else 0.0
+    if net.final_std and not floor <= net.final_std < init_std:
+        raise UsageError(
+            f"network.final_std must lie in [{floor}, {init_std}) (the spread's lower bound "
+            f"and its initial value), got {net.final_std}"
+        )
+    if cfg.ppo.adam_eps <= 0:
+        raise UsageError(f"ppo.adam_eps must be above 0, got {cfg.ppo.adam_eps}")
     if cfg.env.action_repeat < 1:
         raise UsageError(f"env.action_repeat must be at least 1, got {cfg.env.action_repeat}")
     if cfg.ppo.normalize_rewards and not cfg.ppo.reward_clip > 0:
         raise UsageError(f"ppo.reward_clip must be above 0, got {cfg.ppo.reward_clip}")
+
+
+def initial_std(cfg: RunConfig, spec: Any) -> float:
+    """The policy's spread at initialisation: ``network.init_std``, else the head's own (1.0
+    for the free and squashed heads, SB3's; the behaviour's for the others)."""
+    if cfg.network.init_std:
+        return float(cfg.network.init_std)
+    return FREE_INIT_STD if cfg.network.head in ("free", "squashed") else float(spec.init_std)
 
 
 def head_max_std(spec: Any) -> float:
@@ -441,6 +546,31 @@ def shared_layout(cfg: RunConfig, spec: Any) -> bool:
     return layouts[cfg.network.layout]
 
 
+def learner_spec(spec: Any, net: NetworkConfig) -> Any:
+    """The behaviour's NetworkSpec as the run's ``network`` section shapes it: flat encoders
+    (every observation flattened into the fusion layers), the encoders' activation, every
+    observation normalised. The defaults return ``spec`` itself."""
+    from devlearn.api.sensors import FlattenEncoder, MLPEncoder
+
+    encoders: dict[str, Any]
+    if net.encoders == "flat":  # vector senses only: an image keeps its CNN (as SB3's extractor)
+        encoders = {
+            name: FlattenEncoder() if isinstance(enc, MLPEncoder) else enc
+            for name, enc in spec.encoders.items()
+        }
+    else:
+        encoders = {
+            name: MLPEncoder(enc.hidden_dims, net.activation)
+            if isinstance(enc, MLPEncoder) and net.activation != enc.activation
+            else enc
+            for name, enc in spec.encoders.items()
+        }
+    normalize = tuple(spec.encoders) if net.normalize == "all" else tuple(spec.normalize)
+    if encoders == spec.encoders and normalize == tuple(spec.normalize):
+        return spec
+    return dataclasses.replace(spec, encoders=encoders, normalize=normalize)
+
+
 def to_rsl_rl(cfg: RunConfig, behavior: Any, observation_names: list[str] | None = None) -> dict:
     """Return rsl-rl 5.5.1's ``train_cfg`` for this run.
 
@@ -456,7 +586,7 @@ def to_rsl_rl(cfg: RunConfig, behavior: Any, observation_names: list[str] | None
         behavior: The behaviour instance.
         observation_names: Observation names (default: the spec's encoder names).
     """
-    spec = behavior.network()
+    spec = learner_spec(behavior.network(), cfg.network)
     names = list(observation_names or spec.encoders)
     ppo = dataclasses.asdict(cfg.ppo)
     num_steps = ppo.pop("num_steps_per_env")
@@ -468,20 +598,32 @@ def to_rsl_rl(cfg: RunConfig, behavior: Any, observation_names: list[str] | None
         "spec": spec,
         "shared": shared,
         "legacy_uint8_scale": cfg.network.legacy_uint8_scale,
+        "activation": cfg.network.activation,
+        "init": cfg.network.init,
     }
-    if cfg.network.head == "paper":
+    init_std = initial_std(cfg, spec)
+    head = cfg.network.head
+    if head == "paper":
         distribution = {
             "class_name": "devlearn.training.networks:TanhSoftplusGaussian",
-            "init_std": spec.init_std,
+            "init_std": init_std,
             "max_std": spec.max_std,
+        }
+    elif head in ("free", "squashed"):
+        distribution = {
+            "class_name": "devlearn.training.distribution:"
+            + ("FreeGaussian" if head == "free" else "SquashedGaussian"),
+            "init_std": init_std,
         }
     else:
         distribution = {
             "class_name": "devlearn.training.distribution:BoundedGaussian",
-            "init_std": spec.init_std,
+            "init_std": init_std,
             "min_std": cfg.network.min_std,
             "max_std": head_max_std(spec),
         }
+    if cfg.network.final_std:  # absent otherwise: configs from before issue #54 build as then
+        distribution["final_std"] = cfg.network.final_std
     return {
         "algorithm": {
             "class_name": "devlearn.training.ppo:UniqueParamPPO",

@@ -7,12 +7,12 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
-import json
 import types
 import typing
 from typing import Any
 
 from devlearn.api.errors import UsageError
+from devlearn.api.json_files import NestedTooDeeply, parse_json
 
 
 def convert(value: Any, kind: Any, key: str) -> Any:
@@ -27,7 +27,7 @@ def convert(value: Any, kind: Any, key: str) -> Any:
                 return convert(value, arg, key)
             except (UsageError, ValueError, TypeError):
                 pass
-        raise UsageError(f"bad value {value!r} for {key}: expected {_expected(kind)}")
+        raise UsageError(f"bad value {_shown(value)} for {key}: expected {_expected(kind)}")
     try:
         if kind is bool:
             if isinstance(value, str):
@@ -54,7 +54,7 @@ def convert(value: Any, kind: Any, key: str) -> Any:
             if isinstance(value, str):
                 text = value.strip()
                 items = (
-                    json.loads(text)
+                    _json(text, key)
                     if text.startswith("[")
                     else [s for s in text.split(",") if s.strip()]
                 )
@@ -62,7 +62,7 @@ def convert(value: Any, kind: Any, key: str) -> Any:
             items = [convert(v, item_kind, key) for v in items]
             return tuple(items) if (origin or kind) is tuple else list(items)
         if origin is dict or kind is dict:
-            table = json.loads(value) if isinstance(value, str) else value
+            table = _json(value, key) if isinstance(value, str) else value
             if not isinstance(table, dict):
                 raise ValueError("expected a table")
             entry = args[1] if len(args) == 2 else None
@@ -71,8 +71,31 @@ def convert(value: Any, kind: Any, key: str) -> Any:
                 return {k: v if isinstance(v, entry) else entry(**v) for k, v in table.items()}
             return table
     except (ValueError, TypeError):
-        raise UsageError(f"bad value {value!r} for {key}: expected {_expected(kind)}") from None
+        raise UsageError(
+            f"bad value {_shown(value)} for {key}: expected {_expected(kind)}"
+        ) from None
     return value
+
+
+def _shown(value: Any) -> str:
+    """``repr(value)``, cut to 80 characters (a pasted file is no error message)."""
+    text = repr(value)
+    return text if len(text) <= 80 else text[:77] + "..."
+
+
+def _json(text: str, key: str) -> Any:
+    """The JSON value of a ``--set`` list or table (:func:`~devlearn.api.json_files.parse_json`).
+
+    Raises:
+        NestedTooDeeply: Nested too deeply (a one-line UsageError saying so).
+        ValueError: Not JSON (answered with what the field expects).
+    """
+    try:
+        return parse_json(text, f"--set {key}")
+    except NestedTooDeeply:
+        raise
+    except UsageError as err:
+        raise ValueError(str(err)) from None
 
 
 def _expected(kind: Any) -> str:

@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from devlearn.api.errors import UsageError
 from devlearn.api.rewards import (
     BatchContext,
     BatchedFromPerEnv,
@@ -21,8 +22,9 @@ from devlearn.env.guards import (
     check_reward,
     reward_within_bound,
 )
+from devlearn.env.rendering import check_senses_render
 from devlearn.env.settings import EnvSettings
-from devlearn.timing import decision_rate_error
+from devlearn.timing import decision_rate_error, physics_steps
 
 if TYPE_CHECKING:
     from devlearn.api.behavior import Behavior
@@ -40,7 +42,11 @@ def build_default_infant(scene: str, senses: tuple[str, ...], **options: Any) ->
     """Build the real infant (imported lazily so this module imports without it).
 
     ``options`` are the behaviour's :meth:`~devlearn.api.behavior.Behavior.infant_options`.
+
+    Raises:
+        UsageError: ``senses`` include the eyes and ``MUJOCO_GL`` names no backend.
     """
+    check_senses_render(senses, "the infant")
     from devlearn.infant import build_infant
 
     return build_infant(scene, senses=senses, **options)
@@ -56,7 +62,7 @@ def batched_reward_terms(behavior: Behavior) -> list[BatchedIntrinsicReward]:
 class BehaviorEnv:
     """A single sub-environment: one infant, one behaviour's reward terms and one evaluator.
 
-    The environment resets itself: after ``infant.episode_steps`` steps the episode times out,
+    The environment resets itself: after :attr:`episode_steps` steps the episode times out,
     its summary is returned as ``episode_info`` and a new episode begins (random initial pose
     when the stage options say ``random_pose``).
 
@@ -109,7 +115,8 @@ class BehaviorEnv:
         self.evaluator = behavior.evaluator(training=training)
         self.stage: dict[str, Any] = dict(behavior.curriculum().stage.options)
         self.action_dim = int(self.infant.action_dim)
-        self.episode_steps = int(self.infant.episode_steps)
+        self.episode_steps = episode_length(self.infant, behavior, self.settings)
+        """Physics steps per episode (:func:`episode_length`)."""
         self.step_dt = float(self.infant.control_timestep)
         self.episode_step = 0
         self._sums = {term.name: 0.0 for term in self.terms}
@@ -312,6 +319,25 @@ def term_values(envs: list[BehaviorEnv], contexts: list[StepContext]) -> np.ndar
             check_reward(terms[k].name, float(raw[k, i]), envs[i].index, contexts[i].step)
     weights = np.array([term.weight for term in terms])[:, None]
     return weights * raw
+
+
+def episode_length(infant: Any, behavior: Behavior, settings: EnvSettings) -> int:
+    """Physics steps per episode: ``settings.episode_seconds`` (an evaluation's session), else
+    the behaviour's :meth:`~devlearn.api.behavior.Behavior.episode_seconds`, converted with
+    the body's physics step, else the infant's own ``episode_steps`` (5 s).
+
+    Raises:
+        UsageError: The seconds are not a whole number of physics steps (one line).
+    """
+    seconds, whose = settings.episode_seconds, "the evaluation's session"
+    if seconds is None:
+        seconds, whose = behavior.episode_seconds(), f"{type(behavior).name}'s episode_seconds()"
+    if seconds is None:
+        return int(infant.episode_steps)
+    try:
+        return physics_steps(seconds, float(infant.physics_timestep))
+    except ValueError as err:
+        raise UsageError(f"{whose}: {err}") from None
 
 
 def env_settings(settings: EnvSettings | None, action_repeat: int | None = None) -> EnvSettings:

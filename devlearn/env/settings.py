@@ -23,6 +23,15 @@ class EnvSettings:
     (``env.action_repeat``; :func:`~devlearn.env.behavior_env.step_batch`). Must divide the
     episode length (checked where the body is built)."""
 
+    episode_seconds: float | None = None
+    """Simulated seconds per episode, overriding the behaviour's
+    (:meth:`~devlearn.api.behavior.Behavior.episode_seconds`) and the infant's (5 s); None:
+    theirs. ``devlearn eval --session S`` sets it: whole sessions without a reset. Converted
+    with the body's physics step, it must be a whole number of decisions (checked where the
+    body is built)."""
+
     def __post_init__(self) -> None:
         if isinstance(self.action_repeat, bool) or not isinstance(self.action_repeat, int):
             raise TypeError(f"action_repeat must be an int, got {self.action_repeat!r}")
+        if self.episode_seconds is not None and not self.episode_seconds > 0:
+            raise ValueError(f"episode_seconds must be above 0, got {self.episode_seconds!r}")

@@ -22,6 +22,7 @@ from devlearn.env.behavior_env import (
     run_memories,
 )
 from devlearn.env.buffers import EnvBuffers, env_spec, write_obs
+from devlearn.env.rendering import check_senses_render
 from devlearn.env.workers import EpisodeInfos, WorkerPool, make_envs, step_envs
 
 if TYPE_CHECKING:
@@ -72,6 +73,8 @@ class DevVecEnv(VecEnv):
     ) -> None:
         if num_envs < 1:
             raise ValueError(f"num_envs must be at least 1, got {num_envs}")
+        if infant_factory is None:  # the real infant, rendered in worker processes too
+            check_senses_render(behavior.senses, behavior.name)
         rank = int(os.environ.get("RANK", "0")) if rank is None else rank
         seeds = [seed + rank * num_envs + i for i in range(num_envs)]
         self.settings = env_settings(settings, action_repeat)

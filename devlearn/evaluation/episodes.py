@@ -467,7 +467,7 @@ class Players:
         workers: Env worker processes (0: in this process).
         seed: The evaluation seed.
         infant_factory: Infant builder (picklable with workers); None: the real infant.
-        action_repeat: Physics steps per decision.
+        settings: The envs' settings (the decision rate; an evaluation session's length).
         age_months: The body's age (None: the default body).
     """
 
@@ -478,11 +478,10 @@ class Players:
         workers: int,
         seed: int,
         infant_factory: InfantFactory | None,
-        action_repeat: int,
+        settings: EnvSettings,
         age_months: float | None = None,
     ) -> None:
         seeds = [seed] * slots  # every slot seeds its generator afresh anyway
-        settings = EnvSettings(action_repeat=action_repeat)
         self.envs: list[BehaviorEnv] = []
         self.pool: WorkerPool | None = None
         if workers == 0:

@@ -25,6 +25,8 @@ from devlearn.api.errors import UsageError
 from devlearn.config.resolve import RunRequest, resolve_config
 from devlearn.config.run_config import RunConfig, fresh_config, to_dict
 from devlearn.env.behavior_env import BehaviorEnv
+from devlearn.env.rendering import check_senses_render, require_rendering
+from devlearn.env.settings import EnvSettings
 from devlearn.evaluation.episodes import (
     VIDEO_FORMATS,
     VIDEO_FPS,
@@ -47,6 +49,7 @@ from devlearn.files import (
     check_replaceable,
     write_text_atomically,
 )
+from devlearn.timing import decision_rate_error, physics_steps
 from devlearn.training.checkpoint import LATEST, Checkpoint, is_scripted_policy
 
 if TYPE_CHECKING:
@@ -224,6 +227,17 @@ def available_cores() -> int:
     return os.cpu_count() or 1
 
 
+def paying_workers(episodes: int, workers: int) -> int:
+    """The env workers that repay their start-up for ``episodes`` episodes, at most
+    ``workers``: one per :data:`PARALLEL_MIN_EPISODES` episodes, and none where that leaves one
+    (a lone worker only adds its start-up and round trips to one process's work). ``devlearn
+    eval`` asks no more of :func:`parallelism`, so that asking for more workers never makes a
+    small evaluation slower (issue #55); the API keeps what it is asked (tests of the worker
+    path use few episodes)."""
+    workers = min(workers, episodes // PARALLEL_MIN_EPISODES)
+    return workers if workers > 1 else 0
+
+
 def parallelism(
     episodes: int,
     envs: int | None,
@@ -237,7 +251,7 @@ def parallelism(
     :data:`PARALLEL_MIN_EPISODES` episodes per core on (fewer would not repay a worker's
     start-up), else none; :data:`ENVS_PER_WORKER` envs per worker, one without workers. There
     are never more envs than episodes nor more workers than envs; one env plays in this
-    process.
+    process. (``devlearn eval`` also caps workers it is asked for: :func:`paying_workers`.)
 
     Raises:
         UsageError: Several envs asked of a behaviour whose evaluator does not merge.
@@ -284,6 +298,10 @@ class EvalRequest:
             at age A (by default a checkpoint is evaluated at the age it last trained at).
         envs: Envs playing episodes at once (None: automatic, see :func:`parallelism`).
         workers: Env worker processes they are split over (0: this process; None: automatic).
+        session: Play every episode as one session of this many simulated seconds, without a
+            reset inside (``--session 300 --start rest``: the 5-minute sessions from rest that
+            infant studies code); None: the behaviour's episodes (5 s). Recorded as
+            ``protocol.session_s``; the per-episode figures are then per session.
         video: Write the first episode as a video here (MP4, or another of
             :data:`~devlearn.evaluation.episodes.VIDEO_FORMATS`; checked before any episode
             runs). A video that cannot be written does not lose the evaluation.
@@ -301,6 +319,7 @@ class EvalRequest:
     overrides: tuple[str, ...] = ()
     envs: int | None = 1
     workers: int | None = 0
+    session: float | None = None
     video: str | Path | None = None
     out_dir: str | Path | None = None
 
@@ -333,6 +352,8 @@ class EvalRequest:
         ):
             if value is not None and value < least:
                 raise UsageError(f"--{name} must be at least {least}, got {value}")
+        if self.session is not None and not self.session > 0:
+            raise UsageError(f"--session must be above 0 seconds, got {self.session}")
 
     @property
     def ages(self) -> list[str]:
@@ -381,12 +402,14 @@ class EvalConditions:
             infant's own (where it trained).
         envs: Envs playing the episodes (slots).
         workers: Env worker processes (0: this process).
+        settings: The envs' settings: the checkpoint's decision rate, a session's length.
     """
 
     stage: dict[str, Any]
     infant_start: str | None
     envs: int
     workers: int
+    settings: EnvSettings = EnvSettings()
 
 
 def default_out_dir(request: EvalRequest) -> Path:
@@ -449,9 +472,18 @@ def evaluation_conditions(
     both.
 
     Raises:
-        UsageError: Several envs asked of a behaviour whose evaluator does not merge.
+        UsageError: Several envs asked of a behaviour whose evaluator does not merge; a
+            session that is not a whole number of decisions.
     """
     behavior = subject.behavior
+    repeat = subject.config.env.action_repeat
+    if request.session is not None:  # checked for BabyBench's 5 ms step; the env checks its own
+        try:
+            steps = physics_steps(request.session)
+        except ValueError as err:
+            raise UsageError(f"--session: {err}") from None
+        if error := decision_rate_error(repeat, steps):
+            raise UsageError(f"--session {request.session:g}: {error}")
     stage = evaluation_stage(behavior, subject.stage_steps)
     infant_start = None
     if request.start != "stage":
@@ -469,7 +501,7 @@ def evaluation_conditions(
         behavior.evaluator(training=False).mergeable,
         cores,
     )
-    return EvalConditions(stage, infant_start, envs, workers)
+    return EvalConditions(stage, infant_start, envs, workers, EnvSettings(repeat, request.session))
 
 
 class Evaluation:
@@ -521,8 +553,11 @@ class Evaluation:
         request = self.request
         if request.video is not None:
             check_video(request.video)
+            require_rendering("--video")
         out = prepare_out_dir(request.out_dir) if request.out_dir is not None else None
         subject = open_subject(request, self.registry)
+        if self.infant_factory is None:  # before any env or worker renders
+            check_senses_render(subject.behavior.senses, subject.behavior.name)
         torch.manual_seed(request.seed)
         threads = torch.get_num_threads()
         # A batch of one gains nothing from more threads, and several threads on a core that
@@ -537,7 +572,7 @@ class Evaluation:
                 conditions.workers,
                 request.seed,
                 self.infant_factory,
-                subject.config.env.action_repeat,
+                conditions.settings,
                 subject.age_months,
             ) as players:
                 plan, episode_steps = self.plan(subject, conditions, players)
@@ -545,6 +580,7 @@ class Evaluation:
             evaluator, episode_metrics, started = merged_results(results)
             video_error = next((r.video_error for r in results if r.video_error), None)
             summary = self.measures(subject, conditions, evaluator, started)
+            per_episode_headline(summary, episode_metrics, subject.behavior.headline_metric)
             summary["execution"] = {
                 "envs": conditions.envs,
                 "workers": conditions.workers,
@@ -581,8 +617,8 @@ class Evaluation:
                 request.seed,
                 self.infant_factory,
                 training=False,
-                action_repeat=repeat,
                 age_months=subject.age_months,
+                settings=conditions.settings,
             )
         )
         try:
@@ -676,6 +712,7 @@ class Evaluation:
                 "start_option": request.start,
                 "settle_steps": 0,
                 "action_repeat": subject.config.env.action_repeat,
+                "session_s": request.session,
                 "age_months": subject.age_months,
                 **evaluator.protocol(),
                 "checkpoint_env_steps": steps,
@@ -702,6 +739,26 @@ class Evaluation:
             raise EvalWriteError(f"evaluated, but {exc}", summary) from None
 
 
+def per_episode_headline(
+    summary: dict[str, Any], episodes: list[dict[str, float]], headline: str
+) -> None:
+    """Add the headline's per-episode mean, spread and 95% t-interval over ``episodes``
+    (``episode_<headline>_mean``, ``_std``, ``_ci_low``, ``_ci_high``) where the evaluator
+    reports none: the figure training logs under the same name
+    (:func:`~devlearn.training.runner_metrics.headline_key`), for every behaviour (issue #55).
+    Nothing is added where an episode lacks the figure."""
+    from devlearn.api.stats import mean_ci
+
+    if not headline or f"episode_{headline}_mean" in summary:
+        return
+    values = [e[headline] for e in episodes if headline in e]
+    if not values or len(values) != len(episodes):
+        return
+    stats = mean_ci(values)
+    for name in ("mean", "std", "ci_low", "ci_high"):
+        summary[f"episode_{headline}_{name}"] = stats[name]
+
+
 def evaluate(
     behavior_name: str,
     checkpoint: str | Path | None,
@@ -718,6 +775,7 @@ def evaluate(
     action: str = "mean",
     envs: int | None = 1,
     workers: int | None = 0,
+    session: float | None = None,
 ) -> dict[str, Any]:
     """``Evaluation(EvalRequest(...), registry, infant_factory, progress).run()``: a
     convenience for scripts and tests (arguments as :class:`EvalRequest`'s attributes)."""
@@ -732,6 +790,7 @@ def evaluate(
         overrides=tuple(overrides or ()),
         envs=envs,
         workers=workers,
+        session=session,
         video=video,
         out_dir=out_dir,
     )

@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from devlearn.api.errors import UsageError
+from devlearn.api.json_files import read_json
 from devlearn.api.stats import CONFIDENCE, mean_ci
 from devlearn.config.checks import check_out_dir
 from devlearn.files import check_replaceable, write_atomically, write_text_atomically
@@ -130,26 +131,35 @@ def _eval_files(path: Path) -> list[Path]:
 
 
 def _read(file: Path) -> dict[str, Any] | None:
-    try:
-        data = json.loads(file.read_text())
-    except (OSError, ValueError) as exc:
-        raise UsageError(f"{file} is not readable JSON ({type(exc).__name__})") from None
+    """An evaluation's summary, or None for one made before the protocol was recorded.
+
+    Raises:
+        UsageError: Unreadable (:func:`~devlearn.api.json_files.read_json`).
+    """
+    data = read_json(file)
     return data if isinstance(data, dict) and "protocol" in data else None
 
 
-def collect(paths: Sequence[str | Path]) -> tuple[list[tuple[Path, dict]], list[str]]:
+def collect(
+    paths: Sequence[str | Path], skipped: list[str] | None = None
+) -> tuple[list[tuple[Path, dict]], list[str]]:
     """The evaluations under ``paths`` plus baselines of the same behaviour found beside them
-    (in the folders next to a path or next to its parent).
+    (in the folders next to a path or next to its parent). An unreadable evaluation the paths
+    name is refused; an unreadable one found beside them is skipped, with a note (and its
+    reason appended to ``skipped``, for a warning).
 
     Returns:
         ``([(eval.json path, summary), ...], notes)``.
     Raises:
-        UsageError: No paths, a path without evaluations, or evaluations of several behaviours.
+        UsageError: No paths, a path without evaluations or with an unreadable one, or
+            evaluations of several behaviours.
     """
     if not paths:
         raise UsageError("report needs at least one evaluation or run folder")
     found: dict[Path, dict] = {}
-    notes, old = [], []
+    notes: list[str] = []
+    old: list[Path] = []
+    unreadable: dict[Path, str] = {}
     for path in map(Path, paths):
         files = _eval_files(path)
         if not files:
@@ -165,12 +175,20 @@ def collect(paths: Sequence[str | Path]) -> tuple[list[tuple[Path, dict]], list[
         near = path.resolve().parent
         behaviors = {d.get("behavior") for d in found.values()}
         for file in sorted([*near.glob("*/eval.json"), *near.parent.glob("*/eval.json")]):
-            if not file.is_file():
-                continue  # a FIFO under that name would block the read for ever
-            data = _read(file)  # a baseline beside it, of the same behaviour
+            if file.resolve() in found or file.resolve() in unreadable:
+                continue
+            try:  # the guarded reader: a FIFO named eval.json is refused, never waited on
+                data = _read(file)  # a baseline beside it, of the same behaviour
+            except UsageError as err:  # not given: a stray file is no reason to stop
+                unreadable[file.resolve()] = str(err)
+                continue
             if data is not None and data.get("policy") in BASELINES:
                 if data.get("behavior") in behaviors:
                     found.setdefault(file.resolve(), data)
+    for reason in unreadable.values():
+        notes.append(f"skipped an unreadable evaluation found beside them: {reason}")
+        if skipped is not None:
+            skipped.append(reason)
     if old:
         notes.append(
             f"skipped {len(old)} evaluation(s) made before the protocol was recorded "
@@ -268,6 +286,7 @@ def write_report(
     out_dir: str | Path,
     paper_results: PaperResults | None = None,
     as_loaded: ConfigLoader | None = None,
+    skipped: list[str] | None = None,
 ) -> dict[str, Any]:
     """Write ``out_dir/report.md`` (table) and ``out_dir/report.png`` (bars with error bars).
 
@@ -280,6 +299,8 @@ def write_report(
         as_loaded: How a saved config loads (:data:`ConfigLoader`; in the CLI, through the
             behaviour's config class), so that variants are told apart by what their runs
             trained with, not by how old their config files are; None: as saved.
+        skipped: Receives why each evaluation found beside ``paths`` was skipped (an
+            unreadable eval.json that was not given: the report is made without it).
     Returns:
         ``{"behavior", "metrics": [...], "columns": {name: {"kind", "seeds", "paths"}},
         "table": {metric: {column: {"n", "mean", "std", "ci_low", "ci_high", "values"}}},
@@ -294,7 +315,7 @@ def write_report(
     check_out_dir(out)
     for name in REPORT_FILES:
         check_replaceable(out / name)
-    evaluations, notes = collect(paths)
+    evaluations, notes = collect(paths, skipped)
     columns, more = group(evaluations, as_loaded)
     notes += more
     variants = [c for c in columns if not c.endswith(" baseline")]

@@ -13,6 +13,7 @@ import torch
 import torch.nn as nn
 
 from devlearn.api.errors import UsageError
+from devlearn.api.json_files import parse_json
 from devlearn.config.growth import start_age
 from devlearn.config.run_config import from_dict
 from devlearn.training.checkpoint import SCRIPTED_METADATA, behavior_with_artifacts
@@ -133,8 +134,8 @@ class ScriptedPolicy:
         try:
             with known_exporter_noise_silenced():
                 module = torch.jit.load(str(path), map_location="cpu", _extra_files=extra)
-            state = json.loads(extra[METADATA])
-        except (RuntimeError, ValueError) as exc:
+            state = parse_json(extra[METADATA], f"{path}'s metadata")
+        except (RuntimeError, ValueError, UsageError) as exc:
             reason = " ".join(str(exc).split())[:160]
             raise UsageError(f"scripted policy {path} is unreadable: {reason}") from None
         if not isinstance(state, dict) or state.get("format") != SCRIPTED_FORMAT:

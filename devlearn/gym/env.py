@@ -16,6 +16,7 @@ from devlearn.gym.run_setup import (
     as_space,
     episode_info,
     observation_space,
+    require_open,
     step_info,
 )
 
@@ -137,6 +138,7 @@ class DevlearnEnv(gymnasium.Env):
         episode abandoned midway is closed unscored. Reward terms keep their memory over the
         agent's lifetime (self-touch's "first ever" touches), resets included, as in a run.
         """
+        require_open(self, self._closed, "reset")
         if seed is None and self._fresh:
             seed = self.setup.config.seed
         self._fresh = False
@@ -161,6 +163,7 @@ class DevlearnEnv(gymnasium.Env):
             ``(obs, reward, terminated, truncated, info)``; at an episode's end ``obs`` is its
             last observation and ``truncated`` is True (``reset()`` then starts the next).
         """
+        require_open(self, self._closed, "step")
         stage = self.clock.stage.name
         obs, reward, done, _, summary = self.env.step(np.asarray(action, dtype=np.float64))
         info = step_info(self.term_names, self.env.decision_rewards, stage)

@@ -40,12 +40,34 @@ def set_items(overrides: Overrides) -> list[str]:
         return []
     if isinstance(overrides, Mapping):
         return [f"{k}={v if isinstance(v, str) else json.dumps(v)}" for k, v in overrides.items()]
-    if isinstance(overrides, str) or not all(isinstance(o, str) for o in overrides):
+    if (
+        isinstance(overrides, str)
+        or not isinstance(overrides, Sequence)  # 5 was a raw TypeError: not iterable
+        or not all(isinstance(o, str) for o in overrides)
+    ):
+        shown = repr(overrides) if len(repr(overrides)) <= 80 else repr(overrides)[:77] + "..."
         raise UsageError(
             "overrides must be a mapping of config keys to values ({'env.action_repeat': 5}) "
-            f"or a list of 'KEY=VALUE' strings, got {overrides!r}"
+            f"or a list of 'KEY=VALUE' strings, got {shown}"
         )
     return list(overrides)
+
+
+def require_open(env: object, closed: bool, call: str) -> None:
+    """Refuse ``call`` (``step``, ``reset``) on a closed env, as Gymnasium's own vector envs
+    do (a step after ``close()`` read freed buffers: KeyError 'actions').
+
+    Raises:
+        gymnasium.error.ClosedEnvironmentError: ``closed``; the message names the env and
+            what to do.
+    """
+    if closed:
+        from gymnasium.error import ClosedEnvironmentError
+
+        raise ClosedEnvironmentError(
+            f"{call}() on a closed {type(env).__name__}: close() released its environments; "
+            "make a new env to go on"
+        )
 
 
 class RunSetup:

@@ -17,6 +17,7 @@ from devlearn.gym.run_setup import (
     action_space,
     episode_info,
     observation_space,
+    require_open,
     step_info,
 )
 
@@ -113,6 +114,7 @@ class DevlearnVectorEnv(VectorEnv):
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self.render_mode = None
         self._fresh = True  # not reset yet
+        self._closed = False
 
     def _observations(self, prefix: str = "obs/") -> dict[str, np.ndarray]:
         arrays = self.envs.arrays
@@ -134,6 +136,7 @@ class DevlearnVectorEnv(VectorEnv):
         again; an abandoned episode's evaluator figures run into the next one's). Reward terms
         keep their lifetime memory, as in a run.
         """
+        require_open(self, self._closed, "reset")
         if seed is None and self._fresh:
             seed = self.seed_base
         super().reset(seed=seed)
@@ -157,6 +160,7 @@ class DevlearnVectorEnv(VectorEnv):
             ``(obs, rewards (num_envs,) float32, terminated (num_envs,) bool, always False,
             truncated (num_envs,) bool, info)``.
         """
+        require_open(self, self._closed, "step")
         stage = self.clock.stage.name
         ended = self.envs.step_arrays(np.asarray(actions, dtype=np.float32))
         self._fresh = False
@@ -189,6 +193,7 @@ class DevlearnVectorEnv(VectorEnv):
 
     def close_extras(self, **kwargs: Any) -> None:
         """Stop the workers, close the envs and remove the temporary folder."""
+        self._closed = True
         if hasattr(self, "envs"):  # not when building them failed
             self.envs.close()
             self.setup.close()

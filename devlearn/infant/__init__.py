@@ -11,6 +11,12 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 # do not share its thread pool). GPU drivers ignore it.
 os.environ.setdefault("LP_NUM_THREADS", "0")
 
+from devlearn.gl_backend import importable  # noqa: E402
+
+with importable():  # an unusable MUJOCO_GL stops only a command that renders (vision.py)
+    import dm_control.mjcf  # noqa: F401
+    import mujoco  # noqa: F401
+
 from devlearn.infant.infant import (  # noqa: E402
     ACTUATOR_GROUPS,
     SENSES,

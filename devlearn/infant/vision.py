@@ -9,6 +9,8 @@ from collections.abc import Callable
 import mujoco
 import numpy as np
 
+from devlearn.gl_backend import rendering_problem
+
 # Segmentation labels of Infant.eyes_segmentation().
 BACKGROUND, LEFT_HAND, RIGHT_HAND, BODY, SCENE = 0, 1, 2, 3, 4
 HAND_LABELS = {"left": LEFT_HAND, "right": RIGHT_HAND}
@@ -23,7 +25,14 @@ _OFF = (
 
 
 def fast_renderer(model: mujoco.MjModel, height: int, width: int) -> mujoco.Renderer:
-    """A renderer with shadows, reflections, skybox, fog and haze off (cheap on Mesa)."""
+    """A renderer with shadows, reflections, skybox, fog and haze off (cheap on Mesa).
+
+    Raises:
+        RuntimeError: ``MUJOCO_GL`` names no backend (one line saying so), or no OpenGL
+            context opens.
+    """
+    if problem := rendering_problem():
+        raise RuntimeError(problem)
     try:
         renderer = mujoco.Renderer(model, height=height, width=width)
     except mujoco.FatalError as exc:  # typically: mujoco imported before MUJOCO_GL was set

@@ -1,4 +1,5 @@
-"""run_sweep(): check everything, then train and evaluate every run, then write the report."""
+"""run_sweep(): check everything, then train and evaluate every run, then write the report;
+execute_runs(), the loop over a folder's runs that experiments (devlearn.experiment) share."""
 
 from __future__ import annotations
 
@@ -11,13 +12,15 @@ from typing import TYPE_CHECKING, Any, TextIO
 
 from devlearn.api.errors import UsageError
 from devlearn.files import NAME_MAX
-from devlearn.sweep.bookkeeping import SweepFolder, check_folder
-from devlearn.sweep.executors import make_executor
+from devlearn.sweep.bookkeeping import RunFolder, SweepFolder, check_folder
+from devlearn.sweep.executors import LocalExecutor, RayExecutor, make_executor
 from devlearn.sweep.job import RunJob
 from devlearn.sweep.progress import Progress
 from devlearn.sweep.spec import SweepSpec, Variant, variants
 
 if TYPE_CHECKING:
+    from devlearn.config.resolve import RunRequest
+    from devlearn.config.run_config import RunConfig
     from devlearn.plugins import PluginRegistry
 
 POLL_S = 1.0
@@ -50,7 +53,6 @@ def plan_sweep(
     from devlearn.config.resolve import RunRequest, resolve_config
     from devlearn.config.run_config import to_dict
     from devlearn.config.values import in_table, valid_keys
-    from devlearn.training.learned_rewards import LearnedRewards
 
     train = spec.train
     base = resolve_config(RunRequest(spec.behavior), registry)
@@ -79,12 +81,7 @@ def plan_sweep(
                 f"{len(variant.name.encode())} bytes, over the file system's {NAME_MAX}; "
                 "give shorter --grid values"
             )
-        try:
-            cfg = resolve_config(request, registry)
-            registry.create(spec.behavior, cfg.behavior)
-            LearnedRewards.from_config(copy.deepcopy(cfg), registry)  # learned.* options too
-        except UsageError as exc:
-            raise UsageError(f"run {variant.name}: {exc}") from None
+        cfg = checked_config(request, registry, variant.name)
         cfg.out_dir = str(run_dir)
         common = ["--workers", str(train.workers)]
         common += ["--steps", str(train.steps)] if train.steps is not None else []
@@ -107,6 +104,25 @@ def plan_sweep(
     if spec.launcher and shutil.which(spec.launcher[0]) is None:
         raise UsageError(f"launcher command '{spec.launcher[0]}' is not found")
     return runs
+
+
+def checked_config(request: RunRequest, registry: PluginRegistry, name: str) -> RunConfig:
+    """A run's config resolved and checked as ``devlearn run`` would check it: the behaviour
+    built on it, the options of its learned rewards too.
+
+    Raises:
+        UsageError: What the config pipeline refuses, naming the run (``run NAME: ...``).
+    """
+    from devlearn.config.resolve import resolve_config
+    from devlearn.training.learned_rewards import LearnedRewards
+
+    try:
+        cfg = resolve_config(request, registry)
+        registry.create(request.behavior, cfg.behavior)
+        LearnedRewards.from_config(copy.deepcopy(cfg), registry)  # learned.* options too
+    except UsageError as exc:
+        raise UsageError(f"run {name}: {exc}") from None
+    return cfg
 
 
 def _settings(seed: int, preset: str | None, overrides: list[str]) -> list[str]:
@@ -162,49 +178,75 @@ def run_sweep(
         f"sweep {spec.out}: {len(runs)} runs of {spec.behavior}, {executor.describe()}", file=stream
     )
     progress = Progress(len(runs), headline, stream)
-    records = {}
     try:
-        active = []
-        for run in runs:
-            record = folder.finished_record(run.job)
-            if record is not None:
-                records[run.job.name] = record
-                progress.earlier(record)
-            else:
-                folder.mark_queued(run.job)
-                progress.line("queued", run.job.name)
-                try:
-                    executor.submit(run.job)
-                except BaseException:  # an interrupt while queueing: stop what was queued
-                    executor.interrupt()
-                    executor.close()
-                    raise
-                active.append(run.job)
         totals = {run.job.name: run.total_steps for run in runs}
-
-        def collect(timeout: float) -> None:
-            for record in executor.wait(timeout):
-                records[record["name"]] = record
-                progress.finished(record, spec.out)
-            folder.write_runs([records[r.job.name] for r in runs if r.job.name in records])
-
-        try:
-            while executor.pending():
-                collect(POLL_S)
-                active = [job for job in active if job.name not in records]
-                progress.tick(active, totals)
-        except BaseException:
-            # Ctrl-C, SIGTERM or any error: running runs save a checkpoint; queued ones never
-            # start (a sweep that stopped must not go on starting runs and evaluations)
-            executor.interrupt()
-            executor.close()
-            collect(0)
-            raise
-        executor.close()
+        records = execute_runs([run.job for run in runs], totals, folder, executor, progress)
         return _finish(spec, runs, records, stream)
     finally:
         progress.close()
         folder.close()
+
+
+def execute_runs(
+    jobs: list[RunJob],
+    totals: dict[str, int],
+    folder: RunFolder,
+    executor: LocalExecutor | RayExecutor,
+    progress: Progress,
+) -> dict[str, dict[str, Any]]:
+    """Hand every job not done yet to the executor and wait for them all, keeping runs.json
+    and the progress lines up to date; the executor is closed at the end.
+
+    Args:
+        jobs: The runs, in the folder's order.
+        totals: Each run's training budget (environment steps; 0: nothing to train).
+        folder: The open folder (records of earlier starts, runs.json).
+        executor: Where the runs execute.
+        progress: Where their states are shown.
+    Returns:
+        Every run's record by name (``status``: done, failed or interrupted).
+    Raises:
+        KeyboardInterrupt: Ctrl-C or SIGTERM; running runs saved a checkpoint, queued ones never
+            started.
+    """
+    records: dict[str, dict[str, Any]] = {}
+    active = []
+    for job in jobs:
+        record = folder.finished_record(job)
+        if record is not None:
+            records[job.name] = record
+            progress.earlier(record)
+            continue
+        folder.mark_queued(job)
+        progress.line("queued", job.name)
+        try:
+            executor.submit(job)
+        except BaseException:  # an interrupt while queueing: stop what was queued
+            executor.interrupt()
+            executor.close()
+            raise
+        active.append(job)
+
+    def collect(timeout: float) -> None:
+        for record in executor.wait(timeout):
+            records[record["name"]] = record
+            progress.finished(record, folder.path)
+        folder.write_runs([records[job.name] for job in jobs if job.name in records])
+
+    try:
+        while executor.pending():
+            collect(POLL_S)
+            active = [job for job in active if job.name not in records]
+            progress.tick(active, totals)
+    except BaseException:
+        # Ctrl-C, SIGTERM or any error: running runs save a checkpoint; queued ones never
+        # start (a sweep that stopped must not go on starting runs and evaluations)
+        executor.interrupt()
+        executor.close()
+        collect(0)
+        raise
+    executor.close()
+    return records
 
 
 def _finish(spec: SweepSpec, runs: list[PlannedRun], records: dict, stream: TextIO) -> int:

@@ -16,6 +16,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from devlearn.api.errors import UsageError
+from devlearn.api.json_files import read_json as read_json_file
 from devlearn.config.resolve import RUN_CONFIG_FILE
 from devlearn.files import InUseError, lock_exclusively, write_text_atomically
 
@@ -59,6 +61,22 @@ class RunJob:
     """Command prefix that starts devlearn (None: this Python with ``-m devlearn.cli``)."""
     global_args: list[str] = field(default_factory=list)
     """Options before the sub-command (``--disable-plugin NAME``)."""
+    evals: dict[str, list[str]] = field(default_factory=dict)
+    """Evaluations of the run: folder (in the run folder) -> ``devlearn eval`` options after
+    ``--out FOLDER`` (empty: one, ``eval`` with :attr:`eval_args`). A restarted run skips an
+    evaluation whose folder holds a readable eval.json."""
+    trainer: list[str] | None = None
+    """A training command other than ``devlearn run``: a script and its arguments, run with the
+    executing process's Python (``examples/sb3/train.py ...``). It writes :attr:`policy` into
+    the run folder; it cannot resume, so an interrupted one starts again."""
+    policy: str | None = "checkpoint_latest.pt"
+    """The file of the run folder the evaluations score; None: nothing is trained (baselines,
+    whose evaluation options name the policy)."""
+
+    @property
+    def evaluations(self) -> dict[str, list[str]]:
+        """Evaluation folder (in the run folder) -> its ``devlearn eval`` options."""
+        return self.evals or {"eval": self.eval_args}
 
     @property
     def run_dir(self) -> Path:
@@ -88,10 +106,11 @@ def write_json(path: Path, data: dict[str, Any]) -> None:
 
 
 def read_json(path: Path) -> dict[str, Any] | None:
-    """A JSON object from ``path``, or None if it is missing or unreadable."""
+    """A JSON object from ``path``, or None if it is missing or unreadable (the guarded
+    reader's refusals included: :func:`devlearn.api.json_files.read_json`)."""
     try:
-        data = json.loads(Path(path).read_text())
-    except (OSError, ValueError):
+        data = read_json_file(path)
+    except UsageError:
         return None
     return data if isinstance(data, dict) else None
 
@@ -252,30 +271,50 @@ class _Run:
             os.set_inheritable(lock.fileno(), True)
             if self.stop is not None and self.stop.is_set():  # stopped before it started
                 return self.save("interrupted")
-            if not self.record["trained"]:
-                run_dir = str(job.run_dir)
-                if has_checkpoint(job.run_dir):
-                    phase, args = "resume", ["--resume", run_dir, *job.resume_args]
-                else:
-                    if job.run_dir.exists():  # a start killed before its first checkpoint
-                        shutil.rmtree(job.run_dir)
-                    write_json(job.config_path, job.config)
-                    phase, args = "train", ["--out", run_dir, "--config", str(job.config_path)]
-                returncode = self.command(phase, [*base, "run", job.behavior, *args], lock.fileno())
+            if job.policy is not None and not self.record["trained"]:
+                returncode = self.train(base, lock.fileno())
                 if returncode != 0:
                     return self.fail("training", returncode)
                 self.record["trained"] = True
-            if self.stop is not None and self.stop.is_set():  # trained, but asked to stop
-                return self.save("interrupted")
-            checkpoint = job.run_dir / "checkpoint_latest.pt"
-            argv = [*base, "eval", job.behavior, "--checkpoint", str(checkpoint)]
-            argv += ["--out", str(job.run_dir / "eval"), *job.eval_args]
-            returncode = self.command("eval", argv, lock.fileno())
-            if returncode != 0:
-                return self.fail("evaluating", returncode)
+            summaries = {}
+            for folder, args in job.evaluations.items():
+                out = job.run_dir / folder
+                summary = read_json(out / "eval.json")  # a finished evaluation is kept
+                if summary is None:
+                    if self.stop is not None and self.stop.is_set():  # asked to stop
+                        return self.save("interrupted")
+                    argv = [*base, "eval", job.behavior]
+                    if job.policy is not None:
+                        argv += ["--checkpoint", str(job.run_dir / job.policy)]
+                    argv += ["--out", str(out), *args]
+                    returncode = self.command("eval", argv, lock.fileno())
+                    if returncode != 0:
+                        return self.fail("evaluating", returncode)
+                    summary = read_json(out / "eval.json")
+                summaries[folder] = summary
             self.record["config"] = read_json(job.run_dir / "config.json")
-            self.record["eval"] = read_json(job.run_dir / "eval" / "eval.json")
+            if job.trainer is not None:
+                self.record["train"] = read_json(job.run_dir / "train.json")
+            self.record["eval"] = next(iter(summaries.values()), None)
+            if job.evals:
+                self.record["evals"] = summaries
             return self.save("done")
+
+    def train(self, base: list[str], lock_fd: int) -> int:
+        """Train: resume ``devlearn run`` from its checkpoint, else start afresh (from the
+        resolved config, or the job's own trainer); the exit code."""
+        job = self.job
+        run_dir = str(job.run_dir)
+        if job.trainer is None and has_checkpoint(job.run_dir):
+            argv = [*base, "run", job.behavior, "--resume", run_dir, *job.resume_args]
+            return self.command("resume", argv, lock_fd)
+        if job.run_dir.exists():  # a start killed before its first checkpoint
+            shutil.rmtree(job.run_dir)
+        write_json(job.config_path, job.config)
+        if job.trainer is not None:
+            return self.command("train", [sys.executable, *job.trainer], lock_fd)
+        argv = [*base, "run", job.behavior, "--out", run_dir, "--config", str(job.config_path)]
+        return self.command("train", argv, lock_fd)
 
 
 def execute_job(
@@ -283,9 +322,10 @@ def execute_job(
 ) -> dict[str, Any]:
     """Train (resuming from a checkpoint if the run has one) and evaluate one run.
 
-    A run whose training finished earlier is only evaluated. The record
-    (``SWEEP/records/NAME.json``) is updated at every step: status, every command with its
-    host, code commit, wall time and exit code, the final config and evaluation.
+    A run whose training finished earlier is only evaluated, and an evaluation whose eval.json
+    is there is not run again. The record (``SWEEP/records/NAME.json``) is updated at every
+    step: status, every command with its host, code commit, wall time and exit code, the final
+    config and evaluation (``evals``: every evaluation's, by folder, when the job has several).
 
     Args:
         job: The run.

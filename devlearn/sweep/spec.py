@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import itertools
 import json
+import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -177,6 +178,28 @@ def parse_seeds(text: str) -> list[int]:
     return seeds
 
 
+RUNS_MAX = 10_000
+"""Most runs one sweep holds, grid combinations times seeds (as for :data:`SEEDS_MAX`: beyond
+this a typo, not an experiment; a 3000 x 3000 grid planned for hours before printing one)."""
+
+
+def check_size(grid: dict[str, list[str]], seeds: list[int]) -> int:
+    """The number of runs of ``grid`` times ``seeds``, counted without listing them.
+
+    Raises:
+        UsageError: More than :data:`RUNS_MAX` (each factor named).
+    """
+    runs = len(seeds) * math.prod(len(values) for values in grid.values())
+    if runs > RUNS_MAX:
+        factors = [f"{len(values):,} values of {key}" for key, values in grid.items()]
+        factors.append(f"{len(seeds):,} seed{'s' if len(seeds) != 1 else ''}")
+        raise UsageError(
+            f"the sweep would train {runs:,} runs ({' x '.join(factors)}), more than "
+            f"{RUNS_MAX:,}; give fewer grid values or seeds, or split it into several sweeps"
+        )
+    return runs
+
+
 def check_grid(grid: dict[str, list[str]], overrides: list[str]) -> None:
     """Reject empty or repeated values, reserved keys and keys also fixed by ``--set``."""
     fixed = {item.partition("=")[0].strip() for item in overrides}
@@ -199,7 +222,13 @@ def _short_keys(keys: list[str]) -> dict[str, str]:
 
 def variants(grid: dict[str, list[str]], seeds: list[int]) -> list[Variant]:
     """Every combination, seeds outermost: all variants of the first seed come first, so a
-    sweep stopped early still holds a complete comparison."""
+    sweep stopped early still holds a complete comparison.
+
+    Raises:
+        UsageError: More than :data:`RUNS_MAX` runs (:func:`check_size`), or two runs that
+            would share a folder name.
+    """
+    check_size(grid, seeds)
     keys = list(grid)
     short = _short_keys(keys)
     result: list = []

@@ -33,12 +33,14 @@ from types import ModuleType
 from typing import Any
 
 from devlearn.api.errors import UsageError
+from devlearn.api.json_files import read_text
 from devlearn.config.checks import ENVS_MAX, SEED_MAX, STEPS_MAX
 from devlearn.sweep.spec import (
     EvalSpec,
     SweepSpec,
     TrainSpec,
     check_grid,
+    check_size,
     parse_grid,
     parse_seeds,
     value_text,
@@ -66,15 +68,22 @@ def _toml() -> ModuleType:
     return tomli
 
 
+def load_toml(path: Path, what: str = "sweep file") -> dict[str, Any]:
+    """The tables of a TOML file; UsageError (naming ``what`` and the file) when it cannot be
+    read or is not TOML."""
+    text = read_text(path)  # the guarded reader's: a regular file, of a bounded size
+    try:
+        return dict(_toml().loads(text))
+    except ValueError as exc:  # tomllib.TOMLDecodeError
+        raise UsageError(f"{what} {path} is not valid TOML: {exc}") from None
+    except RecursionError:
+        raise UsageError(f"{what} {path} is nested too deeply") from None
+
+
 def read_sweep_file(path: str | Path) -> dict[str, Any]:
     """Read and check a TOML sweep file: known keys only, the right kinds of values."""
     path = Path(path)
-    try:
-        data = _toml().loads(path.read_text())
-    except OSError as exc:
-        raise UsageError(f"cannot read sweep file {path}: {exc.strerror or exc}") from None
-    except ValueError as exc:  # tomllib.TOMLDecodeError
-        raise UsageError(f"sweep file {path} is not valid TOML: {exc}") from None
+    data = load_toml(path)
     for section, keys in SECTIONS.items():
         table = data if not section else data.get(section, {})
         if not isinstance(table, dict):
@@ -164,6 +173,7 @@ def build_spec(behavior: str, options: dict[str, Any], file: str | Path | None) 
         options.get("overrides") or []
     )
     check_grid(grid, overrides)
+    check_size(grid, seeds)  # before any run is planned: each is a config resolved
     executor = pick("executor", execution, "kind", "local")
     if executor not in EXECUTORS:
         raise UsageError(f"unknown executor '{executor}'; valid: {', '.join(EXECUTORS)}")

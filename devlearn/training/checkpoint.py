@@ -654,6 +654,9 @@ def load_actor(
     source = f"the {behavior.name} checkpoint"
     check_fits(actor.state_dict(), checkpoint["actor_state_dict"], source, "actor_state_dict")
     actor.load_state_dict(checkpoint["actor_state_dict"])
+    if actor.distribution is not None:  # the spread's ceiling where the checkpoint's run was
+        steps = int(checkpoint.get("env_steps", 0) or 0)
+        actor.distribution.set_progress(steps / max(int(cfg.total_steps), 1))
     return actor.eval()
 
 

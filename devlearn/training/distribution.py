@@ -1,4 +1,6 @@
-"""The policy's tanh-mean, softplus-spread Gaussian (paper, sec. II-A4)."""
+"""The policy's action distributions: the paper's tanh-mean, softplus-spread Gaussian (sec.
+II-A4), the bounded Gaussian, the free Gaussian of SB3 and cleanrl, and the tanh-squashed Gaussian
+(issue #54)."""
 
 from __future__ import annotations
 
@@ -19,11 +21,39 @@ def inverse_softplus(y: float) -> float:
     return y + math.log(-math.expm1(-y))
 
 
+def spread_cap(start: float, final: float, progress: float) -> float:
+    """The ceiling on the policy's spread at ``progress`` (0 to 1) through the run: falling
+    log-linearly from ``start`` (the head's initial spread) to ``final`` (issue #54: a policy
+    that explores widely at first and whose mean action is its behaviour at the end)."""
+    progress = min(max(progress, 0.0), 1.0)
+    return math.exp(math.log(start) + (math.log(final) - math.log(start)) * progress)
+
+
 class DiagonalNormal(Distribution):
-    """What both policy heads share: a diagonal Normal set by :meth:`update`, sampled, scored
-    and compared dimension by dimension (summed over actions)."""
+    """What every policy head shares: a diagonal Normal set by :meth:`update`, sampled, scored
+    and compared dimension by dimension (summed over actions).
+
+    With ``final_std`` set (:meth:`set_progress`), the spread is capped by a ceiling that falls
+    from the initial spread to ``final_std`` over the run (:func:`spread_cap`); the cap is a
+    function of the run's progress, not a learned parameter, so it is not saved with the
+    weights and a checkpoint's cap follows from its steps and config.
+    """
 
     _distribution: Normal | None = None
+    final_std: float = 0.0
+    """The spread's ceiling at the end of the run; 0: no ceiling."""
+    std_cap: float = math.inf
+    """The ceiling now (:meth:`set_progress`)."""
+
+    def set_progress(self, progress: float) -> None:
+        """Set the spread's ceiling for ``progress`` (0 to 1) through the run (no-op without
+        ``final_std``)."""
+        if self.final_std > 0:
+            self.std_cap = spread_cap(getattr(self, "init_std", 1.0), self.final_std, progress)
+
+    def capped(self, std: torch.Tensor) -> torch.Tensor:
+        """``std`` under the ceiling (unchanged without one)."""
+        return std.clamp(max=self.std_cap) if math.isfinite(self.std_cap) else std
 
     def sample(self) -> torch.Tensor:
         return self._distribution.sample()  # type: ignore[union-attr]
@@ -73,6 +103,7 @@ class TanhSoftplusGaussian(DiagonalNormal):
         init_std: Standard deviation at initialisation (sets the softplus bias).
         min_std: Small positive floor added to the standard deviation.
         max_std: Upper bound on the standard deviation; 0: unbounded (the paper).
+        final_std: The spread's ceiling at the end of the run (:meth:`set_progress`); 0: none.
     """
 
     def __init__(
@@ -81,10 +112,16 @@ class TanhSoftplusGaussian(DiagonalNormal):
         init_std: float = 0.5,
         min_std: float = 1e-3,
         max_std: float = 0.0,
+        final_std: float = 0.0,
     ) -> None:
         super().__init__(output_dim)
         check_spread(init_std, max_std, min_std)
-        self.init_std = float(init_std)
+        if final_std and not min_std <= final_std < init_std:
+            raise ValueError(
+                f"final_std must lie in [min_std, init_std) = [{min_std}, {init_std}), "
+                f"got {final_std}"
+            )
+        self.init_std, self.final_std = float(init_std), float(final_std)
         self.min_std = float(min_std)
         self.max_std = float(max_std)
         self._distribution: Normal | None = None
@@ -101,7 +138,7 @@ class TanhSoftplusGaussian(DiagonalNormal):
             std = F.softplus(raw_std) + self.min_std
         else:
             std = self.min_std + (self.max_std - self.min_std) * torch.sigmoid(raw_std)
-        self._distribution = Normal(torch.tanh(raw_mean), std)
+        self._distribution = Normal(torch.tanh(raw_mean), self.capped(std))
 
     def deterministic_output(self, mlp_output: torch.Tensor) -> torch.Tensor:
         return torch.tanh(mlp_output[..., 0, :])
@@ -153,9 +190,20 @@ class BoundedGaussian(DiagonalNormal):
     """
 
     def __init__(
-        self, output_dim: int, init_std: float = 0.5, min_std: float = 0.05, max_std: float = 1.0
+        self,
+        output_dim: int,
+        init_std: float = 0.5,
+        min_std: float = 0.05,
+        max_std: float = 1.0,
+        final_std: float = 0.0,
     ) -> None:
         super().__init__(output_dim)
+        if final_std and not min_std <= final_std < init_std:
+            raise ValueError(
+                f"final_std must lie in [min_std, init_std) = [{min_std}, {init_std}), "
+                f"got {final_std}"
+            )
+        self.final_std = float(final_std)
         if not 0 < min_std < init_std < max_std:
             raise ValueError(
                 f"the spread needs 0 < min_std < init_std < max_std; got min_std={min_std}, "
@@ -178,7 +226,8 @@ class BoundedGaussian(DiagonalNormal):
         return torch.exp(self._log_min + self._log_span * torch.sigmoid(self.std_param))
 
     def update(self, mlp_output: torch.Tensor) -> None:
-        self._distribution = Normal(mlp_output, self.current_std().expand_as(mlp_output))
+        std = self.capped(self.current_std())
+        self._distribution = Normal(mlp_output, std.expand_as(mlp_output))
 
     def deterministic_output(self, mlp_output: torch.Tensor) -> torch.Tensor:
         """The mean as the env applies it: clipped to [-1, 1]."""
@@ -193,3 +242,92 @@ class BoundedGaussian(DiagonalNormal):
         with torch.no_grad():
             head.weight.mul_(0.01)
             head.bias.zero_()
+
+
+class FreeGaussian(DiagonalNormal):
+    """Diagonal Gaussian with a linear mean and a free state-independent log-spread (SB3's and
+    cleanrl's PPO head): ``mean = W_mu h + b_mu``, ``std = exp(p)`` per action with ``p`` a
+    learned parameter, no bounds. The env clips samples to [-1, 1]; the deterministic action is
+    the mean clipped the same way, so a mean past a bound plays the bound.
+
+    Args:
+        output_dim: Action size.
+        init_std: Spread at initialisation (SB3: 1.0).
+    """
+
+    def __init__(self, output_dim: int, init_std: float = 1.0, final_std: float = 0.0) -> None:
+        super().__init__(output_dim)
+        if not init_std > 0:
+            raise ValueError(f"init_std must be above 0, got {init_std}")
+        if final_std and not 0 < final_std < init_std:
+            raise ValueError(f"final_std must lie in (0, init_std={init_std}), got {final_std}")
+        self.init_std, self.final_std = float(init_std), float(final_std)
+        self.log_std = nn.Parameter(torch.full((output_dim,), math.log(init_std)))
+        self._distribution: Normal | None = None
+        Normal.set_default_validate_args(False)
+
+    @property
+    def input_dim(self) -> int:
+        """The MLP outputs the mean only."""
+        return self.output_dim
+
+    def current_std(self) -> torch.Tensor:
+        """(output_dim,) spread."""
+        return torch.exp(self.log_std)
+
+    def update(self, mlp_output: torch.Tensor) -> None:
+        std = self.capped(self.current_std())
+        self._distribution = Normal(mlp_output, std.expand_as(mlp_output))
+
+    def deterministic_output(self, mlp_output: torch.Tensor) -> torch.Tensor:
+        """The mean as the env applies it: clipped to [-1, 1]."""
+        return mlp_output.clamp(-1.0, 1.0)
+
+    def as_deterministic_output_module(self) -> nn.Module:
+        return nn.Hardtanh()
+
+    def init_mlp_weights(self, mlp: nn.Sequential) -> None:
+        """Start near mean 0: small weights and zero bias on the mean's layer."""
+        head = cast(nn.Linear, mlp[-1])
+        with torch.no_grad():
+            head.weight.mul_(0.01)
+            head.bias.zero_()
+
+
+SQUASH_EDGE = 1.0 - 1e-6
+"""Squashed actions are kept inside +-this so that atanh stays finite."""
+
+
+class SquashedGaussian(FreeGaussian):
+    """A Gaussian squashed by ``tanh``: ``u ~ N(W_mu h + b_mu, exp(p))``, action ``a = tanh(u)``
+    (SAC's head, used here for PPO). Samples never leave (-1, 1), so the env's clip never acts
+    and nothing past a bound is invisible to the gradient; the log-probability carries the
+    change of variables, ``log p(a) = log N(atanh a) - sum log(1 - a^2)``, and the entropy is
+    estimated from one reparameterised sample (``-log p(a)``), which falls as samples pile up at
+    the bounds (a Gaussian entropy would keep rewarding a spread that only saturates). The
+    deterministic action is ``tanh`` of the mean. ``params`` are the Gaussian's (mean, std)
+    before squashing (the KL of the adaptive schedule is the same before and after).
+    """
+
+    def sample(self) -> torch.Tensor:
+        return torch.tanh(self._distribution.sample()).clamp(-SQUASH_EDGE, SQUASH_EDGE)  # type: ignore[union-attr]
+
+    @property
+    def entropy(self) -> torch.Tensor:
+        dist = self._distribution
+        assert dist is not None
+        squashed = torch.tanh(dist.rsample()).clamp(-SQUASH_EDGE, SQUASH_EDGE)
+        return -self.log_prob(squashed)
+
+    def log_prob(self, outputs: torch.Tensor) -> torch.Tensor:
+        a = outputs.clamp(-SQUASH_EDGE, SQUASH_EDGE)
+        # log|d tanh(u)/du| = log(1 - tanh(u)^2), in a form that is stable near the bounds
+        u = torch.atanh(a)
+        log_det = 2.0 * (math.log(2.0) - u - F.softplus(-2.0 * u))
+        return (self._distribution.log_prob(u) - log_det).sum(dim=-1)  # type: ignore[union-attr]
+
+    def deterministic_output(self, mlp_output: torch.Tensor) -> torch.Tensor:
+        return torch.tanh(mlp_output)
+
+    def as_deterministic_output_module(self) -> nn.Module:
+        return nn.Tanh()

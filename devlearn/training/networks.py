@@ -147,6 +147,7 @@ class MultiSenseModel(MLPModel):
         cnns: The actor's SharedBody (the critic of the shared layout; rsl-rl passes it).
         legacy_uint8_scale: Divide uint8 observations by 255 twice (hand-regard runs trained
             before the input-scale fix; see :func:`as_float`).
+        init: ``torch`` (PyTorch's default initialisation) or ``orthogonal``.
     """
 
     def __init__(
@@ -162,6 +163,7 @@ class MultiSenseModel(MLPModel):
         shared: bool = False,
         cnns: SharedBody | None = None,
         legacy_uint8_scale: bool = False,
+        init: str = "torch",
     ) -> None:
         if obs_normalization:
             raise ValueError("MultiSenseModel does not normalise observations; encoders do")
@@ -194,6 +196,24 @@ class MultiSenseModel(MLPModel):
             self.mlp = nn.Sequential(*head)
             if self.distribution is not None:
                 self.distribution.init_mlp_weights(self.mlp)
+        if init == "orthogonal":
+            self._init_orthogonal()
+        elif init != "torch":
+            raise ValueError(f"unknown init '{init}'; valid: torch, orthogonal")
+
+    def _init_orthogonal(self) -> None:
+        """SB3's and cleanrl's initialisation: every Linear layer this model owns orthogonal with
+        gain sqrt(2) and zero bias, the output layer with gain 1, then the head's own start
+        (the policy's mean layer scaled to 0.01, the spread's bias) on top."""
+        layers = [m for m in self.modules() if isinstance(m, nn.Linear)]
+        with torch.no_grad():
+            for layer in layers:
+                nn.init.orthogonal_(layer.weight, math.sqrt(2.0))
+                nn.init.zeros_(layer.bias)
+            last = [m for m in self.mlp.modules() if isinstance(m, nn.Linear)][-1]
+            nn.init.orthogonal_(last.weight, 1.0)
+        if self.distribution is not None:
+            self.distribution.init_mlp_weights(self.mlp)
 
     def _get_obs_dim(
         self, obs: TensorDict, obs_groups: dict[str, list[str]], obs_set: str

@@ -38,7 +38,8 @@ class UniqueParamPPO(PPO):
     models, a behaviour's own sharing) would hit the trap, so the optimiser is rebuilt here
     over unique parameters, and gradients are all-reduced once per tensor when distributed.
     Gradient clipping stays rsl-rl's, per network: the shared body is clipped with the
-    policy head (its gradient holds both losses), the value head on its own.
+    policy head (its gradient holds both losses), the value head on its own. ``adam_eps`` is the
+    optimiser's epsilon (``ppo.adam_eps``).
     """
 
     optimizer: torch.optim.Optimizer
@@ -49,6 +50,7 @@ class UniqueParamPPO(PPO):
         critic: MLPModel,
         storage: RolloutStorage,
         *args: Any,
+        adam_eps: float = 1e-8,
         **kwargs: Any,
     ) -> None:
         with warnings.catch_warnings():  # the parent's optimiser, replaced below, may warn
@@ -56,7 +58,7 @@ class UniqueParamPPO(PPO):
             super().__init__(actor, critic, storage, *args, **kwargs)
         # the parent's optimiser class (Adam...) takes lr; torch's Optimizer base does not
         self.optimizer = type(self.optimizer)(  # type: ignore[call-arg]
-            unique_parameters(self.actor, self.critic), lr=self.learning_rate
+            unique_parameters(self.actor, self.critic), lr=self.learning_rate, eps=adam_eps
         )
 
     def reduce_parameters(self) -> None:

@@ -5,13 +5,13 @@ metrics with that run's rows; a resumed run forgets the rows logged after its ch
 from __future__ import annotations
 
 import contextlib
-import json
 import os
 import shutil
 from collections.abc import Iterator
 from pathlib import Path
 
 from devlearn.api.errors import UsageError
+from devlearn.api.json_files import parse_json
 from devlearn.files import (
     InUseError,
     check_replaceable,
@@ -92,11 +92,11 @@ def forget_metrics_after(path: Path, step: int) -> None:
     if not path.exists():
         return
     kept = []
-    for line in path.read_text().splitlines():
+    for line in path.read_text(errors="replace").splitlines():
         try:
-            if json.loads(line)["step"] <= step:
+            if parse_json(line, "a metrics row")["step"] <= step:
                 kept.append(line)
-        except (ValueError, KeyError, TypeError):
+        except (UsageError, KeyError, TypeError):
             pass  # a line cut short by the kill
     write_text_atomically(path, "".join(line + "\n" for line in kept))
 

@@ -262,6 +262,8 @@ class DevRunner:
                 if self.curriculum.update(self.env_steps):
                     env.set_stage(self.curriculum.stage.options)
                 self._grow(total_steps)
+                if alg.actor.distribution is not None:  # network.final_std's ceiling, if any
+                    alg.actor.distribution.set_progress(self.env_steps / total_steps)
                 collect_threads, learn_threads = threads.next_iteration()
 
                 # Collect: a rollout with the workers stepping while the policy acts.

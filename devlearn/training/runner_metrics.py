@@ -26,6 +26,14 @@ EPISODES_AVERAGED = 100
 """Finished episodes whose reward terms and metrics each metrics.jsonl row averages."""
 
 
+def headline_key(metric: str) -> str:
+    """The metrics.jsonl key of a behaviour's headline as evaluation measures it: the
+    per-episode mean, named as eval.json names it (``metrics/episode_score_mean`` for
+    self-touch's ``score``), so that training, ``devlearn curve``, ``devlearn eval`` and
+    ``devlearn report`` headline one figure under one name (issue #55)."""
+    return f"metrics/episode_{metric}_mean"
+
+
 class MetricsLog:
     """What each iteration records: a metrics.jsonl row (steps, stage, speed, the last
     :data:`EPISODES_AVERAGED` episodes' rewards and metrics, losses, the behaviour's run
@@ -38,7 +46,8 @@ class MetricsLog:
         learned: The run's learned rewards (their figures join each row).
         run_metrics: The behaviour's run metrics (None: it has none), fed every finished
             episode's record and logged as ``metrics/<name>``.
-        headline_metric: The evaluator key shown on the progress bar.
+        headline_metric: The behaviour's headline: its per-episode mean over the averaged
+            episodes is logged and shown on the progress bar as :func:`headline_key`.
         is_main: Whether this rank writes (the others keep only :attr:`last_row`).
     """
 
@@ -129,6 +138,9 @@ class MetricsLog:
             row["mean_reward"] = float(np.mean(returns))
             for key in dict.fromkeys(k for ep in self.episodes for k in ep):
                 row[key] = float(np.mean([ep[key] for ep in self.episodes if key in ep]))
+        per_episode = row.get(f"metrics/{self.headline_metric}")
+        if self.headline_metric and per_episode is not None:
+            row[headline_key(self.headline_metric)] = per_episode
         row.update({f"loss/{k}": float(v) for k, v in losses.items()})
         run_metrics = {}
         if self.run_metrics is not None:
@@ -166,9 +178,9 @@ class MetricsLog:
             postfix["ev"] = f"{health['health/explained_variance']:.2f}"
         if row["mean_reward"] is not None:
             postfix["reward"] = f"{row['mean_reward']:.3g}"
-        headline = row.get(f"metrics/{self.headline_metric}")
-        if headline is not None:
-            postfix[self.headline_metric] = f"{headline:.3g}"
+        key = headline_key(self.headline_metric)
+        if row.get(key) is not None:
+            postfix[key.removeprefix("metrics/")] = f"{row[key]:.3g}"
         bar.set_postfix(postfix, refresh=False)
         total = getattr(bar, "total", None) or env_steps
         if env_steps >= total:  # the last iteration: stop at the total; close() draws it once

@@ -25,6 +25,7 @@ from devlearn.config.resolve import (
 )
 from devlearn.config.run_config import RunConfig, to_rsl_rl
 from devlearn.env import DevVecEnv, EnvSettings
+from devlearn.env.rendering import check_senses_render
 from devlearn.training.checkpoint import (
     LATEST,
     RESUME_KEYS,
@@ -255,6 +256,8 @@ def _build(ctx: RunContext) -> tuple[DevVecEnv, DevRunner]:
     # Behaviour: one-off preparation, then the resolved config is written next to the logs.
     # With several ranks, rank 0 prepares first; the others then reuse what it saved.
     behavior = ctx.behavior or ctx.registry.create(cfg.behavior_name, cfg.behavior)
+    if ctx.infant_factory is None:  # before prepare, which may render (hand regard's babbling)
+        check_senses_render(behavior.senses, behavior.name)
     run_dir.mkdir(parents=True, exist_ok=True)
     if rank == 0:
         remove_temporaries(run_dir)

@@ -128,6 +128,38 @@ def test_a_behaviour_checks_its_config_whenever_it_is_built():
         Checked(config)
 
 
+class Stranger(devlearn.IntrinsicReward):
+    """Another behaviour's term (as hand_to_mouth's ``MouthContact`` is to self-touch): it
+    reads a fact this behaviour never computes."""
+
+    def __call__(self, ctx: devlearn.StepContext) -> float:
+        return float(ctx.facts["mouth_contact"])
+
+
+def test_a_config_names_only_the_terms_its_behaviour_declares():
+    # another behaviour's term passed the check and failed at step 0, after a run folder was
+    # written; a private or abstract class or the core's adapter crashed with a TypeError
+    # (issue #55, fault 3). The one check refuses each, naming the declared terms.
+    hold = f"{Hold.__module__}:Hold"
+    for cls in (
+        f"{Stranger.__module__}:Stranger",
+        "devlearn.api.rewards:BatchedFromPerEnv",
+        "devlearn.api.rewards:BatchedIntrinsicReward",
+        "devlearn_self_touch.rewards:_LifetimeNovelty",
+    ):
+        config = CheckedConfig()
+        config.rewards["hold"].cls = cls
+        expected = f"behavior.rewards.hold.cls: unknown reward term class '{cls}': a config "
+        with pytest.raises(UsageError, match=re.escape(expected) + f".*; valid: {hold}$"):
+            Checked(config)
+        config.rewards = {"hold": RewardTermCfg(Hold), "more": RewardTermCfg(cls)}
+        with pytest.raises(UsageError, match=r"behavior.rewards.more.cls: unknown reward term"):
+            Checked(config)
+    config = CheckedConfig()
+    config.rewards["also"] = RewardTermCfg(Hold, 2.0)  # a declared class, twice: fine
+    assert list(Checked(config).config.rewards) == ["hold", "also"]
+
+
 def test_a_plain_dataclass_config_declares_nothing():
     # BehaviorConfig is optional: a plain dataclass works and has no check or legacy values.
     assert not isinstance(TinyConfig(), BehaviorConfig)

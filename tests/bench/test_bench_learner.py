@@ -26,3 +26,21 @@ def test_a_rollout_longer_than_the_behaviours_own_fits_the_storage():
     own = run_config(behavior, []).ppo.num_steps_per_env
     figures = bench_update(behavior, "separate", 2, num_steps=own + 8, repeats=1, threads=1)
     assert math.isfinite(figures["update_us_per_sample"])
+
+
+def test_sb3s_update_is_measured_on_a_rollout_of_the_same_size():
+    """Issue #54: SB3's PPO update beside ours on the same rollout size and settings; its
+    network is SB3's flat MLP of the behaviour's hidden sizes (fewer parameters than ours)."""
+    import pytest
+
+    pytest.importorskip("stable_baselines3")
+    from devlearn.bench.learner import bench_sb3_update
+
+    behavior = PluginRegistry().create("hand_to_mouth")
+    figures = bench_sb3_update(behavior, num_envs=2, num_steps=8, repeats=1, threads=1)
+    assert figures is not None and math.isfinite(figures["update_us_per_sample"])
+    ours = bench_update(behavior, "separate", 2, num_steps=8, repeats=1, threads=1)
+    spec = behavior.network()
+    hidden = [*spec.fusion_dims, *spec.trunk_dims]
+    # SB3's networks: one flat MLP each for policy and value, with a log-std per action
+    assert hidden and 0 < figures["parameters"] < ours["parameters"]

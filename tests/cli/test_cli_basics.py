@@ -51,6 +51,32 @@ def test_disable_plugin_for_one_command():
     assert plugins["hand_to_mouth"]["behaviors"] == []
 
 
+def test_disabling_a_plugin_that_is_not_installed_is_refused():
+    # issue #55, fault 14: a misspelt name said nothing and left the plugin it meant enabled
+    result = devlearn("--disable-plugin", "hand_to_mouht", "plugins")
+    assert result.returncode == 2 and result.stdout == ""
+    assert result.stderr.startswith(
+        "devlearn: error: --disable-plugin hand_to_mouht: no such plugin; installed: "
+    )
+    assert result.stderr.count("\n") == 1 and "hand_to_mouth, self_touch" in result.stderr
+
+
+def test_a_damaged_settings_file_disables_nothing(tmp_path):
+    # issue #55, fault 8: a deep or odd plugins.json was a traceback on every command
+    import os
+
+    env = dict(os.environ, DEVLEARN_CONFIG_DIR=str(tmp_path))
+    for text in (
+        '{"disabled": ' + "[" * 100_000 + "]" * 100_000 + "}",
+        "[1]",
+        '{"disabled": [[1]]}',
+    ):
+        (tmp_path / "plugins.json").write_text(text)
+        result = devlearn("plugins", "--json", env=env)
+        assert result.returncode == 0, result.stderr
+        assert not any(p["disabled"] for p in json.loads(result.stdout))
+
+
 def test_disable_and_enable_persistently(tmp_path):
     import os
 

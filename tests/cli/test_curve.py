@@ -196,3 +196,51 @@ def test_a_run_curve_leads_with_the_headline_and_reward_and_draws_no_counters(
     assert curve.run(_args(tmp_path, health=True), registry) == 0
     labels = [ax.get_ylabel() for ax in figures[1].axes]
     assert labels[4:] == ["saturated", "std_mean", "learning_rate"]
+
+
+def test_lines_that_are_no_metrics_row_are_skipped_with_a_warning(tmp_path, capsys):
+    # issue #55, fault 9: a [1,2,3] line, a "step": 1e308 and numbers given as text were
+    # tracebacks (AttributeError, ValueError); a binary file a UnicodeDecodeError
+    good = [{"step": 100 * i, "mean_reward": float(i)} for i in range(4)]
+    lines = [json.dumps(r) for r in good]
+    lines[1:1] = ["[1, 2, 3]", '{"step": 1e308, "mean_reward": 1.0}', '"text"', '{"step": true}']
+    lines.append('{"step": 500, "mean_reward": "high", "metrics/x": [1]}')  # no number: none
+    (tmp_path / "metrics.jsonl").write_text("\n".join(lines) + "\n")
+    assert curve.run(_args(tmp_path), None) == 0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "devlearn: warning: " in err
+    assert "skipped 4 line(s) (2, 3, 4, 5): not a metrics row" in err
+    rows = curve.read_metrics(tmp_path)
+    assert [r["step"] for r in rows] == [0, 100, 200, 300, 500] and "mean_reward" not in rows[-1]
+    (tmp_path / "metrics.jsonl").write_bytes(bytes(range(256)) * 40)
+    with pytest.raises(UsageError, match="metrics.jsonl holds no complete rows yet"):
+        curve.run(_args(tmp_path), None)
+
+
+def test_json_nested_too_deeply_is_one_line(tmp_path):
+    # issue #55, fault 8: RecursionError tracebacks
+    deep = '{"a":' * 100_000 + "1" + "}" * 100_000
+    eval_dir = tmp_path / "eval"
+    eval_dir.mkdir()
+    (eval_dir / "eval.json").write_text(deep)
+    with pytest.raises(UsageError, match="eval.json: its JSON is nested too deeply"):
+        curve.run(_args(eval_dir), None)
+    run_dir = tmp_path / "run"
+    run_dir.mkdir()
+    (run_dir / "metrics.jsonl").write_text(deep + "\n" + json.dumps({"step": 1, "a": 2.0}) + "\n")
+    (run_dir / "config.json").write_text(deep)
+    assert [r["step"] for r in curve.read_metrics(run_dir)] == [1]
+    assert curve.run_headline(run_dir, None) is None
+
+
+def test_out_names_the_file_it_writes(tmp_path, capsys):
+    # issue #55, fault 14: `--out plot` wrote plot.png and printed plot
+    (tmp_path / "metrics.jsonl").write_text('{"step": 1, "mean_reward": 1.0}\n')
+    assert curve.run(_args(tmp_path, out=str(tmp_path / "plot")), None) == 0
+    assert capsys.readouterr().out.strip() == str(tmp_path / "plot.png")
+    assert (tmp_path / "plot.png").read_bytes()[:4] == b"\x89PNG"
+    assert curve.run(_args(tmp_path, out=str(tmp_path / "plot.svg")), None) == 0
+    assert capsys.readouterr().out.strip() == str(tmp_path / "plot.svg")
+    with pytest.raises(UsageError, match=r"--out .*plot.v2: no picture format 'v2'; .*\.png"):
+        curve.run(_args(tmp_path, out=str(tmp_path / "plot.v2")), None)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["metrics.jsonl", "plot.png", "plot.svg"]

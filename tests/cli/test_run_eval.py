@@ -150,7 +150,7 @@ def test_eval_prints_a_short_summary_led_by_the_headline(cli, tmp_path, capsys, 
     lines = capsys.readouterr().out.splitlines()
     assert lines[0] == f"tiny: {out / 'checkpoint_latest.pt'} (64 training steps)"
     assert lines[1].startswith("  2 episodes from rest starts, eval seed 0")
-    assert lines[2].startswith("  headline  close = ")  # the behaviour's headline, first
+    assert lines[2].startswith("  headline  episode_close_mean = ")  # the per-episode headline
     assert lines[3].startswith("  baselines zero ") and "(same start)" in lines[3]
     assert any(line.startswith(f"  all figures: {out / 'eval' / 'eval.json'}") for line in lines)
     assert len(lines) <= 7 and all(len(line) < 300 for line in lines)  # no raw dump
@@ -204,3 +204,22 @@ def test_the_summary_puts_every_criterion_of_the_headline_beside_it():
     lines = human_summary(summary, "average", {}, None)
     assert lines[2] == "  headline  episode_average_mean = 0.5 [0.4, 0.6] (95% interval over episodes)"
     assert lines[3].startswith("  criteria  detector 0.5, pixels 0.25")
+
+
+def test_asking_for_workers_never_slows_a_small_evaluation(cli, tmp_path, capsys):
+    """Issue #55: ``--workers 2`` on 12 episodes started two workers and took twice as long as
+    one process; a small job stays in one process whatever is asked, and says so."""
+    out = tmp_path / "run"
+    assert cli(["run", "tiny", "--steps", "16", "--out", str(out), *SMALL]) == 0
+    ckpt = str(out / "checkpoint_latest.pt")
+    capsys.readouterr()
+    argv = ["eval", "tiny", "--checkpoint", ckpt, "--episodes", "12", "--workers", "2"]
+    assert cli([*argv, "--out", str(tmp_path / "small"), "--json"]) == 0
+    captured = capsys.readouterr()
+    assert json.loads(captured.out)["execution"]["workers"] == 0
+    assert "note: --workers 2 for 12 episodes: played in this process" in captured.err
+    from devlearn.evaluation.evaluate import paying_workers
+
+    # one worker per 8 episodes, none where that leaves one; never more than asked
+    assert [paying_workers(n, 4) for n in (12, 15, 16, 24, 40, 400)] == [0, 0, 2, 3, 4, 4]
+    assert paying_workers(400, 0) == 0

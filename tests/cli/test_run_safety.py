@@ -510,6 +510,65 @@ def test_a_checkpoint_naming_a_reward_term_class_imports_nothing(
     assert sorted(p.name for p in tmp_path.iterdir()) == ["pkg", "run"]  # nothing written
 
 
+class _ReachHelper(Reach):
+    """A private class of a plugin (as self_touch's ``_LifetimeNovelty``): registered, no term."""
+
+
+class Stranger(devlearn.IntrinsicReward):
+    """Another behaviour's term (as hand_to_mouth's ``MouthContact`` to self-touch): it reads a
+    fact the terms behaviour never computes, and failed at step 0 after a run folder was
+    written."""
+
+    def __call__(self, ctx: devlearn.StepContext) -> float:
+        return float(ctx.facts["mouth_contact"])
+
+
+@pytest.mark.parametrize(
+    "cls",
+    [
+        "devlearn.api.rewards:BatchedFromPerEnv",
+        f"{__name__}:_ReachHelper",
+        f"{__name__}:Stranger",
+    ],
+)
+def test_a_term_its_behaviour_does_not_declare_is_refused_on_every_path(
+    terms_cli, refused, terms_run, tmp_path, cls
+):
+    # issue #55, fault 3: through --set, --config, a checkpoint's config, --resume and the
+    # Gymnasium env, one check (check_reward_table) refuses it before anything is written
+    expected = f"behavior.rewards.reach.cls: unknown reward term class '{cls}'"
+    valid = "valid: devlearn.testing.fake_infant:Reach"
+    out = tmp_path / "new"
+    err = refused(terms_cli, "run", "terms", "--steps", "32", "--out", str(out), *SMALL,
+                  "--set", f"behavior.rewards.reach.cls={cls}")  # fmt: skip
+    assert expected in err and err.endswith(valid)
+    config = tmp_path / "config.json"
+    config.write_text(json.dumps({"behavior": {"rewards": {"reach": {"cls": cls}}}}))
+    assert expected in refused(terms_cli, "run", "terms", "--config", str(config),
+                               "--out", str(out))  # fmt: skip
+    config.unlink()
+    state = damage(terms_run, lambda s: s["config"]["behavior"]["rewards"]["reach"].update(cls=cls))
+    (terms_run / "config.json").write_text(json.dumps(state["config"]))
+    before = files(terms_run)
+    checkpoint = str(terms_run / "checkpoint_latest.pt")
+    commands = [
+        ["eval", "terms", "--checkpoint", checkpoint, "--episodes", "1", "--out", str(out)],
+        ["run", "terms", "--resume", str(terms_run), "--steps", "64"],
+        ["run", "terms", "--from", checkpoint, "--out", str(out), "--steps", "64"],
+        ["run", "terms", "--config", str(terms_run / "config.json"), "--out", str(out)],
+    ]  # fmt: skip
+    for argv in commands:
+        assert expected in refused(terms_cli, *argv), argv
+    assert files(terms_run) == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]  # nothing written
+    from devlearn.gym.env import DevlearnEnv
+    from devlearn.testing import registry_for
+
+    with pytest.raises(devlearn.api.errors.UsageError, match=expected):
+        DevlearnEnv("terms", {"behavior.rewards.reach.cls": cls},
+                    registry=registry_for(TermsBehavior))  # fmt: skip
+
+
 @pytest.mark.parametrize(
     ("config", "expected"),
     [
@@ -542,6 +601,39 @@ def test_a_deeply_nested_config_file_is_one_line(refused, terms_cli, tmp_path):
     path.write_text('{"a":' * 100_000 + "1" + "}" * 100_000)
     err = refused(terms_cli, "run", "terms", "--config", str(path))
     assert "its JSON is nested too deeply" in err
+
+
+def test_json_a_command_is_given_is_read_with_guards(refused, cli, run_dir, tmp_path):
+    # issue #55, fault 8: `--config /dev/zero` read until the OOM killer stopped it, and JSON
+    # nested 100k deep was a RecursionError traceback in `eval --compare`, `report` and
+    # `--set`; one guarded reader refuses each with one line
+    deep = tmp_path / "deep"
+    deep.mkdir()
+    (deep / "eval.json").write_text("[" * 100_000 + "]" * 100_000)
+    fifo = tmp_path / "fifo.json"
+    os.mkfifo(fifo)
+    big = tmp_path / "big.json"
+    with open(big, "wb") as f:
+        f.truncate(65 << 20)  # sparse: 65 MiB of zeros
+    out = tmp_path / "new"
+    checkpoint = str(run_dir / "checkpoint_latest.pt")
+    for argv, expected in [  # what ran away on today's code last: /dev/zero, the pipe
+        (["eval", "tiny", "--checkpoint", checkpoint, "--episodes", "1", "--out", str(out),
+          "--compare", str(deep)], "its JSON is nested too deeply"),
+        (["report", str(deep), "--out", str(out)], "its JSON is nested too deeply"),
+        (["run", "tiny", "--out", str(out), "--set",
+          "curiosity=" + "[" * 60_000 + "]" * 60_000], "nested too deeply"),
+        (["run", "tiny", "--config", str(tmp_path), "--out", str(out)],
+         f"cannot read {tmp_path}: a folder, not a file"),
+        (["run", "tiny", "--config", str(big), "--out", str(out)],
+         f"cannot read {big}: 68,157,440 bytes, more than the 67,108,864"),
+        (["run", "tiny", "--config", str(fifo), "--out", str(out)],
+         f"cannot read {fifo}: a pipe, not a file"),
+        (["run", "tiny", "--config", "/dev/zero", "--out", str(out)],
+         "cannot read /dev/zero: a character device, not a file"),
+    ]:  # fmt: skip
+        assert expected in refused(cli, *argv), argv
+    assert not out.exists()
 
 
 @pytest.mark.parametrize(

@@ -32,7 +32,7 @@ def test_finished_run_prints_where_how_far_and_what_next(cli, tmp_path, capsys):
     assert (
         f"logs        {out / 'metrics.jsonl'}, TensorBoard: tensorboard --logdir {out}" in printed
     )
-    assert "metrics/close" in printed and "at the start (step 16)" in printed
+    assert "  episode_close_mean  " in printed and "at the start (step 16)" in printed
     assert f"devlearn eval tiny --checkpoint {out / 'checkpoint_latest.pt'}" in printed
     assert f"devlearn curve {out}" in printed
     assert f"devlearn run tiny --resume {out} --steps 128" in printed
@@ -56,7 +56,9 @@ def test_headline_prefers_the_behaviour_metric_then_mean_reward():
         {"mean_reward": 1.0, "metrics/x": 2.0},
         {"mean_reward": 3.0, "metrics/x": 5.0},
     ]
-    assert headline(rows, "x") == ("metrics/x", 2.0, 5.0)
+    assert headline(rows, "x") == ("metrics/x", 2.0, 5.0)  # a run from before issue #55
+    rows[2]["metrics/episode_x_mean"] = 5.0
+    assert headline(rows, "x") == ("metrics/episode_x_mean", 5.0, 5.0)
     assert headline(rows, "") == ("mean_reward", 1.0, 3.0)
     assert headline([], "x") == ("mean_reward", None, None)
 
@@ -111,14 +113,16 @@ def test_the_summary_puts_the_run_beside_baselines_and_its_budget(
     monkeypatch.chdir(tmp_path)
     baseline = tmp_path / "eval_tiny_random"
     baseline.mkdir()
-    (baseline / "eval.json").write_text(json.dumps({"close": 0.25, "policy": "random"}))
+    summary = {"close": 0.25, "episode_close_mean": 0.125, "policy": "random"}
+    (baseline / "eval.json").write_text(json.dumps(summary))
     assert cli(["run", "tiny", "--steps", "64", "--out", "run", *SMALL]) == 0
     printed = capsys.readouterr().out
     assert (
         "budget      64 steps, 20% of a full run (320, --preset paper): a demonstration" in printed
     )
     assert (
-        "baselines   close under the evaluation protocol: random 0.25 (eval_tiny_random)" in printed
+        "baselines   episode_close_mean under the evaluation protocol: random 0.125 "
+        "(eval_tiny_random)" in printed  # the per-episode figure beside the run's, not the union
     )
     assert "devlearn eval tiny --policy zero --episodes 100   # baseline" in printed
     assert "devlearn eval tiny --policy random" not in printed  # already there
@@ -133,3 +137,25 @@ def test_the_summary_names_every_stage_the_run_went_through(cli, tmp_path, capsy
     assert cli([*argv, *SMALL]) == 0
     printed = capsys.readouterr().out
     assert "stages      fixed (logged from step 16) -> random (logged from step 48)" in printed
+
+
+def test_one_headline_from_training_to_evaluation(cli, tmp_path, capsys):
+    """Issue #55: the progress bar, the run summary, metrics.jsonl, ``devlearn curve`` and
+    ``devlearn eval`` headline the behaviour's per-episode mean under one name."""
+    import json
+
+    from devlearn.cli import curve
+    from devlearn.testing import registry_for
+
+    out = tmp_path / "run"
+    assert cli(["run", "tiny", "--steps", "64", "--out", str(out), *SMALL]) == 0
+    captured = capsys.readouterr()
+    rows = [json.loads(line) for line in (out / "metrics.jsonl").read_text().splitlines()]
+    logged = [r for r in rows if "metrics/episode_close_mean" in r]
+    assert logged and all(r["metrics/episode_close_mean"] == r["metrics/close"] for r in logged)
+    assert "episode_close_mean=" in captured.err.replace("\r", "\n")  # the progress bar
+    assert "  episode_close_mean  " in captured.out  # the summary
+    assert curve.run_headline(out, registry_for(TinyBehavior)) == "metrics/episode_close_mean"
+    assert cli(["eval", "tiny", "--checkpoint", str(out), "--episodes", "2", "--out",
+                str(tmp_path / "ev")]) == 0  # fmt: skip
+    assert "headline  episode_close_mean = " in capsys.readouterr().out

@@ -26,10 +26,28 @@ LEARNER = {
     "ppo.schedule": "fixed",
     "ppo.normalize_rewards": True,
     "network.layout": "separate",
-    "network.head": "gaussian",
+    "network.head": "free",
+    "network.init_std": 0.0,  # the free head's own: 1.0
+    "network.final_std": 0.1,
+    "network.encoders": "flat",
+    "network.activation": "tanh",
+    "network.init": "orthogonal",
+    "ppo.adam_eps": 1e-5,
+    "ppo.normalize_advantage_per_mini_batch": True,
 }
-"""The values results/learner/README.md (issue #28) chose: decision rate, discount, rollout
-length, schedule, reward normalisation, layout and head."""
+"""The values results/learner/README.md (issue #28) chose (decision rate, discount, rollout
+length, schedule, reward normalisation, layout) and results/learners/README.md (issue #54:
+network, initialisation, head and its spread, Adam's epsilon, advantages)."""
+ISSUE_28 = {
+    "network.head": "gaussian",
+    "network.final_std": 0.0,
+    "network.encoders": "behavior",
+    "network.activation": "relu",
+    "network.init": "torch",
+    "ppo.adam_eps": 1e-8,
+    "ppo.normalize_advantage_per_mini_batch": False,
+}
+"""Issue #28's learner where issue #54 changed it: what hand regard keeps."""
 OLD = {
     "env.action_repeat": 1,
     "ppo.schedule": "adaptive",
@@ -57,11 +75,13 @@ def value(cfg: Any, key: str) -> Any:
 def test_the_core_defaults_are_the_evidence_based_learner():
     cfg = new_config(Plain)
     assert {key: value(cfg, key) for key in LEARNER} == LEARNER
-    LEARNER_EVIDENCE = "results/learner/README.md"
     from pathlib import Path
 
-    readme = Path(__file__).resolve().parents[2] / LEARNER_EVIDENCE
-    assert "action_repeat" in readme.read_text()
+    from devlearn.config.run_config import LEARNER_EVIDENCE
+
+    root = Path(__file__).resolve().parents[2]
+    assert "action_repeat" in (root / "results/learner/README.md").read_text()  # issue #28
+    assert "final_std" in (root / LEARNER_EVIDENCE).read_text()  # issue #54
 
 
 @pytest.mark.parametrize("behavior", ["self_touch", "hand_to_mouth"])
@@ -78,6 +98,7 @@ def test_hand_regard_overrides_only_what_its_evidence_supports(capsys):
     rows = {row["key"]: row for row in json.loads(capsys.readouterr().out)}
     learner = {k: (rows[k]["default"], rows[k]["set_by"]) for k in [*LEARNER, "ppo.entropy_coef"]}
     assert learner == {**{k: (v, "core") for k, v in LEARNER.items()},
+                       **{k: (v, "behavior") for k, v in ISSUE_28.items()},
                        "ppo.entropy_coef": (0.0, "behavior")}  # fmt: skip
 
 

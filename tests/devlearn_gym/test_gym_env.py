@@ -140,3 +140,16 @@ def test_the_body_has_a_runs_age_at_every_iteration_boundary():
         assert ages == [6.0, 12.0, 18.0]
     finally:
         growing.close()
+
+
+def test_a_closed_env_says_so():
+    # issue #55, fault 14: as its vector env (a step after close read freed state)
+    from gymnasium.error import ClosedEnvironmentError
+
+    env = make()
+    env.reset()
+    env.close()
+    with pytest.raises(ClosedEnvironmentError, match=r"^step\(\) on a closed DevlearnEnv"):
+        env.step(env.action_space.sample())
+    with pytest.raises(UsageError, match="overrides must be a mapping .* got 5"):
+        make(5)

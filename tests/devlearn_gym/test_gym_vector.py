@@ -197,3 +197,28 @@ def test_the_body_has_a_runs_age_at_every_iteration_boundary(workers):
         assert ages == [6.0, 12.0, 18.0]
     finally:
         growing.close()
+
+
+@pytest.mark.parametrize("workers", [0, 1])
+def test_a_closed_vector_env_says_so(workers):
+    # issue #55, fault 14: a step after close() read the freed buffers: KeyError 'actions'
+    from gymnasium.error import ClosedEnvironmentError
+
+    envs = make(num_envs=2, workers=workers)
+    envs.reset()
+    envs.close()
+    actions = np.zeros((2, envs.single_action_space.shape[0]), np.float32)
+    with pytest.raises(ClosedEnvironmentError, match=r"^step\(\) on a closed DevlearnVectorEnv"):
+        envs.step(actions)
+    with pytest.raises(ClosedEnvironmentError, match=r"^reset\(\) on a closed DevlearnVectorEnv"):
+        envs.reset()
+    envs.close()  # still safe twice
+
+
+def test_overrides_of_another_kind_say_what_is_valid():
+    # issue #55, fault 14: gym.make(..., overrides=5) was a raw TypeError
+    from devlearn.api.errors import UsageError
+
+    for bad in (5, "seed=3", [3], {"seed"}):
+        with pytest.raises(UsageError, match=r"^overrides must be a mapping of config keys to"):
+            make(overrides=bad)

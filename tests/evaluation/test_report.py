@@ -303,3 +303,29 @@ def test_a_fifo_named_eval_json_beside_the_runs_is_passed_over(three_seeds, tmp_
     fifo.unlink()
     assert done and done[0]["columns"]["zero baseline"]["kind"] == "baseline"
     assert not thread.is_alive()
+
+
+def test_an_unreadable_file_beside_the_evaluations_is_left_out_with_a_warning(
+    three_seeds, tmp_path, capsys
+):
+    # issue #55, fault 6: X/junk/eval.json, found while looking for baselines beside X/seed1,
+    # stopped the report it was never given
+    junk = tmp_path / "junk"
+    junk.mkdir()
+    (junk / "eval.json").write_bytes(b"\x89PNG not JSON")
+    (tmp_path / "deep").mkdir()
+    (tmp_path / "deep" / "eval.json").write_text("[" * 100_000 + "]" * 100_000)
+    capsys.readouterr()
+    assert main(["report", str(three_seeds[0]), "--out", str(tmp_path / "r")]) == 0
+    out, err = capsys.readouterr()
+    warnings = err.strip().splitlines()
+    assert len(warnings) == 2 and all(w.startswith("devlearn: warning: left out ") for w in warnings)
+    assert f"cannot read {junk / 'eval.json'}: it is not text" in err
+    assert f"cannot read {tmp_path / 'deep' / 'eval.json'}: its JSON is nested too deeply" in err
+    assert "zero baseline" in out and "skipped an unreadable evaluation found beside" in out
+    # given, the same file is refused: one line, nothing written
+    assert main(["report", str(junk), "--out", str(tmp_path / "r2")]) == 2
+    assert capsys.readouterr().err.startswith(f"devlearn: error: cannot read {junk / 'eval.json'}")
+    assert main(["report", str(tmp_path / "deep"), "--out", str(tmp_path / "r2")]) == 2
+    assert "its JSON is nested too deeply" in capsys.readouterr().err
+    assert not (tmp_path / "r2").exists()

@@ -264,3 +264,35 @@ def test_dry_run_checks_what_the_sweep_would_refuse(cli, refused, tmp_path):
     err = refused(cli, *base, "--seeds", "0-100000000")
     assert "--seeds '0-100000000' lists more than 10,000 seeds" in err
     assert not out.exists()
+
+
+def test_a_grid_of_too_many_runs_is_refused_before_any_is_planned(cli, refused, tmp_path):
+    # issue #55, fault 12: seeds were capped, grid x seeds was not (3000 x 3000 planned for hours)
+    with pytest.raises(UsageError, match="would train 10,001 runs"):  # first: fast on old code
+        variants({"a": [str(i) for i in range(10_001)]}, [0])
+    assert len(variants({"a": [str(i) for i in range(5_000)]}, [0, 1])) == 10_000
+    out = tmp_path / "sweep"
+    base = ["sweep", "tiny", "--out", str(out), "--steps", "128", "--dry-run"]
+    values = ",".join(f"0.{i:04d}" for i in range(1, 3001))
+    grid = ["--grid", f"behavior.target={values}", "--grid", f"save_interval={values}"]
+    err = refused(cli, *base, *grid)
+    assert err == (
+        "devlearn: error: the sweep would train 9,000,000 runs (3,000 values of behavior.target "
+        "x 3,000 values of save_interval x 1 seed), more than 10,000; give fewer grid values or "
+        "seeds, or split it into several sweeps"
+    )
+    err = refused(cli, *base, "--grid", f"behavior.target={values}", "--seeds", "1-4")
+    assert "the sweep would train 12,000 runs (3,000 values of behavior.target x 4 seeds)" in err
+    assert not out.exists()
+
+
+def test_a_sweep_file_is_read_with_guards(cli, refused, tmp_path):
+    # issue #55, fault 8: a deep TOML array was a RecursionError; /dev/zero read until memory ran
+    # out (the deep file first: it fails fast where the guards are missing)
+    deep = tmp_path / "deep.toml"
+    deep.write_text("seeds = " + "[" * 100_000 + "]" * 100_000 + "\n")
+    base = ["sweep", "tiny", "--out", str(tmp_path / "sweep"), "--dry-run", "--file"]
+    assert f"sweep file {deep} is nested too deeply" in refused(cli, *base, str(deep))
+    err = refused(cli, *base, "/dev/zero")
+    assert "cannot read /dev/zero: a character device, not a file" in err
+    assert not (tmp_path / "sweep").exists()

@@ -114,3 +114,42 @@ def test_one_age_per_curriculum_stage(tmp_path):
     cfg = tiny_run.config(tmp_path / "more", 64, "infant.growth=stages:1,2,3")
     with pytest.raises(UsageError, match=r"names 3 ages, but tiny's curriculum has 2 stage"):
         train(cfg, tiny_run.registry(), infant_factory=tiny_run.factory, progress=False)
+
+
+def test_a_resume_never_moves_the_age_back_and_keeps_the_schedule(
+    cli_with, refused, tmp_path, capsys
+):
+    # issue #55, fault 13: resumed with only --steps changed, the schedule was stretched over
+    # the new total and the body went from 18 back to 14 months; a changed infant.growth was
+    # taken silently
+    from devlearn.testing.fake_infant import TinyBehavior
+
+    cli = cli_with(TinyBehavior)
+    out = tmp_path / "run"
+    small = ["--envs", "4", "--workers", "0", "--set", "save_interval=1", "--set", GROWTH[1]]
+    assert cli(["run", "tiny", "--steps", "128", "--out", str(out), *small,
+                "--set", GROWTH[0]]) == 0  # fmt: skip
+    assert [r["age_months"] for r in rows(out)] == [6.0, 10.0, 14.0, 18.0]
+    config = (out / "config.json").read_text()
+    changes = [
+        ("infant.growth=6->24", "growth"),
+        ("infant.growth=", "growth"),
+        ("infant.growth_every=64", "growth_every"),
+        ("infant.growth_steps=64", "growth_steps"),
+    ]
+    for change, key in changes:
+        err = refused(cli, "run", "tiny", "--resume", str(out), "--steps", "256", "--set", change)
+        assert f"run {out} grows by infant.{key}=" in err and "which a resumed run keeps" in err
+        assert f"--from {out}/checkpoint_latest.pt" in err
+    assert (out / "config.json").read_text() == config and len(rows(out)) == 4
+    capsys.readouterr()
+    assert cli(["run", "tiny", "--resume", str(out), "--steps", "256"]) == 0
+    assert [r["age_months"] for r in rows(out)] == [6.0, 10.0, 14.0, 18.0, 18.0, 18.0, 18.0, 18.0]
+    assert (
+        f"devlearn: note: run {out} keeps its growth schedule over its first 128 steps "
+        "(infant.growth_steps, recorded in config.json); its body stays at 18 months after them"
+    ) in capsys.readouterr().err
+    assert json.loads((out / "config.json").read_text())["infant"]["growth_steps"] == 128
+    assert load_checkpoint(out / "checkpoint_latest.pt")["age_months"] == 18.0
+    assert cli(["run", "tiny", "--resume", str(out), "--steps", "320"]) == 0  # kept on: no note
+    assert rows(out)[-1]["age_months"] == 18.0 and "note" not in capsys.readouterr().err

@@ -41,6 +41,7 @@ def build(layout: str, algorithm=UniqueParamPPO, behavior_cls=TinyBehavior):
     train_cfg["multi_gpu"] = None
     if algorithm is not UniqueParamPPO:
         train_cfg["algorithm"]["class_name"] = algorithm
+        train_cfg["algorithm"].pop("adam_eps")  # ours (UniqueParamPPO's), not rsl-rl's
     gen = torch.Generator().manual_seed(0)
 
     def observations() -> TensorDict:

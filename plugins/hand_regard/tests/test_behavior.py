@@ -353,3 +353,43 @@ def test_the_cnn_policy_trains_with_the_asymmetric_critic_unless_told_or_saved_o
     saved = to_dict(fresh)
     del saved["behavior"]["critic"]  # as issue #29's CNN runs saved theirs
     assert from_dict(saved, HandRegard).behavior.critic == "same"
+
+
+def test_a_detector_file_with_values_no_calibration_writes_is_one_line(tmp_path, detector_file):
+    # issue #55, faults 7 and 8: NaN areas, empty or NaN colour boxes and JSON nested 100k deep
+    # were taken (detecting nothing, or everything) or a RecursionError traceback
+    import json
+    import re
+    from pathlib import Path
+
+    good = json.loads(Path(detector_file).read_text())
+    deep = tmp_path / "deep.json"
+    deep.write_text('{"a":' * 100_000 + "1" + "}" * 100_000)
+    cases = [
+        ({"min_area": float("nan")}, "min_area, max_area and expected_area must be finite"),
+        ({"expected_area": float("inf")}, "min_area, max_area and expected_area must be finite"),
+        ({"min_area": 50.0, "max_area": 10.0}, "0 <= min_area <= max_area"),
+        ({"hsv_ranges": []}, "hsv_ranges must be a non-empty list of colour boxes"),
+        ({"hsv_ranges": [[float("nan")] * 6]}, "hsv_ranges holds [nan, nan"),
+        ({"hsv_ranges": [[0, 0, 0, 200, 255, 255]]}, "H up to 179"),
+        ({"side_hsv_ranges": [[]]}, "side_hsv_ranges must be [] or [left boxes, right boxes]"),
+        ({"hand_means": [[[float("nan"), 1.0]]]}, "hand_means (eyes x 2 hands x [x, y]) must be"),
+        ({"kernel": 0}, "kernel must be a whole number of pixels from 1"),
+        ({"hsv": 1}, "not a hand detector (unknown field(s) hsv)"),
+    ]
+    for i, (change, reason) in enumerate(cases):
+        path = tmp_path / f"bad{i}.json"
+        path.write_text(json.dumps({**good, **change}))
+        expected = f"hand_regard: behavior.detector_file {path}: .*" + re.escape(reason)
+        with pytest.raises(UsageError, match=expected):
+            HandRegard(HandRegardConfig(detector_file=str(path))).detector  # noqa: B018
+        run = tmp_path / f"run{i}"
+        with pytest.raises(UsageError, match=expected):
+            HandRegard(HandRegardConfig(detector_file=str(path))).prepare(run)
+        assert not (run / DETECTOR_FILE).exists()
+    behavior = HandRegard(HandRegardConfig(detector_file=str(deep)))
+    with pytest.raises(UsageError, match="its JSON is nested too deeply"):
+        behavior.detector  # noqa: B018
+    stored = {"format_version": 2, **{**good, "min_area": float("nan")}}
+    with pytest.raises(UsageError, match="the checkpoint's hand detector: min_area"):
+        HandRegard().load_policy_artifacts({"hand_detector": stored}, tmp_path)

@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import pytest
 from devlearn_self_touch import SelfTouch
 
+import devlearn
 from devlearn.api.errors import UsageError
 from devlearn.testing import PluginRegistry, policy_network, run_config
 from devlearn.testing.envs import BehaviorEnv
@@ -80,3 +82,37 @@ def test_a_spread_bound_below_the_initial_spread_is_a_usage_error():
     """The core's NetworkSpec check answers at config time, naming the valid values."""
     with pytest.raises(UsageError, match="max_std must be 0 \\(unbounded\\) or above init_std=0.5"):
         run_config(SelfTouch, ["behavior.max_std=0.3"])
+
+
+class MouthTouch(devlearn.IntrinsicReward):
+    """Another behaviour's term (hand_to_mouth's ``MouthContact``): it reads a fact self-touch
+    never computes."""
+
+    def __call__(self, ctx: devlearn.StepContext) -> float:
+        return float(ctx.facts["mouth_contact"])
+
+
+@pytest.mark.parametrize(
+    "cls",
+    [
+        "devlearn.api.rewards:BatchedFromPerEnv",
+        "devlearn_self_touch.rewards:_LifetimeNovelty",
+        f"{__name__}:MouthTouch",
+    ],
+)
+def test_only_self_touchs_own_terms_may_be_named(cls):
+    # issue #55, fault 3: each crashed with a TypeError (or at step 0) instead of a refusal
+    expected = (
+        f"behavior.rewards.diversity_milestones.cls: unknown reward term class '{cls}': a "
+        "config names only the reward terms its behaviour declares; valid: "
+        "devlearn_self_touch.rewards:Balance, devlearn_self_touch.rewards:ContactNovelty, "
+        "devlearn_self_touch.rewards:DiversityMilestones, devlearn_self_touch.rewards:TouchNovelty"
+    )
+    key = "behavior.rewards.diversity_milestones"
+    with pytest.raises(UsageError) as refused:
+        run_config(SelfTouch, [f"{key}.cls={cls}", f"{key}.params={{}}"])
+    assert str(refused.value) == expected
+    saved = to_dict(run_config(SelfTouch))
+    saved["behavior"]["rewards"]["diversity_milestones"] = {"cls": cls, "weight": 1.0}
+    with pytest.raises(UsageError, match=re.escape(expected)):
+        from_dict(saved, SelfTouch)

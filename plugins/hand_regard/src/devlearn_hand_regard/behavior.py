@@ -86,6 +86,19 @@ def hand_features(detections: np.ndarray, masks: np.ndarray) -> np.ndarray:
     return out.ravel()
 
 
+ISSUE_28_LEARNER: dict[str, Any] = {
+    "network.encoders": "behavior",
+    "network.activation": "relu",
+    "network.init": "torch",
+    "network.head": "gaussian",
+    "network.final_std": 0.0,
+    "ppo.adam_eps": 1e-8,
+    "ppo.normalize_advantage_per_mini_batch": False,
+}
+"""The core learner as it was before issue #54 (issue #28's), which every published hand-regard
+result was trained with: kept here until a rerun shows issue #54's learner does no worse."""
+
+
 class HandRegard(Behavior):
     """Hand regard: keep your hands in view of both eyes, from intrinsic visual rewards.
 
@@ -163,13 +176,13 @@ class HandRegard(Behavior):
         path = Path(run_dir) / DETECTOR_FILE
         given = self.config.detector_file
         if not path.exists() and given:
-            if not Path(given).is_file():
+            if not Path(given).exists():
                 raise UsageError(
                     f"hand_regard: behavior.detector_file {given} does not exist; give a "
                     "detector JSON (e.g. a run's hand_detector.json) or leave it empty to "
                     "calibrate by babbling"
                 )
-            DetectorParams.load(given).save(path)
+            read_detector_file(given).save(path)
         elif not path.exists():
             detector_store.calibrate_by_babbling(self.config).save(path)
         self.config.detector_file = str(path.resolve())
@@ -194,7 +207,11 @@ class HandRegard(Behavior):
         """
         stored = artifacts.get("hand_detector")
         if stored is not None:
-            self._detector = self._make_detector(DetectorParams.from_dict(stored))
+            try:
+                params = DetectorParams.from_dict(stored, source="the checkpoint's hand detector")
+            except ValueError as err:
+                raise UsageError(f"hand_regard: {err}") from None
+            self._detector = self._make_detector(params)
             return
         name = self.config.detector_file
         if not name:
@@ -208,13 +225,7 @@ class HandRegard(Behavior):
         if self._detector is None:
             params = None
             if self.config.detector_file:
-                try:
-                    params = DetectorParams.load(self.config.detector_file)
-                except (OSError, ValueError, TypeError) as err:  # missing, not JSON, not ours
-                    reason = getattr(err, "strerror", None) or err
-                    raise UsageError(
-                        f"hand_regard: behavior.detector_file {self.config.detector_file}: {reason}"
-                    ) from None
+                params = read_detector_file(self.config.detector_file)
             else:
                 warnings.warn(
                     "hand_regard: no calibrated hand detector (config.detector_file is empty); "
@@ -450,7 +461,11 @@ class HandRegard(Behavior):
         renders and the detector once per decision; a discount of 0.99 per decision; a fixed
         learning rate; separate actor and critic), with one change this behaviour's evidence
         supports: no entropy bonus (with it the spread ran away from 0.5 to 2.7-5.7 in the
-        published runs, and issue #28's pilot learned hand regard without one).
+        published runs, and issue #28's pilot learned hand regard without one). Issue #54's
+        changes to the core learner (flat tanh networks, the free spread under a falling
+        ceiling) were measured on self-touch and the two plugins, not here: hand regard keeps
+        issue #28's network and head, on which its published results stand, until a rerun
+        shows the new learner does no worse (``--set network.head=free`` etc. try it).
         """
         left, right, both = DEMO_STEPS
         return {
@@ -459,6 +474,7 @@ class HandRegard(Behavior):
             "behavior.both_arms_steps": both,
             "total_steps": left + right + both,
             "ppo.entropy_coef": 0.0,
+            **ISSUE_28_LEARNER,
         }
 
     def run_length_defaults(self, total_steps: int) -> dict[str, Any]:
@@ -498,3 +514,19 @@ def _check_choice(key: str, value: str, choices: tuple[str, ...]) -> None:
         raise UsageError(
             f"hand_regard: unknown behavior.{key} '{value}'; valid: {', '.join(choices)}"
         )
+
+
+def read_detector_file(path: str) -> DetectorParams:
+    """The detector ``behavior.detector_file`` names, every value checked
+    (:meth:`DetectorParams.load`).
+
+    Raises:
+        UsageError: One line naming ``behavior.detector_file``, the file and the cause
+            (missing, not a regular file, not JSON, nested too deeply, a value no calibration
+            writes: a NaN area, an empty or NaN colour box list...).
+    """
+    try:
+        return DetectorParams.load(path)
+    except (UsageError, ValueError) as err:
+        reason = str(err).removeprefix(f"{path}: ")
+        raise UsageError(f"hand_regard: behavior.detector_file {path}: {reason}") from None

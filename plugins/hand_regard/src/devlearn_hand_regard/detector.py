@@ -8,6 +8,7 @@ left/right attribution all come from :class:`DetectorParams`, which motor babbli
 from __future__ import annotations
 
 import json
+import math
 import warnings
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -17,6 +18,7 @@ import cv2
 import numpy as np
 
 from devlearn import write_text_atomically
+from devlearn.api.json_files import read_json_object
 from devlearn_hand_regard.attribution import VisibilityPredictor, assign
 
 FORMAT_VERSION = 2
@@ -76,12 +78,28 @@ class DetectorParams:
 
     @classmethod
     def load(cls, path: str | Path) -> DetectorParams:
-        """Read parameters written by :meth:`save`."""
-        return cls.from_dict(json.loads(Path(path).read_text()), source=str(path))
+        """Read parameters written by :meth:`save` (devlearn's guarded JSON reader: a regular
+        file of bounded size and nesting), checked as :meth:`from_dict` checks them.
+
+        Raises:
+            UsageError: The file is unreadable or not a JSON object.
+            ValueError: Its values are not a detector's (the field named).
+        """
+        data = read_json_object(path, "a hand detector")
+        return cls.from_dict(data, source=str(path))
 
     @classmethod
     def from_dict(cls, data: dict[str, Any], source: str = "stored detector") -> DetectorParams:
-        """Rebuild parameters from :meth:`save`'s JSON content (e.g. stored in a policy file)."""
+        """Rebuild parameters from :meth:`save`'s JSON content (e.g. stored in a policy file),
+        every value checked (:func:`check_detector_values`): a NaN area or an empty colour box
+        list would detect nothing, or everything, without a word.
+
+        Raises:
+            ValueError: Another format, a missing or unknown field, or a value no calibration
+                writes (one line naming the field and what is valid).
+        """
+        if not isinstance(data, dict):
+            raise ValueError(f"{source}: a hand detector is a JSON object")
         data = dict(data)
         version = data.pop("format_version", None)
         if version != FORMAT_VERSION:
@@ -89,8 +107,139 @@ class DetectorParams:
                 f"{source}: hand detector format {version}, expected "
                 f"{FORMAT_VERSION}; delete the file to calibrate again by babbling"
             )
-        data["image_size"] = tuple(data["image_size"])
+        check_detector_values(data, source)
+        data["image_size"] = tuple(int(n) for n in data["image_size"])
         return cls(**data)
+
+
+_REQUIRED = ("hsv_ranges", "min_area", "max_area", "expected_area", "hand_means")
+_OPTIONAL = (
+    "image_size",
+    "kernel",
+    "calibration",
+    "position_model",
+    "side_hsv_ranges",
+    "visibility_model",
+)
+HSV_MAX = (179, 255, 255)
+"""Largest H, S and V in OpenCV's 8-bit HSV (the bounds of a colour box)."""
+
+
+def _number(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def _array(value: Any, field_name: str, source: str, shape: tuple[int | None, ...]) -> np.ndarray:
+    """``value`` as a finite float array of ``shape`` (None: any length on that axis)."""
+    try:
+        array = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        array = None
+    ok = (
+        array is not None
+        and array.ndim == len(shape)
+        and all(n is None or n == m for n, m in zip(shape, array.shape))
+        and bool(np.isfinite(array).all())
+    )
+    if not ok:
+        axes = " x ".join("N" if n is None else str(n) for n in shape)
+        raise ValueError(f"{source}: {field_name} must be finite numbers, {axes}")
+    assert array is not None
+    return array
+
+
+def _check_boxes(boxes: Any, field_name: str, source: str) -> None:
+    """A non-empty list of colour boxes ``[h_lo, s_lo, v_lo, h_hi, s_hi, v_hi]``."""
+    valid = (
+        f"a non-empty list of colour boxes [h_lo, s_lo, v_lo, h_hi, s_hi, v_hi], whole numbers "
+        f"with lo <= hi, H up to {HSV_MAX[0]}, S and V up to {HSV_MAX[1]}"
+    )
+    if not isinstance(boxes, list) or not boxes:
+        raise ValueError(f"{source}: {field_name} must be {valid}")
+    for box in boxes:
+        ok = (
+            isinstance(box, list)
+            and len(box) == 6
+            and all(_number(v) and v == int(v) for v in box)
+            and all(0 <= box[i] <= box[i + 3] <= HSV_MAX[i] for i in range(3))
+        )
+        if not ok:
+            raise ValueError(f"{source}: {field_name} holds {box!r:.60}; it must be {valid}")
+
+
+def check_detector_values(data: dict[str, Any], source: str) -> None:
+    """Check the fields of a saved detector (:meth:`DetectorParams.save`'s JSON without its
+    ``format_version``): every field known and the required ones present, colour boxes in
+    OpenCV's HSV, areas finite with ``0 <= min_area <= max_area``, positions finite and of
+    their shapes, the posture and visibility models of consistent shapes.
+
+    Raises:
+        ValueError: One line naming ``source``, the field and what is valid.
+    """
+    unknown = sorted(set(data) - set(_REQUIRED) - set(_OPTIONAL))
+    missing = [name for name in _REQUIRED if name not in data]
+    if unknown or missing:
+        what = [f"unknown field(s) {', '.join(unknown)}"] if unknown else []
+        what += [f"missing {', '.join(missing)}"] if missing else []
+        raise ValueError(f"{source}: not a hand detector ({'; '.join(what)})")
+    _check_boxes(data["hsv_ranges"], "hsv_ranges", source)
+    sides = data.get("side_hsv_ranges", [])
+    if not isinstance(sides, list) or len(sides) not in (0, 2):
+        raise ValueError(f"{source}: side_hsv_ranges must be [] or [left boxes, right boxes]")
+    for side, boxes in zip(("left", "right"), sides):
+        _check_boxes(boxes, f"side_hsv_ranges ({side})", source)
+    areas = [data[name] for name in ("min_area", "max_area", "expected_area")]
+    if not all(_number(a) and a >= 0 for a in areas) or areas[0] > areas[1]:
+        raise ValueError(
+            f"{source}: min_area, max_area and expected_area must be finite numbers of pixels "
+            f"with 0 <= min_area <= max_area; got {areas[0]!r}, {areas[1]!r}, {areas[2]!r}"
+        )
+    _array(data["hand_means"], "hand_means (eyes x 2 hands x [x, y])", source, (None, 2, 2))
+    size = data.get("image_size", (64, 64))
+    if not (
+        isinstance(size, list | tuple)
+        and len(size) == 2
+        and all(_number(n) and n == int(n) and 1 <= n <= 4096 for n in size)
+    ):
+        raise ValueError(f"{source}: image_size must be [height, width] in pixels, got {size!r}")
+    kernel = data.get("kernel", 3)
+    if not (_number(kernel) and kernel == int(kernel) and 1 <= kernel <= min(size)):
+        raise ValueError(
+            f"{source}: kernel must be a whole number of pixels from 1, got {kernel!r}"
+        )
+    for name in ("calibration", "position_model", "visibility_model"):
+        if not isinstance(data.get(name, {}), dict):
+            raise ValueError(f"{source}: {name} must be a JSON object")
+    model = data.get("position_model") or {}
+    if model:
+        mean = _array(model.get("joint_mean"), "position_model.joint_mean", source, (None,))
+        joints = len(mean)
+        scale = _array(model.get("joint_scale"), "position_model.joint_scale", source, (joints,))
+        if not (scale != 0).all():
+            raise ValueError(f"{source}: position_model.joint_scale must not hold 0")
+        shape = (2, joints + 2, 2)
+        _array(model.get("weights"), "position_model.weights", source, shape)
+    visibility = data.get("visibility_model") or {}
+    if visibility:
+        _check_visibility(visibility, source)
+
+
+def _check_visibility(model: dict[str, Any], source: str) -> None:
+    """The visibility model predicts finite probabilities for a posture (its arrays are read
+    as :class:`~devlearn_hand_regard.attribution.VisibilityPredictor` reads them)."""
+    try:
+        predictor = VisibilityPredictor(model)
+        joints = max((int(j.max()) for j in predictor.joints if j.size), default=-1)
+        arrays = [*predictor.low, *predictor.high, *predictor.mean, *predictor.scale]
+        arrays += predictor.weights
+        finite = all(np.isfinite(a).all() for a in arrays)
+        ok = finite and np.isfinite(predictor(np.zeros(joints + 1))).all()
+    except (KeyError, TypeError, ValueError, IndexError):
+        ok = False
+    if not ok:
+        raise ValueError(
+            f"{source}: visibility_model is damaged (its arrays must be finite and fit together)"
+        )
 
 
 @dataclass

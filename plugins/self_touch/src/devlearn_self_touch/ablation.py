@@ -13,9 +13,11 @@ budget, the mean over seeds and the range (min-max) of each figure.
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 from typing import Any
+
+from devlearn.api.errors import UsageError
+from devlearn.api.json_files import read_json_object
 
 COLUMNS = ("coverage_left", "coverage_right", "coverage_total", "balance", "score")
 """Eval figures shown per run (``devlearn eval self_touch --json``)."""
@@ -27,6 +29,7 @@ def ablation_row(run_dir: Path) -> dict[str, Any]:
     Raises:
         FileNotFoundError: the run has no ``config.json`` or no ``eval/eval.json``, with the
             command that makes it.
+        UsageError: either is unreadable (devlearn's guarded JSON reader) or no JSON object.
     """
     run_dir = Path(run_dir)
     config_file, eval_file = run_dir / "config.json", run_dir / "eval" / "eval.json"
@@ -37,8 +40,8 @@ def ablation_row(run_dir: Path) -> dict[str, Any]:
             f"{eval_file} missing: run `devlearn eval self_touch --checkpoint "
             f"{run_dir}/checkpoint_latest.pt --episodes 100 --json --out {run_dir}/eval`"
         )
-    config = json.loads(config_file.read_text())
-    result = json.loads(eval_file.read_text())
+    config = read_json_object(config_file, "a run config")  # devlearn's guarded reader
+    result = read_json_object(eval_file, "an evaluation")
     behavior = config.get("behavior") or {}
     curriculum = behavior.get("curriculum", "two_stage")
     if curriculum == "two_stage":
@@ -88,7 +91,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         print(ablation_table(args.runs))
-    except FileNotFoundError as error:
+    except (FileNotFoundError, UsageError) as error:
         parser.exit(2, f"error: {error}\n")
     return 0
 

@@ -118,14 +118,20 @@ class SelfTouch(Behavior):
     def reward_terms(self) -> list[IntrinsicReward | BatchedIntrinsicReward]:
         """R_t = R_touch + R_geom + R_milestones + R_balance (sec. II-A3): the config's
         ``rewards``, fresh instances (batched: computed once per worker over its envs), the
-        novelty terms told ``lifetime_memory`` and ``touch_count``."""
+        novelty terms told ``lifetime_memory``, touch novelty ``touch_count`` and the repeat
+        pay's clock in seconds (``repeat_crossing_s``, ``repeat_steepness_s``)."""
         c = self.config
         memory = {"lifetime_memory": c.lifetime_memory}
-        shared = {
-            "touch_novelty": {**memory, "touch_count": c.touch_count},
+        clock = {"crossing_s": c.repeat_crossing_s, "steepness_s": c.repeat_steepness_s}
+        shared: dict[str, dict[str, Any]] = {
+            "touch_novelty": {**memory, "touch_count": c.touch_count, **clock},
             "contact_novelty": memory,
         }
         return build_reward_terms(c.rewards, shared)
+
+    def episode_seconds(self) -> float | None:
+        """``episode_s`` (None: the infant's 5 s, BabyBench's)."""
+        return self.config.episode_s
 
     def curriculum(self) -> Curriculum:
         """``two_stage``: fixed pose for ``fixed_pose_steps``, then random initial poses;
@@ -138,6 +144,18 @@ class SelfTouch(Behavior):
             return Curriculum([random])
         fixed.steps = int(self.config.fixed_pose_steps)
         return Curriculum([fixed, random])
+
+    def run_length_defaults(self, total_steps: int) -> dict[str, Any]:
+        """The two stages as halves of the run, as the paper's 4M + 4M are of its 8M (sec.
+        II-A5), so that a run of any length reaches the random poses it is evaluated from
+        (issue #55: a short run used to spend all of it in the fixed pose, 4M steps by
+        default, and scored below random); ``--set behavior.fixed_pose_steps=...`` keeps its
+        own."""
+        fixed = int(total_steps) // 2
+        return {
+            "behavior.fixed_pose_steps": fixed,
+            "behavior.random_pose_steps": int(total_steps) - fixed,
+        }
 
     def eval_stage(self) -> dict[str, Any]:
         """Evaluation starts every episode from a random initial pose (sec. II-A6)."""
@@ -167,6 +185,14 @@ class SelfTouch(Behavior):
             # with the discount and rollouts this behaviour used at that rate
             "network.head": "paper",
             "network.layout": "shared",
+            # the paper's Model I network: per-sense ReLU encoders, torch's initialisation,
+            # Adam's default epsilon, no ceiling on the spread (issue #54's core defaults not)
+            "network.encoders": "behavior",
+            "network.activation": "relu",
+            "network.init": "torch",
+            "network.final_std": 0.0,
+            "ppo.adam_eps": 1e-8,
+            "ppo.normalize_advantage_per_mini_batch": False,
             "behavior.touch_count": "step",
             "env.action_repeat": 1,
             "ppo.num_steps_per_env": 128,

@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 from devlearn.api.behavior import BehaviorConfig
-from devlearn.api.rewards import RewardTermCfg
+from devlearn.api.rewards import RewardTermCfg, reward_term_cfg
 from devlearn_self_touch.rewards import (
     LIFETIME_MEMORIES,
     TOUCH_COUNTS,
@@ -63,6 +63,11 @@ class SelfTouchConfig(BehaviorConfig):
         "max_std": 0.0,
         "lifetime_memory": "per_env",
         "touch_count": "step",
+        # issue #57: runs saved before the reward's clock counted the rewards table's steps
+        # and played the infant's 5 s episodes
+        "repeat_crossing_s": None,
+        "repeat_steepness_s": None,
+        "episode_s": None,
     }
     """Values a saved config (config.json, a checkpoint's config) that lacks the field was
     trained with: runs from before these fields existed, or before their defaults changed
@@ -110,7 +115,9 @@ class SelfTouchConfig(BehaviorConfig):
     rewards: dict[str, RewardTermCfg] = field(default_factory=paper_rewards)
     """Term name -> (class, weight, params) (:func:`paper_rewards`, the paper's constants):
     ``touch_novelty`` (R_touch: first_ever, first_in_episode, repeat_scale and f_decay's
-    midpoint and rate, f_decay(c) = 2 / (1 + exp(rate (c - midpoint))) - 1), ``contact_novelty``
+    midpoint and rate, f_decay(c) = 2 / (1 + exp(rate (c - midpoint))) - 1, in counts of c:
+    touches with ``touch_count=onset``; with ``step``, ``repeat_crossing_s`` and
+    ``repeat_steepness_s`` set them in seconds unless null), ``contact_novelty``
     (R_geom: first_ever, first_in_episode per (hand, region) pair), ``diversity_milestones``
     (R_milestones: reward per milestone of distinct touched regions crossed in the episode) and
     ``balance`` (R_balance: reward on the last step when |N_L - N_R| <= tolerance and
@@ -134,6 +141,29 @@ class SelfTouchConfig(BehaviorConfig):
     rule, ``--preset paper``): every step a region is touched, so a region held for a whole
     episode costs about -489. A saved config without this field means ``step``."""
 
+    # --- the reward's clock, in simulated seconds (issue #57) ------------------------------
+    repeat_crossing_s: float | None = 0.05
+    """With ``touch_count=step``: how long (simulated seconds) a region may have been touched
+    in an episode before touch novelty's repeat pay turns from reward to penalty, f_decay's
+    zero crossing (the paper's c = 10 steps at 200 Hz: 0.05 s). Converted with the body's
+    physics step, the reward terms' clock (self-touch's facts and rewards run at every physics
+    step whatever ``env.action_repeat``), into the rewards table's ``midpoint``, which it
+    replaces: 10 steps at 200 Hz, 20 at 400 Hz. null: the table's ``midpoint``, in steps (what
+    a saved config without this field means). Unused with ``touch_count=onset``, where c_j
+    counts touches, not time (the table's ``midpoint``: the 10th touch)."""
+    repeat_steepness_s: float | None = 0.01
+    """With ``touch_count=step``: f_decay's time constant 1 / rate in simulated seconds (the
+    paper's rate 0.5 per step at 200 Hz: 0.01 s), converted with the physics step into the
+    table's ``rate``, which it replaces. null: the table's ``rate`` (with
+    ``repeat_crossing_s`` null; a saved config without this field)."""
+    episode_s: float | None = None
+    """Simulated seconds per episode, in training and evaluation (converted with the physics
+    step; a whole number of decisions: 5 s is 1,000 physics steps at 200 Hz, 200 decisions at
+    ``env.action_repeat`` 5). null (default): the infant's, BabyBench's 5 s (the paper's).
+    The episode is the clock of every per-episode memory: first-in-episode pay, milestones,
+    the balance bonus on its last step. ``devlearn eval --session S`` overrides it for an
+    evaluation (whole sessions without a reset)."""
+
     # --- policy (sec. II-A4) -----------------------------------------------------------------
     max_std: float = 1.0
     """Upper bound on the policy's standard deviation (default 1.0, bounded with a sigmoid);
@@ -147,10 +177,11 @@ class SelfTouchConfig(BehaviorConfig):
     """``"two_stage"`` (fixed pose then random pose), ``"fixed_only"`` or ``"random_only"``
     (the paper's ablation, Table II)."""
     fixed_pose_steps: int = 4_000_000
-    """Environment steps (all environments) of stage 1, fixed initial pose (paper: 4M)."""
+    """Environment steps (all environments) of stage 1, fixed initial pose (paper: 4M). A new
+    run's default is half its ``total_steps`` (``SelfTouch.run_length_defaults``)."""
     random_pose_steps: int = 4_000_000
-    """Environment steps of stage 2, random initial joint angles (paper: 4M). Informational:
-    the last stage lasts until training ends (set total_steps = 8M for the paper's run)."""
+    """Environment steps of stage 2, random initial joint angles (paper: 4M; a new run's
+    default: the other half). Informational: the last stage lasts until training ends."""
 
     # --- metrics (BabyBench's scoring) ----------------------------------------------------
     training_score_episodes: int = 10_000
@@ -192,3 +223,40 @@ class SelfTouchConfig(BehaviorConfig):
                 f"unknown self_touch reward term(s) {sorted(unknown)}; "
                 f"valid: {', '.join(paper_rewards())}"
             )
+        self._validate_clock()
+
+    def _validate_clock(self) -> None:
+        """The reward's clock: positive seconds, given where the table would not say otherwise."""
+        if self.episode_s is not None and not 0 < self.episode_s < float("inf"):
+            raise ValueError(f"episode_s must be above 0 seconds (or null), got {self.episode_s}")
+        crossing, steepness = self.repeat_crossing_s, self.repeat_steepness_s
+        if (crossing is None) != (steepness is None):
+            raise ValueError(
+                "repeat_crossing_s and repeat_steepness_s are set together (seconds) or both "
+                f"null (the rewards table's steps); got {crossing}, {steepness}"
+            )
+        if crossing is not None and steepness is not None and not min(crossing, steepness) > 0:
+            raise ValueError(
+                f"repeat_crossing_s and repeat_steepness_s must be above 0, got {crossing}, "
+                f"{steepness}"
+            )
+        term = self.rewards.get("touch_novelty")
+        params = {} if term is None else dict(reward_term_cfg(term).params)
+        for key in ("lifetime_memory", "touch_count", "crossing_s", "steepness_s"):
+            if key in params:
+                option = {"crossing_s": "repeat_crossing_s", "steepness_s": "repeat_steepness_s"}
+                raise ValueError(
+                    f"behavior.rewards.touch_novelty.params.{key} is the behaviour's: set "
+                    f"behavior.{option.get(key, key)}"
+                )
+        paper = paper_rewards()["touch_novelty"].params
+        if self.touch_count == "step" and crossing is not None:
+            for key, seconds in (("midpoint", "repeat_crossing_s"), ("rate", "repeat_steepness_s")):
+                if params.get(key, paper[key]) != paper[key]:
+                    raise ValueError(
+                        f"with touch_count=step the repeat pay's clock is behavior.{seconds} "
+                        f"(seconds); behavior.rewards.touch_novelty.params.{key}="
+                        f"{params[key]} counts touches (touch_count=onset). Give it in "
+                        f"seconds, or set behavior.repeat_crossing_s=null and "
+                        "behavior.repeat_steepness_s=null to count steps"
+                    )

@@ -17,6 +17,7 @@ from devlearn import (
     write_text_atomically,
 )
 from devlearn_self_touch.body_map import HANDS, NUM_PARTS, NUM_REGIONS
+from devlearn_self_touch.coding import CodedTouches
 
 SETTLE_STEPS = 10
 """Steps at the start of an evaluation episode whose contacts are not credited: a random
@@ -195,6 +196,8 @@ class SelfTouchEvaluator(Evaluator):
         """The touched parts of the episode :meth:`end_episode` closed last, (2, 34)."""
         self.regions: Any = None  # the infant's region table, taken from the first real step
         self.likeness = Likeness()
+        self.coded = CodedTouches()
+        """Touches as a video coder counts them (:mod:`devlearn_self_touch.coding`)."""
         self.dt = PHYSICS_TIMESTEP
 
     def record(self, ctx: StepContext) -> None:
@@ -203,7 +206,12 @@ class SelfTouchEvaluator(Evaluator):
             self.dt = float(ctx.infant.physics_timestep)
         if not self.training:
             contacts = np.asarray(ctx.facts["hand_contacts"], dtype=bool)
-            self.likeness.record(contacts, counted=ctx.step >= self.settle_steps)
+            counted = ctx.step >= self.settle_steps
+            self.likeness.record(contacts, counted=counted)
+            if counted:
+                if ctx.infant is not None:  # its regions' areas, its bodies (once per body)
+                    self.coded.see_infant(ctx.infant)
+                self.coded.record(contacts, ctx.infant, self.dt)
         if ctx.step < self.settle_steps:
             return  # the reset pose settling under gravity, not the policy
         parts = np.asarray(ctx.facts["hand_parts"], dtype=bool)
@@ -229,6 +237,7 @@ class SelfTouchEvaluator(Evaluator):
         self.ever_parts |= self.episode_parts
         if not self.training:
             self.likeness.end_episode(self.dt)
+            self.coded.end_episode()
             self.episodes.append(metrics)
             self.touched.append(
                 {
@@ -255,6 +264,7 @@ class SelfTouchEvaluator(Evaluator):
         self.episodes += later.episodes
         self.touched += later.touched
         self.likeness.merge(later.likeness)
+        self.coded.merge(later.coded)
         if self.regions is None:
             self.regions, self.dt = later.regions, later.dt
 
@@ -286,9 +296,8 @@ class SelfTouchEvaluator(Evaluator):
             "parts_never_touched": [
                 names[p] for p in range(NUM_PARTS) if not self.ever_parts[:, p].any()
             ],
-            "likeness": self.likeness.summary(
-                None if self.regions is None else self.regions.categories
-            ),
+            "likeness": self.likeness.summary(getattr(self.regions, "categories", None)),
+            "likeness_coded": self.coded.summary(),
         }
 
     def protocol(self) -> dict[str, Any]:
@@ -297,7 +306,10 @@ class SelfTouchEvaluator(Evaluator):
             "settle_steps": self.settle_steps,
             "criteria": {
                 "hand_touch": "a palm or finger of the hand contacts either side's region of "
-                "a part (steps after the settle period)"
+                "a part (steps after the settle period)",
+                "coded_touch": "a bout of a limb's contact in "
+                f"{self.coded.frame_rate} Hz frames, gaps shorter than "
+                f"{self.coded.min_gap_frames} frames merged (likeness_coded)",
             },
             "headline": "score",
         }

@@ -58,6 +58,16 @@ def f_decay(c: float, midpoint: float = 10.0, rate: float = 0.5) -> float:
 TOUCH_COUNTS = ("step", "onset")
 """Valid values of the touch-novelty term's ``touch_count``."""
 
+TICK_SECONDS = 0.005
+"""Seconds between two calls of a term when its contexts carry no infant (synthetic steps in
+tests): BabyBench's physics step. With an infant, its ``physics_timestep``."""
+
+
+def steps_of(seconds: float, tick: float) -> float:
+    """``seconds`` in ticks of ``tick`` s, rounded to 1e-9 of a tick so that a time set in
+    seconds gives the step count exactly (0.05 s at 5 ms: 10.0)."""
+    return round(float(seconds) / float(tick), 9)
+
 
 def _check_touch_count(touch_count: str) -> bool:
     """True for ``onset``; raises ValueError naming the valid values otherwise."""
@@ -120,6 +130,13 @@ class TouchNovelty(_LifetimeNovelty):
     included), so the second consecutive step pays 0.5 f_decay(1) and a contact held for the
     11th step pays 0.5 f_decay(10) = 0. A first-ever touch also starts the episode count.
 
+    With ``touch_count="step"`` c_j is a time: the term is called on every physics step
+    (self-touch's facts run at each one, whatever ``env.action_repeat``), so given
+    ``crossing_s`` and ``steepness_s`` the term takes f_decay's midpoint = crossing_s / dt and
+    rate = dt / steepness_s from the body's physics step dt on its first call (0.05 s and
+    0.01 s: 10 and 0.5 at 200 Hz, the paper's), and a contact turns from reward to penalty
+    after the same simulated time whatever the physics step.
+
     Args:
         weight: Term weight (paper: 1).
         first_ever: Paper: 5.0.
@@ -130,6 +147,9 @@ class TouchNovelty(_LifetimeNovelty):
             counts, so one region held for a whole episode costs about -489) or ``onset``
             (only a touch's first step counts and pays: holding costs nothing more).
         lifetime_memory: ``shared`` (one memory for the run) or ``per_env`` (module docstring).
+        crossing_s, steepness_s: With ``touch_count="step"``, f_decay's zero crossing and its
+            time constant 1 / rate in simulated seconds, replacing ``midpoint`` and ``rate``
+            (None: those, in steps). Ignored with ``onset``, where c_j counts touches.
     """
 
     name = "touch_novelty"
@@ -144,14 +164,34 @@ class TouchNovelty(_LifetimeNovelty):
         rate: float = 0.5,
         lifetime_memory: str = "shared",
         touch_count: str = "step",
+        crossing_s: float | None = None,
+        steepness_s: float | None = None,
     ) -> None:
         super().__init__(weight)
         self.first_ever, self.first_in_episode = float(first_ever), float(first_in_episode)
         self.repeat_scale, self.midpoint, self.rate = float(repeat_scale), midpoint, rate
         self.shared = _check_memory(lifetime_memory)
         self.onset = _check_touch_count(touch_count)
+        self.clock: tuple[float, float] | None = None
+        """(crossing_s, steepness_s) still to convert with the body's physics step, or None."""
+        if crossing_s is not None or steepness_s is not None:
+            if crossing_s is None or steepness_s is None or not min(crossing_s, steepness_s) > 0:
+                raise ValueError(
+                    "crossing_s and steepness_s are given together, both above 0; got "
+                    f"{crossing_s}, {steepness_s}"
+                )
+            if not self.onset:
+                self.clock = (float(crossing_s), float(steepness_s))
         self._repeat = np.zeros(0)  # repeat_scale * f_decay(c) for c = 0, 1, ... (grown as needed)
         self.bind(1)
+
+    def _set_clock(self, clock: tuple[float, float], batch: BatchContext) -> None:
+        """midpoint and rate from ``clock`` (seconds), in physics steps of the batch's body."""
+        infant = batch.contexts[0].infant
+        tick = float(infant.physics_timestep) if infant is not None else TICK_SECONDS
+        self.midpoint, self.rate = steps_of(clock[0], tick), steps_of(tick, clock[1])
+        self._repeat = np.zeros(0)
+        self.clock = None
 
     def bind(self, num_envs: int) -> None:
         super().bind(num_envs)
@@ -174,6 +214,8 @@ class TouchNovelty(_LifetimeNovelty):
         return self._repeat.take(count)
 
     def __call__(self, batch: BatchContext) -> np.ndarray:
+        if self.clock is not None:
+            self._set_clock(self.clock, batch)
         touched = batch.stack("touched", bool)
         if self.onset:  # only a touch's first step counts
             touched, self.before = touched & ~self.before, touched.copy()
