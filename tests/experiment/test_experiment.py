@@ -311,7 +311,7 @@ def test_a_dry_run_lists_every_run_and_its_evaluations_and_starts_nothing(cli, c
 @pytest.mark.slow
 def test_the_learners_experiment_file_checks_with_the_real_behaviour(tmp_path, capsys):
     """experiments/learners.toml (issue #45's comparison) resolves through the config pipeline
-    with self_touch installed: a dry run lists its 6 runs and 2 baselines."""
+    with self_touch installed: a dry run lists its 10 runs and 2 baselines."""
     pytest.importorskip("stable_baselines3")
     assert (
         main(
@@ -326,7 +326,7 @@ def test_the_learners_experiment_file_checks_with_the_real_behaviour(tmp_path, c
         == 0
     )
     out = capsys.readouterr().out
-    assert "6 runs (2 arms x 3 seeds), 2 baseline(s), 8 evaluations" in out
+    assert "10 runs (2 arms x 5 seeds), 2 baseline(s), 12 evaluations" in out
     assert "--steps 2048000" in out and "--episodes 100 --seed 0" in out
     assert not (tmp_path / "o").exists()
 
