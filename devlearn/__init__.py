@@ -3,7 +3,9 @@
 The public API for behaviour plugins, defined in :mod:`devlearn.api` and re-exported here: the
 four interfaces (:class:`Behavior`, :class:`SensorEncoder`, :class:`IntrinsicReward`,
 :class:`Curriculum`), the learned-reward kind (:class:`LearnedReward`), the hook marker
-:data:`hookimpl`, and the infant a behaviour reads (:class:`Infant`, :func:`build_infant`).
+:data:`hookimpl`, the infant a behaviour reads (:class:`Infant`, :func:`build_infant`), and
+devlearn's atomic file writer (:func:`write_text_atomically`, :func:`write_atomically`), through
+which a plugin writes its files too.
 Plugins import only ``devlearn``, ``devlearn.api`` and ``devlearn.testing`` (checked by
 ``lint-imports``, docs/architecture.md). See ``docs/writing-a-plugin.md``.
 """
@@ -38,6 +40,7 @@ if TYPE_CHECKING:  # the same names, for type checkers (which do not run __getat
     )
     from devlearn.api.sensors import MLPEncoder, SensorEncoder
     from devlearn.api.stats import episode_stats
+    from devlearn.files import write_atomically, write_text_atomically
     from devlearn.infant import Infant, build_infant
 
 # MuJoCo picks its GL backend when first imported: headless EGL (no display needed) unless the
@@ -79,6 +82,8 @@ _PUBLIC = {
     "build_infant": "devlearn.infant",
     "episode_stats": "devlearn.api.stats",
     "hookimpl": "devlearn.api.hookspecs",
+    "write_atomically": "devlearn.files",
+    "write_text_atomically": "devlearn.files",
 }
 
 
@@ -116,4 +121,6 @@ __all__ = [
     "build_infant",
     "episode_stats",
     "hookimpl",
+    "write_atomically",
+    "write_text_atomically",
 ]

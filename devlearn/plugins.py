@@ -23,6 +23,7 @@ from devlearn.api import hookspecs
 from devlearn.api.behavior import Behavior
 from devlearn.api.errors import UsageError
 from devlearn.api.json_files import read_json
+from devlearn.files import write_text_atomically
 
 if TYPE_CHECKING:  # torch-based: imported when a plugin registers one (it has loaded torch)
     from devlearn.api.learned import LearnedReward
@@ -64,7 +65,7 @@ def set_plugin_disabled(name: str, disabled: bool) -> Path:
     current = _saved_disabled(path)
     current = current | {name} if disabled else current - {name}
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps({"disabled": sorted(current)}, indent=2) + "\n")
+    write_text_atomically(path, json.dumps({"disabled": sorted(current)}, indent=2) + "\n")
     return path
 
 

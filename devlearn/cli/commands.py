@@ -209,7 +209,11 @@ COMMANDS: tuple[Command, ...] = (
             help="""a baseline's evaluation folder to show beside the headline (repeatable;
             default: eval_BEHAVIOR_zero / _random / _held_random here, when they exist)""",
         ),
-        option("--video", metavar="PATH", help="write an MP4 of the first episode"),
+        option(
+            "--video",
+            metavar="PATH",
+            help="write the first episode as a video (.mp4, .mkv, .mov or .avi)",
+        ),
         option(
             "--out",
             help="""output directory (default CHECKPOINT_DIR/eval; baselines:
@@ -283,7 +287,9 @@ COMMANDS: tuple[Command, ...] = (
             help="""body-map: skin regions; eyes: both eye images; growth: the infant at 0, 6,
             12, 18 and 24 months side by side, at one scale""",
         ),
-        option("--out", required=True, metavar="PATH", help="PNG file to write"),
+        option(
+            "--out", required=True, metavar="PATH", help="picture file to write (.png, .jpg...)"
+        ),
         help="draw the 68-region body map, what the two eyes see, or the body at 0-24 months (PNG)",
     ),
     Command(

@@ -220,13 +220,19 @@ def _load(groups: list[list[Path]]) -> tuple[list[tuple[Path, list[dict]]], bool
 
 def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     """Plot the chosen metrics (moving average) against steps and write a PNG."""
+    from functools import partial
+
     import matplotlib
+
+    from devlearn.files import check_out_file, write_atomically
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     import numpy as np
 
     chosen = picture_path(args.out) if args.out else None  # refused before any work
+    if chosen is not None:
+        check_out_file(chosen)  # a folder, a FIFO, a missing or unwritable folder
     runs: list[tuple[Any, list[dict]]]  # (run folder, rows), then (label, rows) by start
     runs, evaluations = _load([list(args.run_dirs), *(args.vs or [])])
     every = {k for _, rows in runs for r in rows for k in r if not k.startswith("_")}
@@ -242,6 +248,8 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
         raise UsageError(f"no such metric(s) {unknown}; valid: {', '.join(sorted(every))}")
     if not 1 <= args.smooth <= SMOOTH_MAX:
         raise UsageError(f"--smooth must be from 1 to {SMOOTH_MAX}, got {args.smooth}")
+    out = chosen or default_out(list(args.run_dirs), evaluations)
+    check_out_file(out)  # the default beside the runs too, before the drawing
     # constrained layout places the title above the first panel, never over it
     fig, axes = plt.subplots(
         len(keys), 1, figsize=(7, 2.4 * len(keys)), squeeze=False, layout="constrained"
@@ -286,8 +294,13 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     else:
         axes[-1, 0].set_xlabel("environment steps")
         fig.suptitle(f"{title}: mean over episodes ending in each iteration")
-    out = chosen or default_out(list(args.run_dirs), evaluations)
-    fig.savefig(out, dpi=110, bbox_inches="tight")  # the legend beside the axes included
+    try:  # the legend beside the axes included
+        save = partial(fig.savefig, format=out.suffix[1:].lower(), dpi=110, bbox_inches="tight")
+        write_atomically(out, save)
+    except OSError as exc:
+        raise UsageError(f"cannot write {out}: {exc.strerror or exc}") from None
+    finally:
+        plt.close(fig)
     print(out)
     return 0
 

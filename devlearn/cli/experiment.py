@@ -77,14 +77,17 @@ def _publish(args: argparse.Namespace, registry: PluginRegistry) -> int:
 
 def _table(args: argparse.Namespace, registry: PluginRegistry) -> int:
     from devlearn.experiment import experiment_table, markdown
+    from devlearn.files import check_out_file, write_text_atomically
 
+    out = Path(args.out) if args.out else None
+    if out is not None:  # a folder, a device or FIFO, an unwritable place: refused first
+        check_out_file(out, parents=True)
     table = experiment_table(args.dest)
     text = json.dumps(table, indent=2) + "\n" if args.json else markdown(table)
-    if args.out:
-        out = Path(args.out)
+    if out is not None:
         try:
             out.parent.mkdir(parents=True, exist_ok=True)
-            out.write_text(text)
+            write_text_atomically(out, text)
         except OSError as exc:
             raise UsageError(f"cannot write --out {out}: {exc.strerror or exc}") from None
     sys.stdout.write(text)

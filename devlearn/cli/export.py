@@ -13,7 +13,8 @@ if TYPE_CHECKING:
 def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     """Export and print what was written and its inputs."""
     from devlearn.api.errors import UsageError
-    from devlearn.evaluation.export import FORMATS, check_out_file, export_policy, load_policy
+    from devlearn.evaluation.export import FORMATS, export_policy, load_policy
+    from devlearn.files import check_out_file
 
     if args.format not in FORMATS:
         raise UsageError(f"unknown export format '{args.format}'; valid: {', '.join(FORMATS)}")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import keyword
 import string
 from importlib import resources
@@ -10,6 +11,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from devlearn.api.errors import UsageError
+from devlearn.config.checks import check_out_dir
+from devlearn.files import NAME_MAX, temporary_name, write_text_atomically
 
 if TYPE_CHECKING:
     from devlearn.plugins import PluginRegistry
@@ -30,7 +33,14 @@ def names_for(name: str) -> dict[str, str]:
     from devlearn.plugins import PLUGIN_NAME  # the registry's own rule for a behaviour's name
 
     if not PLUGIN_NAME.match(name) or keyword.iskeyword(name):
-        raise UsageError(f"plugin name '{name}' must be lower_snake_case (e.g. my_reach)")
+        raise UsageError(f"plugin name '{name[:40]}' must be lower_snake_case (e.g. my_reach)")
+    # its longest file name: tests/test_NAME.py, written first as .test_NAME.py.tmp-PID
+    longest = NAME_MAX - len(temporary_name(Path("test_.py")).name)
+    if len(name) > longest:
+        raise UsageError(
+            f"plugin name '{name[:40]}...' is {len(name)} characters; at most {longest} fit "
+            f"the file names it makes ({NAME_MAX} bytes each)"
+        )
     return {
         "name": name,
         "module": f"devlearn_{name}",
@@ -45,8 +55,9 @@ def write_plugin(
     """Write the plugin distribution for ``name`` into ``out``; return the files written.
 
     Raises:
-        UsageError: A bad name, a name an installed plugin already registers, or an ``out``
-            that exists and is not empty.
+        UsageError: A bad or too long name, a name an installed plugin already registers, an
+            ``out`` that exists and is not empty or cannot be written (nothing is left of a
+            write that fails).
     """
     subs = names_for(name)
     if registry is not None and name in registry.behaviors():
@@ -55,17 +66,30 @@ def write_plugin(
             f"behaviour '{name}' already exists (plugin '{plugin.name}'); pick another"
         )
     root = Path(out) if out else Path(subs["dist"])
-    if root.exists() and (not root.is_dir() or any(root.iterdir())):
-        raise UsageError(f"{root} already exists and is not empty; choose another --out")
     templates = resources.files("devlearn") / "templates" / "plugin"
-    written = []
-    for template, target in FILES.items():
-        text = string.Template(templates.joinpath(template).read_text()).substitute(subs)
-        path = root / target.format(**subs)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(text)
-        written.append(path)
-    return written
+    texts = {
+        root / target.format(**subs): string.Template(
+            templates.joinpath(template).read_text()
+        ).substitute(subs)
+        for template, target in FILES.items()
+    }
+    made: list[Path] = []  # what this call created, removed again if a write fails
+    try:
+        if root.exists() and (not root.is_dir() or any(root.iterdir())):
+            raise UsageError(f"{root} already exists and is not empty; choose another --out")
+        check_out_dir(root)
+        for path, text in texts.items():
+            missing = [p for p in (path.parent, *path.parent.parents) if not p.exists()]
+            path.parent.mkdir(parents=True, exist_ok=True)
+            made += reversed(missing)
+            write_text_atomically(path, text)
+            made.append(path)
+    except OSError as exc:  # a name too long for the file system, a full disk, /proc...
+        for path in reversed(made):
+            with contextlib.suppress(OSError):
+                path.rmdir() if path.is_dir() else path.unlink()
+        raise UsageError(f"cannot write the plugin to {root}: {exc.strerror or exc}") from None
+    return list(texts)
 
 
 def run(args: argparse.Namespace, registry: PluginRegistry) -> int:

@@ -8,23 +8,42 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from collections.abc import Callable
-    from pathlib import Path
+
+    import numpy as np
 
     from devlearn.plugins import PluginRegistry
 
 
 def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
-    """Write the picture and print its path (``registry`` is unused)."""
+    """Draw the picture, write it (atomically, in the type its extension names) and print its
+    path (``registry`` is unused). The path is checked before anything is drawn."""
     del registry
+    from pathlib import Path
+
+    from devlearn.api.errors import UsageError
     from devlearn.env.rendering import require_rendering
+    from devlearn.files import check_out_file, write_bytes_atomically
+    from devlearn.infant.pictures import (
+        IMAGE_SUFFIXES,
+        body_map_picture,
+        encode_picture,
+        eyes_picture,
+        growth_picture,
+    )
 
-    require_rendering(f"devlearn picture {args.what}")  # every picture is a render
-    from devlearn.infant.pictures import body_map_picture, eyes_picture, growth_picture
-
-    draw: dict[str, Callable[[str], Path]] = {
+    draw: dict[str, Callable[[], np.ndarray]] = {
         "body-map": body_map_picture,
         "eyes": eyes_picture,
         "growth": growth_picture,
     }
-    print(draw[args.what](args.out))
+    out = Path(args.out)
+    check_out_file(out, suffixes=IMAGE_SUFFIXES, parents=True)
+    require_rendering(f"devlearn picture {args.what}")  # every picture is a render
+    data = encode_picture(draw[args.what](), out.suffix.lower())
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        write_bytes_atomically(out, data)
+    except OSError as exc:
+        raise UsageError(f"cannot write {out}: {exc.strerror or exc}") from None
+    print(out)
     return 0

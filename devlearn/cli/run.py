@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import os
 import signal
 import sys
 from collections.abc import Iterator
@@ -26,6 +27,14 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     behavior_cls = registry.behavior(args.behavior)
     if args.resume and args.force:
         raise UsageError("--force and --resume exclude each other (--force replaces a run)")
+    from devlearn.training.run_folder import check_not_in_use
+
+    # another run trains there: refused before any work (rank 0 alone locks a torchrun run's
+    # folder, so the other ranks would find it in use by their own run)
+    if int(os.environ.get("RANK", "0")) == 0:
+        for folder in (args.resume, args.out):
+            if folder:
+                check_not_in_use(Path(folder))
     request = RunRequest(
         behavior=args.behavior,
         overrides=args.overrides,

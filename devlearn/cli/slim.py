@@ -14,9 +14,11 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     """Write the policy file and say where, and how much smaller it is."""
     from devlearn.evaluation.evaluate import POLICY_FILE, resolve_checkpoint
     from devlearn.evaluation.policy_file import slim_checkpoint
+    from devlearn.files import check_out_file
 
     source = resolve_checkpoint(args.checkpoint)
     target = Path(args.out) if args.out else source.parent / POLICY_FILE
+    check_out_file(target, parents=True)  # a device or FIFO, a folder: before the checkpoint
     state = slim_checkpoint(source, target, registry)
     size, before = target.stat().st_size, source.stat().st_size
     extras = ", ".join(state["artifacts"]) or "none"

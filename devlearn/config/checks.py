@@ -5,13 +5,13 @@ from __future__ import annotations
 import math
 import os
 import re
-import tempfile
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from devlearn.ages import check_age
 from devlearn.api.errors import UsageError
 from devlearn.config.growth import growth_schedule
+from devlearn.files import unwritable
 from devlearn.timing import EPISODE_STEPS, decision_rate_error
 
 if TYPE_CHECKING:
@@ -189,17 +189,6 @@ def check_out_dir(out_dir: str | Path) -> None:
         raise UsageError(
             f"--out {path} is not writable: cannot create files in {existing} ({reason})"
         )
-
-
-def unwritable(folder: Path) -> str | None:
-    """Why no file can be created in ``folder`` (tried: a file made and deleted), or None."""
-    try:
-        fd, probe = tempfile.mkstemp(prefix=".devlearn-probe-", dir=folder)
-        os.close(fd)
-        os.unlink(probe)
-    except OSError as exc:
-        return str(exc.strerror or exc)
-    return None
 
 
 def holds_run(run_dir: Path) -> bool:

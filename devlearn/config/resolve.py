@@ -24,6 +24,7 @@ from devlearn.config.run_config import (
     to_dict,
 )
 from devlearn.config.values import apply_overrides, override_keys
+from devlearn.files import write_text_atomically
 
 if TYPE_CHECKING:
     from devlearn.api.behavior import Behavior
@@ -207,9 +208,10 @@ def read_config_file(path: str | Path) -> dict[str, Any]:
 
 
 def write_config_file(cfg: RunConfig, path: str | Path) -> Path:
-    """Write ``cfg`` as JSON (every resolved value) to ``path``; return the path."""
+    """Write ``cfg`` as JSON (every resolved value) to ``path`` atomically (a kill leaves the
+    previous file, which ``--resume`` reads, or the new one); return the path."""
     path = Path(path)
-    path.write_text(json.dumps(to_dict(cfg), indent=2) + "\n")
+    write_text_atomically(path, json.dumps(to_dict(cfg), indent=2) + "\n")
     return path
 
 

@@ -25,11 +25,13 @@ refused rather than evaluated differently.
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Generator
 from dataclasses import dataclass
 from functools import partial
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -39,6 +41,7 @@ from devlearn.api.errors import UsageError
 from devlearn.env.behavior_env import step_batch
 from devlearn.env.settings import EnvSettings
 from devlearn.env.workers import WorkerPool, make_envs
+from devlearn.files import replaced_atomically
 from devlearn.training.checkpoint import observation_batch
 
 if TYPE_CHECKING:
@@ -48,6 +51,9 @@ if TYPE_CHECKING:
 
 VIDEO_FPS = 25
 """Frame rate of evaluation videos (every k-th decision is rendered to match it)."""
+VIDEO_FORMATS = {".mp4": "mp4", ".mkv": "matroska", ".mov": "mov", ".avi": "avi"}
+"""The video files ``devlearn eval --video`` writes, by extension, and ffmpeg's container for
+each (H.264 inside; WebM and GIF need other codecs, and ffmpeg writes them empty without one)."""
 HOLD_STEPS = 8
 """Mean steps a ``held_random`` baseline action is held (40 ms at 200 Hz)."""
 PROGRESS_SECONDS = 0.5
@@ -228,6 +234,7 @@ class SlotResult:
         started: The start its episodes took (babybench, rest or random).
         begins: (env generator, policy randomness) states at its first episode's first decision.
         ends: The same after its last episode (the env's after the reset that follows it).
+        video_error: Why the video this slot filmed could not be written, or None.
     """
 
     episodes: list[dict[str, float]]
@@ -235,6 +242,7 @@ class SlotResult:
     started: str
     begins: tuple[Any, Any]
     ends: tuple[Any, Any]
+    video_error: str | None = None
 
 
 def set_infant_start(infant: Any, start: str) -> None:
@@ -278,6 +286,7 @@ class _Slot:
         self.policy.skip(first * plan.decisions)
         self.begins = (env.rng.bit_generator.state, self.policy.rng_state())
         self.episodes: list[dict[str, float]] = []
+        self.video_error: str | None = None
 
     def step(self, obs: dict[str, np.ndarray], info: dict[str, Any] | None) -> bool:
         """Take one decision's outcome; True when it ended an episode."""
@@ -291,7 +300,9 @@ class _Slot:
 
     def result(self) -> SlotResult:
         ends = (self.env.rng.bit_generator.state, self.policy.rng_state())
-        return SlotResult(self.episodes, self.env.evaluator, self.started, self.begins, ends)
+        return SlotResult(
+            self.episodes, self.env.evaluator, self.started, self.begins, ends, self.video_error
+        )
 
 
 def play(
@@ -312,30 +323,105 @@ def play(
         One result per env, in env order.
     """
     slots = [_Slot(env, plan) for env in envs]
-    filmed = next((s.env for s in slots if s.first == 0), None) if plan.video else None
-    writer = None
+    filmed = next((s for s in slots if s.first == 0), None) if plan.video else None
+    film = Film(plan.video) if plan.video is not None and filmed is not None else None
+    if filmed is not None:  # this process plays episode 0
+        frame = partial(filmed.env.behavior.render_frame, filmed.env.infant)
     try:
-        if plan.video is not None and filmed is not None:  # this process plays episode 0
-            import imageio.v2 as imageio
-
-            writer = imageio.get_writer(plan.video, fps=VIDEO_FPS, macro_block_size=1)
         while playing := [s for s in slots if s.left]:
             batch = [s.env for s in playing]
             for t in range(plan.decisions):
-                if writer is not None and filmed is not None and t % plan.video_stride == 0:
-                    writer.append_data(filmed.behavior.render_frame(filmed.infant))
+                if film is not None and t % plan.video_stride == 0:
+                    film.add(frame)
                 actions = [s.policy.act(s.obs) for s in playing]
                 outcomes = step_batch(batch, actions)
                 ended = sum(s.step(obs, info) for s, (obs, *_, info) in zip(playing, outcomes))
                 if report is not None:
                     report(len(batch) * batch[0].action_repeat, ended)
-            if writer is not None:  # the first episode is over
-                writer.close()
-                writer = None
+            if film is not None:  # the first episode is over
+                film.finish()
+                if filmed is not None:
+                    filmed.video_error = film.error
+                film = None
     finally:
-        if writer is not None:
-            writer.close()
+        if film is not None:  # stopped inside the first episode: no video
+            film.abandon()
     return [s.result() for s in slots]
+
+
+class Film:
+    """The frames of an episode as a video file (:data:`VIDEO_FORMATS`), written to a temporary
+    beside ``path`` and renamed over it by :meth:`finish`: a failed or killed evaluation leaves
+    no partial video, and an existing ``path`` that is not a regular file is left alone.
+
+    A failure (a frame that cannot be rendered, ffmpeg failing, a full disk) stops the filming
+    and is kept in :attr:`error`; the episodes go on, so an evaluation is never lost to its
+    video.
+
+    Args:
+        path: The video file.
+    """
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        self.error: str | None = None
+        """Why the video could not be written, or None."""
+        self._file = contextlib.ExitStack()  # the temporary, renamed when the stack closes
+        self._frames: Generator[None, Any, None] | None = None
+        self._tmp: Path | None = None
+        try:
+            self._tmp = self._file.enter_context(replaced_atomically(self.path))
+        except Exception as exc:
+            self._fail(exc)
+
+    def add(self, render: Callable[[], np.ndarray]) -> None:
+        """Add the frame ``render()`` draws ((H, W, 3) uint8 RGB), unless filming failed."""
+        if self._tmp is None:
+            return
+        try:
+            frame = np.ascontiguousarray(render(), dtype=np.uint8)
+            if self._frames is None:
+                import imageio_ffmpeg
+
+                self._frames = imageio_ffmpeg.write_frames(
+                    str(self._tmp),
+                    (frame.shape[1], frame.shape[0]),
+                    fps=VIDEO_FPS,
+                    macro_block_size=1,
+                    # the temporary's name has no extension for ffmpeg to read the container from
+                    output_params=["-f", VIDEO_FORMATS.get(self.path.suffix.lower(), "mp4")],
+                )
+                self._frames.send(None)
+            self._frames.send(frame)
+        except Exception as exc:
+            self._fail(exc)
+
+    def finish(self) -> None:
+        """Close the video and rename it over ``path`` (a failure is kept in :attr:`error`)."""
+        if self._tmp is None:
+            return
+        try:
+            if self._frames is not None:
+                self._frames.close()
+                self._frames = None
+            self._tmp = None
+            self._file.close()
+        except Exception as exc:
+            self._fail(exc)
+
+    def abandon(self) -> None:
+        """Stop filming and delete the temporary; ``path`` stays as it was."""
+        if self._frames is not None:
+            with contextlib.suppress(Exception):
+                self._frames.close()
+        self._frames = self._tmp = None
+        with contextlib.suppress(Exception):
+            self._file.__exit__(RuntimeError, RuntimeError("abandoned"), None)
+
+    def _fail(self, exc: Exception) -> None:
+        reason = getattr(exc, "strerror", None) or " ".join(str(exc).split())[-200:]
+        self.error = f"cannot write the video {self.path}: {reason or type(exc).__name__}"
+        self.abandon()
 
 
 class _Throttled:

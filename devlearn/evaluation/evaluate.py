@@ -28,6 +28,7 @@ from devlearn.env.behavior_env import BehaviorEnv
 from devlearn.env.rendering import check_senses_render, require_rendering
 from devlearn.env.settings import EnvSettings
 from devlearn.evaluation.episodes import (
+    VIDEO_FORMATS,
     VIDEO_FPS,
     ActorPolicy,
     EpisodePlan,
@@ -42,6 +43,12 @@ from devlearn.evaluation.episodes import (
     prepare_env,
 )
 from devlearn.evaluation.scripted_policy import ScriptedPolicy
+from devlearn.files import (
+    NotARegularFileError,
+    check_out_file,
+    check_replaceable,
+    write_text_atomically,
+)
 from devlearn.timing import decision_rate_error, physics_steps
 from devlearn.training.checkpoint import LATEST, Checkpoint, is_scripted_policy
 
@@ -110,9 +117,11 @@ def prepare_out_dir(out_dir: str | Path) -> Path:
     """Create ``out_dir`` and check that files can be written there (before any episode runs).
 
     Raises:
-        UsageError: It cannot be created or written.
+        UsageError: It cannot be created or written, or its ``eval.json`` is not a regular
+            file (a device or FIFO, which is never replaced).
     """
     out = Path(out_dir)
+    check_replaceable(out / "eval.json")
     probe = out / f".devlearn-write-test-{os.getpid()}"
     try:
         out.mkdir(parents=True, exist_ok=True)
@@ -121,6 +130,23 @@ def prepare_out_dir(out_dir: str | Path) -> Path:
     except OSError as exc:
         raise UsageError(f"cannot write to output folder {out}: {exc.strerror or exc}") from None
     return out
+
+
+def check_video(video: str | Path) -> None:
+    """Refuse a ``--video`` path that cannot take a video, before any episode runs: an
+    extension not in :data:`~devlearn.evaluation.episodes.VIDEO_FORMATS`, a folder, a device or
+    FIFO, a place where no file can be created; or no ffmpeg to encode it.
+
+    Raises:
+        UsageError: One line naming the problem.
+    """
+    import imageio_ffmpeg
+
+    check_out_file(Path(video), "--video", tuple(VIDEO_FORMATS), parents=True)
+    try:
+        imageio_ffmpeg.get_ffmpeg_exe()
+    except RuntimeError as exc:
+        raise UsageError(f"--video needs ffmpeg: {' '.join(str(exc).split())}") from None
 
 
 def code_version() -> dict[str, Any]:
@@ -276,7 +302,9 @@ class EvalRequest:
             reset inside (``--session 300 --start rest``: the 5-minute sessions from rest that
             infant studies code); None: the behaviour's episodes (5 s). Recorded as
             ``protocol.session_s``; the per-episode figures are then per session.
-        video: Write an MP4 of the first episode here (needs imageio-ffmpeg).
+        video: Write the first episode as a video here (MP4, or another of
+            :data:`~devlearn.evaluation.episodes.VIDEO_FORMATS`; checked before any episode
+            runs). A video that cannot be written does not lose the evaluation.
         out_dir: Write ``eval.json`` and the evaluator's artifacts here (checked to be
             writable before any episode runs); None: write nothing.
     """
@@ -518,11 +546,13 @@ class Evaluation:
             ``end_episode`` metrics in order, and, when files were written, ``written``, their
             paths.
         Raises:
-            UsageError: Missing, corrupt or foreign checkpoint; unwritable out_dir.
-            EvalWriteError: The episodes ran but writing files failed (carries the summary).
+            UsageError: Missing, corrupt or foreign checkpoint; unwritable out_dir or video.
+            EvalWriteError: The episodes ran but writing files failed (carries the summary);
+                a video that failed is reported so after eval.json is written.
         """
         request = self.request
         if request.video is not None:
+            check_video(request.video)
             require_rendering("--video")
         out = prepare_out_dir(request.out_dir) if request.out_dir is not None else None
         subject = open_subject(request, self.registry)
@@ -548,6 +578,7 @@ class Evaluation:
                 plan, episode_steps = self.plan(subject, conditions, players)
                 results = self.play(players, plan, episode_steps)
             evaluator, episode_metrics, started = merged_results(results)
+            video_error = next((r.video_error for r in results if r.video_error), None)
             summary = self.measures(subject, conditions, evaluator, started)
             per_episode_headline(summary, episode_metrics, subject.behavior.headline_metric)
             summary["execution"] = {
@@ -557,8 +588,12 @@ class Evaluation:
             }
             if isinstance(subject.opened, ScriptedPolicy):
                 summary["learner"] = subject.opened.learner  # devlearn report tells learners apart
+            written = self.write(out, summary, evaluator) if out is not None else []
+            if video_error is not None:  # the evaluation itself is kept: eval.json written
+                kept = f" ({out / 'eval.json'} is written)" if out is not None else ""
+                raise EvalWriteError(f"evaluated, but {video_error}{kept}", summary)
             if out is not None:
-                summary["written"] = [str(p) for p in self.write(out, summary, evaluator)]
+                summary["written"] = [str(p) for p in written]
             summary["episode_metrics"] = episode_metrics
             return summary
         finally:
@@ -693,12 +728,15 @@ class Evaluation:
             EvalWriteError: Writing failed (it carries ``summary``).
         """
         try:
-            (out / "eval.json").write_text(json.dumps(summary, indent=2, default=float) + "\n")
+            text = json.dumps(summary, indent=2, default=float) + "\n"
+            write_text_atomically(out / "eval.json", text)
             return [out / "eval.json", *evaluator.write_artifacts(out)]
         except OSError as exc:
             raise EvalWriteError(
                 f"evaluated, but writing to {out} failed: {exc.strerror or exc}", summary
             ) from None
+        except NotARegularFileError as exc:  # made a device or FIFO while the episodes ran
+            raise EvalWriteError(f"evaluated, but {exc}", summary) from None
 
 
 def per_episode_headline(

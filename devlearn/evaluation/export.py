@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import io
 import logging
 import warnings
 from collections.abc import Iterator
@@ -14,8 +15,7 @@ import torch
 import torch.nn as nn
 
 from devlearn.api.errors import UsageError
-from devlearn.config.checks import unwritable
-from devlearn.files import replaced_atomically
+from devlearn.files import check_out_file, replaced_atomically, write_bytes_atomically
 
 if TYPE_CHECKING:
     from devlearn.evaluation.scripted_policy import ObservationOrder
@@ -123,7 +123,8 @@ def export_policy(
     ``extra_files`` stored beside it, name -> text, as a scripted policy's metadata).
 
     Raises:
-        UsageError: Unknown format, missing ONNX packages, or an unwritable ``out``.
+        UsageError: Unknown format, missing ONNX packages, or an unwritable ``out`` (one that
+            is not a regular file included, :func:`devlearn.files.check_out_file`).
     """
     if fmt not in FORMATS:
         raise UsageError(f"unknown export format '{fmt}'; valid: {', '.join(FORMATS)}")
@@ -131,12 +132,17 @@ def export_policy(
     check_out_file(out)
     inputs = example_inputs(policy, obs)
     try:  # written beside, then renamed: a failed write (a full disk) leaves no partial file
-        with replaced_atomically(out) as partial:
+        if fmt == "torchscript":
             with torch.no_grad(), known_exporter_noise_silenced():
-                if fmt == "torchscript":
-                    traced = torch.jit.trace(policy, inputs, check_trace=False)
-                    traced.save(str(partial), _extra_files=extra_files or {})
-                else:
+                traced = torch.jit.trace(policy, inputs, check_trace=False)
+                # saved in memory, then written by Python: torch's own file writer aborts the
+                # process on a full disk (issue #55), a Python write raises OSError
+                buffer = io.BytesIO()
+                torch.jit.save(traced, buffer, _extra_files=extra_files or {})
+            write_bytes_atomically(out, buffer.getbuffer())
+        else:
+            with replaced_atomically(out) as partial:
+                with torch.no_grad(), known_exporter_noise_silenced():
                     _export_onnx(policy, inputs, partial)
     except (OSError, RuntimeError) as exc:
         reason = getattr(exc, "strerror", None) or " ".join(str(exc).split())[:160]
@@ -144,30 +150,12 @@ def export_policy(
     return out
 
 
-def check_out_file(out: Path) -> None:
-    """Refuse an export target that is a folder, lies in no folder, or cannot be written there
-    (tried by creating and deleting a file beside it), before anything is built.
-
-    Raises:
-        UsageError: One line naming the problem.
-    """
-    if out.is_dir():
-        raise UsageError(
-            f"--out {out} is a folder; give the file to write, e.g. {out / 'policy.onnx'}"
-        )
-    if not out.parent.is_dir():
-        raise UsageError(f"cannot write {out}: directory {out.parent} does not exist")
-    reason = unwritable(out.parent)
-    if reason:
-        raise UsageError(f"cannot write {out}: {reason}")
-
-
 HARMLESS_WARNINGS = (
     r".*isinstance\(treespec, LeafSpec\)` is deprecated",  # torch's own pytree use
     r"# The axis name: .* will not be used",  # one dynamic batch axis named for all inputs
     # torch 2.13 deprecates TorchScript (still written and read as before): the format of
     # devlearn export --format torchscript and of scripted policies, until they move
-    r"`torch\.jit\.(trace|trace_method|load)` is deprecated",
+    r"`torch\.jit\.(trace|trace_method|save|load)` is deprecated",
 )
 """Messages torch's exporters print on every successful export that say nothing about it."""
 HARMLESS_LOGGERS = ("torch.onnx._internal.exporter._registration",)

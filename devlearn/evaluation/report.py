@@ -14,6 +14,8 @@ import numpy as np
 from devlearn.api.errors import UsageError
 from devlearn.api.json_files import read_json
 from devlearn.api.stats import CONFIDENCE, mean_ci
+from devlearn.config.checks import check_out_dir
+from devlearn.files import check_replaceable, write_atomically, write_text_atomically
 
 PaperResults = Callable[[str, dict[str, Any]], "tuple[str, dict[str, float]] | None"]
 """(behaviour name, a run's config) -> (column label, the paper's figures) or None: the named
@@ -24,6 +26,8 @@ ConfigLoader = Callable[[str, dict[str, Any]], dict[str, Any]]
 rename upgraded, missing keys filled as the run was trained): in the CLI, the behaviour's
 ``from_dict`` then ``to_dict``. Configs of the same recipe then compare equal however old."""
 
+REPORT_FILES = ("report.md", "report.png")
+"""The files :func:`write_report` writes in its folder."""
 BASELINES = ("zero", "random", "held_random")
 """Baseline policies (``devlearn eval BEHAVIOR --policy ...``) shown beside every variant."""
 NOT_VARIANT = frozenset(
@@ -173,7 +177,7 @@ def collect(
         for file in sorted([*near.glob("*/eval.json"), *near.parent.glob("*/eval.json")]):
             if file.resolve() in found or file.resolve() in unreadable:
                 continue
-            try:
+            try:  # the guarded reader: a FIFO named eval.json is refused, never waited on
                 data = _read(file)  # a baseline beside it, of the same behaviour
             except UsageError as err:  # not given: a stray file is no reason to stop
                 unreadable[file.resolve()] = str(err)
@@ -303,8 +307,14 @@ def write_report(
         "notes": [...]}``; intervals are 95% Student-t over seeds (over evaluations for the
         baselines), None for a single seed; kinds are ``variant``, ``baseline``, ``paper``.
     Raises:
-        UsageError: An empty or missing folder, mixed behaviours, no checkpoint evaluation.
+        UsageError: An empty or missing folder, mixed behaviours, no checkpoint evaluation; an
+            ``out_dir`` where the report cannot be written (checked first: a file, a report
+            file that is a device or FIFO, no permission).
     """
+    out = Path(out_dir)
+    check_out_dir(out)
+    for name in REPORT_FILES:
+        check_replaceable(out / name)
     evaluations, notes = collect(paths, skipped)
     columns, more = group(evaluations, as_loaded)
     notes += more
@@ -368,10 +378,12 @@ def write_report(
         "table": table,
         "notes": notes,
     }
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "report.md").write_text(markdown(result, evaluations))
-    draw_report(result, out / "report.png")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        write_text_atomically(out / "report.md", markdown(result, evaluations))
+        draw_report(result, out / "report.png")
+    except OSError as exc:
+        raise UsageError(f"cannot write the report to {out}: {exc.strerror or exc}") from None
     return result
 
 
@@ -488,5 +500,7 @@ def draw_report(result: dict[str, Any], path: Path) -> Path:
         ax.set_xticks(x, ticks, fontsize=7, rotation=20)
         ax.set_title(metric, fontsize=9)
     fig.suptitle(f"{result['behavior']}: mean and 95% interval over seeds", fontsize=10)
-    fig.savefig(path, dpi=110, metadata={"Software": None})
+    write_atomically(
+        path, lambda f: fig.savefig(f, format="png", dpi=110, metadata={"Software": None})
+    )
     return path

@@ -29,6 +29,7 @@ from devlearn.api.errors import UsageError
 from devlearn.experiment.plan import CHECKPOINT, SCRIPTED_POLICY, baseline_name, run_name
 from devlearn.experiment.runner import EXPERIMENT_COPY, EXPERIMENT_INFO
 from devlearn.experiment.spec import Arm, ExperimentSpec, read_experiment
+from devlearn.files import copy_atomically, write_text_atomically
 from devlearn.sweep.bookkeeping import now
 from devlearn.sweep.job import read_json, write_json
 
@@ -142,14 +143,14 @@ def _publish_run(
         if read_json(source) is None:
             continue
         (target / protocol.folder).mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(source, target / protocol.folder / "eval.json")
+        copy_atomically(source, target / protocol.folder / "eval.json")
         evaluated.append(protocol.name)
     if not evaluated:
         return None
     kept = ["config.json"] if arm.learner == "devlearn" else ["run_config.json", "train.json"]
     for file in kept:
         if (run_dir / file).is_file():
-            shutil.copyfile(run_dir / file, target / file)
+            copy_atomically(run_dir / file, target / file)
     rows = _rows(run_dir / "metrics.jsonl")
     learning = learning_of(run_dir, arm, rows)
     if learning is not None:
@@ -157,7 +158,7 @@ def _publish_run(
     curve = thin_curve(rows, headline)
     if curve:
         text = "".join(json.dumps(row) + "\n" for row in curve)
-        (target / CURVE_FILE).write_text(text)
+        write_text_atomically(target / CURVE_FILE, text)
     record = read_json(out / "records" / f"{name}.json") or {}
     commits = sorted({a["commit"] for a in record.get("attempts", []) if a.get("commit")})
     return {
@@ -213,7 +214,7 @@ def publish_experiment(
     first = spec.protocols[0]
     try:
         staging.mkdir(parents=True)
-        (staging / EXPERIMENT_COPY).write_text(spec.text)
+        write_text_atomically(staging / EXPERIMENT_COPY, spec.text)
         for policy in spec.baselines:
             name = baseline_name(policy)
             for protocol in spec.protocols:
@@ -222,7 +223,7 @@ def publish_experiment(
                     missing.append(f"{name}/{protocol.folder}")
                     continue
                 (staging / name / protocol.folder).mkdir(parents=True, exist_ok=True)
-                shutil.copyfile(source, staging / name / protocol.folder / "eval.json")
+                copy_atomically(source, staging / name / protocol.folder / "eval.json")
         for arm in spec.arms:
             values: dict[int, float] = {}
             for seed in spec.seeds:
@@ -245,7 +246,7 @@ def publish_experiment(
             if arm.learner == "devlearn":
                 slim_checkpoint(run_dir / CHECKPOINT, staging / arm.name / POLICY_FILE, registry)
             else:
-                shutil.copyfile(run_dir / SCRIPTED_POLICY, staging / arm.name / POLICY_FILE)
+                copy_atomically(run_dir / SCRIPTED_POLICY, staging / arm.name / POLICY_FILE)
             policies[arm.name] = {
                 "file": f"{arm.name}/{POLICY_FILE}",
                 "seed": seed,

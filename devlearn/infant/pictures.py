@@ -1,10 +1,10 @@
 """Pictures of the infant: the 68-region body map (docs/images/body_map.png), the eyes' view and
-the body from birth to 24 months (docs/images/growth.png)."""
+the body from birth to 24 months (docs/images/growth.png), drawn as BGR arrays and encoded to an
+image file's bytes here; ``devlearn picture`` writes them (through :mod:`devlearn.files`)."""
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 import cv2
@@ -18,6 +18,8 @@ from devlearn.infant.scenes import SCENE_GROUP
 if TYPE_CHECKING:
     from devlearn.infant.infant import Infant
 
+IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp")
+"""The picture files ``devlearn picture`` writes (OpenCV encodes each by its extension)."""
 # Looking down at both hands held in front, toys on the floor beyond.
 EYES_POSE = {"head_tilt": 0.95, "shoulder_flexion": 0.6, "elbow": 1.0, "shoulder_abduction": -0.3}
 
@@ -102,15 +104,14 @@ def _legend(height: int, width: int) -> np.ndarray:
     return panel
 
 
-def body_map_picture(path: str | Path, width: int = 420, height: int = 900) -> Path:
-    """Write the body map: front and back views of the infant, sensors coloured by region.
+def body_map_picture(width: int = 420, height: int = 900) -> np.ndarray:
+    """Draw the body map: front and back views of the infant, sensors coloured by region.
 
     Args:
-        path: Output PNG.
         width, height: Size of each view in pixels.
 
     Returns:
-        The path written.
+        (height, 2 * width + 260, 3) uint8 BGR.
     """
     infant = build_infant("crib", senses=("touch",))
     try:
@@ -128,7 +129,7 @@ def body_map_picture(path: str | Path, width: int = 420, height: int = 900) -> P
         picture = np.concatenate(views + [_legend(height, 260)], axis=1)
     finally:
         infant.close()
-    return _write_png(path, picture)
+    return picture
 
 
 GROWTH_AGES = (0.0, 6.0, 12.0, 18.0, 24.0)
@@ -139,19 +140,18 @@ the trunk so that they show."""
 
 
 def growth_picture(
-    path: str | Path, ages: tuple[float, ...] = GROWTH_AGES, width: int = 250, height: int = 520
-) -> Path:
-    """Write the infant at each of ``ages`` side by side, from the front, at one scale: soles
+    ages: tuple[float, ...] = GROWTH_AGES, width: int = 250, height: int = 520
+) -> np.ndarray:
+    """Draw the infant at each of ``ages`` side by side, from the front, at one scale: soles
     on one line, a grey line every 10 cm, each labelled with its age, crown-heel length and
     mass (:mod:`devlearn.infant.growth`; WHO's medians).
 
     Args:
-        path: Output PNG.
         ages: Ages in months (0 to 24).
         width, height: Size of each infant's panel in pixels.
 
     Returns:
-        The path written.
+        (height, A * width + (A - 1) * 4, 3) uint8 BGR, for A ages.
     """
     from devlearn.infant.growth import grown_body, standing_extent
 
@@ -195,13 +195,13 @@ def growth_picture(
     parts = [panels[0]]
     for panel in panels[1:]:
         parts += [gap, panel]
-    return _write_png(path, np.concatenate(parts, axis=1))
+    return np.concatenate(parts, axis=1)
 
 
 def eyes_picture(
-    path: str | Path, scale: int = 4, scene: str = "sitting_babybench", overview: bool = True
-) -> Path:
-    """Write what the two eyes see at the scene's rest (its initial state), left | right,
+    scale: int = 4, scene: str = "sitting_babybench", overview: bool = True
+) -> np.ndarray:
+    """Draw what the two eyes see at the scene's rest (its initial state), left | right,
     64 x 64 each, and beside them the third-person view of the same moment.
 
     In ``sitting_babybench`` (hand regard's default, BabyBench's scene) the head is pitched
@@ -210,13 +210,12 @@ def eyes_picture(
     raised before the eyes (:data:`EYES_POSE`), the picture of runs before issue #29.
 
     Args:
-        path: Output PNG.
         scale: Each eye pixel is drawn as scale x scale pixels.
         scene: ``sitting_babybench`` or ``sitting``.
         overview: Add the third-person view on the right.
 
     Returns:
-        The path written.
+        (64 * scale, W, 3) uint8 BGR: the eyes and, with ``overview``, the third-person view.
     """
     infant = build_infant(scene, senses=("eyes",))
     try:
@@ -245,12 +244,20 @@ def eyes_picture(
         picture = np.concatenate(parts, axis=1)
     finally:
         infant.close()
-    return _write_png(path, picture)
+    return picture
 
 
-def _write_png(path: str | Path, picture: np.ndarray) -> Path:
-    """Write a BGR uint8 picture to ``path`` (parent folders made); return the path."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    cv2.imwrite(str(path), picture, [cv2.IMWRITE_PNG_COMPRESSION, 9])
-    return path
+def encode_picture(picture: np.ndarray, suffix: str = ".png") -> bytes:
+    """A BGR uint8 picture as the bytes of an image file of type ``suffix``
+    (:data:`IMAGE_SUFFIXES`; PNG at its highest compression).
+
+    Raises:
+        ValueError: OpenCV cannot encode that type.
+    """
+    try:
+        ok, encoded = cv2.imencode(suffix, picture, [cv2.IMWRITE_PNG_COMPRESSION, 9])
+    except cv2.error:
+        ok = False
+    if not ok:
+        raise ValueError(f"OpenCV cannot write a '{suffix}' picture")
+    return encoded.tobytes()

@@ -16,12 +16,11 @@ with experiment.json in place of sweep.json.
 from __future__ import annotations
 
 import datetime
-import fcntl
-import os
 from pathlib import Path
 from typing import Any
 
 from devlearn.api.errors import UsageError
+from devlearn.files import lock_exclusively
 from devlearn.sweep.job import RunJob, read_json, write_json
 from devlearn.sweep.spec import SweepSpec
 
@@ -97,18 +96,7 @@ class RunFolder:
     def __init__(self, path: Path, kind: str, info_file: str, info: dict[str, Any]) -> None:
         self.path = path
         self.path.mkdir(parents=True, exist_ok=True)
-        self._lock = open(self.path / LOCK_FILE, "a+")
-        try:
-            fcntl.flock(self._lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            self._lock.seek(0)
-            holder = self._lock.read().strip() or "another process"
-            self._lock.close()
-            raise UsageError(f"{kind} folder {self.path} is in use by {holder}") from None
-        self._lock.seek(0)
-        self._lock.truncate()
-        self._lock.write(f"pid {os.getpid()}\n")
-        self._lock.flush()
+        self._lock = lock_exclusively(self.path / LOCK_FILE, f"{kind} folder {self.path}")
         write_json(self.path / info_file, info)
 
     def finished_record(self, job: RunJob) -> dict[str, Any] | None:

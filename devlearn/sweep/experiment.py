@@ -11,14 +11,12 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, TextIO
 
 from devlearn.api.errors import UsageError
+from devlearn.files import NAME_MAX
 from devlearn.sweep.bookkeeping import RunFolder, SweepFolder, check_folder
 from devlearn.sweep.executors import LocalExecutor, RayExecutor, make_executor
 from devlearn.sweep.job import RunJob
 from devlearn.sweep.progress import Progress
 from devlearn.sweep.spec import SweepSpec, Variant, variants
-
-NAME_MAX = 255
-"""Longest file name (bytes) of the common Linux file systems: a run folder's name."""
 
 if TYPE_CHECKING:
     from devlearn.config.resolve import RunRequest

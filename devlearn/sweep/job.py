@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import datetime
-import fcntl
 import json
 import os
 import shutil
@@ -20,7 +19,7 @@ from typing import Any
 from devlearn.api.errors import UsageError
 from devlearn.api.json_files import read_json as read_json_file
 from devlearn.config.resolve import RUN_CONFIG_FILE
-from devlearn.files import write_text_atomically
+from devlearn.files import InUseError, lock_exclusively, write_text_atomically
 
 LOG_TAIL_LINES = 15
 """Lines of a failed run's log shown in its record and on the console."""
@@ -259,16 +258,16 @@ class _Run:
         job = self.job
         base = list(job.launcher or [sys.executable, "-m", "devlearn.cli"]) + job.global_args
         job.record_path.parent.mkdir(parents=True, exist_ok=True)
-        with open(job.record_path.with_suffix(".lock"), "w") as lock:
-            try:
-                fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except BlockingIOError:
-                self.record["error"] = (
-                    f"run {job.name} is locked by another process (an earlier sweep's training "
-                    "still running?); stop it, then start the sweep again"
-                )
-                self.record["status"] = "failed"
-                return self.record  # the record on disk belongs to the process holding it
+        try:
+            lock = lock_exclusively(job.record_path.with_suffix(".lock"), f"run {job.name}")
+        except InUseError as exc:
+            self.record["error"] = (
+                f"{exc} (an earlier sweep's training still running?); stop it, then start the "
+                "sweep again"
+            )
+            self.record["status"] = "failed"
+            return self.record  # the record on disk belongs to the process holding it
+        with lock:
             os.set_inheritable(lock.fileno(), True)
             if self.stop is not None and self.stop.is_set():  # stopped before it started
                 return self.save("interrupted")

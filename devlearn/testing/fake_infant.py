@@ -198,7 +198,7 @@ class CloseEvaluator(devlearn.Evaluator):
 
     def write_artifacts(self, out_dir: Path) -> list[Path]:
         path = out_dir / "close.txt"
-        path.write_text(f"{self.close_steps}/{self.steps}\n")
+        devlearn.write_text_atomically(path, f"{self.close_steps}/{self.steps}\n")
         return [path]
 
 

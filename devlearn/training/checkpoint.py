@@ -24,7 +24,7 @@ from devlearn.ages import check_age
 from devlearn.api.errors import UsageError
 from devlearn.config.checks import STEPS_MAX
 from devlearn.config.run_config import from_dict, to_rsl_rl
-from devlearn.files import replaced_atomically
+from devlearn.files import TEMPORARY, replaced_atomically
 
 if TYPE_CHECKING:
     from tensordict import TensorDict
@@ -52,7 +52,6 @@ RESUME_KEYS = (
 )
 """Keys a checkpoint must hold to resume training from it."""
 _PERIODIC = re.compile(r"^checkpoint_(\d+)\.pt$")
-_TEMPORARY = re.compile(r"^\.checkpoint_.*\.pt\.tmp-\d+(-\d+)?$")
 _DTYPE_CLASSES = (
     "Bool Int8 Int16 Int32 Int64 UInt8 UInt16 UInt32 UInt64 Byte UByte Short UShort Int UInt Long "
     "ULong LongLong ULongLong Float16 Float32 Float64 LongDouble Complex64 Complex128 "
@@ -142,10 +141,11 @@ def link_atomic(source: Path, path: Path) -> None:
 
 
 def remove_temporaries(run_dir: Path) -> list[Path]:
-    """Delete the ``.checkpoint_*.pt.tmp-PID`` files that killed runs left behind."""
+    """Delete the temporaries of devlearn's atomic writer (``.checkpoint_64.pt.tmp-PID``,
+    ``.config.json.tmp-PID``...) that killed runs left behind in their folder."""
     removed = []
-    for p in Path(run_dir).glob(".checkpoint_*.pt.tmp-*"):
-        if _TEMPORARY.match(p.name) and p.is_file():
+    for p in Path(run_dir).glob(".*.tmp-*"):
+        if TEMPORARY.match(p.name) and p.is_file():
             p.unlink(missing_ok=True)
             removed.append(p)
     return removed

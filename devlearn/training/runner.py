@@ -28,6 +28,7 @@ from devlearn.config.growth import growth_schedule
 from devlearn.config.run_config import RunConfig
 from devlearn.env.guards import GuardError
 from devlearn.env.workers import EnvWorkerError
+from devlearn.files import write_text_atomically
 from devlearn.training.checkpoint import LATEST
 from devlearn.training.health import HealthWatch, rollout_health
 from devlearn.training.learned_rewards import LearnedRewards
@@ -189,7 +190,7 @@ class DevRunner:
             self.run_dir, curriculum, self.learned, run_metrics, headline_metric, self.is_main
         )
         if self.is_main:
-            (self.run_dir / "networks.txt").write_text(report.getvalue())
+            write_text_atomically(self.run_dir / "networks.txt", report.getvalue())
 
     @property
     def last_row(self) -> dict[str, Any]:

@@ -45,7 +45,7 @@ from devlearn.training.process import (
     resolve_workers,
     seed_everything,
 )
-from devlearn.training.run_folder import copy_metrics, start_up
+from devlearn.training.run_folder import check_run_files, copy_metrics, locked, start_up
 from devlearn.training.runner import DevRunner
 
 if TYPE_CHECKING:
@@ -159,10 +159,12 @@ def train(
 
     Everything that can be checked (config values, the checkpoint's env count, memory, the
     folder) is checked before anything is written; a start that fails anyway (e.g. the envs
-    cannot be built) leaves the run folder as it was.
+    cannot be built) leaves the run folder as it was. The run holds the folder's lock
+    (:func:`~devlearn.training.run_folder.locked`) from its start to its end.
 
     Raises:
-        UsageError: Bad input, named; :class:`~devlearn.api.errors.RunStopped` when a reward or
+        UsageError: Bad input, named; another process training in the folder (``RUN is in use
+            by pid N``); :class:`~devlearn.api.errors.RunStopped` when a reward or
             observation guard or a dead env worker stopped training (a checkpoint of the
             last good state is written first).
     """
@@ -201,6 +203,7 @@ def train(
         )
     cfg.out_dir = str(run_dir)
     check_out_dir(run_dir)
+    check_run_files(run_dir)
     world_size = int(os.environ.get("WORLD_SIZE", "1"))
     device = resolve_device(cfg.device, int(os.environ.get("LOCAL_RANK", "0")), world_size)
     cfg.workers = resolve_workers(cfg.workers, cfg.num_envs)  # config.json records the number
@@ -210,22 +213,25 @@ def train(
         cfg, registry, run_dir, rank, world_size, device, learned,
         checkpoint, ckpt_path, start_from, infant_factory, progress, behavior,
     )  # fmt: skip
-    with start_up(run_dir, replace=force and resume is None, owner=rank == 0):
-        env, runner = _build(ctx)
-    if started is not None and rank == 0:  # built: a start-up error was one line, this is none
-        started(run_dir)
-    try:
-        # Learn; the runner saves checkpoints periodically, at the end and on Ctrl-C.
-        runner.learn(cfg.total_steps)
-    except OSError as exc:
-        if exc.errno not in (errno.ENOSPC, errno.EDQUOT):
-            raise
-        raise UsageError(
-            f"disk full: cannot write {exc.filename or run_dir}; free some space, then "
-            f"continue with --resume {run_dir}"
-        ) from None
-    finally:
-        env.close()
+    # The folder is this process's for the run's life: a second run on it (--resume, --out
+    # --force) is refused rather than interleaving its steps or deleting these checkpoints.
+    with locked(run_dir, owner=rank == 0) as created:
+        with start_up(run_dir, replace=force and resume is None, owner=rank == 0, created=created):
+            env, runner = _build(ctx)
+        if started is not None and rank == 0:  # built: a start-up error was one line
+            started(run_dir)
+        try:
+            # Learn; the runner saves checkpoints periodically, at the end and on Ctrl-C.
+            runner.learn(cfg.total_steps)
+        except OSError as exc:
+            if exc.errno not in (errno.ENOSPC, errno.EDQUOT):
+                raise
+            raise UsageError(
+                f"disk full: cannot write {exc.filename or run_dir}; free some space, then "
+                f"continue with --resume {run_dir}"
+            ) from None
+        finally:
+            env.close()
     return TrainResult(
         run_dir,
         runner.env_steps,

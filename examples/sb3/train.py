@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import pickle
 import platform
 import subprocess
 import sys
@@ -35,6 +36,7 @@ from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.vec_env import VecMonitor, VecNormalize
 
+import devlearn
 import devlearn.gym
 
 ALGORITHMS = {"ppo": PPO, "sac": SAC}
@@ -214,8 +216,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             devlearn.gym.save_policy(
                 policy, envs, out / "policy.pt", learner=f"sb3_{args.algo}", env_steps=steps
             )
-        model.save(out / "model.zip")
-        venv.save(str(out / "vecnormalize.pkl"))
+        # every file through devlearn's atomic writer: a kill leaves the old file or the new one
+        devlearn.write_atomically(out / "model.zip", model.save)
+        devlearn.write_atomically(out / "vecnormalize.pkl", lambda f: pickle.dump(venv, f))
         record = {
             "algo": args.algo,
             "learner": f"sb3_{args.algo}",
@@ -240,7 +243,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             "command": [Path(sys.argv[0]).name, *(argv if argv is not None else sys.argv[1:])],
             "out": str(out),
         }
-        (out / "train.json").write_text(json.dumps(record, indent=2) + "\n")
+        devlearn.write_text_atomically(out / "train.json", json.dumps(record, indent=2) + "\n")
         return record
     finally:
         envs.close()

@@ -52,7 +52,7 @@ def test_overrides_are_shown_and_checked(capsys):
     "item",
     [
         "network.head=bogus",  # the learner's checks (finish_config): skipped before issue #42
-        "network.min_std=0.9",
+        "network.final_std=2",  # above the free head's initial spread 1.0
         "behavior.max_std=-1",  # the behaviour's network() rejects it
         "env.action_repeat=7",  # the bounds (check_config)
     ],

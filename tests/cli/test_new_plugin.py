@@ -65,6 +65,40 @@ def test_a_non_empty_folder_is_refused(tmp_path):
         write_plugin("my_reach", tmp_path)
 
 
+def test_a_name_or_folder_the_file_system_refuses_is_one_line(tmp_path, capsys, monkeypatch):
+    """Issue #55: a 301-character name or ``--out /proc/x`` was an OSError traceback."""
+    monkeypatch.chdir(tmp_path)
+    assert main(["new", "a" * 301]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("devlearn: error: plugin name 'aaaa") and "\n" not in err
+    assert "is 301 characters; at most" in err
+    cases = [str(tmp_path / ("b" * 300) / "x")]  # a folder name over the file system's limit
+    if os.path.isdir("/proc/self"):
+        cases.append("/proc/x")
+    for out in cases:
+        assert main(["new", "my_reach", "--out", out]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.startswith("devlearn: error: ") and "\n" not in err, err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_write_that_fails_leaves_nothing(tmp_path, monkeypatch):
+    import devlearn.cli.new as new
+
+    written = []
+
+    def full_disk(path, text):
+        if len(written) == 3:
+            raise OSError(28, "No space left on device")
+        written.append(path)
+        path.write_text(text)
+
+    monkeypatch.setattr(new, "write_text_atomically", full_disk)
+    with pytest.raises(UsageError, match="cannot write the plugin to .*: No space left on device"):
+        write_plugin("my_reach", tmp_path / "deep" / "p")
+    assert len(written) == 3 and list(tmp_path.iterdir()) == []
+
+
 def test_every_file_excerpt_in_the_guide_is_what_new_writes(tmp_path):
     write_plugin("my_reach", tmp_path / "devlearn-my-reach")
     guide = GUIDE.read_text()

@@ -282,6 +282,29 @@ def test_configs_saved_before_and_after_a_key_rename_are_one_variant(tmp_path, c
     assert len([c for c in columns if not c.endswith("baseline")]) > 2
 
 
+def test_a_fifo_named_eval_json_beside_the_runs_is_passed_over(three_seeds, tmp_path):
+    """The folders beside a run are scanned for baselines: reading a FIFO found there (named
+    eval.json) blocked the report for ever."""
+    import os
+    import threading
+
+    (tmp_path / "pipe").mkdir()
+    fifo = tmp_path / "pipe" / "eval.json"
+    os.mkfifo(fifo)
+    done: list[dict] = []
+    thread = threading.Thread(
+        target=lambda: done.append(write_report(three_seeds, tmp_path / "report")), daemon=True
+    )
+    thread.start()
+    thread.join(timeout=60)
+    if thread.is_alive():  # blocked opening the FIFO: let it go, then fail
+        os.close(os.open(fifo, os.O_WRONLY))
+        thread.join(timeout=60)
+    fifo.unlink()
+    assert done and done[0]["columns"]["zero baseline"]["kind"] == "baseline"
+    assert not thread.is_alive()
+
+
 def test_an_unreadable_file_beside_the_evaluations_is_left_out_with_a_warning(
     three_seeds, tmp_path, capsys
 ):

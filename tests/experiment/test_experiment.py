@@ -7,6 +7,8 @@ from __future__ import annotations
 import contextlib
 import io
 import json
+import os
+import stat
 import subprocess
 import sys
 import time
@@ -196,6 +198,12 @@ def test_an_experiment_runs_restarts_publishes_and_tabulates(tmp_path):
     assert f"{zero[HEADLINE]:.4g}" in rows["zero actions (baseline)"]
     assert "0.5 [0.4, 0.6]" in rows["near (paper) (reference [1])"]
     assert "- [1] a made-up table, row 3" in text
+    fifo = tmp_path / "t.fifo"  # refused before the table is made, and left a FIFO
+    os.mkfifo(fifo)
+    code, text, stderr = run_cli(["experiment", "table", str(dest), "--out", str(fifo)])
+    assert code == 2 and text == "" and f"cannot write {fifo}: it is a FIFO" in stderr
+    assert stat.S_ISFIFO(os.lstat(fifo).st_mode)
+    fifo.unlink()
 
 
 @pytest.fixture
@@ -303,7 +311,7 @@ def test_a_dry_run_lists_every_run_and_its_evaluations_and_starts_nothing(cli, c
 @pytest.mark.slow
 def test_the_learners_experiment_file_checks_with_the_real_behaviour(tmp_path, capsys):
     """experiments/learners.toml (issue #45's comparison) resolves through the config pipeline
-    with self_touch installed: a dry run lists its 6 runs and 2 baselines."""
+    with self_touch installed: a dry run lists its 10 runs and 2 baselines."""
     pytest.importorskip("stable_baselines3")
     assert (
         main(
@@ -318,7 +326,7 @@ def test_the_learners_experiment_file_checks_with_the_real_behaviour(tmp_path, c
         == 0
     )
     out = capsys.readouterr().out
-    assert "6 runs (2 arms x 3 seeds), 2 baseline(s), 8 evaluations" in out
+    assert "10 runs (2 arms x 5 seeds), 2 baseline(s), 12 evaluations" in out
     assert "--steps 2048000" in out and "--episodes 100 --seed 0" in out
     assert not (tmp_path / "o").exists()
 

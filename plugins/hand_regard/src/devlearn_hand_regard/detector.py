@@ -17,6 +17,7 @@ from typing import Any
 import cv2
 import numpy as np
 
+from devlearn import write_text_atomically
 from devlearn.api.json_files import read_json_object
 from devlearn_hand_regard.attribution import VisibilityPredictor, assign
 
@@ -71,9 +72,8 @@ class DetectorParams:
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         data = {"format_version": FORMAT_VERSION, **asdict(self)}
-        tmp = path.with_suffix(".tmp")
-        tmp.write_text(json.dumps(data, indent=2) + "\n")
-        tmp.replace(path)  # atomic: a resumed run never reads half a file
+        # devlearn's atomic writer (synced, then renamed): a resumed run never reads half a file
+        write_text_atomically(path, json.dumps(data, indent=2) + "\n")
         return path
 
     @classmethod

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from devlearn import Evaluator, StepContext, episode_stats
+from devlearn import Evaluator, StepContext, episode_stats, write_atomically
 from devlearn_hand_regard.visibility import CRITERIA, DETECTOR_TRUTH, HEADLINE, criteria_protocol
 
 EYES = ("left", "right")
@@ -272,6 +272,8 @@ class HandRegardEvaluator(Evaluator):
         out_dir = Path(out_dir)
         out_dir.mkdir(parents=True, exist_ok=True)
         path = out_dir / "hand_regard_visibility.png"
-        fig.savefig(path, dpi=120)
-        plt.close(fig)
+        try:
+            write_atomically(path, lambda f: fig.savefig(f, format="png", dpi=120))
+        finally:
+            plt.close(fig)
         return [path]

@@ -29,6 +29,7 @@ from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
+from devlearn import write_atomically, write_text_atomically
 from devlearn_hand_regard.babbling import BabblingData, babble
 from devlearn_hand_regard.calibration import calibrate
 from devlearn_hand_regard.config import HandRegardConfig
@@ -243,7 +244,10 @@ def detection_picture(
     picture = np.concatenate([np.concatenate(top, 1), np.concatenate(bottom, 1)], 0)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    cv2.imwrite(str(path), cv2.cvtColor(picture, cv2.COLOR_RGB2BGR))
+    ok, encoded = cv2.imencode(path.suffix or ".png", cv2.cvtColor(picture, cv2.COLOR_RGB2BGR))
+    if not ok:
+        raise ValueError(f"OpenCV cannot write a '{path.suffix}' picture")
+    write_atomically(path, lambda f: f.write(encoded.tobytes()))
     return path
 
 
@@ -371,7 +375,7 @@ def main(argv: list[str] | None = None) -> dict:
     text = json.dumps(result, indent=1)
     print(text)
     if args.out:
-        Path(args.out).write_text(text + "\n")
+        write_text_atomically(Path(args.out), text + "\n")
     return result
 
 

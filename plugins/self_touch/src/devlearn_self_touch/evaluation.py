@@ -8,7 +8,14 @@ from typing import Any
 
 import numpy as np
 
-from devlearn import Evaluator, RunMetrics, StepContext, episode_stats
+from devlearn import (
+    Evaluator,
+    RunMetrics,
+    StepContext,
+    episode_stats,
+    write_atomically,
+    write_text_atomically,
+)
 from devlearn_self_touch.body_map import HANDS, NUM_PARTS, NUM_REGIONS
 from devlearn_self_touch.coding import CodedTouches
 
@@ -318,7 +325,8 @@ class SelfTouchEvaluator(Evaluator):
             if self.regions is not None
             else [f"region_{j:02d}" for j in range(NUM_REGIONS)]
         )
-        counts.write_text(
+        write_text_atomically(
+            counts,
             json.dumps(
                 {
                     hand: dict(zip(names, map(int, self.region_steps[h])))
@@ -326,7 +334,7 @@ class SelfTouchEvaluator(Evaluator):
                 },
                 indent=2,
             )
-            + "\n"
+            + "\n",
         )
         return [picture, counts]
 
@@ -451,5 +459,5 @@ def draw_body_map_counts(region_steps: np.ndarray, regions: Any, out_dir: Path) 
     fig.colorbar(image, ax=axes, label="log(1 + steps in contact)", shrink=0.6)
     fig.suptitle("Self-touch: where each hand touched the body")
     path = out_dir / "self_touch_body_map.png"
-    fig.savefig(path, dpi=110)
+    write_atomically(path, lambda f: fig.savefig(f, format="png", dpi=110))
     return path
