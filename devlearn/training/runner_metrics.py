@@ -138,9 +138,9 @@ class MetricsLog:
             row["mean_reward"] = float(np.mean(returns))
             for key in dict.fromkeys(k for ep in self.episodes for k in ep):
                 row[key] = float(np.mean([ep[key] for ep in self.episodes if key in ep]))
-        per_episode = row.get(f"metrics/{self.headline_metric}")
-        if self.headline_metric and per_episode is not None:
-            row[headline_key(self.headline_metric)] = per_episode
+        per_episode = f"metrics/{self.headline_metric}"  # averaged over episodes, not a run metric
+        if self.headline_metric and any(per_episode in ep for ep in self.episodes):
+            row[headline_key(self.headline_metric)] = row[per_episode]
         row.update({f"loss/{k}": float(v) for k, v in losses.items()})
         run_metrics = {}
         if self.run_metrics is not None:
@@ -178,9 +178,10 @@ class MetricsLog:
             postfix["ev"] = f"{health['health/explained_variance']:.2f}"
         if row["mean_reward"] is not None:
             postfix["reward"] = f"{row['mean_reward']:.3g}"
-        key = headline_key(self.headline_metric)
-        if row.get(key) is not None:
-            postfix[key.removeprefix("metrics/")] = f"{row[key]:.3g}"
+        for key in (headline_key(self.headline_metric), f"metrics/{self.headline_metric}"):
+            if self.headline_metric and row.get(key) is not None:  # the per-episode one first
+                postfix[key.removeprefix("metrics/")] = f"{row[key]:.3g}"
+                break
         bar.set_postfix(postfix, refresh=False)
         total = getattr(bar, "total", None) or env_steps
         if env_steps >= total:  # the last iteration: stop at the total; close() draws it once

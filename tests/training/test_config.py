@@ -154,11 +154,10 @@ def test_to_rsl_rl():
     assert train_cfg["obs_groups"] == {"actor": ["proprioception"], "critic": ["proprioception"]}
     assert train_cfg["actor"]["class_name"] == "devlearn.training.networks:MultiSenseModel"
     dist = train_cfg["actor"]["distribution_cfg"]
-    assert dist == {  # the default head: bounded, state-independent spread
-        "class_name": "devlearn.training.distribution:BoundedGaussian",
-        "init_std": 0.5,
-        "min_std": 0.05,
-        "max_std": 1.0,
+    assert dist == {  # the default head (issue #54): free spread from 1.0, ceiling to 0.1
+        "class_name": "devlearn.training.distribution:FreeGaussian",
+        "init_std": 1.0,
+        "final_std": 0.1,
     }
     paper = to_rsl_rl(tiny_run.config("unused", 256, "network.head=paper"), behavior)
     dist = paper["actor"]["distribution_cfg"]
@@ -171,7 +170,8 @@ def test_to_rsl_rl():
 
     params = inspect.signature(UniqueParamPPO.__mro__[1].__init__).parameters
     # share_cnn_encoders is popped by rsl-rl's construct_algorithm before PPO sees it
-    assert set(alg) - {"class_name", "share_cnn_encoders"} <= set(params)
+    # adam_eps is UniqueParamPPO's own
+    assert set(alg) - {"class_name", "share_cnn_encoders", "adam_eps"} <= set(params)
 
 
 def test_automatic_workers_one_per_core_and_none_for_small_batches():

@@ -129,7 +129,9 @@ def test_behavior_contract():
         "balance",
     ]
     assert behavior.eval_stage() == {"random_pose": True}
-    assert "total_steps" not in behavior.train_defaults()
+    from devlearn_self_touch.behavior import DEFAULT_STEPS
+
+    assert behavior.train_defaults() == {"total_steps": DEFAULT_STEPS}  # issue #55
     import pickle
 
     assert pickle.loads(pickle.dumps(behavior)).config == behavior.config

@@ -13,7 +13,7 @@ import devlearn
 from devlearn.api.errors import UsageError
 from devlearn.testing import PluginRegistry, policy_network, run_config
 from devlearn.testing.envs import BehaviorEnv
-from devlearn.testing.runs import RunConfig, from_dict, load_run_config, to_dict
+from devlearn.testing.runs import from_dict, load_run_config, to_dict
 
 ROOT = Path(__file__).resolve().parents[3]
 RESULTS = ROOT / "results/self_touch"
@@ -22,7 +22,11 @@ RESULTS = ROOT / "results/self_touch"
 def test_default_is_the_supported_recipe_and_a_short_run():
     cfg = run_config(SelfTouch)
     assert (cfg.behavior.max_std, cfg.behavior.lifetime_memory) == (1.0, "shared")
-    assert cfg.total_steps == RunConfig.total_steps  # the README's few-minute run
+    from devlearn_self_touch.behavior import DEFAULT_STEPS
+
+    # the README's few-minute run, long enough to show learning (issue #55), its stages halves
+    assert cfg.total_steps == DEFAULT_STEPS == 1_024_000
+    assert (cfg.behavior.fixed_pose_steps, cfg.behavior.random_pose_steps) == (512_000, 512_000)
     assert cfg.preset == ""
 
 
