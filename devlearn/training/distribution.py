@@ -45,6 +45,19 @@ class DiagonalNormal(Distribution):
     std_cap: float = math.inf
     """The ceiling now (:meth:`set_progress`)."""
 
+    def set_final_std(self, final_std: float, floor: float, init_std: float) -> None:
+        """Check and keep ``final_std`` (0: none): it must lie in [``floor``, ``init_std``).
+
+        Raises:
+            ValueError: ``final_std`` outside that range.
+        """
+        if final_std and not floor <= final_std < init_std:
+            raise ValueError(
+                f"final_std must lie in [{floor}, {init_std}) (the spread's floor and its "
+                f"initial value), got {final_std}"
+            )
+        self.final_std = float(final_std)
+
     def set_progress(self, progress: float) -> None:
         """Set the spread's ceiling for ``progress`` (0 to 1) through the run (no-op without
         ``final_std``)."""
@@ -116,12 +129,8 @@ class TanhSoftplusGaussian(DiagonalNormal):
     ) -> None:
         super().__init__(output_dim)
         check_spread(init_std, max_std, min_std)
-        if final_std and not min_std <= final_std < init_std:
-            raise ValueError(
-                f"final_std must lie in [min_std, init_std) = [{min_std}, {init_std}), "
-                f"got {final_std}"
-            )
-        self.init_std, self.final_std = float(init_std), float(final_std)
+        self.set_final_std(final_std, min_std, init_std)
+        self.init_std = float(init_std)
         self.min_std = float(min_std)
         self.max_std = float(max_std)
         self._distribution: Normal | None = None
@@ -169,7 +178,41 @@ class _TanhFirstSlice(nn.Module):
         return torch.tanh(mlp_output[..., 0, :])
 
 
-class BoundedGaussian(DiagonalNormal):
+class LinearMeanGaussian(DiagonalNormal):
+    """What the state-independent heads share: the MLP outputs the mean alone (a plain linear
+    layer), one spread per action from :meth:`current_std` (under the ceiling, if any), the
+    deterministic action the mean clipped to [-1, 1] as the env applies it, and a small mean
+    layer at the start. Subclasses say how the spread is parameterised."""
+
+    def current_std(self) -> torch.Tensor:
+        """(output_dim,) spread."""
+        raise NotImplementedError
+
+    @property
+    def input_dim(self) -> int:
+        """The MLP outputs the mean only."""
+        return self.output_dim
+
+    def update(self, mlp_output: torch.Tensor) -> None:
+        std = self.capped(self.current_std())
+        self._distribution = Normal(mlp_output, std.expand_as(mlp_output))
+
+    def deterministic_output(self, mlp_output: torch.Tensor) -> torch.Tensor:
+        """The mean as the env applies it: clipped to [-1, 1]."""
+        return mlp_output.clamp(-1.0, 1.0)
+
+    def as_deterministic_output_module(self) -> nn.Module:
+        return nn.Hardtanh()  # clamp to [-1, 1], exportable
+
+    def init_mlp_weights(self, mlp: nn.Sequential) -> None:
+        """Start near mean 0: small weights and zero bias on the mean's layer."""
+        head = cast(nn.Linear, mlp[-1])
+        with torch.no_grad():
+            head.weight.mul_(0.01)
+            head.bias.zero_()
+
+
+class BoundedGaussian(LinearMeanGaussian):
     """Diagonal Gaussian with a linear mean and a state-independent, bounded spread.
 
     ``mean = W_mu h + b_mu`` (no squashing) and, per action dimension,
@@ -198,12 +241,7 @@ class BoundedGaussian(DiagonalNormal):
         final_std: float = 0.0,
     ) -> None:
         super().__init__(output_dim)
-        if final_std and not min_std <= final_std < init_std:
-            raise ValueError(
-                f"final_std must lie in [min_std, init_std) = [{min_std}, {init_std}), "
-                f"got {final_std}"
-            )
-        self.final_std = float(final_std)
+        self.set_final_std(final_std, min_std, init_std)
         if not 0 < min_std < init_std < max_std:
             raise ValueError(
                 f"the spread needs 0 < min_std < init_std < max_std; got min_std={min_std}, "
@@ -216,35 +254,12 @@ class BoundedGaussian(DiagonalNormal):
         self._distribution: Normal | None = None
         Normal.set_default_validate_args(False)
 
-    @property
-    def input_dim(self) -> int:
-        """The MLP outputs the mean only."""
-        return self.output_dim
-
     def current_std(self) -> torch.Tensor:
         """(output_dim,) spread."""
         return torch.exp(self._log_min + self._log_span * torch.sigmoid(self.std_param))
 
-    def update(self, mlp_output: torch.Tensor) -> None:
-        std = self.capped(self.current_std())
-        self._distribution = Normal(mlp_output, std.expand_as(mlp_output))
 
-    def deterministic_output(self, mlp_output: torch.Tensor) -> torch.Tensor:
-        """The mean as the env applies it: clipped to [-1, 1]."""
-        return mlp_output.clamp(-1.0, 1.0)
-
-    def as_deterministic_output_module(self) -> nn.Module:
-        return nn.Hardtanh()  # clamp to [-1, 1], exportable
-
-    def init_mlp_weights(self, mlp: nn.Sequential) -> None:
-        """Start near mean 0: small weights and zero bias on the mean's layer."""
-        head = cast(nn.Linear, mlp[-1])
-        with torch.no_grad():
-            head.weight.mul_(0.01)
-            head.bias.zero_()
-
-
-class FreeGaussian(DiagonalNormal):
+class FreeGaussian(LinearMeanGaussian):
     """Diagonal Gaussian with a linear mean and a free state-independent log-spread (SB3's and
     cleanrl's PPO head): ``mean = W_mu h + b_mu``, ``std = exp(p)`` per action with ``p`` a
     learned parameter, no bounds. The env clips samples to [-1, 1]; the deterministic action is
@@ -259,39 +274,15 @@ class FreeGaussian(DiagonalNormal):
         super().__init__(output_dim)
         if not init_std > 0:
             raise ValueError(f"init_std must be above 0, got {init_std}")
-        if final_std and not 0 < final_std < init_std:
-            raise ValueError(f"final_std must lie in (0, init_std={init_std}), got {final_std}")
-        self.init_std, self.final_std = float(init_std), float(final_std)
+        self.set_final_std(final_std, 0.0, init_std)
+        self.init_std = float(init_std)
         self.log_std = nn.Parameter(torch.full((output_dim,), math.log(init_std)))
         self._distribution: Normal | None = None
         Normal.set_default_validate_args(False)
 
-    @property
-    def input_dim(self) -> int:
-        """The MLP outputs the mean only."""
-        return self.output_dim
-
     def current_std(self) -> torch.Tensor:
         """(output_dim,) spread."""
         return torch.exp(self.log_std)
-
-    def update(self, mlp_output: torch.Tensor) -> None:
-        std = self.capped(self.current_std())
-        self._distribution = Normal(mlp_output, std.expand_as(mlp_output))
-
-    def deterministic_output(self, mlp_output: torch.Tensor) -> torch.Tensor:
-        """The mean as the env applies it: clipped to [-1, 1]."""
-        return mlp_output.clamp(-1.0, 1.0)
-
-    def as_deterministic_output_module(self) -> nn.Module:
-        return nn.Hardtanh()
-
-    def init_mlp_weights(self, mlp: nn.Sequential) -> None:
-        """Start near mean 0: small weights and zero bias on the mean's layer."""
-        head = cast(nn.Linear, mlp[-1])
-        with torch.no_grad():
-            head.weight.mul_(0.01)
-            head.bias.zero_()
 
 
 SQUASH_EDGE = 1.0 - 1e-6
