@@ -403,16 +403,13 @@ def check_learner(cfg: RunConfig, spec: Any) -> None:
         ("encoders", net.encoders, ENCODERS),
         ("init", net.init, INITS),
         ("normalize", net.normalize, NORMALIZE),
+        ("activation", net.activation, ACTIVATIONS),
     ):
         if value not in valid:
             raise UsageError(f"unknown network.{key} '{value}'; valid: {', '.join(valid)}")
-    if net.activation not in ACTIVATIONS:
-        raise UsageError(
-            f"unknown network.activation '{net.activation}'; valid: {', '.join(ACTIVATIONS)}"
-        )
     if net.init_std < 0:
         raise UsageError(
-            f"network.init_std must be 0 (the behaviour's) or above, got {net.init_std}"
+            f"network.init_std must be 0 (the head's own) or above, got {net.init_std}"
         )
     init_std = initial_std(cfg, spec)
     if net.head == "gaussian" and not 0 < net.min_std < min(init_std, head_max_std(spec)):
