@@ -88,6 +88,9 @@ def option(*flags: str, **kwargs: Any) -> Option:
     return Option(flags, {**SHARED.get(flags[0], {}), **kwargs})
 
 
+REPORT_ROWS_SHOWN = 12
+"""Metric rows `devlearn report` prints without ``--full`` (the headline first)."""
+
 BEHAVIOR = option("behavior")
 
 COMMANDS: tuple[Command, ...] = (
@@ -363,6 +366,12 @@ COMMANDS: tuple[Command, ...] = (
         "report",
         option("paths", nargs="+", metavar="PATH", help="evaluation or run folders"),
         option("--out", default="report", help="output folder (default report)"),
+        option(
+            "--full",
+            action="store_true",
+            help=f"print every metric's row (default: the first {REPORT_ROWS_SHOWN}; "
+            "report.md always has them all)",
+        ),
         help="table and chart of evaluations: mean and 95%% interval over seeds",
         description="""Read evaluation folders (eval.json) or run folders containing them, group
         them by variant (the config keys that differ; seeds pooled) and write report.md (mean

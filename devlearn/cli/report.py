@@ -6,6 +6,8 @@ import argparse
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
+    from pathlib import Path
+
     from devlearn.plugins import PluginRegistry
 
 
@@ -40,6 +42,23 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
         write_report(args.paths, args.out, paper_results, as_loaded, skipped)
     for reason in skipped:  # a stray file beside the evaluations: left out, said so
         print(f"devlearn: warning: left out an evaluation beside them: {reason}", file=sys.stderr)
-    print((Path(args.out) / "report.md").read_text(), end="")
+    text = (Path(args.out) / "report.md").read_text()
+    print(text if args.full else shortened(text, Path(args.out) / "report.md"), end="")
     print(f"written to {args.out}: report.md, report.png")
     return 0
+
+
+def shortened(report: str, where: Path) -> str:
+    """``report`` with its metric table cut to the first rows (the headline leads), and a line
+    saying how many more rows ``where`` holds: an evaluation records hundreds of figures (the
+    coded touches per limb and area), which would scroll the headline off a terminal."""
+    from devlearn.cli.commands import REPORT_ROWS_SHOWN
+
+    lines = report.splitlines(keepends=True)
+    rows = [i for i, line in enumerate(lines) if line.startswith("| `")]
+    if len(rows) <= REPORT_ROWS_SHOWN:
+        return report
+    cut, last = rows[REPORT_ROWS_SHOWN], rows[-1]
+    more = len(rows) - REPORT_ROWS_SHOWN
+    note = f"\n({more} more metrics in {where}; `devlearn report ... --full` prints them)\n"
+    return "".join([*lines[:cut], note, *lines[last + 1 :]])

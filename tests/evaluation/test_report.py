@@ -329,3 +329,23 @@ def test_an_unreadable_file_beside_the_evaluations_is_left_out_with_a_warning(
     assert main(["report", str(tmp_path / "deep"), "--out", str(tmp_path / "r2")]) == 2
     assert "its JSON is nested too deeply" in capsys.readouterr().err
     assert not (tmp_path / "r2").exists()
+
+
+def test_cli_report_prints_the_first_rows_unless_full(tmp_path, capsys):
+    """An evaluation with hundreds of figures (the coded touches) prints its headline and the
+    first rows, then says where the rest are; report.md and ``--full`` keep every row."""
+    many = {f"extra_{i:03d}": float(i) for i in range(40)}
+    paths = [fake_eval(tmp_path / f"s{s}" / "eval", 0.5 + s / 10, s, **many) for s in (1, 2)]
+    out_dir = tmp_path / "r"
+    assert main(["report", *map(str, paths), "--out", str(out_dir)]) == 0
+    short = capsys.readouterr().out
+    rows = [line for line in short.splitlines() if line.startswith("| `")]
+    md_rows = [r for r in (out_dir / "report.md").read_text().splitlines() if r.startswith("| `")]
+    assert len(md_rows) > 40 and len(rows) == 12
+    assert rows == md_rows[:12]  # the headline leads, in report.md's order
+    assert f"({len(md_rows) - 12} more metrics in {out_dir / 'report.md'}" in short
+    assert "Columns:" in short  # what follows the table is still printed
+    assert main(["report", *map(str, paths), "--out", str(tmp_path / "r2"), "--full"]) == 0
+    full = capsys.readouterr().out
+    assert [line for line in full.splitlines() if line.startswith("| `")] == md_rows
+    assert "more metrics" not in full
