@@ -95,3 +95,39 @@ def test_published_checkpoint_loads_and_acts(path, tmp_path):
     finally:
         env.close()
     assert action.shape == (env.action_dim,) and np.all(np.isfinite(action))
+
+
+PUBLISHED_TABLES = {
+    "results/self_touch/i30/curriculum": ("self_touch_curriculum", "results/self_touch/README.md"),
+    "results/self_touch/i30/ablation": (
+        "self_touch_ablation",
+        "results/self_touch/i30/ablation/README.md",
+    ),
+    "results/self_touch/i43/ablation_8M": (
+        "self_touch_ablation_8M",
+        "results/self_touch/i43/ablation_8M/README.md",
+    ),
+}
+"""Publications whose README shows the table ``devlearn experiment table`` prints (issue #56):
+the publication, its experiment file under ``experiments/`` and the README."""
+
+
+def _without_heading_marks(text: str) -> str:
+    import re
+
+    return re.sub(r"^#+ ", "", text, flags=re.MULTILINE)
+
+
+@pytest.mark.parametrize("dest", sorted(PUBLISHED_TABLES))
+def test_readme_tables_are_the_experiment_tables(dest):
+    """The README's table is ``devlearn experiment table DEST``'s, every line as printed (the
+    protocols' headings at the README's level), and the publication's experiment file is the
+    one under experiments/."""
+    from devlearn.experiment.table import experiment_table, markdown
+
+    name, readme = PUBLISHED_TABLES[dest]
+    published = (ROOT / dest / "experiment.toml").read_text()
+    assert published == (ROOT / "experiments" / f"{name}.toml").read_text()
+    printed = markdown(experiment_table(ROOT / dest))
+    tables = printed[printed.index("\n## ") + 1 :]
+    assert _without_heading_marks(tables) in _without_heading_marks((ROOT / readme).read_text())
