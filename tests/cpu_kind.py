@@ -39,10 +39,10 @@ def to_record(path: Path) -> Path:
 
 REFERENCE_KIND: dict[str, str] = {
     "plugins__hand_to_mouth__runs__seed-3.npz": "genuineintel-avx512",
-    **{  # issue #39's policies, recorded when they were published
-        f"hand_regard__i39__{run}.npz": "authenticamd-avx512"
-        for run in ["reward-paper_seed-3", *(f"reward-reach_t4_seed-{s}" for s in range(1, 6))]
-    },
+    # issue #39's median policies, recorded when they were published (the other four seeds'
+    # policies left the tree in issue #56)
+    "hand_regard__i39__reward-paper_seed-3.npz": "authenticamd-avx512",
+    "hand_regard__i39__reward-reach_t4_seed-4.npz": "authenticamd-avx512",
     # issue #40's median CNN policy, recorded when it was published
     "hand_regard__i40__policy-cnn_seed-4.npz": "authenticamd-avx512",
     # issue #54's reruns with the new core learner, recorded when they were published

@@ -14,7 +14,7 @@
 #            more-infant-like variant, judged by the likeness measures of every evaluation.
 #   rate:    a slower decision rate, a decision every 10 physics steps (50 ms, 20 Hz) instead
 #            of 5: the other more-infant-like variant the issue names (fewer, longer strokes).
-# Each final checkpoint is evaluated as in ablation.sh (100 random-pose episodes, eval seed 0,
+# Each final checkpoint is evaluated as issue #30's ablation was (100 random-pose episodes, eval seed 0,
 # 10-step settle, mean action; likeness measures included). A rerun resumes: a finished
 # evaluation is kept, a run with checkpoints goes on with --resume. From the repository root:
 #   bash results/self_touch/pilots43.sh OUT PILOT SEED [STEPS]  # e.g. /work/sweeps/pil43 repeats 1

@@ -26,7 +26,7 @@ from devlearn.training.checkpoint import observation_batch as _batch
 ROOT = Path(__file__).resolve().parents[2]
 PUBLISHED = {
     # issue #30's median seed (shared layout)
-    "self_touch": ROOT / "results/self_touch/i30/curriculum/runs/seed=4/policy.pt",
+    "self_touch": ROOT / "results/self_touch/i30/curriculum/two_stage/policy.pt",
     # issue #40's CNN policy at the paper's budget (separate layout, sees the eyes; its detector)
     "hand_regard": ROOT / "results/hand_regard/i40/policy=cnn,seed=4/policy.pt",
     # a small fixture as every run before the layouts saved it (separate, double uint8 scale)

@@ -243,7 +243,7 @@ def test_configs_saved_before_and_after_a_key_rename_are_one_variant(tmp_path, c
 
     root = Path(__file__).resolve().parents[2]
     old = json.loads(
-        (root / "results/self_touch/i30/curriculum/runs/seed=1/config.json").read_text()
+        (root / "results/self_touch/i30/curriculum/two_stage/seed=1/config.json").read_text()
     )
     assert "weight_balance" in old["behavior"] and "rewards" not in old["behavior"]
     new = to_dict(from_dict(old, PluginRegistry().behavior("self_touch")))

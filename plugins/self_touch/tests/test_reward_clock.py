@@ -19,7 +19,7 @@ from devlearn.testing.envs import BehaviorEnv
 from devlearn.testing.runs import from_dict, to_dict
 
 ROOT = Path(__file__).resolve().parents[3]
-PUBLISHED = ROOT / "results/self_touch/i30/curriculum/runs/seed=4"
+PUBLISHED = ROOT / "results/self_touch/i30/curriculum/two_stage/seed=4"
 
 
 def held_pay(term: TouchNovelty, steps: int, physics_timestep: float | None) -> list[float]:
