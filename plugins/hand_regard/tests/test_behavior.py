@@ -235,8 +235,9 @@ def test_demonstration_by_default_and_the_paper_preset():
     from devlearn.testing import run_config
 
     demo = run_config(HandRegard)
-    assert demo.total_steps == 30_000 and demo.behavior.policy == "proprio"
-    assert (demo.behavior.left_arm_steps, demo.behavior.right_arm_steps) == (3_000, 3_000)
+    assert demo.total_steps == 200_000 and demo.behavior.policy == "proprio"
+    assert (demo.behavior.left_arm_steps, demo.behavior.right_arm_steps) == (20_000, 20_000)
+    assert demo.behavior.both_arms_steps == 160_000
     paper = run_config(HandRegard, preset="paper")
     assert paper.total_steps == 1_850_000 and paper.behavior.policy == "cnn"
     assert (paper.behavior.left_arm_steps, paper.behavior.both_arms_steps) == (175_000, 1_500_000)

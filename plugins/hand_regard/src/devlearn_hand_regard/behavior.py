@@ -51,10 +51,13 @@ PAPER_STAGE_STEPS = (
 )
 """The paper's stages (left arm, right arm, both; sec. II-B5): the config's defaults, 175k +
 175k + 1.5M physics steps (``--preset paper``)."""
-DEMO_STEPS = (3_000, 3_000, 24_000)
+DEMO_STEPS = (20_000, 20_000, 160_000)
 """``devlearn run hand_regard`` without ``--steps``: a demonstration of a few minutes on a CPU,
-the paper's three stages in short (left arm, right arm, both); ``--preset paper`` is the
-paper's 175k + 175k + 1.5M."""
+the paper's three stages in short (left arm, right arm, both: the shares of
+:meth:`HandRegard.run_length_defaults`); ``--preset paper`` is the paper's 175k + 175k + 1.5M.
+Issue #55: 200,000 steps, because the 30,000 steps before it never saw a hand (detector 0.000
+against random actions' 0.017, 100 episodes from BabyBench's start) and 200,000 see one hand
+with both eyes (`results/hand_regard/i55_default_run/`)."""
 
 
 def hand_features(detections: np.ndarray, masks: np.ndarray) -> np.ndarray:
@@ -451,7 +454,7 @@ class HandRegard(Behavior):
 
     def train_defaults(self) -> dict[str, Any]:
         """A demonstration of a few minutes on a CPU: :data:`DEMO_STEPS`, the three stages
-        in short (3k + 3k + 24k = 30k steps), with the ``proprio`` policy.
+        in short (20k + 20k + 160k = 200k steps), with the ``proprio`` policy.
 
         The paper's run (175k + 175k + 1.5M = 1.85M steps, the eye CNN) is ``--preset paper``:
         many hours of rendering on a CPU. The paper gives no PPO constants for Model II beyond
@@ -479,7 +482,7 @@ class HandRegard(Behavior):
 
     def run_length_defaults(self, total_steps: int) -> dict[str, Any]:
         """The stages as shares of the run, as the 614,400-step experiments had them: 10% left
-        arm, 10% right arm, the rest both arms (the demonstration's 30k: 3k + 3k + 24k), so
+        arm, 10% right arm, the rest both arms (the demonstration's 200k: 20k + 20k + 160k), so
         that ``--steps N`` goes through every stage; ``--set behavior.left_arm_steps=...``
         or ``--preset paper`` (175k + 175k + 1.5M) keep their own."""
         one_arm = round(total_steps * STAGE_SHARE)
