@@ -254,7 +254,7 @@ def test_stage_lengths_scale_with_the_run_unless_set():
         b = run_config(HandRegard, overrides, preset, registry=registry, **top).behavior
         return b.left_arm_steps, b.right_arm_steps, b.both_arms_steps
 
-    assert stages() == (3_000, 3_000, 24_000)  # the demonstration
+    assert stages() == (20_000, 20_000, 160_000)  # the demonstration
     assert stages(total_steps=614_400) == (61_440, 61_440, 491_520)
     assert stages(preset="paper") == (175_000, 175_000, 1_500_000)
     set_left = ["behavior.left_arm_steps=5000"]
