@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 from devlearn_hand_regard.babbling import BabblingData
 from devlearn_hand_regard.detector import DetectorParams, HandDetector
-from devlearn_hand_regard.measure import score
+from devlearn_hand_regard.segmentation_score import score
 
 from devlearn.evaluation.evaluate import evaluate
 from devlearn.infant import build_infant
@@ -76,8 +76,8 @@ class FrameRecorder:
         return eyes
 
     def frames(self) -> tuple[BabblingData, np.ndarray]:
-        """The recorded frames (as a recording ``measure.score`` reads) and their (T, 2, H, W)
-        segmentation."""
+        """The recorded frames (as a recording ``segmentation_score.score`` reads) and their
+        (T, 2, H, W) segmentation."""
         steps = len(self.eyes_seen)
         data = BabblingData(
             eyes=np.stack(self.eyes_seen),
@@ -104,7 +104,7 @@ def policy_frames(path: Path, episodes: int, registry: PluginRegistry) -> dict[s
 
 
 def brief(result: dict[str, Any]) -> dict[str, Any]:
-    """The figures of a ``measure.score`` result that the tables show."""
+    """The figures of a ``segmentation_score.score`` result that the tables show."""
     return {
         "steps": result["steps"],
         "pair_mean": {k: result["pair_mean"][k] for k in ("precision_pixels", "recall_pixels")},
