@@ -39,7 +39,7 @@ from devlearn_hand_regard.babbling import BabblingData
 from devlearn_hand_regard.detector import DetectorParams, HandDetector
 from devlearn_hand_regard.segmentation_score import score
 
-from devlearn.evaluation.evaluate import evaluate
+from devlearn.evaluation.evaluate import EvalRequest, Evaluation
 from devlearn.infant import build_infant
 from devlearn.plugins import PluginRegistry
 from devlearn.training.checkpoint import Checkpoint
@@ -98,7 +98,11 @@ def policy_frames(path: Path, episodes: int, registry: PluginRegistry) -> dict[s
         recorders.append(FrameRecorder(build_infant(scene, **options)))
         return recorders[-1]
 
-    summary = evaluate("hand_regard", path, episodes, registry, infant_factory=factory, seed=0)
+    summary = Evaluation(
+        EvalRequest("hand_regard", path, episodes=episodes, seed=0),
+        registry,
+        infant_factory=factory,
+    ).run()
     data, segmentation = recorders[0].frames()
     return {"data": data, "segmentation": segmentation, "summary": summary}
 
