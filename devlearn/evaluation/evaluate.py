@@ -24,6 +24,7 @@ from devlearn.api.behavior import evaluation_stage
 from devlearn.api.errors import UsageError
 from devlearn.config.resolve import RunRequest, resolve_config
 from devlearn.config.run_config import RunConfig, fresh_config
+from devlearn.cores import available_cores
 from devlearn.env.behavior_env import BehaviorEnv
 from devlearn.env.rendering import check_senses_render, require_rendering
 from devlearn.env.settings import EnvSettings
@@ -190,13 +191,6 @@ def _evaluated_age(overrides: list[str], trained: float | None) -> float | None:
         raise UsageError(message) from None
 
 
-def available_cores() -> int:
-    """The CPU cores this process may run on."""
-    if hasattr(os, "sched_getaffinity"):
-        return len(os.sched_getaffinity(0))
-    return os.cpu_count() or 1
-
-
 def paying_workers(episodes: int, workers: int) -> int:
     """The env workers that repay their start-up for ``episodes`` episodes, at most
     ``workers``: one per :data:`PARALLEL_MIN_EPISODES` episodes, and none where that leaves one
@@ -233,7 +227,7 @@ def parallelism(
                 "(Evaluator.merge): evaluate it with --envs 1 --workers 0"
             )
         return 1, 0
-    cores = available_cores() if cores is None else cores
+    cores = len(available_cores()) if cores is None else cores
     if workers is None:
         workers = cores if cores > 1 and episodes >= PARALLEL_MIN_EPISODES * cores else 0
     if envs is None:
