@@ -123,6 +123,7 @@ class DevRunner:
         cfg: RunConfig,
         run_dir: Path,
         curriculum: Curriculum,
+        *,
         headline_metric: str = "",
         device: str = "cpu",
         progress: bool = True,
