@@ -1,10 +1,22 @@
-"""No import circles in the core (issue #42): a module never imports, directly or through
-others, a module that imports it back. Imports inside functions count (they are deferred, not
-absent); imports made only for type annotations do not (as in the import contract)."""
+"""No import circles in the core (issue #42) nor in the plugins' packages (issue #59): a module
+never imports, directly or through others, a module that imports it back.
+Imports inside functions count (they are deferred, not absent); imports made only for type
+annotations do not (as in the import contract)."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import grimp
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+PLUGIN_PACKAGES = sorted(
+    p.parent.name
+    for folder in ("plugins", "examples")
+    for p in ROOT.glob(f"{folder}/*/src/*/__init__.py")
+)
+"""The built-in plugins' packages (``plugins/*/src``) and the examples' (``examples/*/src``)."""
 
 
 def _cycles(graph: grimp.ImportGraph, package: str) -> list[list[str]]:
@@ -59,3 +71,16 @@ def test_the_cycle_finder_finds_a_circle() -> None:
 def test_devlearn_has_no_import_circles() -> None:
     graph = grimp.build_graph("devlearn", exclude_type_checking_imports=True)
     assert _cycles(graph, "devlearn") == []
+
+
+@pytest.mark.parametrize("package", PLUGIN_PACKAGES)
+def test_plugin_package_has_no_import_circles(package: str) -> None:
+    graph = grimp.build_graph(package, exclude_type_checking_imports=True)
+    assert _cycles(graph, package) == []
+
+
+def test_every_plugin_package_is_checked() -> None:
+    """The list above is read from the tree; it must not silently come up empty."""
+    assert {"devlearn_self_touch", "devlearn_hand_regard", "devlearn_curiosity"} <= set(
+        PLUGIN_PACKAGES
+    )

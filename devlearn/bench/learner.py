@@ -130,7 +130,7 @@ def bench_update(
         num_steps: Steps per environment.
         repeats: Timed updates after one warm-up; the best is kept (least disturbed).
         threads: torch threads during the update and inference (0: the training default, all
-            cores this process may use, see :func:`devlearn.training.process.learner_threads`).
+            cores this process may use, see :func:`devlearn.training.process.rank_cores`).
         registry: Where the behaviour is registered (default: the installed plugins).
 
     Returns:
@@ -141,9 +141,9 @@ def bench_update(
     import torch
 
     from devlearn.training.ppo import unique_parameters
-    from devlearn.training.process import learner_threads, update_threads
+    from devlearn.training.process import rank_cores, update_threads
 
-    threads = threads or learner_threads()
+    threads = threads or rank_cores()
     alg, observations = build_learner(behavior, layout, num_envs, num_steps, registry=registry)
     best, inference = float("inf"), float("inf")
     with update_threads(threads):
@@ -282,7 +282,7 @@ def bench_learner(registry: PluginRegistry, quick: bool, progress: Callable[[str
     (``self_touch_update_us_per_sample[_sb3]_1thread``, issue #54); hand regard trains with 8
     envs and a short babbling (speed does not depend on the detector's quality).
     """
-    from devlearn.training.process import learner_threads
+    from devlearn.training.process import rank_cores
 
     behaviors = registry.behaviors()
     result: dict[str, Any] = {}
@@ -290,7 +290,7 @@ def bench_learner(registry: PluginRegistry, quick: bool, progress: Callable[[str
     for name, (envs, steps) in rollouts.items():
         if name not in behaviors:
             continue
-        for suffix, layout, threads in (("_old", "separate", 1), ("", "shared", learner_threads())):
+        for suffix, layout, threads in (("_old", "separate", 1), ("", "shared", rank_cores())):
             progress(f"{name}: PPO update, {layout} networks, {threads} thread(s)")
             behavior, repeats = behaviors[name](), 1 if quick else 2
             figures = bench_update(behavior, layout, envs, steps, repeats, threads, registry)

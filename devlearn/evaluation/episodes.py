@@ -8,7 +8,7 @@ every decision's randomness in turn. ``devlearn eval --envs N`` gives each of N 
 consecutive episodes (``np.array_split``: slot 0 the first ones). A slot reaches its first
 episode ``k`` as the reference does: a fresh generator, ``k`` resets, and the policy's draws of
 ``k`` episodes made without acting. Its later episodes then follow by the environment's own
-reset, as in the reference. Each slot acts on one observation at a time, with the same calls
+reset, as in the reference. Each slot acts on a batch of one observation, with the same calls
 as the reference (a batch of several rows can round differently in float32). Its evaluator
 sees its episodes only; the slots' evaluators are merged in slot order
 (:meth:`~devlearn.api.behavior.Evaluator.merge`; an evaluator that is not
@@ -26,7 +26,6 @@ refused rather than evaluated differently.
 from __future__ import annotations
 
 import contextlib
-import copy
 import time
 from collections.abc import Callable, Generator
 from dataclasses import dataclass
@@ -35,165 +34,26 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import torch
 
 from devlearn.api.errors import UsageError
 from devlearn.env.behavior_env import step_batch
 from devlearn.env.settings import EnvSettings
 from devlearn.env.workers import WorkerPool, make_envs
+from devlearn.evaluation.policy import batch_of_one
 from devlearn.files import replaced_atomically
-from devlearn.training.checkpoint import observation_batch
 
 if TYPE_CHECKING:
     from devlearn.api.behavior import Behavior
     from devlearn.env.behavior_env import BehaviorEnv, InfantFactory
-    from devlearn.training.networks import MultiSenseModel
+    from devlearn.evaluation.policy import Actions
 
 VIDEO_FPS = 25
 """Frame rate of evaluation videos (every k-th decision is rendered to match it)."""
 VIDEO_FORMATS = {".mp4": "mp4", ".mkv": "matroska", ".mov": "mov", ".avi": "avi"}
 """The video files ``devlearn eval --video`` writes, by extension, and ffmpeg's container for
 each (H.264 inside; WebM and GIF need other codecs, and ffmpeg writes them empty without one)."""
-HOLD_STEPS = 8
-"""Mean steps a ``held_random`` baseline action is held (40 ms at 200 Hz)."""
 PROGRESS_SECONDS = 0.5
 """How often a worker reports its progress (physics steps, episodes) to the progress bar."""
-
-
-# --- policies: how each decision's action is chosen, with their own randomness ---------------
-
-
-class Policy:
-    """A policy of ``devlearn eval``: ``act(obs) -> (action_dim,)``.
-
-    A slot starting at episode k first calls :meth:`skip` with k episodes' decisions, so that
-    its randomness is where the reference's (one env, every episode in order) is then.
-    """
-
-    def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
-        """The action for one observation (name -> unbatched array), (action_dim,)."""
-        raise NotImplementedError
-
-    def skip(self, decisions: int) -> None:
-        """Draw what ``decisions`` decisions would draw, without acting. Baselines do not read
-        the observation, so they act on none."""
-        for _ in range(decisions):
-            self.act({})
-
-    def rng_state(self) -> Any:
-        """The state of the policy's own randomness (None: it has none)."""
-        return None
-
-    def for_slot(self) -> Policy:
-        """A copy in this initial state for one slot."""
-        return copy.deepcopy(self)
-
-
-class ZeroPolicy(Policy):
-    """The zero action."""
-
-    def __init__(self, action_dim: int) -> None:
-        self.action_dim = action_dim
-
-    def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
-        return np.zeros(self.action_dim)
-
-    def skip(self, decisions: int) -> None:
-        pass
-
-
-class UniformPolicy(Policy):
-    """Actions uniform in [-1, 1], drawn afresh every decision from the evaluation seed's
-    stream ``[seed, 1]`` (apart from the env's)."""
-
-    def __init__(self, action_dim: int, seed: int) -> None:
-        self.action_dim = action_dim
-        self.rng = np.random.default_rng([seed, 1])
-
-    def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
-        return self.rng.uniform(-1.0, 1.0, self.action_dim)
-
-    def rng_state(self) -> Any:
-        return self.rng.bit_generator.state
-
-
-class HeldPolicy(Policy):
-    """Uniform actions each held for :data:`HOLD_STEPS` physics steps on average: every
-    actuator redraws with probability ``repeat / HOLD_STEPS`` per decision (stream
-    ``[seed, 2]``)."""
-
-    def __init__(self, action_dim: int, seed: int, repeat: int) -> None:
-        self.action_dim = action_dim
-        self.rng = np.random.default_rng([seed, 2])
-        self.held = self.rng.uniform(-1.0, 1.0, action_dim)
-        self.redraw = min(1.0, repeat / HOLD_STEPS)
-
-    def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
-        redraw = self.rng.random(self.action_dim) < self.redraw
-        self.held[redraw] = self.rng.uniform(-1.0, 1.0, int(redraw.sum()))
-        return self.held.copy()
-
-    def rng_state(self) -> Any:
-        return self.rng.bit_generator.state
-
-
-class ActorPolicy(Policy):
-    """A checkpoint's policy network: its mean action, or (``sample``) an action drawn from its
-    distribution with torch's generator in ``generator_state`` (the state torch's global
-    generator had after the network was built, as in one env evaluating in order), kept per
-    slot."""
-
-    def __init__(
-        self, actor: MultiSenseModel, action_dim: int, sample: bool, generator_state: torch.Tensor
-    ) -> None:
-        self.actor = actor
-        self.action_dim = action_dim
-        self.sample = sample
-        self.state = generator_state.clone()
-
-    def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
-        if self.sample:
-            torch.set_rng_state(self.state)
-        with torch.inference_mode():
-            action = self.actor(observation_batch(obs), stochastic_output=self.sample)[0].numpy()
-        if self.sample:
-            self.state = torch.get_rng_state()
-        return action
-
-    def skip(self, decisions: int) -> None:
-        """A sampled action is ``torch.normal(mean, std)`` of shape (1, action_dim): one
-        standard normal fill of that shape per decision, whatever the mean and spread."""
-        if not self.sample or not decisions:
-            return
-        torch.set_rng_state(self.state)
-        noise = torch.empty(1, self.action_dim)
-        for _ in range(decisions):
-            noise.normal_()
-        self.state = torch.get_rng_state()
-
-    def rng_state(self) -> Any:
-        return self.state.numpy().tobytes() if self.sample else None
-
-    def for_slot(self) -> Policy:
-        return copy.deepcopy(self, {id(self.actor): self.actor})  # one network, shared
-
-
-class ScriptedActions(Policy):
-    """A scripted policy's deterministic action (another learner's policy file,
-    :class:`~devlearn.evaluation.scripted_policy.ScriptedPolicy`): nothing to draw, nothing to
-    skip; it travels to env workers as its file and is loaded again there."""
-
-    def __init__(self, scripted: Any) -> None:
-        self.scripted = scripted
-
-    def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
-        return np.asarray(self.scripted.act(obs))
-
-    def skip(self, decisions: int) -> None:
-        pass
-
-    def for_slot(self) -> Policy:
-        return self
 
 
 # --- the plan and one process's slots -------------------------------------------------------
@@ -209,7 +69,8 @@ class EpisodePlan:
         stage: The evaluation stage's options.
         start: The infant start to set (``babybench``, ``rest``), or None: the infant's own.
         decisions: Decisions per episode (physics steps / decision rate).
-        policy: The policy in its initial state (each slot plays a copy).
+        actions: The policy's actions in their initial state, for batches of one (each slot
+            plays a copy).
         video: Write the first episode's frames here (MP4), or None.
         video_stride: Render every this many decisions.
     """
@@ -219,7 +80,7 @@ class EpisodePlan:
     stage: dict[str, Any]
     start: str | None
     decisions: int
-    policy: Policy
+    actions: Actions
     video: str | None = None
     video_stride: int = 1
 
@@ -282,9 +143,9 @@ class _Slot:
         for _ in range(first):
             env.reset()
         self.obs = env.reset()
-        self.policy = plan.policy.for_slot()
-        self.policy.skip(first * plan.decisions)
-        self.begins = (env.rng.bit_generator.state, self.policy.rng_state())
+        self.actions = plan.actions.for_slot()
+        self.actions.skip(first * plan.decisions)
+        self.begins = (env.rng.bit_generator.state, self.actions.rng_state())
         self.episodes: list[dict[str, float]] = []
         self.video_error: str | None = None
 
@@ -299,7 +160,7 @@ class _Slot:
         return True
 
     def result(self) -> SlotResult:
-        ends = (self.env.rng.bit_generator.state, self.policy.rng_state())
+        ends = (self.env.rng.bit_generator.state, self.actions.rng_state())
         return SlotResult(
             self.episodes, self.env.evaluator, self.started, self.begins, ends, self.video_error
         )
@@ -333,7 +194,9 @@ def play(
             for t in range(plan.decisions):
                 if film is not None and t % plan.video_stride == 0:
                     film.add(frame)
-                actions = [s.policy.act(s.obs) for s in playing]
+                # each slot acts on its own batch of one: a batch of several rows can round
+                # differently in float32 from the reference's one env
+                actions = [s.actions.act(batch_of_one(s.obs))[0] for s in playing]
                 outcomes = step_batch(batch, actions)
                 ended = sum(s.step(obs, info) for s, (obs, *_, info) in zip(playing, outcomes))
                 if report is not None:

@@ -23,26 +23,22 @@ from devlearn.ages import check_age
 from devlearn.api.behavior import evaluation_stage
 from devlearn.api.errors import UsageError
 from devlearn.config.resolve import RunRequest, resolve_config
-from devlearn.config.run_config import RunConfig, fresh_config, to_dict
+from devlearn.config.run_config import RunConfig, fresh_config
+from devlearn.cores import available_cores
 from devlearn.env.behavior_env import BehaviorEnv
 from devlearn.env.rendering import check_senses_render, require_rendering
 from devlearn.env.settings import EnvSettings
 from devlearn.evaluation.episodes import (
     VIDEO_FORMATS,
     VIDEO_FPS,
-    ActorPolicy,
     EpisodePlan,
-    HeldPolicy,
     Players,
-    Policy,
-    ScriptedActions,
     SlotResult,
-    UniformPolicy,
-    ZeroPolicy,
     merged_results,
     prepare_env,
 )
-from devlearn.evaluation.scripted_policy import ScriptedPolicy
+from devlearn.evaluation.policy import BASELINES, Baseline, CheckpointPolicy, Policy, batch_of_one
+from devlearn.evaluation.scripted_policy import ScriptedPolicy, sampling_refused
 from devlearn.files import (
     NotARegularFileError,
     check_out_file,
@@ -50,7 +46,7 @@ from devlearn.files import (
     write_text_atomically,
 )
 from devlearn.timing import decision_rate_error, physics_steps
-from devlearn.training.checkpoint import LATEST, Checkpoint, is_scripted_policy
+from devlearn.training.checkpoint import LATEST, is_scripted_policy
 
 if TYPE_CHECKING:
     from devlearn.api.behavior import Behavior, Evaluator
@@ -61,10 +57,11 @@ AGE_KEY = "infant.age_months"
 """The one ``--set`` key a checkpoint's evaluation takes: the body's age."""
 POLICY_FILE = "policy.pt"
 """Name of a slimmed policy file (``devlearn slim``) in a published run folder."""
-POLICIES = ("checkpoint", "zero", "random", "held_random")
-"""What ``evaluate`` can run: a checkpoint's mean action, or a baseline: zero action, actions
-uniform in [-1, 1] drawn afresh every step (i.i.d.), or ``held_random``: uniform actions each
-held for :data:`~devlearn.evaluation.episodes.HOLD_STEPS` (8) physics steps on average (each
+POLICIES = ("checkpoint", *BASELINES)
+"""What an evaluation can run (:mod:`devlearn.evaluation.policy`): a checkpoint's (or scripted
+policy's) action, or a baseline: zero action, actions uniform in [-1, 1] drawn afresh every
+step (i.i.d.), or ``held_random``: uniform actions each held for
+:data:`~devlearn.evaluation.policy.HOLD_STEPS` (8) physics steps on average (each
 actuator redraws with probability 1 / HOLD_STEPS per physics step, as motor babbling does;
 with a decision rate K, K / HOLD_STEPS per decision), which moves the damped limbs much
 further than i.i.d. noise. All seeded by the evaluation seed."""
@@ -179,32 +176,6 @@ def code_version() -> dict[str, Any]:
     return {"commit": sha, "dirty": bool(status.strip())}
 
 
-def make_policy(
-    policy: str,
-    opened: Checkpoint | ScriptedPolicy | None,
-    obs: dict[str, np.ndarray],
-    action_dim: int,
-    seed: int,
-    repeat: int,
-    sample: bool,
-) -> Policy:
-    """The policy ``policy`` names: the checkpoint's network (built for ``obs``; torch's global
-    generator, seeded with the evaluation seed, draws its initialisation and then, with
-    ``sample``, its actions), a scripted policy's deterministic action, or a baseline seeded by
-    the evaluation seed."""
-    if policy == "zero":
-        return ZeroPolicy(action_dim)
-    if policy == "random":
-        return UniformPolicy(action_dim, seed)
-    if policy == "held_random":
-        return HeldPolicy(action_dim, seed, repeat)
-    assert opened is not None, "the checkpoint policy needs a checkpoint"
-    if isinstance(opened, ScriptedPolicy):
-        return ScriptedActions(opened)
-    actor = opened.actor(obs, action_dim)
-    return ActorPolicy(actor, action_dim, sample, torch.get_rng_state())
-
-
 def _evaluated_age(overrides: list[str], trained: float | None) -> float | None:
     """The age a checkpoint is evaluated at: the last ``infant.age_months=A`` given (``null``:
     the default body), else the age it last trained at."""
@@ -218,13 +189,6 @@ def _evaluated_age(overrides: list[str], trained: float | None) -> float | None:
     except ValueError as err:
         message = str(err) if "months" in str(err) else f"{AGE_KEY} must be a number, got {value!r}"
         raise UsageError(message) from None
-
-
-def available_cores() -> int:
-    """The CPU cores this process may run on."""
-    if hasattr(os, "sched_getaffinity"):
-        return len(os.sched_getaffinity(0))
-    return os.cpu_count() or 1
 
 
 def paying_workers(episodes: int, workers: int) -> int:
@@ -263,7 +227,7 @@ def parallelism(
                 "(Evaluator.merge): evaluate it with --envs 1 --workers 0"
             )
         return 1, 0
-    cores = available_cores() if cores is None else cores
+    cores = len(available_cores()) if cores is None else cores
     if workers is None:
         workers = cores if cores > 1 and episodes >= PARALLEL_MIN_EPISODES * cores else 0
     if envs is None:
@@ -363,32 +327,37 @@ class EvalRequest:
 
 @dataclass
 class EvalSubject:
-    """What is evaluated, opened and settled once: the behaviour under the config it acts with.
+    """What is evaluated, opened and settled once: the policy and the body's age.
 
     Attributes:
-        behavior: The behaviour, built under :attr:`config` (with a checkpoint's artifacts).
-        config: The checkpoint's config, or a baseline's (resolved once).
-        opened: The opened checkpoint or scripted policy; None for a baseline.
+        policy: The policy (a checkpoint, a scripted policy or a baseline).
         age_months: The body's age the episodes play at (None: the default body).
     """
 
-    behavior: Behavior
-    config: RunConfig
-    opened: Checkpoint | ScriptedPolicy | None
+    policy: Policy
     age_months: float | None
 
     @property
+    def behavior(self) -> Behavior:
+        """The policy's behaviour, built under :attr:`config` (with a file's artifacts)."""
+        return self.policy.behavior()
+
+    @property
+    def config(self) -> RunConfig:
+        """The policy's config: a file's own, or a baseline's (resolved once)."""
+        return self.policy.config
+
+    @property
     def trained_steps(self) -> int:
-        """The checkpoint's training steps (0: a baseline)."""
-        return int(self.opened.state.get("env_steps", 0)) if self.opened is not None else 0
+        """The policy's training steps (0: a baseline, or a file that does not say)."""
+        return self.policy.env_steps or 0
 
     @property
     def stage_steps(self) -> int:
         """Where in its curriculum the policy is judged: a checkpoint where its training
         ended, a baseline where a run of its config would end (``total_steps``)."""
-        if self.opened is not None and "env_steps" in self.opened.state:
-            return int(self.opened.state["env_steps"])
-        return int(self.config.total_steps)
+        steps = self.policy.env_steps
+        return int(self.config.total_steps) if steps is None else steps
 
 
 @dataclass(frozen=True)
@@ -444,21 +413,18 @@ def open_subject(request: EvalRequest, registry: PluginRegistry) -> EvalSubject:
     """
     if request.checkpoint is None:
         cfg = baseline_config(request.behavior, request.overrides, registry)
-        behavior = registry.create(request.behavior, cfg.behavior)
-        return EvalSubject(behavior, cfg, None, cfg.infant.age_months)
+        baseline = Baseline(request.policy, cfg, registry.create(request.behavior, cfg.behavior))
+        return EvalSubject(baseline, baseline.age_months)
     path = resolve_checkpoint(request.checkpoint)
-    opened: Checkpoint | ScriptedPolicy
+    policy: Policy
     if is_scripted_policy(path):  # another learner's (devlearn.gym.save_policy)
-        if request.action != "mean":
-            raise UsageError(
-                f"--action {request.action}: a scripted policy ({path}) gives one deterministic "
-                "action; sampling needs a devlearn checkpoint"
-            )
-        opened = ScriptedPolicy.open(path, registry, request.behavior)
+        if request.action == "sample":
+            raise sampling_refused(path)
+        policy = ScriptedPolicy.open(path, registry, request.behavior)
     else:
-        opened = Checkpoint.open(path, registry, request.behavior)
-    age = _evaluated_age(request.ages, opened.age_months)
-    return EvalSubject(opened.behavior(), opened.config, opened, age)
+        policy = CheckpointPolicy.open(path, registry, request.behavior)
+    policy.behavior()  # built (with its artifacts) before any env is
+    return EvalSubject(policy, _evaluated_age(request.ages, policy.age_months))
 
 
 def evaluation_conditions(
@@ -586,8 +552,8 @@ class Evaluation:
                 "workers": conditions.workers,
                 "wall_seconds": round(time.monotonic() - began, 1),
             }
-            if isinstance(subject.opened, ScriptedPolicy):
-                summary["learner"] = subject.opened.learner  # devlearn report tells learners apart
+            if subject.policy.learner is not None:  # devlearn report tells learners apart
+                summary["learner"] = subject.policy.learner
             written = self.write(out, summary, evaluator) if out is not None else []
             if video_error is not None:  # the evaluation itself is kept: eval.json written
                 kept = f" ({out / 'eval.json'} is written)" if out is not None else ""
@@ -602,7 +568,8 @@ class Evaluation:
     def plan(
         self, subject: EvalSubject, conditions: EvalConditions, players: Players
     ) -> tuple[EpisodePlan, int]:
-        """The policy and the episode plan every slot plays, and the episode's physics steps.
+        """The policy's actions and the episode plan every slot plays, and the episode's
+        physics steps.
 
         An env gives the observation the network is built for and the episode length: the
         first player in this process, else one of its own.
@@ -623,14 +590,8 @@ class Evaluation:
         )
         try:
             prepare_env(env, conditions.stage, conditions.infant_start)
-            chosen = make_policy(
-                request.policy,
-                subject.opened,
-                env.reset(),
-                env.action_dim,
-                request.seed,
-                repeat,
-                request.action == "sample",
+            actions = subject.policy.actions(
+                batch_of_one(env.reset()), env.action_dim, request.seed, request.action == "sample"
             )
             episode_steps, step_dt = env.episode_steps, env.step_dt
         finally:
@@ -645,7 +606,7 @@ class Evaluation:
             stage=conditions.stage,
             start=conditions.infant_start,
             decisions=episode_steps // repeat,
-            policy=chosen,
+            actions=actions,
             video=None if request.video is None else str(request.video),
             video_stride=max(1, round(1.0 / (step_dt * repeat * VIDEO_FPS))),
         )
@@ -689,17 +650,16 @@ class Evaluation:
             criteria, training steps, code commit).
         """
         request = self.request
-        checkpoint = subject.opened
+        policy = subject.policy
         steps = subject.trained_steps
-        config = checkpoint.state["config"] if checkpoint is not None else to_dict(subject.config)
         summary = evaluator.summary()
         summary.update(
             behavior=request.behavior,
-            policy=request.policy,
-            checkpoint=str(checkpoint.path) if checkpoint is not None else None,
+            policy=policy.name,
+            checkpoint=str(policy.path) if policy.path is not None else None,
             checkpoint_env_steps=steps,
-            training_seed=int(subject.config.seed) if checkpoint is not None else None,
-            config=config,
+            training_seed=int(subject.config.seed) if policy.path is not None else None,
+            config=policy.saved_config,
             age_months=subject.age_months,
             start=started,
             protocol={
@@ -757,41 +717,3 @@ def per_episode_headline(
     stats = mean_ci(values)
     for name in ("mean", "std", "ci_low", "ci_high"):
         summary[f"episode_{headline}_{name}"] = stats[name]
-
-
-def evaluate(
-    behavior_name: str,
-    checkpoint: str | Path | None,
-    episodes: int,
-    registry: PluginRegistry,
-    video: str | Path | None = None,
-    seed: int = 0,
-    out_dir: str | Path | None = None,
-    infant_factory: InfantFactory | None = None,
-    progress: bool = True,
-    policy: str = "checkpoint",
-    start: str = "stage",
-    overrides: Sequence[str] | None = None,
-    action: str = "mean",
-    envs: int | None = 1,
-    workers: int | None = 0,
-    session: float | None = None,
-) -> dict[str, Any]:
-    """``Evaluation(EvalRequest(...), registry, infant_factory, progress).run()``: a
-    convenience for scripts and tests (arguments as :class:`EvalRequest`'s attributes)."""
-    request = EvalRequest(
-        behavior=behavior_name,
-        checkpoint=checkpoint,
-        policy=policy,
-        episodes=episodes,
-        seed=seed,
-        start=start,
-        action=action,
-        overrides=tuple(overrides or ()),
-        envs=envs,
-        workers=workers,
-        session=session,
-        video=video,
-        out_dir=out_dir,
-    )
-    return Evaluation(request, registry, infant_factory, progress).run()

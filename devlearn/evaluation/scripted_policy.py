@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 import torch
@@ -16,11 +16,10 @@ from devlearn.api.errors import UsageError
 from devlearn.api.json_files import parse_json
 from devlearn.config.growth import start_age
 from devlearn.config.run_config import from_dict
-from devlearn.training.checkpoint import SCRIPTED_METADATA, behavior_with_artifacts
+from devlearn.evaluation.policy import Actions, Observations, batch_of_one, batch_rows
+from devlearn.training.checkpoint import SCRIPTED_METADATA, SavedPolicy
 
 if TYPE_CHECKING:
-    from devlearn.api.behavior import Behavior
-    from devlearn.config.run_config import RunConfig
     from devlearn.plugins import PluginRegistry
 
 SCRIPTED_FORMAT = "devlearn-scripted-policy/1"
@@ -96,26 +95,19 @@ def save_scripted_policy(
 
 
 @dataclass
-class ScriptedPolicy:
+class ScriptedPolicy(SavedPolicy):
     """An opened scripted policy file, read as ``devlearn eval`` reads a checkpoint
     (:class:`~devlearn.training.checkpoint.Checkpoint`): its config, its behaviour (with the
-    artifacts it carries) and a deterministic actor. Open with :meth:`open`.
+    artifacts it carries) and a deterministic actor; a
+    :class:`~devlearn.evaluation.policy.Policy`. Open with :meth:`open`.
 
     Loading it runs TorchScript (a restricted program of tensor operations, no Python
     pickle): open only files you trust, as with any model file that holds code.
     """
 
-    path: Path
-    """The file."""
-    state: dict[str, Any]
-    """Its metadata (``behavior``, ``observations``, ``config``, ``env_steps``, ``learner``)."""
-    config: RunConfig
-    """The run config of the environments it trained on."""
-    registry: PluginRegistry
-    """The registry its behaviour is built from."""
-    module: Any = field(repr=False)
+    module: Any = field(default=None, repr=False)
     """The TorchScript policy."""
-    _behavior: Behavior | None = field(default=None, repr=False)
+    name: ClassVar[str] = "checkpoint"
 
     @classmethod
     def open(
@@ -146,24 +138,15 @@ class ScriptedPolicy:
                 f"not '{behavior_name}'"
             )
         config = from_dict(state["config"], registry.behavior(state["behavior"]))
-        return cls(path, state, config, registry, module.eval())
-
-    @property
-    def behavior_name(self) -> str:
-        """The behaviour it was trained for."""
-        return str(self.state["behavior"])
-
-    @property
-    def env_steps(self) -> int:
-        """Physics steps it was trained for (0 where it does not say)."""
-        return int(self.state.get("env_steps", 0))
+        return cls(path, state, config, registry, module=module.eval())
 
     @property
     def age_months(self) -> float | None:
         """The body's age it last trained at: its config's growth schedule at its steps, else
         ``infant.age_months`` (None: the default body)."""
-        stage = self.behavior().curriculum().stage_index_at(self.env_steps)
-        return start_age(self.config, self.env_steps, stage)
+        steps = self.env_steps or 0
+        stage = self.behavior().curriculum().stage_index_at(steps)
+        return start_age(self.config, steps, stage)
 
     @property
     def learner(self) -> str:
@@ -184,13 +167,15 @@ class ScriptedPolicy:
         with known_exporter_noise_silenced():
             self.module = torch.jit.load(str(self.path), map_location="cpu").eval()
 
-    def behavior(self) -> Behavior:
-        """Its behaviour under its config, with the artifacts the file carries; built once."""
-        if self._behavior is None:
-            self._behavior = behavior_with_artifacts(
-                self.registry, self.config, self.state, self.path
-            )
-        return self._behavior
+    def actions(self, obs: Observations, action_dim: int, seed: int, sample: bool) -> Actions:
+        """Its deterministic action (nothing to draw, nothing to skip).
+
+        Raises:
+            UsageError: ``sample``: it has no distribution to draw from.
+        """
+        if sample:
+            raise sampling_refused(self.path)
+        return ScriptedActions(self, batch_rows(obs), action_dim)
 
     def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
         """The policy's action for one env's observation: (action_dim,) float64.
@@ -198,16 +183,48 @@ class ScriptedPolicy:
         Raises:
             UsageError: The observation lacks a group the policy takes, or has another shape.
         """
+        return self.act_batch(batch_of_one(obs))[0]
+
+    def act_batch(self, obs: Observations) -> np.ndarray:
+        """The policy's actions for a batch of observations ((N, *shape) per group):
+        (N, action_dim) float64.
+
+        Raises:
+            UsageError: The observations lack a group the policy takes, or have another shape.
+        """
         inputs = []
         for spec in self.state["observations"]:
             name, shape = spec["name"], tuple(spec["shape"])
             value = obs.get(name)
-            if value is None or tuple(np.shape(value)) != shape:
-                got = None if value is None else tuple(np.shape(value))
+            if value is None or tuple(np.shape(value))[1:] != shape:
+                got = None if value is None else tuple(np.shape(value))[1:]
                 raise UsageError(
                     f"scripted policy {self.path} takes observation '{name}' {shape}; the "
                     f"env gives {got} (a config other than the one it trained with?)"
                 )
-            inputs.append(torch.from_numpy(np.array(value, dtype=spec["dtype"])[None]))
+            inputs.append(torch.from_numpy(np.asarray(value, dtype=spec["dtype"])))
         with torch.inference_mode():
-            return self.module(*inputs)[0].numpy().astype(np.float64)
+            return self.module(*inputs).numpy().astype(np.float64)
+
+
+def sampling_refused(path: str | Path) -> UsageError:
+    """The error for ``--action sample`` with the scripted policy ``path``."""
+    return UsageError(
+        f"--action sample: a scripted policy ({path}) gives one deterministic action; "
+        "sampling needs a devlearn checkpoint"
+    )
+
+
+class ScriptedActions(Actions):
+    """A scripted policy's deterministic actions (:class:`ScriptedPolicy`): nothing to draw,
+    nothing to skip; they travel to env workers as the policy's file, loaded again there."""
+
+    def __init__(self, scripted: ScriptedPolicy, rows: int, action_dim: int) -> None:
+        super().__init__(rows, action_dim)
+        self.scripted = scripted
+
+    def act(self, obs: Observations) -> np.ndarray:
+        return self.scripted.act_batch(obs)
+
+    def for_slot(self) -> Actions:
+        return self

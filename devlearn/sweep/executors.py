@@ -7,21 +7,14 @@ Both run :func:`devlearn.sweep.job.execute_job` per run and hand back its record
 from __future__ import annotations
 
 import concurrent.futures
-import os
 import queue
 import socket
 import threading
 from typing import Any
 
 from devlearn.api.errors import UsageError
+from devlearn.cores import available_cores
 from devlearn.sweep.job import STOP_TIMEOUT_S, RunJob, execute_job, read_json
-
-
-def available_cores() -> list[int]:
-    """The CPU cores this process may run on."""
-    if hasattr(os, "sched_getaffinity"):
-        return sorted(os.sched_getaffinity(0))
-    return list(range(os.cpu_count() or 1))
 
 
 def _failed(job: RunJob, error: str) -> dict[str, Any]:

@@ -39,6 +39,7 @@ class FakeInfant:
         scene: str,
         senses: Iterable[str] = ("proprioception",),
         eye_size: int = 8,
+        *,
         episode_steps: int = 10,
         action_dim: int = 3,
         fail_after: int | None = None,

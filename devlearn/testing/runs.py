@@ -28,6 +28,7 @@ if TYPE_CHECKING:
     import numpy as np
 
     from devlearn.api.behavior import Behavior
+    from devlearn.env.behavior_env import InfantFactory
     from devlearn.evaluation.scripted_policy import ScriptedPolicy
     from devlearn.plugins import PluginRegistry
     from devlearn.training.networks import MultiSenseModel
@@ -159,16 +160,22 @@ def evaluate_policy(
     checkpoint: str | Path | None,
     episodes: int,
     registry: PluginRegistry,
-    **options: Any,
+    *,
+    infant_factory: InfantFactory | None = None,
+    progress: bool = True,
+    **request: Any,
 ) -> dict[str, Any]:
     """Evaluate as ``devlearn eval`` does: ``episodes`` episodes of ``checkpoint`` (a
     checkpoint, policy file or run folder; None with ``policy="zero"`` or ``"random"``: a
     baseline) under the behaviour's evaluation protocol; return the summary ``eval.json``
-    holds. ``options``: ``seed``, ``out_dir``, ``infant_factory``, ``progress``, ``policy``,
-    ``start``, ``overrides``, ``envs``, ``workers`` (:mod:`devlearn.evaluation.evaluate`)."""
-    from devlearn.evaluation.evaluate import evaluate
+    holds. ``request``: the other fields of
+    :class:`~devlearn.evaluation.evaluate.EvalRequest` (``seed``, ``out_dir``, ``policy``,
+    ``start``, ``overrides``, ``envs``, ``workers``...); ``infant_factory`` and ``progress``
+    as :class:`~devlearn.evaluation.evaluate.Evaluation` takes them."""
+    from devlearn.evaluation.evaluate import EvalRequest, Evaluation
 
-    return evaluate(behavior, checkpoint, episodes, registry, **options)
+    asked = EvalRequest(behavior=behavior, checkpoint=checkpoint, episodes=episodes, **request)
+    return Evaluation(asked, registry, infant_factory, progress).run()
 
 
 def open_scripted_policy(

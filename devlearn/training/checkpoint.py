@@ -15,7 +15,7 @@ import zipfile
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Self
 
 import numpy as np
 import torch
@@ -496,7 +496,52 @@ def resume_checkpoint(
 
 
 @dataclass
-class Checkpoint:
+class SavedPolicy:
+    """A policy file, opened: its state, the config it trained with and, built when asked for,
+    its behaviour (with the policy artifacts it carries, e.g. hand regard's detector
+    calibration). What a devlearn :class:`Checkpoint` and another learner's scripted policy
+    (:class:`~devlearn.evaluation.scripted_policy.ScriptedPolicy`) share."""
+
+    path: Path
+    """The file."""
+    state: dict[str, Any]
+    """What it holds besides the weights' program: ``behavior``, ``config``, ``env_steps``..."""
+    config: RunConfig
+    """The run config it was trained with (keys an old config lacks take the values it was
+    trained with, :func:`~devlearn.config.run_config.from_dict`)."""
+    registry: PluginRegistry
+    """The registry its behaviour is built from."""
+    _behavior: Behavior | None = field(default=None, repr=False)
+
+    @property
+    def behavior_name(self) -> str:
+        """The behaviour it was trained for."""
+        return str(self.state["behavior"])
+
+    @property
+    def env_steps(self) -> int | None:
+        """Physics steps it trained for, summed over its environments (devlearn's count: a
+        decision of ``env.action_repeat`` K counts K; all ranks); None where the file does
+        not say."""
+        return int(self.state["env_steps"]) if "env_steps" in self.state else None
+
+    @property
+    def saved_config(self) -> dict[str, Any]:
+        """Its config as the file saved it (:attr:`config` is that config completed)."""
+        return dict(self.state["config"])
+
+    def behavior(self) -> Behavior:
+        """Its behaviour under its config, with the policy artifacts the file carries loaded
+        (or found by name next to it, ``Behavior.load_policy_artifacts``); built once."""
+        if self._behavior is None:
+            self._behavior = behavior_with_artifacts(
+                self.registry, self.config, self.state, self.path
+            )
+        return self._behavior
+
+
+@dataclass
+class Checkpoint(SavedPolicy):
     """An opened checkpoint (training checkpoint or policy file): its state, its config and,
     built when asked for, its behaviour (with the policy artifacts it carries, e.g. hand
     regard's detector calibration) and its policy network. Every command that reads a
@@ -505,17 +550,6 @@ class Checkpoint:
     Open with :meth:`open`.
     """
 
-    path: Path
-    """The file."""
-    state: dict[str, Any]
-    """What :func:`load_checkpoint` read (weights, counters, ``config``...)."""
-    config: RunConfig
-    """The run config it was trained with (keys an old config lacks take the values it was
-    trained with, :func:`~devlearn.config.run_config.from_dict`)."""
-    registry: PluginRegistry
-    """The registry its behaviour is built from."""
-    _behavior: Behavior | None = field(default=None, repr=False)
-
     @classmethod
     def open(
         cls,
@@ -523,7 +557,7 @@ class Checkpoint:
         registry: PluginRegistry,
         behavior_name: str = "",
         required: tuple[str, ...] = POLICY_KEYS,
-    ) -> Checkpoint:
+    ) -> Self:
         """Load ``path`` (as data, :func:`load_checkpoint`) and rebuild its config.
 
         Args:
@@ -543,16 +577,6 @@ class Checkpoint:
         return cls(path, state, config, registry)
 
     @property
-    def behavior_name(self) -> str:
-        """The behaviour it was trained for."""
-        return str(self.state["behavior"])
-
-    @property
-    def env_steps(self) -> int:
-        """Environment steps it was trained for (0 where it does not say)."""
-        return int(self.state.get("env_steps", 0))
-
-    @property
     def age_months(self) -> float | None:
         """The body's age it last trained at (a growing run's final age; None: the default
         body; a checkpoint from before ages: its config's)."""
@@ -564,15 +588,6 @@ class Checkpoint:
             return check_age(self.state["age_months"], "its age_months")
         except ValueError as err:
             raise UsageError(f"checkpoint {self.path} is damaged: {err}") from None
-
-    def behavior(self) -> Behavior:
-        """Its behaviour under its config, with the policy artifacts the checkpoint carries
-        loaded (or found by name next to it, ``Behavior.load_policy_artifacts``); built once."""
-        if self._behavior is None:
-            self._behavior = behavior_with_artifacts(
-                self.registry, self.config, self.state, self.path
-            )
-        return self._behavior
 
     def actor(self, obs: dict[str, np.ndarray], action_dim: int) -> MultiSenseModel:
         """Its policy network (eval mode, CPU), built for one observation ``obs`` of its

@@ -18,6 +18,7 @@ import torch
 import torch.distributed as dist
 
 from devlearn.api.errors import UsageError
+from devlearn.cores import available_cores
 
 
 def init_distributed(device: str) -> None:
@@ -34,18 +35,19 @@ def init_distributed(device: str) -> None:
             dist.init_process_group("gloo")
 
 
-def learner_threads() -> int:
-    """The cores this process may use, shared among torchrun's local ranks (at least 1)."""
-    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else None
+def rank_cores() -> int:
+    """The cores this rank may use: those this process may run on
+    (:func:`~devlearn.cores.available_cores`), shared among torchrun's local ranks (at
+    least 1)."""
     local_ranks = int(os.environ.get("LOCAL_WORLD_SIZE", "1"))
-    return max((cores or os.cpu_count() or 1) // local_ranks, 1)
+    return max(len(available_cores()) // local_ranks, 1)
 
 
 class ThreadPlan:
     """How many torch threads the rollout inference and the PPO update of each iteration get.
 
     A fixed count (``torch_threads`` / ``update_threads`` > 0) is used as given. Automatic (0)
-    means all cores this process may use (:func:`learner_threads`): the env workers wait while
+    means all cores this process may use (:func:`rank_cores`): the env workers wait while
     the training process runs inference or updates, so those cores are idle. But torch's
     OpenMP threads meet at a barrier after every operation, and when another program holds one
     of the cores each of the update's thousands of operations waits for that core's next time
@@ -60,14 +62,14 @@ class ThreadPlan:
     Args:
         collect: Threads during rollouts (0: automatic, the update's count).
         update: Threads of the update (0: ``collect`` if fixed, else automatic).
-        cores: Cores available (default :func:`learner_threads`).
+        cores: Cores available (default :func:`rank_cores`).
         probe_every: Iterations between trials of the slower count.
     """
 
     def __init__(
         self, collect: int, update: int, cores: int | None = None, probe_every: int = 25
     ) -> None:
-        self.cores = cores or learner_threads()
+        self.cores = cores or rank_cores()
         self.fixed_collect = collect
         fixed = update or collect
         self.candidates = [fixed] if fixed else sorted({self.cores, 1}, reverse=True)
@@ -172,9 +174,7 @@ def resolve_workers(workers: int, num_envs: int, cpus: int | None = None) -> int
     if workers >= 0:
         return workers
     if cpus is None:
-        cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else None
-        local_ranks = int(os.environ.get("LOCAL_WORLD_SIZE", "1"))
-        cpus = max((cores or os.cpu_count() or 1) // local_ranks, 1)
+        cpus = rank_cores()
     return 0 if cpus < 2 or num_envs < 8 else min(cpus, num_envs // 4)
 
 

@@ -43,7 +43,7 @@ from devlearn.training.process import (
 )
 from devlearn.training.reward_norm import RewardNormalizer
 from devlearn.training.runner_checkpoints import RunCheckpoints
-from devlearn.training.runner_metrics import MetricsLog, purge_tensorboard_from
+from devlearn.training.runner_metrics import IterationFigures, MetricsLog, purge_tensorboard_from
 
 if TYPE_CHECKING:
     from devlearn.env import DevVecEnv
@@ -123,6 +123,7 @@ class DevRunner:
         cfg: RunConfig,
         run_dir: Path,
         curriculum: Curriculum,
+        *,
         headline_metric: str = "",
         device: str = "cpu",
         progress: bool = True,
@@ -403,19 +404,18 @@ class DevRunner:
         health["learning_rate"] = alg.learning_rate
         if self.reward_norm is not None:
             health["health/reward_scale"] = self.reward_norm.std
-        row = self.metrics.record(
-            it,
-            self.env_steps,
-            rollout.finished,
-            rollout.mean_step_reward,
-            losses,
-            rate,
-            times,
-            bar,
-            self.logger.writer,
-            health,
-            self.env.age_months,
+        figures = IterationFigures(
+            iteration=it,
+            env_steps=self.env_steps,
+            finished=rollout.finished,
+            mean_step_reward=rollout.mean_step_reward,
+            losses=losses,
+            steps_per_s=rate,
+            times=times,
+            health=health,
+            age_months=self.env.age_months,
         )
+        row = self.metrics.record(figures, bar, self.logger.writer)
         for warning in self.health.check(row):
             if self.is_main:
                 tqdm.write(f"devlearn: {warning}", file=sys.stderr)

@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 from collections import deque
 from collections.abc import Callable
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -32,6 +33,33 @@ def headline_key(metric: str) -> str:
     self-touch's ``score``), so that training, ``devlearn curve``, ``devlearn eval`` and
     ``devlearn report`` headline one figure under one name (issue #55)."""
     return f"metrics/episode_{metric}_mean"
+
+
+@dataclass
+class IterationFigures:
+    """What one PPO iteration measured, as :meth:`MetricsLog.record` records it."""
+
+    iteration: int
+    """The iteration's index (from 0)."""
+    env_steps: int
+    """Physics steps done after it (all envs and ranks)."""
+    finished: list[dict[str, float]]
+    """Its finished episodes' figures (their records taken out by
+    :meth:`MetricsLog.add_episode_records`)."""
+    mean_step_reward: float
+    """Its mean reward per step."""
+    losses: dict[str, float]
+    """PPO's losses."""
+    steps_per_s: float
+    """Physics steps per second (collecting and updating)."""
+    times: dict[str, float]
+    """Its ``collect_s`` (rollout) and ``update_s`` (PPO) seconds and ``update_threads``."""
+    health: dict[str, float] = field(default_factory=dict)
+    """The learner's figures (:mod:`devlearn.training.health`), also shown on the progress bar
+    (empty: none)."""
+    age_months: float | None = None
+    """The body's age during the iteration (a row has ``age_months`` only where it is set: a
+    run at an age or growing)."""
 
 
 class MetricsLog:
@@ -87,48 +115,28 @@ class MetricsLog:
         self.run_metrics.add(records)
 
     def record(
-        self,
-        it: int,
-        env_steps: int,
-        finished: list[dict[str, float]],
-        mean_step_reward: float,
-        losses: dict,
-        rate: float,
-        times: dict[str, float],
-        bar: tqdm,
-        writer: SummaryWriter | None,
-        health: dict[str, float] | None = None,
-        age_months: float | None = None,
+        self, figures: IterationFigures, bar: tqdm, writer: SummaryWriter | None
     ) -> dict[str, Any]:
         """Add the iteration's finished episodes, append one line to metrics.jsonl, write the
         extra TensorBoard scalars and refresh the progress bar (rank 0); return the row.
 
         Args:
-            it: The iteration's index (from 0).
-            env_steps: Steps done after it (all envs and ranks).
-            finished: Its finished episodes' figures (records taken out).
-            mean_step_reward: Its mean reward per step.
-            losses: PPO's losses.
-            rate: Steps per second.
-            times: Its ``collect_s`` (rollout) and ``update_s`` (PPO) seconds and
-                ``update_threads``.
+            figures: What the iteration measured.
             bar: The progress bar.
             writer: rsl-rl's writer (TensorBoard, W&B...; None: none).
-            health: The learner's figures (:mod:`devlearn.training.health`), also shown on the
-                progress bar.
-            age_months: The body's age during the iteration (a row has ``age_months`` only
-                where it is set: a run at an age or growing).
         """
+        finished, health, env_steps = figures.finished, figures.health, figures.env_steps
+        rate, age_months = figures.steps_per_s, figures.age_months
         self.episodes.extend(finished)
         row: dict[str, Any] = {
             "step": env_steps,
-            "iteration": it,
+            "iteration": figures.iteration,
             "stage": self.curriculum.stage.name,
             **({} if age_months is None else {"age_months": age_months}),
             "steps_per_s": rate,
-            **times,
+            **figures.times,
             "episodes": len(finished),
-            "mean_step_reward": mean_step_reward,
+            "mean_step_reward": figures.mean_step_reward,
             "mean_reward": None,
         }
         if self.episodes:
@@ -141,19 +149,20 @@ class MetricsLog:
         per_episode = f"metrics/{self.headline_metric}"  # averaged over episodes, not a run metric
         if self.headline_metric and any(per_episode in ep for ep in self.episodes):
             row[headline_key(self.headline_metric)] = row[per_episode]
-        row.update({f"loss/{k}": float(v) for k, v in losses.items()})
+        row.update({f"loss/{k}": float(v) for k, v in figures.losses.items()})
         run_metrics = {}
         if self.run_metrics is not None:
             run_metrics = {f"metrics/{k}": float(v) for k, v in self.run_metrics.values().items()}
         row.update(run_metrics)
-        row.update(health or {})
+        row.update(health)
         row.update(self.learned.last)
         self.last_row = row
         if not self.is_main:
             return row
+        it = figures.iteration
         self.learned.write(writer, it)
         if writer is not None:
-            for key, value in (health or {}).items():
+            for key, value in health.items():
                 writer.add_scalar(key if "/" in key else f"health/{key}", value, it)
             for key, value in run_metrics.items():
                 writer.add_scalar(key, value, it)
@@ -166,7 +175,7 @@ class MetricsLog:
         self,
         row: dict[str, Any],
         rate: float,
-        health: dict[str, float] | None,
+        health: dict[str, float],
         bar: tqdm,
         env_steps: int,
     ) -> None:

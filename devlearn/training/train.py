@@ -305,11 +305,11 @@ def _build(ctx: RunContext) -> tuple[DevVecEnv, DevRunner]:
             cfg,
             run_dir,
             behavior.curriculum(),
-            behavior.headline_metric,
-            ctx.device,
-            ctx.progress,
-            ctx.learned,
-            behavior.run_metrics(),
+            headline_metric=behavior.headline_metric,
+            device=ctx.device,
+            progress=ctx.progress,
+            learned=ctx.learned,
+            run_metrics=behavior.run_metrics(),
         )
         if checkpoint is not None:
             if ctx.start_from is not None and rank == 0:

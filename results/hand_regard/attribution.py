@@ -37,9 +37,9 @@ from typing import Any
 import numpy as np
 from devlearn_hand_regard.babbling import BabblingData
 from devlearn_hand_regard.detector import DetectorParams, HandDetector
-from devlearn_hand_regard.measure import score
+from devlearn_hand_regard.segmentation_score import score
 
-from devlearn.evaluation.evaluate import evaluate
+from devlearn.evaluation.evaluate import EvalRequest, Evaluation
 from devlearn.infant import build_infant
 from devlearn.plugins import PluginRegistry
 from devlearn.training.checkpoint import Checkpoint
@@ -76,8 +76,8 @@ class FrameRecorder:
         return eyes
 
     def frames(self) -> tuple[BabblingData, np.ndarray]:
-        """The recorded frames (as a recording ``measure.score`` reads) and their (T, 2, H, W)
-        segmentation."""
+        """The recorded frames (as a recording ``segmentation_score.score`` reads) and their
+        (T, 2, H, W) segmentation."""
         steps = len(self.eyes_seen)
         data = BabblingData(
             eyes=np.stack(self.eyes_seen),
@@ -98,13 +98,17 @@ def policy_frames(path: Path, episodes: int, registry: PluginRegistry) -> dict[s
         recorders.append(FrameRecorder(build_infant(scene, **options)))
         return recorders[-1]
 
-    summary = evaluate("hand_regard", path, episodes, registry, infant_factory=factory, seed=0)
+    summary = Evaluation(
+        EvalRequest("hand_regard", path, episodes=episodes, seed=0),
+        registry,
+        infant_factory=factory,
+    ).run()
     data, segmentation = recorders[0].frames()
     return {"data": data, "segmentation": segmentation, "summary": summary}
 
 
 def brief(result: dict[str, Any]) -> dict[str, Any]:
-    """The figures of a ``measure.score`` result that the tables show."""
+    """The figures of a ``segmentation_score.score`` result that the tables show."""
     return {
         "steps": result["steps"],
         "pair_mean": {k: result["pair_mean"][k] for k in ("precision_pixels", "recall_pixels")},

@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 from attribution import brief, policy_frames
 from devlearn_hand_regard.detector import Blob, HandDetector
-from devlearn_hand_regard.measure import score
+from devlearn_hand_regard.segmentation_score import score
 
 from devlearn.plugins import PluginRegistry
 from devlearn.training.checkpoint import Checkpoint

@@ -77,8 +77,8 @@ def test_the_public_api_loads_on_first_use():
             "import devlearn.config.run_config, devlearn.config.checks; "
             "light = 'torch' not in sys.modules; "
             "from devlearn import MLPEncoder; from devlearn.training import train; "
-            "from devlearn.evaluation.evaluate import evaluate; "
-            "print(light, 'torch' in sys.modules, callable(train), callable(evaluate))",
+            "from devlearn.evaluation.evaluate import Evaluation; "
+            "print(light, 'torch' in sys.modules, callable(train), callable(Evaluation))",
         ],
         capture_output=True,
         text=True,

@@ -11,7 +11,7 @@ import pytest
 import devlearn
 from devlearn.api.errors import UsageError
 from devlearn.env import BehaviorEnv, EnvSettings
-from devlearn.evaluation.evaluate import evaluate
+from devlearn.evaluation.evaluate import EvalRequest, Evaluation
 from devlearn.testing import registry_for
 from devlearn.testing.fake_infant import TinyBehavior, fake_infant_factory
 from devlearn.timing import physics_steps
@@ -105,16 +105,22 @@ def test_an_episode_must_be_whole_decisions():
 
 def test_an_evaluation_session_is_one_episode_without_a_reset():
     registry = registry_for(Counted)
-    options = dict(policy="random", infant_factory=factory, progress=False, start="rest")
-    plain = evaluate("counted", None, 2, registry, **options)
+
+    def evaluate(episodes, **options):
+        request = EvalRequest(
+            "counted", episodes=episodes, policy="random", start="rest", **options
+        )
+        return Evaluation(request, registry, infant_factory=factory, progress=False).run()
+
+    plain = evaluate(2)
     assert plain["episode_steps"] == [10, 10] and plain["protocol"]["session_s"] is None
-    session = evaluate("counted", None, 2, registry, session=0.5, **options)
+    session = evaluate(2, session=0.5)
     assert session["episode_steps"] == [100, 100]  # 0.5 s of 5 ms steps each, no reset
     assert session["protocol"]["session_s"] == 0.5
     assert session["episode_metrics"] == [{"steps": 100.0}, {"steps": 100.0}]
-    in_two_envs = evaluate("counted", None, 2, registry, session=0.5, envs=2, **options)
+    in_two_envs = evaluate(2, session=0.5, envs=2)
     assert in_two_envs["episode_steps"] == [100, 100]
     with pytest.raises(UsageError, match="--session 0.02: env.action_repeat=5 must divide"):
-        evaluate("counted", None, 1, registry, session=0.02, **options)
+        evaluate(1, session=0.02)
     with pytest.raises(UsageError, match="--session must be above 0 seconds"):
-        evaluate("counted", None, 1, registry, session=-1.0, **options)
+        evaluate(1, session=-1.0)

@@ -15,7 +15,7 @@ import pytest
 import devlearn
 from devlearn.api.errors import UsageError
 from devlearn.config.resolve import RunRequest, resolve_config
-from devlearn.evaluation.evaluate import evaluate, parallelism
+from devlearn.evaluation.evaluate import EvalRequest, Evaluation, parallelism
 from devlearn.testing import registry_for
 from devlearn.testing.fake_infant import FakeInfant, TinyBehavior, fake_infant_factory
 from devlearn.training.train import train
@@ -119,18 +119,16 @@ def checkpoint(registry, tmp_path_factory) -> Path:
 
 
 def played(registry, checkpoint, policy, action="mean", episodes=7, **where) -> dict:
-    summary = evaluate(
+    request = EvalRequest(
         "drift",
         checkpoint if policy == "checkpoint" else None,
-        episodes,
-        registry,
+        episodes=episodes,
         seed=5,
-        progress=False,
         policy=policy,
         action=action,
-        infant_factory=factory,
         **where,
     )
+    summary = Evaluation(request, registry, infant_factory=factory, progress=False).run()
     assert summary.pop("execution")["envs"] == where.get("envs", 1)
     return summary
 
@@ -158,7 +156,9 @@ def test_worker_processes_play_the_episodes_of_one_env(registry, checkpoint, pol
 def test_no_episode_is_played_beyond_the_count(registry, checkpoint, monkeypatch):
     monkeypatch.setattr("devlearn.env.behavior_env.build_default_infant", counting)
     CountingInfant.steps = 0
-    summary = evaluate("drift", checkpoint, 5, registry, progress=False, envs=3)
+    summary = Evaluation(
+        EvalRequest("drift", checkpoint, episodes=5, envs=3), registry, progress=False
+    ).run()
     assert summary["episodes"] == len(summary["episode_metrics"]) == 5
     # the one env that builds the network takes no step; the envs play 2 + 2 + 1 episodes
     assert CountingInfant.steps == 5 * EPISODE_STEPS
@@ -166,10 +166,12 @@ def test_no_episode_is_played_beyond_the_count(registry, checkpoint, monkeypatch
 
 def test_a_behaviour_drawing_during_episodes_is_refused_in_several_envs(registry):
     def run(envs):
-        return evaluate(
-            "step_draws", None, 4, registry, progress=False, policy="zero", envs=envs,
+        return Evaluation(
+            EvalRequest("step_draws", episodes=4, policy="zero", envs=envs),
+            registry,
             infant_factory=factory,
-        )  # fmt: skip
+            progress=False,
+        ).run()
 
     assert run(1)["episodes"] == 4
     with pytest.raises(UsageError, match="evaluate it with --envs 1"):
@@ -178,10 +180,12 @@ def test_a_behaviour_drawing_during_episodes_is_refused_in_several_envs(registry
 
 def test_an_evaluator_that_does_not_merge_plays_in_one_env(registry):
     def run(envs, workers):
-        return evaluate(
-            "unmerged", None, 20, registry, progress=False, policy="zero", envs=envs,
-            workers=workers, infant_factory=factory,
-        )  # fmt: skip
+        return Evaluation(
+            EvalRequest("unmerged", episodes=20, policy="zero", envs=envs, workers=workers),
+            registry,
+            infant_factory=factory,
+            progress=False,
+        ).run()
 
     execution = run(None, None)["execution"]
     assert (execution["envs"], execution["workers"]) == (1, 0)

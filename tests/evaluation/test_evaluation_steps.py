@@ -5,7 +5,6 @@ the records apart."""
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -13,18 +12,17 @@ import pytest
 
 import devlearn
 from devlearn.api.errors import UsageError
+from devlearn.config.resolve import RunRequest, resolve_config
 from devlearn.config.run_config import to_dict
 from devlearn.evaluation import evaluate as evaluation_module
 from devlearn.evaluation.evaluate import (
     EvalRequest,
     Evaluation,
-    default_out_dir,
     evaluation_conditions,
     open_subject,
 )
 from devlearn.testing import registry_for
 from devlearn.testing.fake_infant import CloseEvaluator, FakeInfant, TinyBehavior
-from devlearn.config.resolve import RunRequest, resolve_config
 
 
 class Fixed(TinyBehavior):
@@ -174,7 +172,8 @@ def test_a_baseline_resolves_its_config_once(registry, monkeypatch):
     saved = RunRequest("decisive", ["env.action_repeat=2", "seed=9"], saved={})
     assert fresh.env.action_repeat == 2
     assert to_dict(subject.config) == to_dict(resolve_config(saved, registry))
-    assert subject.opened is None and subject.trained_steps == 0
+    assert subject.policy.path is None and subject.policy.name == "zero"
+    assert subject.trained_steps == 0
     assert subject.stage_steps == subject.config.total_steps
 
 
@@ -189,36 +188,3 @@ def test_measures_record_the_protocol_apart_from_playing(registry):
     assert protocol["start_option"] == "rest" and protocol["action_repeat"] == 2
     assert summary["checkpoint"] is None and summary["config"]["env"]["action_repeat"] == 2
     assert summary["episodes"] == 0  # the evaluator's own summary, nothing played
-
-
-def test_the_evaluate_convenience_is_the_request_run(registry, tmp_path):
-    by_object = Evaluation(
-        EvalRequest("tiny", policy="random", episodes=2, seed=3, out_dir=tmp_path / "a"),
-        registry,
-        infant_factory=starting,
-        progress=False,
-    ).run()
-    by_function = evaluation_module.evaluate(
-        "tiny",
-        None,
-        2,
-        registry,
-        seed=3,
-        policy="random",
-        out_dir=tmp_path / "b",
-        infant_factory=starting,
-        progress=False,
-    )
-    assert by_object["episode_metrics"] == by_function["episode_metrics"]
-    assert by_object["protocol"] == by_function["protocol"]
-
-
-def test_the_default_output_folder_of_a_request(tmp_path):
-    (tmp_path / "run").mkdir()
-    (tmp_path / "run" / "checkpoint_latest.pt").write_bytes(b"")
-    run = tmp_path / "run"
-    assert default_out_dir(EvalRequest("tiny", run)) == run / "eval"
-    aged = EvalRequest("tiny", run, overrides=["infant.age_months=3", "infant.age_months = 6"])
-    assert default_out_dir(aged) == run / "eval_6_months"
-    zero = EvalRequest("tiny", policy="held_random", overrides=["seed=2"])
-    assert default_out_dir(zero) == Path("eval_tiny_held_random")

@@ -11,7 +11,7 @@ import torch
 
 import devlearn.gym
 from devlearn.api.errors import UsageError
-from devlearn.evaluation.evaluate import evaluate
+from devlearn.evaluation.evaluate import EvalRequest, Evaluation
 from devlearn.evaluation.scripted_policy import ScriptedPolicy
 from devlearn.gym.env import DevlearnEnv
 from devlearn.testing import registry_for
@@ -48,25 +48,20 @@ def env():
 
 
 def run(path, **kwargs) -> dict:
-    return evaluate(
-        "tiny", path, 2, REGISTRY, infant_factory=fake_infant_factory, progress=False, **kwargs
-    )
+    request = EvalRequest("tiny", path, episodes=2, **kwargs)
+    return Evaluation(request, REGISTRY, infant_factory=fake_infant_factory, progress=False).run()
 
 
 def test_a_zero_scripted_policy_scores_exactly_the_zero_baseline(env, tmp_path):
     path = devlearn.gym.save_policy(Still(), env, tmp_path / "policy.pt", learner="mine")
     assert is_scripted_policy(path) and not is_scripted_policy(tmp_path / "nothing.pt")
     ours = run(path)
-    zero = evaluate(
-        "tiny",
-        None,
-        2,
+    zero = Evaluation(
+        EvalRequest("tiny", episodes=2, policy="zero", overrides=["env.action_repeat=2"]),
         REGISTRY,
         infant_factory=fake_infant_factory,
         progress=False,
-        policy="zero",
-        overrides=["env.action_repeat=2"],
-    )
+    ).run()
     assert ours["close"] == zero["close"] and ours["episodes"] == 2
     assert ours["protocol"]["action_repeat"] == 2 == zero["protocol"]["action_repeat"]
     assert ours["learner"] == "mine" and "learner" not in zero

@@ -21,6 +21,7 @@ import pytest
 import tiny_devlearn
 
 from devlearn.cli import main
+from devlearn.cores import available_cores
 
 GRID = ["--grid", "behavior.target=0.1,0.15", "--seeds", "1,2"]
 ONE_RUN = ["--grid", "behavior.target=0.3", "--seeds", "1", "--no-report"]
@@ -140,7 +141,7 @@ def test_two_by_two_sweep_trains_and_evaluates_four_runs(local_sweep):
         assert argv[argv.index("--config") + 1] == str(out / "runs" / name / "run_config.json")
     # two at a time, each pinned to a core of its own
     cores = {tuple(found[n]["attempts"][0]["cores"] or ()) for n in NAMES[:2]}
-    if len(os.sched_getaffinity(0)) >= 2:
+    if len(available_cores()) >= 2:
         assert len(cores) == 2 and all(len(c) == 1 for c in cores)
     lines = stdout.splitlines()
     for name in NAMES:

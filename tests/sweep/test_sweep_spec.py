@@ -9,9 +9,10 @@ import tiny_devlearn
 
 from devlearn.api.errors import UsageError
 from devlearn.cli import main
+from devlearn.cores import available_cores
 from devlearn.sweep import build_spec, plan_sweep, variants
 from devlearn.sweep.bookkeeping import SweepFolder
-from devlearn.sweep.executors import LocalExecutor, available_cores
+from devlearn.sweep.executors import LocalExecutor
 from devlearn.sweep.spec import parse_grid, parse_seeds
 
 

@@ -15,7 +15,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "env"))
 import devlearn.plugins  # noqa: E402
 from devlearn.api.errors import UsageError  # noqa: E402
 from devlearn.cli import main  # noqa: E402
-from devlearn.evaluation.evaluate import evaluate  # noqa: E402
+from devlearn.evaluation.evaluate import EvalRequest, Evaluation  # noqa: E402
 from devlearn.testing import registry_for  # noqa: E402
 from devlearn.testing.fake_infant import FakeInfant, TinyBehavior  # noqa: E402
 
@@ -62,7 +62,11 @@ def eval_run(run_dir: Path, *options: str) -> int:
 
 def actions_of(registry, checkpoint, policy, seed=0):
     RecordingInfant.log = []
-    summary = evaluate("tiny", checkpoint, 2, registry, seed=seed, progress=False, policy=policy)
+    summary = Evaluation(
+        EvalRequest("tiny", checkpoint, episodes=2, seed=seed, policy=policy),
+        registry,
+        progress=False,
+    ).run()
     return np.array(RecordingInfant.log), summary
 
 
@@ -90,9 +94,11 @@ def test_baselines_run_through_the_checkpoint_path(registry, run_dir):
 
 def test_protocol_is_recorded(registry, run_dir, tmp_path):
     out = tmp_path / "eval"
-    summary = evaluate(
-        "tiny", run_dir / "checkpoint_latest.pt", 2, registry, seed=5, out_dir=out, progress=False
-    )
+    summary = Evaluation(
+        EvalRequest("tiny", run_dir / "checkpoint_latest.pt", episodes=2, seed=5, out_dir=out),
+        registry,
+        progress=False,
+    ).run()
     written = json.loads((out / "eval.json").read_text())
     protocol = written["protocol"]
     assert protocol["episodes"] == 2 and protocol["seed"] == 5
@@ -108,9 +114,9 @@ def test_protocol_is_recorded(registry, run_dir, tmp_path):
 
 def test_baseline_and_bad_policy_arguments(registry):
     with pytest.raises(UsageError, match="valid: checkpoint, zero, random"):
-        evaluate("tiny", None, 1, registry, policy="greedy")
+        Evaluation(EvalRequest("tiny", episodes=1, policy="greedy"), registry).run()
     with pytest.raises(UsageError, match="not both"):
-        evaluate("tiny", "x.pt", 1, registry, policy="zero")
+        Evaluation(EvalRequest("tiny", "x.pt", episodes=1, policy="zero"), registry).run()
 
 
 def test_cli_baseline(registry, tmp_path, capsys):
@@ -156,7 +162,9 @@ def test_summary_is_printed_when_writing_fails(registry, run_dir, tmp_path, caps
 
 
 def test_evaluate_takes_a_run_folder(registry, run_dir):
-    summary = evaluate("tiny", run_dir, 1, registry, infant_factory=recording, progress=False)
+    summary = Evaluation(
+        EvalRequest("tiny", run_dir, episodes=1), registry, infant_factory=recording, progress=False
+    ).run()
     assert summary["checkpoint"] == str(run_dir / "checkpoint_latest.pt")
 
 
@@ -175,37 +183,44 @@ def test_rest_start_overrides_the_eval_stage(registry, run_dir, tmp_path, capsys
         return PoseRecordingInfant(scene, senses, episode_steps=10)
 
     PoseRecordingInfant.resets = []
-    stage = evaluate(
-        "tiny", run_dir, 2, registry, infant_factory=pose_recording, progress=False
-    )  # tiny's first stage, where training starts: the rest pose
+    # tiny's first stage, where training starts: the rest pose
+    stage = Evaluation(
+        EvalRequest("tiny", run_dir, episodes=2),
+        registry,
+        infant_factory=pose_recording,
+        progress=False,
+    ).run()
     assert PoseRecordingInfant.resets and not any(PoseRecordingInfant.resets)
     assert stage["protocol"]["start"] == "rest" and stage["start"] == "rest"
     assert stage["protocol"]["start_option"] == "stage"
     PoseRecordingInfant.resets = []
-    moved = evaluate(
-        "tiny", run_dir, 2, registry, infant_factory=pose_recording, progress=False, start="random"
-    )
+    moved = Evaluation(
+        EvalRequest("tiny", run_dir, episodes=2, start="random"),
+        registry,
+        infant_factory=pose_recording,
+        progress=False,
+    ).run()
     assert PoseRecordingInfant.resets and all(PoseRecordingInfant.resets)
     assert moved["protocol"]["start"] == "random" and moved["protocol"]["start_option"] == "random"
     PoseRecordingInfant.resets = []
-    rest = evaluate(
-        "tiny", run_dir, 2, registry, infant_factory=pose_recording, progress=False, start="rest"
-    )
+    rest = Evaluation(
+        EvalRequest("tiny", run_dir, episodes=2, start="rest"),
+        registry,
+        infant_factory=pose_recording,
+        progress=False,
+    ).run()
     assert PoseRecordingInfant.resets and not any(PoseRecordingInfant.resets)
     assert rest["protocol"]["stage"] == {"random_pose": False}
     assert rest["protocol"]["start"] == "rest"
     with pytest.raises(UsageError, match="valid: stage, babybench, rest, random"):
-        evaluate("tiny", run_dir, 1, registry, start="sideways")
+        Evaluation(EvalRequest("tiny", run_dir, episodes=1, start="sideways"), registry).run()
     with pytest.raises(UsageError, match="no such start"):  # a stand-in without starts
-        evaluate(
-            "tiny",
-            run_dir,
-            1,
+        Evaluation(
+            EvalRequest("tiny", run_dir, episodes=1, start="babybench"),
             registry,
             infant_factory=pose_recording,
-            start="babybench",
             progress=False,
-        )
+        ).run()
     out = tmp_path / "rest"
     assert eval_run(run_dir, "--start", "rest", "--out", str(out)) == 0
     assert json.loads((out / "eval.json").read_text())["protocol"]["start"] == "rest"
@@ -229,16 +244,12 @@ def test_start_options_reach_the_infant_and_the_json(registry, run_dir, tmp_path
 
     StartingInfant.starts = []
     out = tmp_path / start
-    summary = evaluate(
-        "tiny",
-        run_dir,
-        2,
+    summary = Evaluation(
+        EvalRequest("tiny", run_dir, episodes=2, start=start, out_dir=out),
         registry,
         infant_factory=factory,
         progress=False,
-        start=start,
-        out_dir=out,
-    )
+    ).run()
     assert set(StartingInfant.starts) == {start}
     saved = json.loads((out / "eval.json").read_text())
     assert saved["start"] == start and saved["protocol"]["start"] == start
@@ -258,12 +269,14 @@ def test_held_random_baseline_holds_its_actions(registry):
 
 
 def test_baseline_config_overrides(registry, tmp_path):
-    summary = evaluate(
-        "tiny", None, 1, registry, policy="zero", progress=False, overrides=["seed=7"]
-    )
+    summary = Evaluation(
+        EvalRequest("tiny", episodes=1, policy="zero", overrides=["seed=7"]),
+        registry,
+        progress=False,
+    ).run()
     assert summary["config"]["seed"] == 7
     with pytest.raises(UsageError, match="baselines only"):
-        evaluate("tiny", tmp_path, 1, registry, overrides=["seed=7"])
+        Evaluation(EvalRequest("tiny", tmp_path, episodes=1, overrides=["seed=7"]), registry).run()
     out = tmp_path / "zero"
     assert (
         main(
@@ -296,7 +309,9 @@ def test_an_undeclared_protocol_evaluates_in_the_stage_the_policy_trained_in(reg
     declared = type("Declared", (TinyBehavior,), {"eval_stage": lambda self: {"x": 1}})()
     assert evaluation_stage(declared, 0) == {"x": 1}
     # a baseline evaluates in the stage a default run ends in (tiny: 150,000 steps: random)
-    summary = evaluate("tiny", None, 1, registry, policy="zero", progress=False)
+    summary = Evaluation(
+        EvalRequest("tiny", episodes=1, policy="zero"), registry, progress=False
+    ).run()
     assert summary["protocol"]["stage"] == {"random_pose": True} and summary["start"] == "random"
 
 
@@ -308,7 +323,11 @@ def test_a_checkpoint_is_evaluated_at_its_last_age_or_the_age_given(registry, tm
 
     def evaluated(*overrides):
         RecordingInfant.ages = []
-        summary = evaluate("tiny", checkpoint, 1, registry, progress=False, overrides=[*overrides])
+        summary = Evaluation(
+            EvalRequest("tiny", checkpoint, episodes=1, overrides=[*overrides]),
+            registry,
+            progress=False,
+        ).run()
         age = summary["age_months"]
         assert RecordingInfant.ages == [age] and summary["protocol"]["age_months"] == age
         return age
@@ -320,11 +339,15 @@ def test_a_checkpoint_is_evaluated_at_its_last_age_or_the_age_given(registry, tm
         evaluated("infant.age_months=30")
     with pytest.raises(UsageError, match="--set applies to baselines only, and infant.age_m"):
         evaluated("infant.age_months=3", "ppo.gamma=0.9")
-    zero = evaluate("tiny", None, 1, registry, progress=False, policy="zero")
+    zero = Evaluation(
+        EvalRequest("tiny", episodes=1, policy="zero"), registry, progress=False
+    ).run()
     assert zero["age_months"] is None
-    zero = evaluate(
-        "tiny", None, 1, registry, progress=False, policy="zero", overrides=["infant.age_months=2"]
-    )
+    zero = Evaluation(
+        EvalRequest("tiny", episodes=1, policy="zero", overrides=["infant.age_months=2"]),
+        registry,
+        progress=False,
+    ).run()
     assert zero["age_months"] == 2.0
     capsys.readouterr()
     at = ["eval", "tiny", "--checkpoint", str(run), "--episodes", "1"]

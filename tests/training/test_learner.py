@@ -14,7 +14,7 @@ from devlearn.testing import run_config
 from devlearn.testing.fake_infant import TinyBehavior
 from devlearn.training.distribution import BoundedGaussian, TanhSoftplusGaussian, inverse_softplus
 from devlearn.training.health import PATIENCE, HealthWatch, rollout_health
-from devlearn.training.reward_norm import RewardNormalizer
+from devlearn.training.reward_norm import RewardNormalizer, RunningMoments
 
 # --- reward normalisation ---------------------------------------------------------------
 
@@ -63,6 +63,32 @@ def test_reward_normalisation_clips_and_its_state_round_trips():
     copy.load_state_dict(norm.state_dict())
     assert copy.std == norm.std
     assert torch.equal(copy.returns, norm.returns) and copy.returns[0] == 0.0
+
+
+def test_reward_moments_are_rsl_rls_bit_for_bit_and_load_its_saved_state():
+    """Issue #59: the running moments are our own (no private rsl-rl attribute read), with
+    rsl-rl's arithmetic and state layout: a checkpoint saved when EmpiricalNormalization held
+    them resumes exactly."""
+    from rsl_rl.modules import EmpiricalNormalization
+
+    torch.manual_seed(0)
+    ours, theirs = RunningMoments(), EmpiricalNormalization(1, eps=0.0)
+    for rows in (3, 3, 1, 8, 3):
+        x = torch.randn(rows, 1) * 4.0 + 2.0
+        ours.update(x)
+        theirs.update(x)
+    assert ours.state_dict().keys() == theirs.state_dict().keys()
+    for key, value in theirs.state_dict().items():
+        assert torch.equal(ours.state_dict()[key], value), key
+    assert torch.equal(ours.var, ours.state_dict()["_var"].squeeze())
+    # a normaliser saved with rsl-rl's moments (the checkpoint format before issue #59) loads
+    saved = RewardNormalizer(2, 0.9)
+    saved.moments = EmpiricalNormalization(1, eps=0.0)
+    saved.moments.update(torch.tensor([[1.0], [5.0], [-2.0]]))
+    resumed = RewardNormalizer(2, 0.9)
+    resumed.load_state_dict(saved.state_dict())
+    assert resumed.std == float(torch.sqrt(saved.moments._var.squeeze() + 1e-8))
+    assert resumed.moments.count == 3
 
 
 # --- the policy head ------------------------------------------------------------------

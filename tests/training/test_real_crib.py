@@ -7,7 +7,7 @@ import json
 import pytest
 import tiny_run
 
-from devlearn.evaluation.evaluate import evaluate
+from devlearn.evaluation.evaluate import EvalRequest, Evaluation
 from devlearn.training import train
 
 pytest.importorskip("devlearn.infant")
@@ -21,14 +21,16 @@ def test_tiny_behaviour_on_the_real_crib(tmp_path):
     row = json.loads((result.run_dir / "metrics.jsonl").read_text().splitlines()[-1])
     assert row["steps_per_s"] > 0 and row["stage"] == "fixed"
     video = tmp_path / "episode.mp4"
-    summary = evaluate(
-        "tiny",
-        result.run_dir / "checkpoint_latest.pt",
-        1,
+    summary = Evaluation(
+        EvalRequest(
+            "tiny",
+            result.run_dir / "checkpoint_latest.pt",
+            episodes=1,
+            video=video,
+            out_dir=tmp_path / "eval",
+        ),
         tiny_run.registry(),
-        video=video,
-        out_dir=tmp_path / "eval",
-    )
+    ).run()
     assert summary["episodes"] == 1
     assert video.stat().st_size > 1000
 
@@ -42,13 +44,15 @@ def test_the_real_crib_grows_in_a_worker(tmp_path):
         json.loads(line) for line in (result.run_dir / "metrics.jsonl").read_text().splitlines()
     ]
     assert [r["age_months"] for r in rows] == [3.0, 3.0, 9.0, 9.0]  # 4 iterations of 16 steps
-    summary = evaluate(
-        "tiny",
-        result.run_dir / "checkpoint_latest.pt",
-        1,
+    summary = Evaluation(
+        EvalRequest(
+            "tiny",
+            result.run_dir / "checkpoint_latest.pt",
+            episodes=1,
+            out_dir=tmp_path / "eval",
+            overrides=["infant.age_months=0"],
+        ),
         tiny_run.registry(),
-        out_dir=tmp_path / "eval",
-        overrides=["infant.age_months=0"],
         progress=False,
-    )
+    ).run()
     assert summary["age_months"] == 0.0 and summary["episodes"] == 1

@@ -16,7 +16,7 @@ from devlearn.training.checkpoint import RESUME_KEYS, load_checkpoint
 from devlearn.training.learned_rewards import LearnedRewards
 from devlearn.training.process import Ranks
 from devlearn.training.runner_checkpoints import RunCheckpoints
-from devlearn.training.runner_metrics import MetricsLog
+from devlearn.training.runner_metrics import IterationFigures, MetricsLog
 
 
 class FakeAlg:
@@ -159,15 +159,24 @@ def test_metrics_log_writes_one_row_per_iteration_over_the_last_episodes(tmp_pat
     assert all(EPISODE_RECORD not in ep for ep in finished)  # only numbers are averaged
     bar = Bar()
     times = {"collect_s": 1.0, "update_s": 0.5, "update_threads": 1}
-    row = log.record(0, 32, finished, 0.25, {"value": 2.0}, 21.3, times, bar, None)
+    first = IterationFigures(
+        iteration=0,
+        env_steps=32,
+        finished=finished,
+        mean_step_reward=0.25,
+        losses={"value": 2.0},
+        steps_per_s=21.3,
+        times=times,
+    )
+    row = log.record(first, bar, None)
     assert row["step"] == 32 and row["iteration"] == 0 and row["stage"] == "fixed"
     assert row["mean_reward"] == 3.0  # (1 + 2 + 3 + 0) / 2 episodes
     assert (row["reward/a"], row["loss/value"], row["metrics/seen"]) == (2.0, 2.0, 3)
-    log.record(1, 64, [], 0.5, {"value": 1.0}, 20.0, times, bar, None)
+    log.record(IterationFigures(1, 64, [], 0.5, {"value": 1.0}, 20.0, times), bar, None)
     lines = [json.loads(x) for x in (tmp_path / "metrics.jsonl").read_text().splitlines()]
     assert [r["step"] for r in lines] == [32, 64]
     assert lines[1]["episodes"] == 0 and lines[1]["mean_reward"] == 3.0  # the last episodes
     assert log.last_row == lines[1] and bar.n == 64 and bar.postfix["seen"] == "3"
     quiet = MetricsLog(tmp_path / "other", curriculum(), LearnedRewards(), None, is_main=False)
-    quiet.record(0, 32, [], 0.0, {}, 1.0, times, Bar(), None)
+    quiet.record(IterationFigures(0, 32, [], 0.0, {}, 1.0, times), Bar(), None)
     assert not (tmp_path / "other").exists()  # only rank 0 writes

@@ -17,7 +17,7 @@ except ImportError:  # the body is built in parallel; until it lands these tests
 from devlearn_hand_regard.babbling import babble
 from devlearn_hand_regard.calibration import calibrate
 from devlearn_hand_regard.detector import HandDetector
-from devlearn_hand_regard.measure import LABELS, held_out, score
+from devlearn_hand_regard.segmentation_score import LABELS, held_out, score
 
 pytestmark = [
     pytest.mark.slow,

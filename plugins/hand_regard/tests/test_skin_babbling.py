@@ -8,7 +8,7 @@ import pytest
 from devlearn_hand_regard.babbling import babble
 from devlearn_hand_regard.calibration import calibrate
 from devlearn_hand_regard.detector import HandDetector
-from devlearn_hand_regard.measure import held_out, score
+from devlearn_hand_regard.segmentation_score import held_out, score
 
 from devlearn import build_infant
 

@@ -127,6 +127,7 @@ def mirror_signs(actuator_names: list[str], joints: list[int]) -> list[float]:
 
 def babble(
     steps: int,
+    *,
     seed: int = 0,
     hold_steps: int = 8,
     head_hold_steps: int = 50,

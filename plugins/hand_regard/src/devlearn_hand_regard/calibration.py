@@ -156,6 +156,7 @@ class CalibrationError(RuntimeError):
 
 def calibrate(
     data: BabblingData,
+    *,
     threshold: float = 0.6,
     clusters: int = 12,
     seed: int = 0,

@@ -53,7 +53,7 @@ def calibrate_by_babbling(
     from devlearn import build_infant
     from devlearn_hand_regard.calibration import calibrate
     from devlearn_hand_regard.detector import HandDetector
-    from devlearn_hand_regard.measure import held_out, score
+    from devlearn_hand_regard.segmentation_score import held_out, score
 
     infant = build_infant(cfg.scene, senses=("proprioception", "eyes"), appearance=cfg.appearance)
     try:

@@ -157,6 +157,7 @@ class TouchNovelty(_LifetimeNovelty):
     def __init__(
         self,
         weight: float = 1.0,
+        *,
         first_ever: float = 5.0,
         first_in_episode: float = 1.0,
         repeat_scale: float = 0.5,

@@ -53,7 +53,7 @@ def play(path: Path, action: str, episodes: int, registry: PluginRegistry) -> di
         prepare_env(env, conditions.stage, conditions.infant_start)
         env.rng = np.random.default_rng(request.seed)
         obs = env.reset()
-        actor = subject.opened.actor(obs, env.action_dim)
+        actor = subject.policy.actor(obs, env.action_dim)
         distribution = actor.distribution
         sigma = distribution.current_std().detach().numpy().astype(np.float64)
         mus, pixels = [], []

@@ -1,0 +1,309 @@
+"""What ``devlearn eval`` evaluates, as one type: a :class:`Policy` is a devlearn checkpoint (or
+policy file), another learner's scripted policy
+(:class:`~devlearn.evaluation.scripted_policy.ScriptedPolicy`) or a baseline (zero, random,
+held_random), and every kind answers the same few questions; its :class:`Actions` choose each
+decision's action in one evaluation, with their own randomness."""
+
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, ClassVar, Protocol
+
+import numpy as np
+import torch
+
+from devlearn.config.run_config import to_dict
+from devlearn.training.checkpoint import Checkpoint
+
+if TYPE_CHECKING:
+    from devlearn.api.behavior import Behavior
+    from devlearn.config.run_config import RunConfig
+    from devlearn.training.networks import MultiSenseModel
+
+BASELINES = ("zero", "random", "held_random")
+"""The baselines: zero action; actions uniform in [-1, 1] drawn afresh every decision (i.i.d.);
+``held_random``: uniform actions each held for :data:`HOLD_STEPS` physics steps on average."""
+HOLD_STEPS = 8
+"""Mean physics steps a ``held_random`` baseline action is held (40 ms at 200 Hz)."""
+
+Observations = dict[str, np.ndarray]
+"""A batch of observations: group name -> (N, *shape) array, one row per env."""
+
+
+class Policy(Protocol):
+    """What an evaluation needs of the policy it plays: what it is, what it trained for, the
+    behaviour and config it acts under, and its actions.
+
+    Implemented by :class:`CheckpointPolicy` (a devlearn checkpoint or policy file),
+    :class:`~devlearn.evaluation.scripted_policy.ScriptedPolicy` (another learner's policy
+    file) and :class:`Baseline` (zero, random, held_random).
+    """
+
+    @property
+    def name(self) -> str:
+        """What eval.json's ``policy`` says: ``checkpoint`` for any policy file (devlearn's or
+        another learner's), else the baseline's name (:data:`BASELINES`)."""
+        ...
+
+    @property
+    def path(self) -> Path | None:
+        """The file it was read from (eval.json's ``checkpoint``); None: a baseline."""
+        ...
+
+    @property
+    def learner(self) -> str | None:
+        """Who trained it where not devlearn (``sb3_ppo``...; eval.json's ``learner``, which
+        ``devlearn report`` tells learners apart by); None: devlearn, or a baseline."""
+        ...
+
+    @property
+    def env_steps(self) -> int | None:
+        """Physics steps it trained for, summed over its environments (devlearn's count: a
+        decision of ``env.action_repeat`` K counts K); None: a baseline, or a file that does
+        not say."""
+        ...
+
+    @property
+    def config(self) -> RunConfig:
+        """The config it acts under: the one it trained with, or a baseline's."""
+        ...
+
+    @property
+    def saved_config(self) -> dict[str, Any]:
+        """Its config as eval.json records it: as its file saved it (keys a newer devlearn
+        added left out, so ``devlearn report`` groups it as saved), a baseline's as
+        :func:`~devlearn.config.run_config.to_dict` writes it."""
+        ...
+
+    @property
+    def age_months(self) -> float | None:
+        """The body's age it acts in unless the evaluation sets another: where it last
+        trained, a baseline's config's (None: the default body)."""
+        ...
+
+    def behavior(self) -> Behavior:
+        """Its behaviour under :attr:`config`, with the artifacts it carries (hand regard's
+        detector calibration); built once."""
+        ...
+
+    def actions(self, obs: Observations, action_dim: int, seed: int, sample: bool) -> Actions:
+        """Its actions in one evaluation, in their initial state, for batches of ``obs``'s
+        size (the first observation of its envs, which a network is built for).
+
+        Args:
+            obs: The envs' first observations, (N, *shape) per group.
+            action_dim: Number of actions.
+            seed: The evaluation seed (a baseline's draws; a checkpoint samples from torch's
+                global generator, seeded with it before the network is built).
+            sample: Draw actions from the policy's distribution instead of its mean action
+                (a devlearn checkpoint's; the others act as they are).
+        """
+        ...
+
+
+# --- actions: how each decision's action is chosen, with their own randomness ---------------
+
+
+class Actions:
+    """A policy's actions in one evaluation: ``act(obs) -> (N, action_dim)``.
+
+    A slot starting at episode k first calls :meth:`skip` with k episodes' decisions, so that
+    its randomness is where the reference's (one env, every episode in order) is then.
+
+    Args:
+        rows: The batch size it acts on (N).
+        action_dim: Number of actions.
+    """
+
+    def __init__(self, rows: int, action_dim: int) -> None:
+        self.rows = rows
+        self.action_dim = action_dim
+
+    def act(self, obs: Observations) -> np.ndarray:
+        """The actions for a batch of observations ((N, *shape) per group): (N, action_dim)."""
+        raise NotImplementedError
+
+    def skip(self, decisions: int) -> None:
+        """Draw what ``decisions`` decisions would draw, without acting (nothing by default)."""
+
+    def rng_state(self) -> Any:
+        """The state of the actions' own randomness (None: they have none)."""
+        return None
+
+    def for_slot(self) -> Actions:
+        """A copy in this initial state for one slot."""
+        return copy.deepcopy(self)
+
+
+class ZeroActions(Actions):
+    """The zero action."""
+
+    def act(self, obs: Observations) -> np.ndarray:
+        return np.zeros((self.rows, self.action_dim))
+
+
+class UniformActions(Actions):
+    """Actions uniform in [-1, 1], drawn afresh every decision from the evaluation seed's
+    stream ``[seed, 1]`` (apart from the env's)."""
+
+    def __init__(self, rows: int, action_dim: int, seed: int) -> None:
+        super().__init__(rows, action_dim)
+        self.rng = np.random.default_rng([seed, 1])
+
+    def act(self, obs: Observations) -> np.ndarray:
+        return self.rng.uniform(-1.0, 1.0, (self.rows, self.action_dim))
+
+    def skip(self, decisions: int) -> None:
+        """Baselines do not read the observation: the same draws, without one."""
+        for _ in range(decisions):
+            self.act({})
+
+    def rng_state(self) -> Any:
+        return self.rng.bit_generator.state
+
+
+class HeldActions(Actions):
+    """Uniform actions each held for :data:`HOLD_STEPS` physics steps on average: every
+    actuator redraws with probability ``repeat / HOLD_STEPS`` per decision (stream
+    ``[seed, 2]``)."""
+
+    def __init__(self, rows: int, action_dim: int, seed: int, repeat: int) -> None:
+        super().__init__(rows, action_dim)
+        self.rng = np.random.default_rng([seed, 2])
+        self.held = self.rng.uniform(-1.0, 1.0, (rows, action_dim))
+        self.redraw = min(1.0, repeat / HOLD_STEPS)
+
+    def act(self, obs: Observations) -> np.ndarray:
+        redraw = self.rng.random((self.rows, self.action_dim)) < self.redraw
+        self.held[redraw] = self.rng.uniform(-1.0, 1.0, int(redraw.sum()))
+        return self.held.copy()
+
+    def skip(self, decisions: int) -> None:
+        """Baselines do not read the observation: the same draws, without one."""
+        for _ in range(decisions):
+            self.act({})
+
+    def rng_state(self) -> Any:
+        return self.rng.bit_generator.state
+
+
+class ActorActions(Actions):
+    """A checkpoint's policy network: its mean action, or (``sample``) an action drawn from its
+    distribution with torch's generator in ``generator_state`` (the state torch's global
+    generator had after the network was built, as in one env evaluating in order), kept per
+    slot."""
+
+    def __init__(
+        self,
+        actor: MultiSenseModel,
+        rows: int,
+        action_dim: int,
+        sample: bool,
+        generator_state: torch.Tensor,
+    ) -> None:
+        super().__init__(rows, action_dim)
+        self.actor = actor
+        self.sample = sample
+        self.state = generator_state.clone()
+
+    def act(self, obs: Observations) -> np.ndarray:
+        from tensordict import TensorDict
+
+        batch = TensorDict({k: torch.from_numpy(v) for k, v in obs.items()}, [self.rows])
+        if self.sample:
+            torch.set_rng_state(self.state)
+        with torch.inference_mode():
+            action = self.actor(batch, stochastic_output=self.sample).numpy()
+        if self.sample:
+            self.state = torch.get_rng_state()
+        return action
+
+    def skip(self, decisions: int) -> None:
+        """A sampled action is ``torch.normal(mean, std)`` of shape (N, action_dim): one
+        standard normal fill of that shape per decision, whatever the mean and spread."""
+        if not self.sample or not decisions:
+            return
+        torch.set_rng_state(self.state)
+        noise = torch.empty(self.rows, self.action_dim)
+        for _ in range(decisions):
+            noise.normal_()
+        self.state = torch.get_rng_state()
+
+    def rng_state(self) -> Any:
+        return self.state.numpy().tobytes() if self.sample else None
+
+    def for_slot(self) -> Actions:
+        return copy.deepcopy(self, {id(self.actor): self.actor})  # one network, shared
+
+
+def batch_of_one(obs: dict[str, Any]) -> Observations:
+    """One env's observation (name -> unbatched array) as a batch of one, copied: (1, *shape)
+    per group."""
+    return {k: np.array(v)[None] for k, v in obs.items()}
+
+
+def batch_rows(obs: Observations) -> int:
+    """The number of rows (N) of a batch of observations."""
+    return len(next(iter(obs.values())))
+
+
+# --- the kinds of policy ---------------------------------------------------------------------
+
+
+class CheckpointPolicy(Checkpoint):
+    """A devlearn checkpoint or policy file (:class:`~devlearn.training.checkpoint.Checkpoint`,
+    opened with :meth:`~devlearn.training.checkpoint.Checkpoint.open`) as a :class:`Policy`:
+    its network's mean action, or one sampled from its distribution."""
+
+    name: ClassVar[str] = "checkpoint"
+    learner: ClassVar[str | None] = None
+
+    def actions(self, obs: Observations, action_dim: int, seed: int, sample: bool) -> Actions:
+        """Its network, built for ``obs`` (torch's global generator draws its initialisation
+        and then, with ``sample``, its actions)."""
+        actor = self.actor({k: v[0] for k, v in obs.items()}, action_dim)
+        return ActorActions(actor, batch_rows(obs), action_dim, sample, torch.get_rng_state())
+
+
+class Baseline:
+    """A baseline (:data:`BASELINES`) as a :class:`Policy`: no file, no training, its
+    behaviour under a config resolved for it.
+
+    Args:
+        name: One of :data:`BASELINES`.
+        config: Its config (:func:`~devlearn.evaluation.evaluate.baseline_config`).
+        behavior: Its behaviour, built under ``config``.
+    """
+
+    path = None
+    learner = None
+    env_steps = None
+
+    def __init__(self, name: str, config: RunConfig, behavior: Behavior) -> None:
+        if name not in BASELINES:
+            raise ValueError(f"unknown baseline '{name}'; valid: {', '.join(BASELINES)}")
+        self.name = name
+        self.config = config
+        self._behavior = behavior
+
+    @property
+    def saved_config(self) -> dict[str, Any]:
+        return to_dict(self.config)
+
+    @property
+    def age_months(self) -> float | None:
+        return self.config.infant.age_months
+
+    def behavior(self) -> Behavior:
+        return self._behavior
+
+    def actions(self, obs: Observations, action_dim: int, seed: int, sample: bool) -> Actions:
+        """Zero, uniform or held-uniform actions seeded by ``seed`` (``sample`` is not a
+        baseline's: it acts as it is named)."""
+        rows = batch_rows(obs)
+        if self.name == "zero":
+            return ZeroActions(rows, action_dim)
+        if self.name == "random":
+            return UniformActions(rows, action_dim, seed)
+        return HeldActions(rows, action_dim, seed, self.config.env.action_repeat)

@@ -1,0 +1,177 @@
+"""One Policy for every kind an evaluation plays (issue #59): a checkpoint, another learner's
+scripted policy and the baselines answer the same questions, and their actions act on batches
+of observations with the draws of one env acting in order."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+import devlearn.gym
+from devlearn.api.errors import UsageError
+from devlearn.config.resolve import RunRequest, resolve_config
+from devlearn.config.run_config import to_dict
+from devlearn.env.behavior_env import BehaviorEnv
+from devlearn.evaluation.evaluate import EvalRequest, open_subject
+from devlearn.evaluation.policy import (
+    HOLD_STEPS,
+    Baseline,
+    CheckpointPolicy,
+    HeldActions,
+    UniformActions,
+    batch_of_one,
+)
+from devlearn.evaluation.scripted_policy import ScriptedPolicy
+from devlearn.gym.env import DevlearnEnv
+from devlearn.testing import registry_for
+from devlearn.testing.fake_infant import TinyBehavior, fake_infant_factory
+from devlearn.testing.runs import policy_file, policy_network, save_checkpoint
+
+REGISTRY = registry_for(TinyBehavior)
+
+
+class Reach(torch.nn.Module):
+    """Moves every joint toward 0.5: the action 5 * (0.5 - position), clipped."""
+
+    def forward(self, proprioception: torch.Tensor) -> torch.Tensor:
+        return torch.clamp(5.0 * (0.5 - proprioception), -1.0, 1.0)
+
+
+@pytest.fixture()
+def first_obs():
+    env = BehaviorEnv(TinyBehavior(), 0, fake_infant_factory, training=False)
+    try:
+        yield env.reset(), env.action_dim
+    finally:
+        env.close()
+
+
+@pytest.fixture()
+def checkpoint(tmp_path, first_obs):
+    """A policy file of the tiny behaviour that trained 96 physics steps at 9 months."""
+    obs, action_dim = first_obs
+    cfg = resolve_config(RunRequest("tiny", ["seed=6"]), REGISTRY)
+    behavior = REGISTRY.create("tiny", cfg.behavior)
+    torch.manual_seed(0)
+    actor = policy_network(cfg, behavior, obs, action_dim)
+    state = policy_file(to_dict(cfg), behavior, actor.state_dict(), env_steps=96)
+    state["age_months"] = 9.0
+    save_checkpoint(state, tmp_path / "policy.pt")
+    return tmp_path / "policy.pt"
+
+
+@pytest.fixture()
+def scripted(tmp_path):
+    env = DevlearnEnv("tiny", {"seed": 4}, registry=REGISTRY, infant_factory=fake_infant_factory)
+    try:
+        return devlearn.gym.save_policy(
+            Reach(), env, tmp_path / "reach.pt", learner="mine", env_steps=40
+        )
+    finally:
+        env.close()
+
+
+def test_every_kind_answers_what_an_evaluation_asks(checkpoint, scripted):
+    ours = open_subject(EvalRequest("tiny", checkpoint), REGISTRY).policy
+    theirs = open_subject(EvalRequest("tiny", scripted), REGISTRY).policy
+    zero = open_subject(EvalRequest("tiny", policy="zero"), REGISTRY).policy
+    assert isinstance(ours, CheckpointPolicy) and isinstance(theirs, ScriptedPolicy)
+    assert (ours.name, ours.path, ours.learner) == ("checkpoint", checkpoint, None)
+    assert (theirs.name, theirs.path, theirs.learner) == ("checkpoint", scripted, "mine")
+    assert (zero.name, zero.path, zero.learner) == ("zero", None, None)
+    assert (ours.env_steps, theirs.env_steps, zero.env_steps) == (96, 40, None)
+    assert (ours.age_months, zero.age_months) == (9.0, None)
+    assert ours.config.seed == 6 and theirs.config.seed == 4
+    assert ours.saved_config["seed"] == 6 and theirs.saved_config["seed"] == 4
+    assert zero.saved_config == to_dict(zero.config)
+    for policy in (ours, theirs, zero):
+        assert policy.behavior() is policy.behavior()  # built once
+        assert policy.behavior().name == "tiny"
+
+
+def test_a_file_that_does_not_say_its_steps_is_judged_at_the_end_of_its_config(
+    checkpoint, tmp_path
+):
+    state = torch.load(checkpoint, weights_only=True)
+    del state["env_steps"]
+    save_checkpoint(state, tmp_path / "stepless.pt")
+    subject = open_subject(EvalRequest("tiny", tmp_path / "stepless.pt"), REGISTRY)
+    assert subject.policy.env_steps is None and subject.trained_steps == 0
+    assert subject.stage_steps == subject.config.total_steps
+    with_steps = open_subject(EvalRequest("tiny", checkpoint), REGISTRY)
+    assert with_steps.trained_steps == with_steps.stage_steps == 96
+
+
+def test_actions_act_on_a_batch_of_observations(checkpoint, scripted, first_obs):
+    obs, action_dim = first_obs
+    rows = {k: np.stack([v, v * 0.5, v + 0.25]) for k, v in obs.items()}
+    ours = CheckpointPolicy.open(checkpoint, REGISTRY, "tiny")
+    network = ours.actions(batch_of_one(obs), action_dim, seed=0, sample=False)
+    three = ours.actions(rows, action_dim, seed=0, sample=False)
+    together = three.act(rows)
+    assert together.shape == (3, action_dim)
+    for i in range(3):
+        alone = network.act({k: v[i : i + 1] for k, v in rows.items()})
+        assert alone.shape == (1, action_dim)
+        np.testing.assert_allclose(alone[0], together[i], atol=1e-6)
+    theirs = ScriptedPolicy.open(scripted, REGISTRY, "tiny")
+    acted = theirs.actions(rows, action_dim, seed=0, sample=False).act(rows)
+    expected = np.clip(5 * (0.5 - rows["proprioception"]), -1, 1)
+    np.testing.assert_allclose(acted, expected, atol=1e-6)
+    assert theirs.act(obs) == pytest.approx(expected[0], abs=1e-6)
+    with pytest.raises(UsageError, match="a scripted policy .* gives one deterministic action"):
+        theirs.actions(rows, action_dim, seed=0, sample=True)
+    cfg = resolve_config(RunRequest("tiny", ["env.action_repeat=2"]), REGISTRY)
+    for name in ("zero", "random", "held_random"):
+        actions = Baseline(name, cfg, TinyBehavior()).actions(rows, action_dim, 3, False)
+        acted = actions.act(rows)
+        assert acted.shape == (3, action_dim) and np.all(np.abs(acted) <= 1)
+        assert np.any(acted != 0) == (name != "zero")
+
+
+def test_the_baselines_draw_as_one_env_did(first_obs):
+    """Seeded by the evaluation seed, on streams apart from the env's: uniform [seed, 1], held
+    [seed, 2] with a redraw chance of repeat / HOLD_STEPS per decision."""
+    obs, action_dim = first_obs
+    one = batch_of_one(obs)
+    uniform = UniformActions(1, action_dim, 5)
+    rng = np.random.default_rng([5, 1])
+    for _ in range(3):
+        assert np.array_equal(uniform.act(one)[0], rng.uniform(-1.0, 1.0, action_dim))
+    held = HeldActions(1, action_dim, 5, repeat=2)
+    rng = np.random.default_rng([5, 2])
+    expected = rng.uniform(-1.0, 1.0, action_dim)
+    for _ in range(4):
+        redraw = rng.random(action_dim) < 2 / HOLD_STEPS
+        expected[redraw] = rng.uniform(-1.0, 1.0, int(redraw.sum()))
+        assert np.array_equal(held.act(one)[0], expected)
+
+
+@pytest.mark.parametrize("name", ["random", "held_random", "sample"])
+def test_skipping_draws_what_acting_would(name, checkpoint, first_obs):
+    """A slot starting later skips the decisions before it: its next action is the one the
+    reference (one env acting every decision) takes there."""
+    obs, action_dim = first_obs
+    one = batch_of_one(obs)
+    if name == "sample":
+        policy = CheckpointPolicy.open(checkpoint, REGISTRY, "tiny")
+        torch.manual_seed(2)
+        reference = policy.actions(one, action_dim, seed=2, sample=True)
+        slot = reference.for_slot()
+    else:
+        cfg = resolve_config(RunRequest("tiny", ["env.action_repeat=2"]), REGISTRY)
+        reference = Baseline(name, cfg, TinyBehavior()).actions(one, action_dim, 2, False)
+        slot = reference.for_slot()
+    for _ in range(5):
+        reference.act(one)
+    slot.skip(5)
+    assert slot.rng_state() is not None
+    assert slot.rng_state() == reference.rng_state()
+    assert np.array_equal(slot.act(one), reference.act(one))
+
+
+def test_a_baseline_is_one_of_the_named_ones():
+    cfg = resolve_config(RunRequest("tiny"), REGISTRY)
+    with pytest.raises(ValueError, match="unknown baseline 'greedy'; valid: zero, random"):
+        Baseline("greedy", cfg, TinyBehavior())
