@@ -174,3 +174,18 @@ def test_a_run_refuses_noise_out_of_range(key, value, message):
     apply_overrides(cfg, {key: value})
     with pytest.raises(UsageError, match=message):
         check_config(cfg)
+
+
+def test_an_evaluation_plays_with_the_policys_motor_noise():
+    # the noise is the body's: devlearn eval's envs take it from the checkpoint's config
+    from devlearn.evaluation.evaluate import EvalRequest, EvalSubject, evaluation_conditions
+
+    cfg = run_config.RunConfig()
+    cfg.env.action_noise_std, cfg.env.action_noise_beta = 0.2, 0.69
+    subject = EvalSubject(TinyBehavior(TinyConfig(use_eyes=False)), cfg, None, None)
+    request = EvalRequest("tiny", policy="zero", episodes=2, session=300.0)
+    settings = evaluation_conditions(request, subject).settings
+    assert (settings.action_noise_std, settings.action_noise_beta) == (0.2, 0.69)
+    assert settings.episode_seconds == 300.0
+    cfg.env.action_noise_std = 0.0
+    assert evaluation_conditions(request, subject).settings.action_noise_std == 0.0
