@@ -113,6 +113,20 @@ def _check_infant(cfg: RunConfig) -> None:
     growth_schedule(cfg)
 
 
+def _check_motor_noise(cfg: RunConfig) -> None:
+    """``env.action_noise_std`` from 0 to 1, ``env.action_noise_beta`` from 0 to below 2 (the
+    bounds of :func:`devlearn.env.motor_noise.check_noise`, which the envs apply again)."""
+    std, beta = cfg.env.action_noise_std, cfg.env.action_noise_beta
+    if not 0.0 <= std <= 1.0:
+        raise UsageError(
+            f"env.action_noise_std must be from 0 (off) to 1 (action units), got {std:g}"
+        )
+    if not 0.0 <= beta < 2.0:
+        raise UsageError(
+            f"env.action_noise_beta must be from 0 (white noise) to below 2, got {beta:g}"
+        )
+
+
 def _check_batches(cfg: RunConfig) -> None:
     """The decision rate against the episode and the budget, and the mini-batches against the
     rollout: values that pass their own bounds but fail or hang together."""
@@ -120,6 +134,7 @@ def _check_batches(cfg: RunConfig) -> None:
     _whole(repeat, "env.action_repeat", 1, EPISODE_STEPS)
     if error := decision_rate_error(repeat):
         raise UsageError(error)
+    _check_motor_noise(cfg)
     rollout = cfg.num_envs * cfg.ppo.num_steps_per_env
     iteration = rollout * repeat
     if iteration > OVERSHOOT_MAX * cfg.total_steps:

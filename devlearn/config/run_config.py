@@ -188,6 +188,18 @@ class EnvConfig:
     5 ms barely moves an arm, so random exploration goes nowhere (issue #28,
     :data:`LEARNER_EVIDENCE`). A saved run's config without this field means 1. Must divide
     the episode length."""
+    action_noise_std: float = 0.0
+    """Motor noise: the standard deviation, per actuator and in action units (a fraction of
+    each motor's maximum torque), of time-correlated Gaussian noise added to every action the
+    env applies, at every physics step, before the clip to [-1, 1]; in training and in every
+    evaluation of the run's policy (it is the body's). 0 (default): none. Seeded per env,
+    independent of the initial poses, never reset (it runs on through episodes and sessions),
+    saved in checkpoints (:mod:`devlearn.env.motor_noise`). From 0 to 1."""
+    action_noise_beta: float = 0.88
+    """The motor noise's spectrum: its power falls as f^-beta from 0.01 Hz to the Nyquist
+    frequency. Infants' hand-velocity spectra: beta 0.69 at 8 weeks to 0.88 at 30 weeks
+    (Ernst, Lopez, Hoffmann and Triesch, arXiv 2606.16590); the default is the older infants'
+    (our body is 18 months old by default). 0: white noise. From 0 to below 2."""
 
 
 @dataclass

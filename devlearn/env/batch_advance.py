@@ -40,10 +40,20 @@ def clipped_actions(actions: Any) -> np.ndarray | list[np.ndarray]:
     return [np.minimum(np.maximum(np.asarray(a, dtype=np.float64), -1.0), 1.0) for a in actions]
 
 
+def apply_action(env: BehaviorEnv, action: np.ndarray) -> None:
+    """One physics step of ``env`` under ``action`` (clipped): the env's motor noise added
+    (:meth:`~devlearn.env.behavior_env.BehaviorEnv.motor_command`), the behaviour's hooks,
+    the body's step."""
+    action = env.motor_command(action)
+    env.behavior.before_step(env.infant, action)
+    env.infant.step(env.behavior.process_action(action, env.stage))
+
+
 def advance_batch(
     envs: list[BehaviorEnv], actions: Any
 ) -> tuple[list[StepContext], dict[str, np.ndarray] | None]:
-    """Hooks, ``process_action`` and physics per env, then facts and observations.
+    """Motor noise, hooks, ``process_action`` and physics per env (:func:`apply_action`),
+    then facts and observations.
 
     Every observation is checked by the guard (:func:`devlearn.env.guards.check_observations`):
     a bad one raises, naming the env's index and its step.
@@ -57,8 +67,7 @@ def advance_batch(
         batched them (each context's observations are row views of these), else None.
     """
     for env, action in zip(envs, clipped_actions(actions)):
-        env.behavior.before_step(env.infant, action)
-        env.infant.step(env.behavior.process_action(action, env.stage))
+        apply_action(env, action)
     lead = envs[0].behavior
     infants = [env.infant for env in envs]
     if overrides(lead, "batch_facts"):

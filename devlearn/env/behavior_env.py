@@ -15,13 +15,14 @@ from devlearn.api.rewards import (
     StepContext,
     as_batched,
 )
-from devlearn.env.batch_advance import advance_batch, clipped_actions
+from devlearn.env.batch_advance import advance_batch, apply_action, clipped_actions
 from devlearn.env.guards import (
     REWARD_BOUND,
     check_observations,
     check_reward,
     reward_within_bound,
 )
+from devlearn.env.motor_noise import PowerLawNoise
 from devlearn.env.rendering import check_senses_render
 from devlearn.env.settings import EnvSettings
 from devlearn.timing import decision_rate_error, physics_steps
@@ -118,6 +119,17 @@ class BehaviorEnv:
         self.episode_steps = episode_length(self.infant, behavior, self.settings)
         """Physics steps per episode (:func:`episode_length`)."""
         self.step_dt = float(self.infant.control_timestep)
+        self.motor_noise: PowerLawNoise | None = None
+        """The body's motor noise (``settings.action_noise_std`` above 0), or None: one
+        stream per actuator, seeded by this env's seed, never reset."""
+        if self.settings.action_noise_std > 0:
+            self.motor_noise = PowerLawNoise(
+                self.action_dim,
+                self.settings.action_noise_std,
+                self.settings.action_noise_beta,
+                float(self.infant.physics_timestep),
+                seed,
+            )
         self.episode_step = 0
         self._sums = {term.name: 0.0 for term in self.terms}
         self.decision_rewards = [0.0] * len(self.terms)
@@ -129,6 +141,14 @@ class BehaviorEnv:
         since, so :meth:`step` returned the next episode's first); None before any ended."""
         if error := decision_rate_error(self.action_repeat, self.episode_steps):
             raise ValueError(error)  # checked before any worker starts too (check_config)
+
+    def motor_command(self, action: np.ndarray) -> np.ndarray:
+        """What the body gets for the policy's ``action`` (action_dim,), clipped: the action
+        itself, or with :attr:`motor_noise` on, the action plus the noise's next sample,
+        clipped to [-1, 1] again. Called once per physics step."""
+        if self.motor_noise is None:
+            return action
+        return np.minimum(np.maximum(action + self.motor_noise(), -1.0), 1.0)
 
     @property
     def action_repeat(self) -> int:
@@ -219,10 +239,14 @@ class BehaviorEnv:
         self.stage = dict(options)
 
     def state_dict(self) -> dict[str, Any]:
-        """Return the resumable state: every reward term's state, the rng and the stage (the
-        body's age is the run's: its config's, which the runner records in checkpoints)."""
+        """Return the resumable state: every reward term's state, the rng, the stage and the
+        motor noise's stream where it has one (the body's age is the run's: its config's,
+        which the runner records in checkpoints)."""
         terms = {term.name: term.state_dict(self.batch_index) for term in self.terms}
-        return {"terms": terms, "rng": self.rng.bit_generator.state, "stage": dict(self.stage)}
+        state = {"terms": terms, "rng": self.rng.bit_generator.state, "stage": dict(self.stage)}
+        if self.motor_noise is not None:
+            state["motor_noise"] = self.motor_noise.state_dict()
+        return state
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
         """Restore :meth:`state_dict`'s output (call :meth:`reset` afterwards)."""
@@ -231,6 +255,8 @@ class BehaviorEnv:
                 term.load_state_dict(self.batch_index, state["terms"][term.name])
         self.rng.bit_generator.state = state["rng"]
         self.stage = dict(state["stage"])
+        if self.motor_noise is not None and "motor_noise" in state:
+            self.motor_noise.load_state_dict(state["motor_noise"])
 
     def close(self) -> None:
         """Release the infant's resources."""
@@ -379,8 +405,7 @@ def step_batch(
     if not envs[0].behavior.facts_every_physics_step:
         for _ in range(repeat - 1):
             for env, action in zip(envs, clipped_actions(actions)):
-                env.behavior.before_step(env.infant, action)
-                env.infant.step(env.behavior.process_action(action, env.stage))
+                apply_action(env, action)
                 env.episode_step += 1
         return step_physics(envs, actions, obs_out, paid=repeat)
     totals = np.zeros(len(envs))

@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
+
+from devlearn.env.motor_noise import check_noise
 
 
 @dataclass(frozen=True)
@@ -30,8 +33,28 @@ class EnvSettings:
     with the body's physics step, it must be a whole number of decisions (checked where the
     body is built)."""
 
+    action_noise_std: float = 0.0
+    """Standard deviation of the motor noise added to every action, per actuator, in action
+    units (``env.action_noise_std``; 0: none, :mod:`devlearn.env.motor_noise`)."""
+
+    action_noise_beta: float = 0.88
+    """The motor noise's spectral exponent: its power falls as f^-beta
+    (``env.action_noise_beta``)."""
+
+    @classmethod
+    def of(cls, env: Any, episode_seconds: float | None = None) -> EnvSettings:
+        """The settings a run config's ``env`` section (:class:`devlearn.config.EnvConfig`)
+        gives, with an evaluation's session length: the one place they are read from it."""
+        return cls(
+            int(env.action_repeat),
+            episode_seconds,
+            float(env.action_noise_std),
+            float(env.action_noise_beta),
+        )
+
     def __post_init__(self) -> None:
         if isinstance(self.action_repeat, bool) or not isinstance(self.action_repeat, int):
             raise TypeError(f"action_repeat must be an int, got {self.action_repeat!r}")
         if self.episode_seconds is not None and not self.episode_seconds > 0:
             raise ValueError(f"episode_seconds must be above 0, got {self.episode_seconds!r}")
+        check_noise(self.action_noise_std, self.action_noise_beta)

@@ -371,7 +371,8 @@ class EvalConditions:
             infant's own (where it trained).
         envs: Envs playing the episodes (slots).
         workers: Env worker processes (0: this process).
-        settings: The envs' settings: the checkpoint's decision rate, a session's length.
+        settings: The envs' settings: the checkpoint's decision rate and motor noise, a
+            session's length.
     """
 
     stage: dict[str, Any]
@@ -467,7 +468,8 @@ def evaluation_conditions(
         behavior.evaluator(training=False).mergeable,
         cores,
     )
-    return EvalConditions(stage, infant_start, envs, workers, EnvSettings(repeat, request.session))
+    settings = EnvSettings.of(subject.config.env, request.session)  # the body's motor noise too
+    return EvalConditions(stage, infant_start, envs, workers, settings)
 
 
 class Evaluation:

@@ -88,6 +88,8 @@ def eval_args(protocol: Protocol, workers: int, baseline: str | None = None) -> 
     args += ["--start", protocol.start, "--workers", str(workers), "--json"]
     if baseline is None:
         args += ["--action", protocol.action]
+    if protocol.session_s is not None:
+        args += ["--session", f"{protocol.session_s:.12g}"]
     for item in protocol.overrides:
         args += ["--set", item]
     return args
@@ -106,6 +108,7 @@ def _eval_request(behavior: str, protocol: Protocol, policy: str) -> EvalRequest
         start=protocol.start,
         action=protocol.action if policy == "checkpoint" else "mean",
         overrides=protocol.overrides,
+        session=protocol.session_s,
     )
 
 
@@ -130,6 +133,21 @@ def _check_protocols(spec: ExperimentSpec, registry: PluginRegistry) -> None:
             raise UsageError(
                 f"{where}: action 'sample' needs a devlearn checkpoint; arm '{scripted[0]}' "
                 "writes a scripted policy, which acts with one deterministic action"
+            )
+
+
+def _check_sessions(spec: ExperimentSpec, action_repeat: int, name: str) -> None:
+    """Every protocol's ``session_s`` a whole number of the run's decisions (as ``devlearn
+    eval --session`` checks it for the policy the run writes)."""
+    from devlearn.timing import decision_rate_error, physics_steps
+
+    for protocol in spec.protocols:
+        if protocol.session_s is None:
+            continue
+        if error := decision_rate_error(action_repeat, physics_steps(protocol.session_s)):
+            raise UsageError(
+                f"experiment file {spec.path}: protocols '{protocol.name}' session_s "
+                f"{protocol.session_s:g} for run {name}: {error}"
             )
 
 
@@ -167,6 +185,7 @@ def _arm_run(
     top = {"total_steps": train.steps, "num_envs": train.envs, "workers": train.workers}
     request = RunRequest(spec.behavior, overrides, arm.preset, {**top, "seed": seed})
     cfg = checked_config(request, registry, name)
+    _check_sessions(spec, cfg.env.action_repeat, name)
     cfg.out_dir = str(run_dir)
     trainer = None
     if arm.learner in SB3_ALGOS:

@@ -37,6 +37,12 @@ FILE OUT`` runs it, ``publish`` keeps what a reader needs, ``table`` tabulates i
     action = "mean"                   # or sample
     set = { "infant.age_months" = 6 }
 
+    [[protocols]]
+    name = "sessions"                 # whole 5-minute sessions from rest (devlearn eval --session)
+    start = "rest"
+    episodes = 10                     # sessions
+    session_s = 300
+
     [[references]]
     source = "the paper, Table II"
     protocol = "random_mean"          # default: the first protocol
@@ -84,7 +90,7 @@ KEYS = {
     },
     "train": {"steps", "envs", "workers", "torch_threads", "cores", "set"},
     "arms": {"name", "learner", "set", "preset", "note"},
-    "protocols": {"name", "start", "episodes", "seed", "action", "set"},
+    "protocols": {"name", "start", "episodes", "seed", "action", "session_s", "set"},
     "references": {"source", "protocol", "note", "rows"},
     "rows": {"label", "value", "low", "high"},
     "executor": {"kind", "jobs", "address", "launcher"},
@@ -96,6 +102,8 @@ NAME_MAX = 100
 """Longest arm or protocol name."""
 EPISODES_MAX = 1_000_000
 """Most episodes of one evaluation (as ``devlearn eval --episodes``)."""
+SESSION_S_MAX = 86_400.0
+"""Longest ``session_s``: a simulated day (seconds), as ``devlearn eval --session``."""
 CORES_MAX = 4_096
 """Most workers, cores or jobs (as ``devlearn sweep``)."""
 
@@ -136,6 +144,9 @@ class Protocol:
     """A trained policy's action: ``mean`` or ``sample`` (baselines act as they are named)."""
     overrides: tuple[str, ...] = ()
     """``devlearn eval --set`` items: a checkpoint takes only ``infant.age_months``."""
+    session_s: float | None = None
+    """``devlearn eval --session``: every episode one session of this many simulated seconds,
+    without a reset inside (None: the behaviour's episodes); :attr:`episodes` counts sessions."""
 
     @property
     def folder(self) -> str:
@@ -143,21 +154,28 @@ class Protocol:
         return f"eval_{self.name}"
 
     def what(self) -> dict[str, Any]:
-        """What decides the protocol's numbers."""
-        return {
+        """What decides the protocol's numbers (``session_s`` only where set, so that a folder
+        started before the key existed keeps its protocols)."""
+        what: dict[str, Any] = {
             "start": self.start,
             "episodes": self.episodes,
             "seed": self.seed,
             "action": self.action,
             "set": list(self.overrides),
         }
+        if self.session_s is not None:
+            what["session_s"] = self.session_s
+        return what
 
     def describe(self) -> str:
-        """One line for people: ``100 episodes from stage starts, eval seed 0, mean action``."""
-        text = (
-            f"{self.episodes} episodes from {self.start} starts, eval seed {self.seed}, "
-            f"{self.action} action"
+        """One line for people: ``100 episodes from stage starts, eval seed 0, mean action``
+        (``10 sessions of 300 s from rest starts, ...`` with :attr:`session_s`)."""
+        played = (
+            f"{self.episodes} episodes"
+            if self.session_s is None
+            else f"{self.episodes} sessions of {self.session_s:g} s"
         )
+        text = f"{played} from {self.start} starts, eval seed {self.seed}, {self.action} action"
         return text + (f", {' '.join(self.overrides)}" if self.overrides else "")
 
 
@@ -435,7 +453,27 @@ def _protocol(check: _Checker, table: dict[str, Any], where: str) -> Protocol:
         seed=check.integer(table.get("seed"), f"{where} seed", 0, SEED_MAX, 0),
         action=check.choice(table.get("action"), f"{where} action", ACTIONS, "mean"),
         overrides=check.overrides(table.get("set"), f"{where} set"),
+        session_s=_session(check, table.get("session_s"), f"{where} session_s"),
     )
+
+
+def _session(check: _Checker, value: Any, where: str) -> float | None:
+    """A protocol's ``session_s``: seconds above 0, at most :data:`SESSION_S_MAX`, a whole
+    number of BabyBench's physics steps (each arm's decisions are checked when planned)."""
+    from devlearn.timing import physics_steps
+
+    seconds = check.number(value, where)
+    if seconds is None:
+        return None
+    if not 0 < seconds <= SESSION_S_MAX:
+        raise check.error(
+            where, f"must be above 0 and at most {SESSION_S_MAX:g} seconds, got {seconds:g}"
+        )
+    try:
+        physics_steps(seconds)
+    except ValueError as err:
+        raise check.error(where, str(err)) from None
+    return seconds
 
 
 def _reference(

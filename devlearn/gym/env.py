@@ -8,6 +8,7 @@ import gymnasium
 import numpy as np
 
 from devlearn.env.behavior_env import BehaviorEnv, build_default_infant
+from devlearn.env.settings import EnvSettings
 from devlearn.gym.run_setup import (
     CurriculumClock,
     Overrides,
@@ -106,8 +107,8 @@ class DevlearnEnv(gymnasium.Env):
                 self.setup.behavior,
                 cfg.seed,
                 with_eyes(factory) if render_mode else factory,
-                action_repeat=cfg.env.action_repeat,
                 age_months=self.clock.age_months,
+                settings=EnvSettings.of(cfg.env),
             )
         except BaseException:
             self.setup.close()

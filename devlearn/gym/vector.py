@@ -9,6 +9,7 @@ import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from devlearn.env.settings import EnvSettings
 from devlearn.env.vec_env import DevVecEnv
 from devlearn.gym.run_setup import (
     CurriculumClock,
@@ -92,8 +93,8 @@ class DevlearnVectorEnv(VectorEnv):
                 resolve_workers(cfg.workers, cfg.num_envs),
                 infant_factory=infant_factory,
                 rank=0,
-                action_repeat=cfg.env.action_repeat,
                 age_months=self.clock.age_months,
+                settings=EnvSettings.of(cfg.env),
             )
         except BaseException:
             self.setup.close()

@@ -294,7 +294,7 @@ def _build(ctx: RunContext) -> tuple[DevVecEnv, DevRunner]:
         ctx.infant_factory,
         rank,
         age_months=age,
-        settings=EnvSettings(action_repeat=cfg.env.action_repeat),  # the envs' one source
+        settings=EnvSettings.of(cfg.env),  # the envs' one source
     )
     try:
         train_cfg = to_rsl_rl(cfg, behavior, list(env.observation_shapes))

@@ -261,6 +261,19 @@ BAD = [
         'seed = 0\nset = ["behavior.target=0.2"]',
         "protocols 'rest2': --set applies to baselines only",
     ),
+    ("seed = 0", "seed = 0\nsession_s = -5", "protocols 'rest2' session_s: must be above 0"),
+    (
+        "seed = 0",
+        "seed = 0\nsession_s = 0.0125",
+        "protocols 'rest2' session_s: 0.0125 s is not a whole number of physics steps",
+    ),
+    (
+        'set = ["behavior.target=0.3"]\n\n[[protocols]]\nname = "rest2"\n',
+        'set = ["behavior.target=0.3", "env.action_repeat=4"]\n\n[[protocols]]\n'
+        'name = "rest2"\nsession_s = 0.01\n',
+        "protocols 'rest2' session_s 0.01 for run far,seed=1: env.action_repeat=4 must divide "
+        "the episode (2 physics steps)",
+    ),
     (
         'source = "a',
         'protocol = "q"\nsource = "a',
@@ -306,6 +319,26 @@ def test_a_dry_run_lists_every_run_and_its_evaluations_and_starts_nothing(cli, c
     file.write_text(file.read_text().replace('name = "rest2"', 'name = "rest2"\naction = "sample"'))
     assert cli(["experiment", "run", str(file), str(out), "--dry-run"]) == 2
     assert "action 'sample' needs a devlearn checkpoint; arm 'sb3'" in capsys.readouterr().err
+
+
+def test_a_session_protocol_evaluates_whole_sessions(cli, capsys, tmp_path):
+    # issue #57: whole sessions without a reset inside, as devlearn eval --session plays them
+    from devlearn.experiment.spec import read_experiment
+
+    file, out = tmp_path / "tiny.toml", tmp_path / "out"
+    session = '[[protocols]]\nname = "sessions"\nstart = "rest"\nepisodes = 3\nsession_s = 300\n'
+    file.write_text(TINY.replace("[[references]]", session + "\n[[references]]"))
+    assert cli(["experiment", "run", str(file), str(out), "--dry-run"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    sessions = [line for line in lines if "eval_sessions:" in line]
+    assert len(sessions) == 5  # the baseline and 2 arms x 2 seeds
+    assert all("--episodes 3 --seed 0 --start rest" in line for line in sessions)
+    assert all(line.endswith("--session 300") for line in sessions), sessions[0]
+    assert not any("--session" in line for line in lines if "eval_rest2:" in line)
+    spec = read_experiment(file)
+    assert spec.protocols[1].what()["session_s"] == 300.0
+    assert "session_s" not in spec.protocols[0].what()  # folders started before the key match
+    assert spec.protocols[1].describe().startswith("3 sessions of 300 s from rest starts")
 
 
 @pytest.mark.slow

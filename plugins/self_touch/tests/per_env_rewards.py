@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 from devlearn_self_touch.body_map import HANDS, NUM_PARTS, NUM_REGIONS
+from devlearn_self_touch.config import NOT_IN_PAPER
 from devlearn_self_touch.rewards import _check_touch_count, f_decay
 
 from devlearn import IntrinsicReward, StepContext
@@ -230,9 +231,12 @@ ORACLES = {
 def per_env_reward_terms(config: Any) -> list[IntrinsicReward]:
     """The oracle of ``SelfTouch(config).reward_terms()``: the same terms, weights and params
     as per-environment terms, each with its own memory (equal to the plugin's terms with
-    ``lifetime_memory="per_env"``; they cannot share one)."""
+    ``lifetime_memory="per_env"``; they cannot share one). Issue #57's terms, which read the
+    body, have no oracle here: they are tested in ``test_activity_terms.py``."""
     terms: list[IntrinsicReward] = []
     for name, cfg in config.rewards.items():
+        if name in NOT_IN_PAPER and cfg.weight == 0:  # left out, as the plugin leaves them
+            continue
         extra = {"touch_count": config.touch_count} if name == "touch_novelty" else {}
         terms.append(ORACLES[name](weight=cfg.weight, **cfg.params, **extra))
     return terms

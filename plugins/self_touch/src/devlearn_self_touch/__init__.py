@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
+from devlearn_self_touch.activity import ActivityLevel, Effort
 from devlearn_self_touch.behavior import SelfTouch
-from devlearn_self_touch.config import SelfTouchConfig, paper_rewards
+from devlearn_self_touch.config import SelfTouchConfig, default_rewards, paper_rewards
 from devlearn_self_touch.evaluation import SelfTouchEvaluator
 from devlearn_self_touch.rewards import (
     Balance,
@@ -14,13 +15,16 @@ from devlearn_self_touch.rewards import (
 )
 
 __all__ = [
+    "ActivityLevel",
     "Balance",
     "ContactNovelty",
     "DiversityMilestones",
+    "Effort",
     "SelfTouch",
     "SelfTouchConfig",
     "SelfTouchEvaluator",
     "TouchNovelty",
+    "default_rewards",
     "f_decay",
     "paper_rewards",
 ]

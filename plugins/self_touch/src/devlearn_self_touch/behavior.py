@@ -23,7 +23,7 @@ from devlearn_self_touch.body_map import (
     hand_touched_parts,
     sparse_body_map,
 )
-from devlearn_self_touch.config import SelfTouchConfig
+from devlearn_self_touch.config import NOT_IN_PAPER, SelfTouchConfig
 from devlearn_self_touch.evaluation import PAPER_RESULTS, SelfTouchEvaluator, TrainingScore
 
 if TYPE_CHECKING:
@@ -123,7 +123,8 @@ class SelfTouch(Behavior):
         """R_t = R_touch + R_geom + R_milestones + R_balance (sec. II-A3): the config's
         ``rewards``, fresh instances (batched: computed once per worker over its envs), the
         novelty terms told ``lifetime_memory``, touch novelty ``touch_count`` and the repeat
-        pay's clock in seconds (``repeat_crossing_s``, ``repeat_steepness_s``)."""
+        pay's clock in seconds (``repeat_crossing_s``, ``repeat_steepness_s``); our terms
+        (:data:`~devlearn_self_touch.config.NOT_IN_PAPER`) only where their weight is not 0."""
         c = self.config
         memory = {"lifetime_memory": c.lifetime_memory}
         clock = {"crossing_s": c.repeat_crossing_s, "steepness_s": c.repeat_steepness_s}
@@ -131,7 +132,8 @@ class SelfTouch(Behavior):
             "touch_novelty": {**memory, "touch_count": c.touch_count, **clock},
             "contact_novelty": memory,
         }
-        return build_reward_terms(c.rewards, shared)
+        terms = build_reward_terms(c.rewards, shared)
+        return [t for t in terms if t.weight != 0.0 or t.name not in NOT_IN_PAPER]
 
     def episode_seconds(self) -> float | None:
         """``episode_s`` (None: the infant's 5 s, BabyBench's)."""

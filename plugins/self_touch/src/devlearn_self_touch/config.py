@@ -7,6 +7,7 @@ from typing import Any, ClassVar
 
 from devlearn.api.behavior import BehaviorConfig
 from devlearn.api.rewards import RewardTermCfg, reward_term_cfg
+from devlearn_self_touch.activity import ActivityLevel, Effort
 from devlearn_self_touch.rewards import (
     LIFETIME_MEMORIES,
     TOUCH_COUNTS,
@@ -45,6 +46,27 @@ def paper_rewards() -> dict[str, RewardTermCfg]:
             DiversityMilestones, 1.0, {"reward": 5.0, "milestones": (5, 10, 15, 20, 25, 30)}
         ),
         "balance": RewardTermCfg(Balance, 1.0, {"reward": 10.0, "tolerance": 3, "min_parts": 0}),
+    }
+
+
+NOT_IN_PAPER = ("activity_level", "effort")
+"""Our reward terms beside the paper's (issue #57's infant-like variants,
+:mod:`devlearn_self_touch.activity`): in the default table at weight 0, and left out of a run
+while their weight is 0, so that a run without them is the paper's reward exactly."""
+
+
+def default_rewards() -> dict[str, RewardTermCfg]:
+    """The default table: the paper's four terms (:func:`paper_rewards`), then ours
+    (:data:`NOT_IN_PAPER`) at weight 0: off, but declared, so ``--set
+    behavior.rewards.effort.weight=0.5`` switches one on."""
+    return {
+        **paper_rewards(),
+        "activity_level": RewardTermCfg(
+            ActivityLevel,
+            0.0,
+            {"preferred": 0.1, "time_constant_s": 1.0, "signal": "hand_speed"},
+        ),
+        "effort": RewardTermCfg(Effort, 0.0, {}),
     }
 
 
@@ -112,8 +134,9 @@ class SelfTouchConfig(BehaviorConfig):
     5.7, instead of raw values spanning four orders of magnitude."""
 
     # --- reward terms (R_t = R_touch + R_geom + R_milestones + R_balance, sec. II-A3) ----
-    rewards: dict[str, RewardTermCfg] = field(default_factory=paper_rewards)
-    """Term name -> (class, weight, params) (:func:`paper_rewards`, the paper's constants):
+    rewards: dict[str, RewardTermCfg] = field(default_factory=default_rewards)
+    """Term name -> (class, weight, params) (:func:`default_rewards`: the paper's four terms
+    with its constants, :func:`paper_rewards`, and two of ours at weight 0, off):
     ``touch_novelty`` (R_touch: first_ever, first_in_episode, repeat_scale and f_decay's
     midpoint and rate, f_decay(c) = 2 / (1 + exp(rate (c - midpoint))) - 1, in counts of c:
     touches with ``touch_count=onset``; with ``step``, ``repeat_crossing_s`` and
@@ -122,7 +145,11 @@ class SelfTouchConfig(BehaviorConfig):
     (R_milestones: reward per milestone of distinct touched regions crossed in the episode) and
     ``balance`` (R_balance: reward on the last step when |N_L - N_R| <= tolerance and
     N_L + N_R >= min_parts; the paper's min_parts is 0, so an episode without any touch also
-    pays). ``--set behavior.rewards.balance.weight=0`` switches one off."""
+    pays). ``--set behavior.rewards.balance.weight=0`` switches one off. Ours (issue #57,
+    :mod:`devlearn_self_touch.activity`, costs per simulated second, left out while their
+    weight is 0): ``activity_level``, a rest drive, -|m - preferred| per second with m the
+    running mean over ``time_constant_s`` seconds of ``signal`` (``hand_speed`` in m/s or
+    ``joint_speed`` in rad/s); ``effort``, -mean squared motor command per second."""
 
     # --- touch novelty R_touch (sec. II-A3) ------------------------------------------------
     lifetime_memory: str = "shared"
@@ -217,13 +244,19 @@ class SelfTouchConfig(BehaviorConfig):
             raise ValueError(
                 f"training_score_episodes must be at least 1, got {self.training_score_episodes}"
             )
-        unknown = set(self.rewards) - set(paper_rewards())
+        unknown = set(self.rewards) - set(default_rewards())
         if unknown:  # the behaviour passes lifetime_memory and touch_count to its own terms
             raise ValueError(
                 f"unknown self_touch reward term(s) {sorted(unknown)}; "
-                f"valid: {', '.join(paper_rewards())}"
+                f"valid: {', '.join(default_rewards())}"
             )
         self._validate_clock()
+        for name in NOT_IN_PAPER:  # our terms check their own params' values when built
+            if name in self.rewards:
+                try:
+                    reward_term_cfg(self.rewards[name]).build(name)
+                except TypeError:  # an unknown param: check_reward_table names the valid ones
+                    pass
 
     def _validate_clock(self) -> None:
         """The reward's clock: positive seconds, given where the table would not say otherwise."""

@@ -1,0 +1,160 @@
+"""Reward terms on how much the body moves, not on what it touches (issue #57's infant-like
+variants): a rest drive toward a preferred activity level, and an effort cost.
+
+Both are costs per simulated second: a term called at every physics step of ``dt`` seconds
+pays its rate times ``dt``, so a second costs the same at any physics step or decision rate
+(``env.action_repeat``), as the touch terms' clock in seconds (``repeat_crossing_s``). Both
+read the body (``ctx.infant``: its joint or hand velocities, the controls it applied), which
+the touch facts do not carry; both are off (weight 0) in the default reward table and left out
+of the run while they are.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from devlearn import BatchContext, BatchedIntrinsicReward
+
+ACTIVITY_SIGNALS = ("hand_speed", "joint_speed")
+"""What :class:`ActivityLevel` measures: ``hand_speed``, the mean linear speed of the two
+hands' centres of mass (m/s), or ``joint_speed``, the mean absolute velocity of the actuated
+joints (rad/s)."""
+
+HAND_BODIES = ("left_hand", "right_hand")
+"""The bodies whose speed ``hand_speed`` averages (the palms; the fingers move with them)."""
+
+
+def bodies(batch: BatchContext, term: str) -> tuple[list[Any], float]:
+    """The batch's bodies (one infant per env) and their physics step in seconds (every env's
+    is the same).
+
+    Raises:
+        ValueError: A context carries no infant (the term reads the body).
+    """
+    infants = [ctx.infant for ctx in batch.contexts if ctx.infant is not None]
+    if len(infants) < len(batch.contexts):
+        raise ValueError(f"the {term} term reads the body: its step contexts need an infant")
+    return infants, float(infants[0].physics_timestep)
+
+
+def hand_speed(infant: Any) -> float:
+    """The two hands' mean linear speed (m/s): their centres of mass's, from MuJoCo's body
+    velocities (``mj_objectVelocity``, computed as the physics step began)."""
+    import mujoco
+
+    model, data = infant.model, infant.data
+    velocity = np.zeros(6)
+    total = 0.0
+    for name in HAND_BODIES:
+        body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
+        # [rotation (3), translation (3)] at the body's centre of mass, world coordinates
+        mujoco.mj_objectVelocity(model, data, mujoco.mjtObj.mjOBJ_BODY, body, velocity, 0)
+        total += math.sqrt(float(velocity[3:] @ velocity[3:]))
+    return total / len(HAND_BODIES)
+
+
+def joint_speed(infant: Any) -> float:
+    """The actuated joints' mean absolute velocity (rad/s): proprioception's qvel block."""
+    joints = int(infant.action_dim)
+    qvel = np.asarray(infant.proprioception())[joints : 2 * joints]
+    return float(np.abs(qvel).mean())
+
+
+SIGNALS = {"hand_speed": hand_speed, "joint_speed": joint_speed}
+
+
+class ActivityLevel(BatchedIntrinsicReward):
+    """A rest drive: the body's recent activity is pulled toward a preferred level.
+
+    Spisak, Hoffmann, O'Regan et al. (IEEE TCDS 2026, arXiv 2504.17939) obtain infant-like
+    activity in a self-touch model with a preferred activity level (a rest drive) besides
+    motor noise: being still and being frantic both cost. Here the activity m_t is a running
+    mean of an instantaneous speed s_t (:data:`ACTIVITY_SIGNALS`) over ``time_constant_s``
+    simulated seconds, and the term pays, per physics step of dt seconds::
+
+        m_t = m_{t-1} + (1 - exp(-dt / time_constant_s)) (s_t - m_{t-1}),   m = 0 at a reset
+        r_t = -|m_t - preferred| * dt
+
+    so a second away from the preferred level by d costs d (times the weight), whatever the
+    physics step. m starts at 0 every episode: an episode starts from a still body (its
+    initial velocities are zero, in rest and random poses alike).
+
+    Args:
+        weight: Term weight (0 in the default table: off).
+        preferred: The preferred activity, in the signal's unit (m/s or rad/s).
+        time_constant_s: The running mean's time constant (simulated seconds).
+        signal: ``hand_speed`` or ``joint_speed``.
+    """
+
+    name = "activity_level"
+
+    def __init__(
+        self,
+        weight: float = 1.0,
+        preferred: float = 0.1,
+        time_constant_s: float = 1.0,
+        signal: str = "hand_speed",
+    ) -> None:
+        super().__init__(weight)
+        if signal not in SIGNALS:
+            raise ValueError(
+                f"unknown activity signal '{signal}'; valid: {', '.join(ACTIVITY_SIGNALS)}"
+            )
+        if not (math.isfinite(preferred) and preferred >= 0):
+            raise ValueError(f"activity preferred must be 0 or above, got {preferred}")
+        if not (math.isfinite(time_constant_s) and time_constant_s > 0):
+            raise ValueError(
+                f"activity time_constant_s must be above 0 seconds, got {time_constant_s}"
+            )
+        self.preferred, self.time_constant_s = float(preferred), float(time_constant_s)
+        self.signal = signal
+        self._speed = SIGNALS[signal]
+        self.bind(1)
+
+    def bind(self, num_envs: int) -> None:
+        super().bind(num_envs)
+        self.activity = np.zeros(num_envs)
+        """(num_envs,): each env's running mean m of the signal."""
+
+    def __call__(self, batch: BatchContext) -> np.ndarray:
+        infants, dt = bodies(batch, self.name)
+        speed = np.array([self._speed(infant) for infant in infants])
+        self.activity += -math.expm1(-dt / self.time_constant_s) * (speed - self.activity)
+        return -np.abs(self.activity - self.preferred) * dt
+
+    def reset(self, env: int) -> None:
+        self.activity[env] = 0.0
+
+
+class Effort(BatchedIntrinsicReward):
+    """An effort cost: the squared motor command, per second.
+
+    Effort (energy) costs are the usual account of why movements are smooth and economical
+    (minimum-effort and optimal-feedback-control models, Todorov and Jordan, Nat. Neurosci.
+    5:1226, 2002) and one of the drives issue #57 lists for infant-like activity. The command
+    u (action_dim,) is what the motors applied this step (``infant.data.ctrl``: the policy's
+    action, plus the motor noise where it is on, clipped to [-1, 1]; torque = max torque *
+    u), and the term pays, per physics step of dt seconds::
+
+        r_t = -mean_i(u_i^2) * dt
+
+    so holding every motor at full torque for a second costs 1 (times the weight), whatever
+    the physics step or the number of motors.
+
+    Args:
+        weight: Term weight (0 in the default table: off).
+    """
+
+    name = "effort"
+
+    def __init__(self, weight: float = 1.0) -> None:
+        super().__init__(weight)
+        self.bind(1)
+
+    def __call__(self, batch: BatchContext) -> np.ndarray:
+        infants, dt = bodies(batch, self.name)
+        effort = [float(np.mean(np.square(infant.data.ctrl))) for infant in infants]
+        return -np.array(effort) * dt
