@@ -179,10 +179,12 @@ def test_a_run_refuses_noise_out_of_range(key, value, message):
 def test_an_evaluation_plays_with_the_policys_motor_noise():
     # the noise is the body's: devlearn eval's envs take it from the checkpoint's config
     from devlearn.evaluation.evaluate import EvalRequest, EvalSubject, evaluation_conditions
+    from devlearn.evaluation.policy import Baseline
 
     cfg = run_config.RunConfig()
     cfg.env.action_noise_std, cfg.env.action_noise_beta = 0.2, 0.69
-    subject = EvalSubject(TinyBehavior(TinyConfig(use_eyes=False)), cfg, None, None)
+    policy = Baseline("zero", cfg, TinyBehavior(TinyConfig(use_eyes=False)))
+    subject = EvalSubject(policy, None)
     request = EvalRequest("tiny", policy="zero", episodes=2, session=300.0)
     settings = evaluation_conditions(request, subject).settings
     assert (settings.action_noise_std, settings.action_noise_beta) == (0.2, 0.69)
