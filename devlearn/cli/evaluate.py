@@ -57,6 +57,9 @@ BOOKKEEPING = {
     "episode_metrics",
 }  # fmt: skip
 """Summary keys the human summary's header says in words (or leaves to --json)."""
+MEAN_AT_BOUND_NOTED = 0.5
+"""A mean action at the bounds in more than this share of components is called out (training's
+``health/saturated`` warns past the same share)."""
 SHOWN_MAX = 8
 """Further figures the human summary shows after the headline (the JSON has all)."""
 
@@ -128,6 +131,16 @@ def human_summary(
         text = ", ".join(f"{k} {_figure(v)}" for k, v in rest[:SHOWN_MAX])
         more = f" (+{len(rest) - SHOWN_MAX} more)" if len(rest) > SHOWN_MAX else ""
         lines.append(f"  also      {text}{more}")
+    bound = (summary.get("policy_figures") or {}).get("mean_at_bound")
+    if bound is not None:  # a network's mean at the action bounds (issue #54)
+        lines.append(
+            f"  policy    mean action at the bounds in {bound:.0%} of components"
+            + (
+                ": the mean plays the bounds; compare --action sample"
+                if bound > MEAN_AT_BOUND_NOTED
+                else ""
+            )
+        )
     if json_path is not None:
         lines.append(f"  all figures: {json_path} (devlearn eval ... --json prints them)")
     return lines

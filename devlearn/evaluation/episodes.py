@@ -155,7 +155,9 @@ class _Slot:
         if info is None:
             return False
         metrics = {k: v for k, v in info.items() if k.startswith("metrics/")}
-        self.episodes.append({k.removeprefix("metrics/"): float(v) for k, v in metrics.items()})
+        figures = {k.removeprefix("metrics/"): float(v) for k, v in metrics.items()}
+        policy = {f"policy/{k}": v for k, v in self.actions.episode_figures().items()}
+        self.episodes.append({**figures, **policy})
         self.left -= 1
         return True
 

@@ -549,6 +549,7 @@ class Evaluation:
             video_error = next((r.video_error for r in results if r.video_error), None)
             summary = self.measures(subject, conditions, evaluator, started)
             per_episode_headline(summary, episode_metrics, subject.behavior.headline_metric)
+            policy_figures(summary, episode_metrics)
             summary["execution"] = {
                 "envs": conditions.envs,
                 "workers": conditions.workers,
@@ -719,3 +720,16 @@ def per_episode_headline(
     stats = mean_ci(values)
     for name in ("mean", "std", "ci_low", "ci_high"):
         summary[f"episode_{headline}_{name}"] = stats[name]
+
+
+def policy_figures(summary: dict[str, Any], episodes: list[dict[str, float]]) -> None:
+    """Add ``policy_figures``: the policy's own figures (``policy/...`` in every episode's metrics,
+    :meth:`~devlearn.evaluation.policy.Actions.episode_figures`) averaged over the episodes:
+    a network's ``mean_at_bound`` share, so that a mean sitting past the action bounds is never
+    unseen (issue #54). Nothing where the policy has none (baselines, scripted policies)."""
+    keys = sorted({k for e in episodes for k in e if k.startswith("policy/")})
+    if keys:
+        summary["policy_figures"] = {
+            k.removeprefix("policy/"): float(np.mean([e[k] for e in episodes if k in e]))
+            for k in keys
+        }

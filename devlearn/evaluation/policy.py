@@ -15,6 +15,7 @@ import torch
 
 from devlearn.config.run_config import to_dict
 from devlearn.training.checkpoint import Checkpoint
+from devlearn.training.health import SATURATED
 
 if TYPE_CHECKING:
     from devlearn.api.behavior import Behavior
@@ -135,6 +136,11 @@ class Actions:
         """A copy in this initial state for one slot."""
         return copy.deepcopy(self)
 
+    def episode_figures(self) -> dict[str, float]:
+        """Figures of the policy itself over the episode just ended, counted afresh for the
+        next (none by default; a network's: :class:`ActorActions`)."""
+        return {}
+
 
 class ZeroActions(Actions):
     """The zero action."""
@@ -206,6 +212,8 @@ class ActorActions(Actions):
         self.actor = actor
         self.sample = sample
         self.state = generator_state.clone()
+        self.at_bound = 0  # mean components at or past the bounds, this episode
+        self.components = 0
 
     def act(self, obs: Observations) -> np.ndarray:
         from tensordict import TensorDict
@@ -215,9 +223,25 @@ class ActorActions(Actions):
             torch.set_rng_state(self.state)
         with torch.inference_mode():
             action = self.actor(batch, stochastic_output=self.sample).numpy()
+            # the mean as the head plays it (clipped, or squashed); no draw from the generator
+            mean = self.actor(batch).numpy() if self.sample else action
         if self.sample:
             self.state = torch.get_rng_state()
+        self.at_bound += int((np.abs(mean) >= SATURATED).sum())
+        self.components += mean.size
         return action
+
+    def episode_figures(self) -> dict[str, float]:
+        """``mean_at_bound``: the share of the mean action's components at the action
+        bounds over the episode's decisions: the deterministic action (the mean clipped to
+        [-1, 1] as the env applies it, or squashed by the head) at magnitude >=
+        :data:`~devlearn.training.health.SATURATED` (the threshold of training's
+        ``health/saturated``). A mean at or past a bound plays the bound, and a sample past
+        it is clipped to the same action (issue #54). Counted with sampled actions too (the
+        mean beside the samples)."""
+        share = self.at_bound / self.components if self.components else 0.0
+        self.at_bound = self.components = 0
+        return {"mean_at_bound": share}
 
     def skip(self, decisions: int) -> None:
         """A sampled action is ``torch.normal(mean, std)`` of shape (N, action_dim): one

@@ -119,9 +119,9 @@ def test_sigterm_saves_a_checkpoint_and_restores_handlers(cli, tmp_path, monkeyp
 
     record = MetricsLog.record
 
-    def record_then_terminate(self, it, env_steps, *args, **kwargs):
-        row = record(self, it, env_steps, *args, **kwargs)
-        if env_steps == 32:  # the scheduler's SIGTERM, mid-run
+    def record_then_terminate(self, figures, *args, **kwargs):
+        row = record(self, figures, *args, **kwargs)
+        if figures.env_steps == 32:  # the scheduler's SIGTERM, mid-run
             os.kill(os.getpid(), signal.SIGTERM)
         return row
 
@@ -153,7 +153,8 @@ def test_eval_prints_a_short_summary_led_by_the_headline(cli, tmp_path, capsys, 
     assert lines[2].startswith("  headline  episode_close_mean = ")  # the per-episode headline
     assert lines[3].startswith("  baselines zero ") and "(same start)" in lines[3]
     assert any(line.startswith(f"  all figures: {out / 'eval' / 'eval.json'}") for line in lines)
-    assert len(lines) <= 7 and all(len(line) < 300 for line in lines)  # no raw dump
+    assert any(line.startswith("  policy    mean action at the bounds in ") for line in lines)
+    assert len(lines) <= 8 and all(len(line) < 300 for line in lines)  # no raw dump
     assert cli(["eval", "tiny", "--checkpoint", str(out), "--episodes", "2", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["episodes"] == 2  # --json keeps everything
     err = "--compare nowhere: no readable eval.json there"

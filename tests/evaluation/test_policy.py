@@ -175,3 +175,41 @@ def test_a_baseline_is_one_of_the_named_ones():
     cfg = resolve_config(RunRequest("tiny"), REGISTRY)
     with pytest.raises(ValueError, match="unknown baseline 'greedy'; valid: zero, random"):
         Baseline("greedy", cfg, TinyBehavior())
+
+
+@pytest.mark.parametrize("sample", [False, True])
+def test_an_evaluation_says_where_the_mean_action_sits_past_the_bounds(
+    tmp_path, first_obs, sample
+):
+    """Issue #54: a mean past the action bounds plays the bound, and was unseen in eval.json
+    (hand regard's CNN seed 1: 64% of components). A network whose mean is 3, -3 and 0 on its
+    three actions, whatever it sees, has two thirds of its mean at the bounds; eval.json says
+    so under ``policy_figures.mean_at_bound``, with the mean action and beside sampled ones."""
+    from devlearn.evaluation.evaluate import Evaluation
+
+    obs, action_dim = first_obs
+    assert action_dim == 3
+    cfg = resolve_config(RunRequest("tiny", ["seed=6"]), REGISTRY)
+    behavior = REGISTRY.create("tiny", cfg.behavior)
+    actor = policy_network(cfg, behavior, obs, action_dim)
+    with torch.no_grad():
+        actor.mlp[-1].weight.zero_()
+        actor.mlp[-1].bias.copy_(torch.tensor([3.0, -3.0, 0.0]))
+    state = policy_file(to_dict(cfg), behavior, actor.state_dict(), env_steps=96)
+    save_checkpoint(state, tmp_path / "policy.pt")
+    request = EvalRequest(
+        "tiny",
+        tmp_path / "policy.pt",
+        episodes=2,
+        action="sample" if sample else "mean",
+        out_dir=tmp_path / "eval",
+    )
+    summary = Evaluation(request, REGISTRY, infant_factory=fake_infant_factory).run()
+    assert summary["policy_figures"]["mean_at_bound"] == pytest.approx(2 / 3)
+    import json
+
+    saved = json.loads((tmp_path / "eval" / "eval.json").read_text())
+    assert saved["policy_figures"]["mean_at_bound"] == pytest.approx(2 / 3)
+    zero = EvalRequest("tiny", policy="zero", episodes=2)
+    assert saved["policy"] == "checkpoint"  # the policy's name stays
+    assert "policy_figures" not in Evaluation(zero, REGISTRY, infant_factory=fake_infant_factory).run()
