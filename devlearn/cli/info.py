@@ -14,9 +14,9 @@ if TYPE_CHECKING:
 
 def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     """Print the description as a table or JSON."""
-    from devlearn.config.run_config import fresh_config
+    from devlearn.config.resolve import RunRequest, resolve_config
 
-    cfg = fresh_config(registry.behavior(args.behavior))  # what `devlearn run` would use
+    cfg = resolve_config(RunRequest(args.behavior), registry)  # what `devlearn run` would use
     behavior = registry.create(args.behavior, cfg.behavior)
     info = describe_behavior(behavior, action_repeat=cfg.env.action_repeat)
     info["plugin"] = registry.plugin_of(args.behavior).name

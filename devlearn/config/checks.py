@@ -1,4 +1,5 @@
-"""Start-up checks of a run: config values, seed, memory for the envs, the output folder."""
+"""Start-up checks of a run: config values, a resumed run's seed and growth schedule, memory for
+the envs, the output folder."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 from devlearn.ages import check_age
 from devlearn.api.errors import UsageError
-from devlearn.config.growth import growth_schedule
+from devlearn.config.growth import growth_schedule, keep_growth_on_resume
 from devlearn.files import unwritable
 from devlearn.timing import EPISODE_STEPS, decision_rate_error
 
@@ -99,6 +100,29 @@ def check_config(cfg: RunConfig) -> None:
         _positive(cfg, "desired_kl")
     _check_batches(cfg)
     _check_infant(cfg)  # the reward table: when its behaviour is built (check_reward_table)
+
+
+def check_resumed(saved: RunConfig, resumed: RunConfig, run_dir: Path) -> str | None:
+    """Check a resumed run's config against the one its run saved (``run_dir/config.json``):
+    the seed stays the run's (its random states continue from the checkpoint) and so does its
+    growth schedule, whose span is fixed in ``resumed`` where ``--steps`` changed
+    (:func:`~devlearn.config.growth.keep_growth_on_resume`: the body's age never goes back).
+
+    Returns:
+        A note saying that the growth schedule's span was fixed (None otherwise).
+    Raises:
+        UsageError: Another seed or growth schedule (the saved and the new values named, and
+            how to get them: a new run from the run's checkpoint).
+    """
+    note = keep_growth_on_resume(saved, resumed, str(run_dir))
+    if resumed.seed != saved.seed:
+        raise UsageError(
+            f"run {run_dir} was trained with seed {saved.seed}, which a resumed run keeps "
+            "(its random states continue from the checkpoint); for another seed start a new "
+            f"run from its checkpoint: --from {run_dir / 'checkpoint_latest.pt'} "
+            f"--seed {resumed.seed} --out NEW_DIR"
+        )
+    return note
 
 
 def _check_infant(cfg: RunConfig) -> None:

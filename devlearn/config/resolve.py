@@ -11,18 +11,8 @@ from typing import TYPE_CHECKING, Any, Protocol
 
 from devlearn.api.errors import UsageError
 from devlearn.api.json_files import read_json_object
-from devlearn.config.checks import check_config
-from devlearn.config.growth import keep_growth_on_resume
-from devlearn.config.run_config import (
-    RunConfig,
-    apply_preset,
-    build_behavior,
-    finish_config,
-    from_dict,
-    scale_to_length,
-    start_config,
-    to_dict,
-)
+from devlearn.config.checks import check_config, check_resumed
+from devlearn.config.run_config import RunConfig, finish_config, from_dict, new_config, to_dict
 from devlearn.config.values import apply_overrides, override_keys
 from devlearn.files import write_text_atomically
 
@@ -109,8 +99,8 @@ def resolve_config(
     registry: PluginRegistry,
     read_checkpoint: CheckpointReader | None = None,
 ) -> RunConfig:
-    """The run config ``request`` asks for, checked: :func:`resolve_run`'s config, for a
-    command that needs no behaviour (``devlearn config``, a sweep's plan)."""
+    """:func:`resolve_run`'s config alone, for a command that needs no behaviour
+    (``devlearn config``, a sweep's plan): ``resolve_run(...).cfg``."""
     return resolve_run(request, registry, read_checkpoint).cfg
 
 
@@ -122,15 +112,40 @@ def resolve_run(
     """The run config ``request`` asks for, checked (every value in bounds, the learner's
     head, spread bounds and decision rate, the behaviour's config and ``network()``), with the
     behaviour built on it, ready for :func:`~devlearn.training.train.train`. Every command
-    that builds a run's config builds it here (``devlearn run``, ``config``, ``sweep``,
-    ``eval``'s baselines, ``bench``, the Gymnasium envs), so each checks what ``devlearn run``
-    checks.
+    that builds a run's config builds it here (``devlearn run``, ``config``, ``info``,
+    ``sweep``, ``experiment``, ``eval``'s baselines, ``bench``, the Gymnasium envs), so each
+    checks what ``devlearn run`` checks.
 
-    - fresh: defaults < the behaviour's ``train_defaults()`` < preset < top < overrides;
-    - ``resume``: the run's ``config.json`` < top < overrides; the seed stays the run's;
-    - ``start_from``: the checkpoint's config < preset < top < overrides; ``start_from``
-      records the checkpoint and ``out_dir`` is ``request.out_dir``;
-    - ``config_file`` / ``saved``: that config < top < overrides.
+    One pipeline, its stages in this order, each a function of this module:
+
+    1. the request's options, checked against each other (:func:`_check_request`);
+    2. where the config starts (:func:`_start`): fresh, the core defaults < the behaviour's
+       ``train_defaults()``; ``resume``, the run's ``config.json``; ``start_from``, the
+       checkpoint's config; ``config_file`` / ``saved``, that config (a new run's file: keys
+       it lacks take a fresh run's values);
+    3. ``preset`` (:func:`_apply_preset`; fresh and ``start_from`` only);
+    4. ``top`` and ``out_dir``, then ``overrides`` (``--set``);
+    5. a resumed run keeps its seed and growth schedule
+       (:func:`~devlearn.config.checks.check_resumed`); a run from a checkpoint records it
+       (:func:`_record_source`);
+    6. the behaviour built on the config (:func:`_build_behavior`); a fresh run's run-length
+       defaults (:func:`_scale_to_length`: ``run_length_defaults(total_steps)``, except the
+       keys the preset or ``--set`` gave);
+    7. the checks (:func:`~devlearn.config.run_config.finish_config`,
+       :func:`~devlearn.config.checks.check_config`), then the :class:`ResolvedRun`.
+
+    The walk a reader follows (``python scripts/walk_resolve.py``): from this body through
+    every call named in the code within ``devlearn/``, into the stages (walked: their calls
+    followed, their ``return`` statements counted), not into the tools a stage hands one job
+    (opened: their files counted): setting dotted keys (``values.apply_overrides``,
+    ``override_keys``), reading a saved config (``run_config.from_dict``,
+    :func:`read_config_file`) and the checks (``finish_config``, ``check_config``,
+    ``check_resumed``); calls on objects handed in (the registry, the behaviour, the
+    checkpoint reader) are not followed. Issue #59 measured it on bc7cc2f at 5 files and 8
+    returns (its builders in ``run_config.py``, a growth rule in ``growth.py``); here it is 4
+    files (``resolve.py``, ``run_config.py``, ``values.py``, ``checks.py``) and 4 returns.
+    Through the tools too (``--all``): 10 files and 81 returns then, 10 and 77 now (the
+    ``--set`` language and the checks are unchanged).
 
     ``read_checkpoint`` reads ``start_from``'s config
     (:func:`devlearn.training.checkpoint.checkpoint_config`); only a request with
@@ -141,6 +156,32 @@ def resolve_run(
             config or checkpoint that is unreadable or trains another behaviour, a bad
             override or value (each named with what is valid).
     """
+    _check_request(request)
+    fresh = not (request.resume or request.start_from or request.config_file)
+    fresh = fresh and request.saved is None
+    cfg = _start(request, registry, read_checkpoint)
+    started = copy.deepcopy(cfg)
+    behavior_cls = registry.behavior(cfg.behavior_name)
+    if request.preset:
+        _apply_preset(cfg, behavior_cls, request.preset)
+    placed = {**request.top, "out_dir": request.out_dir} if request.out_dir else request.top
+    apply_overrides(cfg, {k: v for k, v in placed.items() if v is not None})
+    apply_overrides(cfg, request.overrides)
+    notes: list[str] = []
+    if request.resume and (note := check_resumed(started, cfg, Path(request.resume))):
+        notes.append(note)
+    _record_source(cfg, request)
+    behavior = _build_behavior(cfg, behavior_cls)
+    if fresh:  # values that scale with the run's length, unless given
+        preset_keys = set(behavior_cls.presets[request.preset]) if request.preset else set()
+        _scale_to_length(cfg, behavior, preset_keys | override_keys(request.overrides))
+    finish_config(cfg, behavior)
+    check_config(cfg)
+    return ResolvedRun(cfg, behavior, notes)
+
+
+def _check_request(request: RunRequest) -> None:
+    """Stage 1: refuse options that exclude each other (one line each, naming them)."""
     sources = [
         name
         for name, given in (
@@ -155,45 +196,111 @@ def resolve_run(
         raise UsageError("--resume keeps the run's config; --preset and --from start new runs")
     if len(sources) > 1:
         raise UsageError(f"{' and '.join(sources)} exclude each other")
-    if request.resume and request.preset:
-        raise UsageError("--resume keeps the run's config; --preset and --from start new runs")
     if request.resume and request.out_dir:
         raise UsageError("--out and --resume exclude each other (a resumed run stays put)")
     if (request.config_file or request.saved is not None) and request.preset:
         raise UsageError("--config starts from a resolved config; --preset does not apply to it")
-    top = {k: v for k, v in request.top.items() if v is not None}
-    behavior: Behavior | None = None
-    notes: list[str] = []
-    placed = {**top, "out_dir": request.out_dir} if request.out_dir else top
+
+
+def _start(
+    request: RunRequest, registry: PluginRegistry, read_checkpoint: CheckpointReader | None
+) -> RunConfig:
+    """Stage 2, where the config starts: a fresh run's defaults (the core's < the behaviour's
+    ``train_defaults()``), the checkpoint's config (``start_from``), or a saved config (a run's
+    ``config.json`` to resume, a ``config_file``, ``saved`` data) read for its behaviour, which
+    must be the requested one where one is. A saved run's config takes, for keys it lacks, the
+    values it was trained with (:func:`~devlearn.config.run_config.from_dict`); a new run's
+    file (``config_file``) a fresh run's values, the run-length defaults at its default
+    length included.
+
+    Raises:
+        UsageError: An unknown behaviour, a missing run folder, an unreadable config or
+            checkpoint, or one that trains another behaviour.
+    """
+    data, source = request.saved, "the saved config"
     if request.resume:
-        cfg = _resumed(request, registry, top, notes)
-    elif request.start_from:
+        run_dir = Path(request.resume)
+        if not run_dir.is_dir():
+            raise UsageError(f"run directory {run_dir} does not exist")
+        data, source = read_config_file(run_dir / CONFIG_FILE), f"run {run_dir}"
+    elif request.config_file:
+        data, source = read_config_file(request.config_file), request.config_file
+    if request.start_from:
         if read_checkpoint is None:
             raise TypeError(
                 "resolve_config: a request with start_from needs read_checkpoint "
                 "(devlearn.training.checkpoint.checkpoint_config)"
             )
-        cfg = _branched(request, registry, top, read_checkpoint)
-    elif request.config_file or request.saved is not None:
-        data = request.saved
-        if data is None:
-            data = read_config_file(request.config_file)
-        source = request.config_file or "the saved config"
-        cfg = _from_saved(data, request, registry, source, new_run=bool(request.config_file))
-        apply_overrides(cfg, placed)
-        apply_overrides(cfg, request.overrides)
-    else:  # fresh: as fresh_config, keeping the behaviour it builds
+        cfg = read_checkpoint(str(request.start_from), registry, request.behavior)
+    elif data is None:  # fresh
         behavior_cls = registry.behavior(request.behavior)
-        cfg, explicit = start_config(behavior_cls, request.preset, **placed)
-        explicit |= override_keys(request.overrides)
-        apply_overrides(cfg, request.overrides)
-        behavior = build_behavior(cfg, behavior_cls)
-        scale_to_length(cfg, behavior, explicit)
-    if behavior is None:
-        behavior = build_behavior(cfg, registry.behavior(cfg.behavior_name))
-    finish_config(cfg, behavior)
-    check_config(cfg)
-    return ResolvedRun(cfg, behavior, notes)
+        cfg = new_config(behavior_cls)
+        _apply_behavior_defaults(cfg, behavior_cls)
+    else:
+        name = data.get("behavior_name") or request.behavior
+        if request.behavior and name != request.behavior:
+            raise UsageError(f"{source} trains '{name}', not '{request.behavior}'")
+        behavior_cls = registry.behavior(name)
+        base = None
+        if request.config_file:  # a new run's file: what it lacks, a fresh run's values
+            base = new_config(behavior_cls)
+            _apply_behavior_defaults(base, behavior_cls)
+            _scale_to_length(base, _build_behavior(base, behavior_cls), set())
+        cfg = from_dict(data, behavior_cls, base)
+    return cfg
+
+
+def _apply_behavior_defaults(cfg: RunConfig, behavior_cls: type[Behavior]) -> None:
+    """Apply the behaviour's ``train_defaults()`` (read from a behaviour built on the default
+    config: run settings are data) to a new run's ``cfg``."""
+    apply_overrides(cfg, behavior_cls(cfg.behavior).train_defaults())
+
+
+def _apply_preset(cfg: RunConfig, behavior_cls: type[Behavior], preset: str) -> None:
+    """Stage 3: apply the behaviour's preset ``preset`` (its ``presets``) and record its name
+    in ``cfg.preset``.
+
+    Raises:
+        UsageError: The behaviour has no such preset (the valid ones are named).
+    """
+    presets = behavior_cls.presets
+    if preset not in presets:
+        raise UsageError(
+            f"unknown preset '{preset}' for {behavior_cls.name}; "
+            f"valid: {', '.join(presets) or 'none (it defines no presets)'}"
+        )
+    apply_overrides(cfg, presets[preset])
+    cfg.preset = preset
+
+
+def _record_source(cfg: RunConfig, request: RunRequest) -> None:
+    """Stage 5 of a run from a checkpoint: it records the checkpoint and writes where
+    ``--out`` says (not where the checkpoint's run wrote, whatever ``--set`` said)."""
+    if request.start_from:
+        cfg.out_dir = request.out_dir
+        cfg.start_from = str(request.start_from)
+
+
+def _build_behavior(cfg: RunConfig, behavior_cls: type[Behavior]) -> Behavior:
+    """Stage 6: the behaviour a run of ``cfg`` trains, built on ``cfg.behavior`` (which it
+    checks: the config's ``validate`` and its reward table).
+
+    Raises:
+        UsageError: The behaviour refuses its config (one line naming the behaviour).
+    """
+    try:
+        return behavior_cls(cfg.behavior)
+    except (ValueError, TypeError) as err:
+        raise UsageError(f"{behavior_cls.name}: {err}") from None
+
+
+def _scale_to_length(cfg: RunConfig, behavior: Behavior, keep: set[str]) -> None:
+    """Stage 6 of a new run: apply ``behavior.run_length_defaults(cfg.total_steps)`` (values
+    that scale with the run's length) to ``cfg``, except the keys in ``keep`` (what ``--set``
+    or the preset gave). ``behavior`` is the one built on ``cfg.behavior``, so it sees the
+    values."""
+    scaled = behavior.run_length_defaults(int(cfg.total_steps))
+    apply_overrides(cfg, {k: v for k, v in scaled.items() if k not in keep})
 
 
 def read_config_file(path: str | Path) -> dict[str, Any]:
@@ -223,58 +330,3 @@ def load_run_config(run_dir: str | Path, registry: PluginRegistry) -> RunConfig:
     """
     data = read_config_file(Path(run_dir) / CONFIG_FILE)
     return from_dict(data, registry.behavior(data.get("behavior_name", "")))
-
-
-def _from_saved(
-    data: dict[str, Any],
-    request: RunRequest,
-    registry: PluginRegistry,
-    source: str,
-    new_run: bool = False,
-) -> RunConfig:
-    """``data`` read for its behaviour, which must be the requested one (if one is; a config
-    that names none is read for the requested one); ``new_run``: a new run's config file, whose
-    missing keys take today's defaults (:func:`~devlearn.config.run_config.from_dict`)."""
-    name = data.get("behavior_name") or request.behavior
-    if request.behavior and name != request.behavior:
-        raise UsageError(f"{source} trains '{name}', not '{request.behavior}'")
-    return from_dict(data, registry.behavior(name), new_run)
-
-
-def _resumed(
-    request: RunRequest, registry: PluginRegistry, top: dict[str, Any], notes: list[str]
-) -> RunConfig:
-    run_dir = Path(request.resume)
-    if not run_dir.is_dir():
-        raise UsageError(f"run directory {run_dir} does not exist")
-    cfg = _from_saved(read_config_file(run_dir / CONFIG_FILE), request, registry, f"run {run_dir}")
-    saved = copy.deepcopy(cfg)
-    recorded_seed = cfg.seed
-    apply_overrides(cfg, top)
-    apply_overrides(cfg, request.overrides)
-    if note := keep_growth_on_resume(saved, cfg, str(run_dir)):  # the age never goes back
-        notes.append(note)
-    if cfg.seed != recorded_seed:
-        raise UsageError(
-            f"run {run_dir} was trained with seed {recorded_seed}, which a resumed run keeps "
-            "(its random states continue from the checkpoint); for another seed start a new "
-            f"run from its checkpoint: --from {run_dir / 'checkpoint_latest.pt'} "
-            f"--seed {cfg.seed} --out NEW_DIR"
-        )
-    return cfg
-
-
-def _branched(
-    request: RunRequest,
-    registry: PluginRegistry,
-    top: dict[str, Any],
-    read_checkpoint: CheckpointReader,
-) -> RunConfig:
-    cfg = read_checkpoint(str(request.start_from), registry, request.behavior)
-    if request.preset:
-        apply_preset(cfg, registry.behavior(cfg.behavior_name), request.preset)
-    apply_overrides(cfg, top)
-    apply_overrides(cfg, request.overrides)
-    cfg.out_dir = request.out_dir
-    cfg.start_from = str(request.start_from)
-    return cfg

@@ -1,5 +1,6 @@
-"""Run configuration: nested dataclasses, presets, saved configs, rsl-rl's train_cfg (``--set``
-overrides: :mod:`devlearn.config.values`)."""
+"""Run configuration: the nested dataclasses, saved configs (:func:`to_dict`, :func:`from_dict`),
+the learner's checks and rsl-rl's train_cfg. A run's config is built by
+:func:`devlearn.config.resolve.resolve_run` (``--set`` overrides: :mod:`devlearn.config.values`)."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 from devlearn.api.behavior import BehaviorConfig, check_reward_table
 from devlearn.api.errors import UsageError
 from devlearn.api.rewards import upgrade_saved_rewards
-from devlearn.config.values import apply_overrides, convert, field_types, override_keys
+from devlearn.config.values import convert, field_types
 
 if TYPE_CHECKING:
     from devlearn.api.behavior import Behavior
@@ -302,71 +303,8 @@ class RunConfig:
 
 def new_config(behavior_cls: type[Behavior]) -> RunConfig:
     """The core defaults with the behaviour's config class's defaults: the base every run
-    config starts from (:func:`fresh_config`, :func:`from_dict`)."""
+    config starts from (:func:`devlearn.config.resolve.resolve_run`, :func:`from_dict`)."""
     return RunConfig(behavior_name=behavior_cls.name, behavior=behavior_cls.config_class())
-
-
-def fresh_config(
-    behavior_cls: type[Behavior],
-    overrides: list[str] | None = None,
-    preset: str | None = None,
-    **top: Any,
-) -> RunConfig:
-    """A new run's config, unchecked: defaults < the behaviour's ``train_defaults()`` < its
-    preset ``preset`` < ``top`` < overrides, then the behaviour's
-    ``run_length_defaults(total_steps)`` for the keys neither the preset nor an override set
-    (:func:`start_config`, :func:`scale_to_length`: the steps
-    :func:`devlearn.config.resolve.resolve_config` takes, checking the result, for a run).
-
-    Raises:
-        UsageError: An unknown preset (the valid ones named) or a bad override.
-    """
-    cfg, explicit = start_config(behavior_cls, preset, **top)
-    apply_overrides(cfg, overrides or [])
-    scale_to_length(cfg, build_behavior(cfg, behavior_cls), explicit | override_keys(overrides))
-    return cfg
-
-
-def start_config(
-    behavior_cls: type[Behavior], preset: str | None = None, **top: Any
-) -> tuple[RunConfig, set[str]]:
-    """A new run's config before ``--set`` and the run-length defaults: defaults < the
-    behaviour's ``train_defaults()`` < its preset ``preset`` < ``top`` (None values skipped);
-    with the keys the preset sets (which :func:`scale_to_length` keeps).
-
-    Raises:
-        UsageError: An unknown preset (the valid ones named) or a bad value.
-    """
-    cfg = new_config(behavior_cls)
-    defaults = behavior_cls(cfg.behavior)  # the default config's: run settings are data
-    apply_overrides(cfg, defaults.train_defaults())
-    explicit: set[str] = set()
-    if preset:
-        apply_preset(cfg, behavior_cls, preset)
-        explicit |= set(behavior_cls.presets[preset])
-    apply_overrides(cfg, {k: v for k, v in top.items() if v is not None})
-    return cfg, explicit
-
-
-def scale_to_length(cfg: RunConfig, behavior: Behavior, keep: set[str]) -> None:
-    """Apply ``behavior.run_length_defaults(cfg.total_steps)`` (values that scale with the
-    run's length) to a new run's ``cfg``, except the keys in ``keep`` (what ``--set`` or the
-    preset gave). ``behavior`` is the one built on ``cfg.behavior``, so it sees the values."""
-    scaled = behavior.run_length_defaults(int(cfg.total_steps))
-    apply_overrides(cfg, {k: v for k, v in scaled.items() if k not in keep})
-
-
-def build_behavior(cfg: RunConfig, behavior_cls: type[Behavior]) -> Behavior:
-    """The behaviour a run of ``cfg`` trains, built on ``cfg.behavior`` (which it checks:
-    the config's ``validate`` and its reward table).
-
-    Raises:
-        UsageError: The behaviour refuses its config (one line naming the behaviour).
-    """
-    try:
-        return behavior_cls(cfg.behavior)
-    except (ValueError, TypeError) as err:
-        raise UsageError(f"{behavior_cls.name}: {err}") from None
 
 
 def finish_config(cfg: RunConfig, behavior: Behavior) -> None:
@@ -462,24 +400,6 @@ def head_max_std(spec: Any) -> float:
     return float(spec.max_std) if spec.max_std else 1.0
 
 
-def apply_preset(cfg: RunConfig, behavior_cls: type[Behavior], preset: str) -> RunConfig:
-    """Apply the behaviour's preset ``preset`` (its ``presets``) to ``cfg`` in place and
-    record its name in ``cfg.preset``.
-
-    Raises:
-        UsageError: The behaviour has no such preset (the valid ones are named).
-    """
-    presets = behavior_cls.presets
-    if preset not in presets:
-        raise UsageError(
-            f"unknown preset '{preset}' for {behavior_cls.name}; "
-            f"valid: {', '.join(presets) or 'none (it defines no presets)'}"
-        )
-    apply_overrides(cfg, presets[preset])
-    cfg.preset = preset
-    return cfg
-
-
 def to_dict(cfg: RunConfig) -> dict[str, Any]:
     """Return a JSON-ready dict of ``cfg`` (tuples become lists)."""
     return json.loads(json.dumps(dataclasses.asdict(cfg)))
@@ -504,22 +424,24 @@ def _fill(obj: Any, data: dict[str, Any], prefix: str) -> None:
 
 
 def from_dict(
-    data: dict[str, Any], behavior_cls: type[Behavior], new_run: bool = False
+    data: dict[str, Any], behavior_cls: type[Behavior], base: RunConfig | None = None
 ) -> RunConfig:
     """Rebuild a RunConfig saved by :func:`to_dict` for the behaviour class ``behavior_cls``.
 
-    A saved run's config (a checkpoint's, a run folder's): a key it lacks takes its default,
-    except where the old runs were trained otherwise: a missing ``network`` section means
-    :data:`LEGACY_NETWORK`, a core field of :data:`LEGACY_FIELDS` takes its value there, and a
-    behaviour field named in its config class's
+    A saved run's config (a checkpoint's, a run folder's; no ``base``): a key it lacks takes
+    its default, except where the old runs were trained otherwise: a missing ``network``
+    section means :data:`LEGACY_NETWORK`, a core field of :data:`LEGACY_FIELDS` takes its
+    value there, and a behaviour field named in its config class's
     :attr:`~devlearn.api.behavior.BehaviorConfig.LEGACY_DEFAULTS` (field -> value) that the
     saved ``behavior`` section lacks takes that value (a default changed after those runs).
 
-    ``new_run``: ``data`` is a new run's config file (``devlearn run --config``): a key it
-    lacks takes today's defaults, the behaviour's ``train_defaults()`` included
-    (:func:`fresh_config`), never the values old runs were trained with.
+    ``base``: ``data`` is a new run's config file (``devlearn run --config``), filled into
+    ``base`` (in place), a fresh run's config: a key it lacks keeps today's defaults, the
+    behaviour's ``train_defaults()`` included (:func:`devlearn.config.resolve.resolve_run`
+    builds it), never the values old runs were trained with.
     """
-    cfg = fresh_config(behavior_cls) if new_run else new_config(behavior_cls)
+    new_run = base is not None
+    cfg = base if base is not None else new_config(behavior_cls)
     if not new_run and "network" not in data:
         cfg.network = dataclasses.replace(LEGACY_NETWORK)
     for key, value in {} if new_run else LEGACY_FIELDS.items():

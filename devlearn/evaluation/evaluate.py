@@ -23,7 +23,7 @@ from devlearn.ages import check_age
 from devlearn.api.behavior import evaluation_stage
 from devlearn.api.errors import UsageError
 from devlearn.config.resolve import RunRequest, resolve_config
-from devlearn.config.run_config import RunConfig, fresh_config
+from devlearn.config.run_config import RunConfig
 from devlearn.cores import available_cores
 from devlearn.env.behavior_env import BehaviorEnv
 from devlearn.env.rendering import check_senses_render, require_rendering
@@ -399,7 +399,7 @@ def baseline_config(
     """A baseline's config, resolved once: the config a saved config without values means (the
     behaviour's ``LEGACY_DEFAULTS``), acting at the decision rate a new run of the behaviour
     would use (its fresh config's ``env.action_repeat``), then ``overrides``."""
-    rate = fresh_config(registry.behavior(behavior_name)).env.action_repeat
+    rate = resolve_config(RunRequest(behavior_name), registry).env.action_repeat
     request = RunRequest(behavior_name, [f"env.action_repeat={rate}", *overrides], saved={})
     return resolve_config(request, registry)
 

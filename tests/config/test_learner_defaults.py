@@ -108,7 +108,7 @@ def test_a_run_saved_before_loads_as_it_was_trained():
 
 
 def test_a_new_runs_config_file_gets_todays_defaults():
-    cfg = from_dict({"behavior_name": "plain"}, Plain, new_run=True)
+    cfg = from_dict({"behavior_name": "plain"}, Plain, run_config(Plain))
     assert {key: value(cfg, key) for key in LEARNER} == LEARNER
     assert to_dict(cfg) == to_dict(run_config(Plain))
 

@@ -139,7 +139,8 @@ def test_legacy_defaults_fill_fields_an_old_saved_config_lacks():
     assert from_dict(data, LegacyTiny).behavior.target == 0.25
     del data["behavior"]["target"]
     assert from_dict(data, LegacyTiny).behavior.target == 0.9
-    assert from_dict(data, LegacyTiny, new_run=True).behavior.target == TinyConfig().target
+    new_run = from_dict(data, LegacyTiny, run_config(LegacyTiny))  # filling a fresh config
+    assert new_run.behavior.target == TinyConfig().target
     assert from_dict({}, LegacyTiny).behavior.target == TinyConfig().target
 
 

@@ -129,7 +129,7 @@ def test_saved_runs_keep_the_clock_they_were_trained_with():
     assert touch_novelty(old).clock is None  # the rewards table's counts
     new = from_dict(to_dict(run_config(SelfTouch)), SelfTouch).behavior
     assert (new.repeat_crossing_s, new.repeat_steepness_s, new.episode_s) == (0.05, 0.01, None)
-    fresh = from_dict({"behavior": {}}, SelfTouch, new_run=True).behavior
+    fresh = from_dict({"behavior": {}}, SelfTouch, run_config(SelfTouch)).behavior
     assert fresh.repeat_crossing_s == 0.05
     assert PluginRegistry().behavior("self_touch") is SelfTouch
 
