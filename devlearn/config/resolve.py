@@ -1,5 +1,7 @@
-"""resolve_config(): the one path from what a command asks for (a fresh run, ``--resume``,
-``--from``, ``--config``, ``--preset``, ``--set``) to a checked :class:`RunConfig`."""
+"""resolve_run(): the one pipeline from what a command asks for (a fresh run, ``--resume``,
+``--from``, ``--config``, ``--preset``, ``--set``) to a checked :class:`RunConfig` and the
+behaviour built on it, its stages the small functions below it; reading and writing a run's
+config file."""
 
 from __future__ import annotations
 
@@ -141,11 +143,12 @@ def resolve_run(
     ``override_keys``), reading a saved config (``run_config.from_dict``,
     :func:`read_config_file`) and the checks (``finish_config``, ``check_config``,
     ``check_resumed``); calls on objects handed in (the registry, the behaviour, the
-    checkpoint reader) are not followed. Issue #59 measured it on bc7cc2f at 5 files and 8
-    returns (its builders in ``run_config.py``, a growth rule in ``growth.py``); here it is 4
-    files (``resolve.py``, ``run_config.py``, ``values.py``, ``checks.py``) and 4 returns.
-    Through the tools too (``--all``): 10 files and 81 returns then, 10 and 77 now (the
-    ``--set`` language and the checks are unchanged).
+    checkpoint reader) are not followed. Counted so, it is 4 files (``resolve.py``,
+    ``run_config.py``, ``values.py``, ``checks.py``) and 4 returns; on bc7cc2f, before this
+    pipeline, 5 files and 8 returns (the builders in ``run_config.py``, a growth rule in
+    ``growth.py``; issue #59 counted 10 files and 27 returns by a rule it does not give).
+    Through the tools too (``--all``): 10 files and 77 returns, 81 on bc7cc2f (the ``--set``
+    language and the checks are unchanged).
 
     ``read_checkpoint`` reads ``start_from``'s config
     (:func:`devlearn.training.checkpoint.checkpoint_config`); only a request with
@@ -160,7 +163,7 @@ def resolve_run(
     fresh = not (request.resume or request.start_from or request.config_file)
     fresh = fresh and request.saved is None
     cfg = _start(request, registry, read_checkpoint)
-    started = copy.deepcopy(cfg)
+    started = copy.deepcopy(cfg)  # what a resumed run's checks compare against
     behavior_cls = registry.behavior(cfg.behavior_name)
     if request.preset:
         _apply_preset(cfg, behavior_cls, request.preset)
