@@ -53,10 +53,10 @@ class CheckpointReader(Protocol):
 class RunRequest:
     """What a command asks for; :func:`resolve_config` turns it into a RunConfig.
 
-    At most one of ``resume``, ``start_from``, ``config_file`` and ``saved`` names where the
-    config starts; none: a fresh run (the core defaults < the behaviour's ``train_defaults()``).
-    Then, in this order: ``preset`` (not with ``resume`` or a saved config), ``top``,
-    ``overrides``.
+    At most one of ``resume``, ``start_from``, ``config_file``, ``saved`` and ``baseline``
+    names where the config starts; none: a fresh run (the core defaults < the behaviour's
+    ``train_defaults()``). Then, in this order: ``preset`` (not with ``resume``,
+    ``config_file`` or ``saved``), ``top``, ``overrides``.
     """
 
     behavior: str = ""
@@ -80,6 +80,11 @@ class RunRequest:
     saved: dict[str, Any] | None = None
     """A saved config given as data (read as :func:`~devlearn.config.run_config.from_dict`
     reads one: keys it lacks take the values old runs were trained with)."""
+    baseline: bool = False
+    """The config a baseline policy acts with (``devlearn eval --policy zero``, ``random``,
+    ``held_random``): a saved config without values (the values a saved config lacking them
+    means: ``LEGACY_FIELDS``, the behaviour's ``LEGACY_DEFAULTS``), at the decision rate of a
+    new run of the behaviour (its fresh config's ``env.action_repeat``)."""
 
 
 @dataclass
@@ -124,7 +129,8 @@ def resolve_run(
     2. where the config starts (:func:`_start`): fresh, the core defaults < the behaviour's
        ``train_defaults()``; ``resume``, the run's ``config.json``; ``start_from``, the
        checkpoint's config; ``config_file`` / ``saved``, that config (a new run's file: keys
-       it lacks take a fresh run's values);
+       it lacks take a fresh run's values); ``baseline``, an empty saved config at a fresh
+       run's decision rate;
     3. ``preset`` (:func:`_apply_preset`; fresh and ``start_from`` only);
     4. ``top`` and ``out_dir``, then ``overrides`` (``--set``);
     5. a resumed run keeps its seed and growth schedule
@@ -161,7 +167,7 @@ def resolve_run(
     """
     _check_request(request)
     fresh = not (request.resume or request.start_from or request.config_file)
-    fresh = fresh and request.saved is None
+    fresh = fresh and request.saved is None and not request.baseline
     cfg = _start(request, registry, read_checkpoint)
     started = copy.deepcopy(cfg)  # what a resumed run's checks compare against
     behavior_cls = registry.behavior(cfg.behavior_name)
@@ -192,6 +198,7 @@ def _check_request(request: RunRequest) -> None:
             ("--from", request.start_from),
             ("--config", request.config_file),
             ("a saved config", request.saved is not None),
+            ("a baseline", request.baseline),
         )
         if given
     ]
@@ -210,11 +217,12 @@ def _start(
 ) -> RunConfig:
     """Stage 2, where the config starts: a fresh run's defaults (the core's < the behaviour's
     ``train_defaults()``), the checkpoint's config (``start_from``), or a saved config (a run's
-    ``config.json`` to resume, a ``config_file``, ``saved`` data) read for its behaviour, which
-    must be the requested one where one is. A saved run's config takes, for keys it lacks, the
-    values it was trained with (:func:`~devlearn.config.run_config.from_dict`); a new run's
-    file (``config_file``) a fresh run's values, the run-length defaults at its default
-    length included.
+    ``config.json`` to resume, a ``config_file``, ``saved`` data, a ``baseline``'s empty one)
+    read for its behaviour, which must be the requested one where one is. A saved run's config
+    takes, for keys it lacks, the values it was trained with
+    (:func:`~devlearn.config.run_config.from_dict`); a new run's file (``config_file``) a
+    fresh run's values, the run-length defaults at its default length included; a baseline
+    a fresh run's decision rate.
 
     Raises:
         UsageError: An unknown behaviour, a missing run folder, an unreadable config or
@@ -228,6 +236,8 @@ def _start(
         data, source = read_config_file(run_dir / CONFIG_FILE), f"run {run_dir}"
     elif request.config_file:
         data, source = read_config_file(request.config_file), request.config_file
+    elif request.baseline:
+        data = {}
     if request.start_from:
         if read_checkpoint is None:
             raise TypeError(
@@ -244,12 +254,14 @@ def _start(
         if request.behavior and name != request.behavior:
             raise UsageError(f"{source} trains '{name}', not '{request.behavior}'")
         behavior_cls = registry.behavior(name)
-        base = None
-        if request.config_file:  # a new run's file: what it lacks, a fresh run's values
-            base = new_config(behavior_cls)
-            _apply_behavior_defaults(base, behavior_cls)
-            _scale_to_length(base, _build_behavior(base, behavior_cls), set())
-        cfg = from_dict(data, behavior_cls, base)
+        new = None  # a fresh run's config: what a new run's file lacks, a baseline's rate
+        if request.config_file or request.baseline:
+            new = new_config(behavior_cls)
+            _apply_behavior_defaults(new, behavior_cls)
+            _scale_to_length(new, _build_behavior(new, behavior_cls), set())
+        cfg = from_dict(data, behavior_cls, new if request.config_file else None)
+        if request.baseline and new is not None:
+            cfg.env.action_repeat = new.env.action_repeat
     return cfg
 
 

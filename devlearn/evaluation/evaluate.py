@@ -399,9 +399,7 @@ def baseline_config(
     """A baseline's config, resolved once: the config a saved config without values means (the
     behaviour's ``LEGACY_DEFAULTS``), acting at the decision rate a new run of the behaviour
     would use (its fresh config's ``env.action_repeat``), then ``overrides``."""
-    rate = resolve_config(RunRequest(behavior_name), registry).env.action_repeat
-    request = RunRequest(behavior_name, [f"env.action_repeat={rate}", *overrides], saved={})
-    return resolve_config(request, registry)
+    return resolve_config(RunRequest(behavior_name, list(overrides), baseline=True), registry)
 
 
 def open_subject(request: EvalRequest, registry: PluginRegistry) -> EvalSubject:

@@ -77,6 +77,8 @@ def test_every_value_is_checked_once_with_what_is_valid(fields, message):
         ({"resume": "no/such/run"}, "run directory no/such/run does not exist"),
         ({"start_from": "no.pt"}, "checkpoint no.pt does not exist"),
         ({"config_file": "no.json"}, "cannot read no.json"),
+        ({"saved": {}, "baseline": True}, "a saved config and a baseline exclude each other"),
+        ({"resume": "r", "baseline": True}, "--resume and a baseline exclude each other"),
     ],
 )
 def test_options_that_exclude_each_other_or_name_nothing_are_refused(fields, message):
