@@ -150,10 +150,10 @@ def resolve_run(
     :func:`read_config_file`) and the checks (``finish_config``, ``check_config``,
     ``check_resumed``); calls on objects handed in (the registry, the behaviour, the
     checkpoint reader) are not followed. Counted so, it is 4 files (``resolve.py``,
-    ``run_config.py``, ``values.py``, ``checks.py``) and 4 returns; on bc7cc2f, before this
+    ``run_config.py``, ``values.py``, ``checks.py``) and 4 returns; on bb126a6, before this
     pipeline, 5 files and 8 returns (the builders in ``run_config.py``, a growth rule in
     ``growth.py``; issue #59 counted 10 files and 27 returns by a rule it does not give).
-    Through the tools too (``--all``): 10 files and 77 returns, 81 on bc7cc2f (the ``--set``
+    Through the tools too (``--all``): 10 files and 77 returns, 81 on bb126a6 (the ``--set``
     language and the checks are unchanged).
 
     ``read_checkpoint`` reads ``start_from``'s config

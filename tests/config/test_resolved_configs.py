@@ -55,8 +55,8 @@ SAVED = (
     "results/plugins/i54/hand_to_mouth/core_defaults/seed=1/config.json",
     "results/self_touch/ablation/ablation_fixed_only/config.json",
     "results/self_touch/i20/two_stage_s1/run/config.json",
-    "results/self_touch/i30/ablation/runs/curriculum=fixed_only,seed=1/config.json",
-    "results/self_touch/i43/ablation_8M/runs/curriculum=fixed_only,seed=1/config.json",
+    "results/self_touch/i30/ablation/fixed_only/seed=1/config.json",
+    "results/self_touch/i43/ablation_8M/fixed_only/seed=1/config.json",
     "results/self_touch/max_std/run/config.json",
 )
 """One saved config of each shape under ``results/`` (behaviour and the set of keys it holds)
