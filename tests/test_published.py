@@ -125,6 +125,16 @@ PUBLISHED_TABLES: dict[str, tuple[str, str, tuple[str, ...]]] = {
         "results/self_touch/README.md",
         LIKENESS,
     ),
+    "results/plugins/hand_to_mouth": (
+        "plugins_hand_to_mouth_i38",
+        "results/plugins/README.md",
+        (),
+    ),
+    "results/plugins/my_behavior": (
+        "plugins_my_behavior_i38",
+        "results/plugins/README.md",
+        (),
+    ),
     "results/self_touch/i43/pilots_2M": (
         "self_touch_pilots_2M",
         "results/self_touch/i43/pilots_2M/README.md",
@@ -166,7 +176,6 @@ SCRIPTS_NOT_YET_CONVERTED = {
     "results/hand_regard/table.py", "results/hand_regard/view_prior.py",
     "results/learner/pilot.sh", "results/learner/run.sh", "results/learner/table.py",
     "results/learners/experiment.sh", "results/learners/publish.sh", "results/learners/table.py",
-    "results/plugins/proof.sh", "results/plugins/publish.sh", "results/plugins/table.py",
     "results/publish_lib.sh",
 }
 """Issue #56's scripts whose publications are not converted yet: this set only shrinks (each
