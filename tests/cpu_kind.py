@@ -38,7 +38,7 @@ def to_record(path: Path) -> Path:
 
 
 REFERENCE_KIND: dict[str, str] = {
-    "plugins__hand_to_mouth__runs__seed-3.npz": "genuineintel-avx512",
+    "plugins__hand_to_mouth__core_defaults.npz": "genuineintel-avx512",
     # issue #39's median policies, recorded when they were published (the other four seeds'
     # policies left the tree in issue #56)
     "hand_regard__i39__reward-paper_seed-3.npz": "authenticamd-avx512",

@@ -491,10 +491,18 @@ COMMANDS: tuple[Command, ...] = (
                 option("dest", metavar="DEST", help="a publication (devlearn experiment publish)"),
                 option("--json", help="print the figures as JSON"),
                 option("--out", metavar="FILE", help="also write the tables (or JSON) to FILE"),
+                option(
+                    "--metric",
+                    metavar="KEY",
+                    action="append",
+                    help="also tabulate this eval.json number, by its dotted key "
+                    "(likeness.touches_per_minute); repeatable",
+                ),
                 help="print the comparison as markdown tables (or JSON)",
                 description="""Per protocol, every arm's headline as the mean and 95% t-interval
                 over seeds with each seed's value, its seconds of learning where recorded, the
-                baselines under the same protocol and the references with their source.""",
+                baselines under the same protocol and the references with their source; with
+                --metric, a table of those eval.json numbers per protocol too.""",
             ),
         ),
     ),

@@ -2,7 +2,9 @@
 the baselines and the references.
 
 :func:`experiment_table` reads a publication (``devlearn experiment publish``'s DEST) into one
-dict (``devlearn experiment table --json``); :func:`markdown` writes it for people.
+dict (``devlearn experiment table --json``); :func:`markdown` writes it for people. Figures
+other than the headline (``--metric likeness.touches_per_minute``: any number in eval.json, by
+its dotted key) get a table of their own per protocol.
 """
 
 from __future__ import annotations
@@ -23,6 +25,43 @@ def _headline(summary: dict[str, Any] | None, behavior_headline: str) -> tuple |
     from devlearn.evaluation.report import headline_of
 
     return headline_of(summary, behavior_headline) if summary else None
+
+
+def metric_value(summary: dict[str, Any] | None, key: str) -> float | None:
+    """The number at dotted ``key`` of an eval.json (``likeness.touch_share_by_area.face``), or
+    None where the evaluation has no such number."""
+    value: Any = summary
+    for part in key.split("."):
+        if not isinstance(value, dict) or part not in value:
+            return None
+        value = value[part]
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return None
+    return float(value)
+
+
+def _metric_rows(
+    dest: Path, spec: ExperimentSpec, protocol: Protocol, metrics: list[str]
+) -> dict[str, Any]:
+    """Each arm's ``metrics`` under ``protocol`` (mean and 95% t-interval over the seeds that
+    report it, every seed's value) and each baseline's (its one evaluation)."""
+    arms = []
+    for arm in spec.arms:
+        folders = {str(seed): dest / arm.name / seed_folder(seed) for seed in spec.seeds}
+        summaries = {s: read_json(f / protocol.folder / "eval.json") for s, f in folders.items()}
+        figures: dict[str, dict[str, Any]] = {}
+        for key in metrics:
+            values = {s: metric_value(v, key) for s, v in summaries.items() if v is not None}
+            found = {s: v for s, v in values.items() if v is not None}
+            figures[key] = {**mean_ci(list(found.values())), "seeds": found}
+        arms.append({"arm": arm.name, "metrics": figures})
+    baselines = []
+    for policy in spec.baselines:
+        summary = read_json(dest / baseline_name(policy) / protocol.folder / "eval.json")
+        if summary is not None:
+            evaluated = {key: metric_value(summary, key) for key in metrics}
+            baselines.append({"baseline": policy, "metrics": evaluated})
+    return {"keys": metrics, "arms": arms, "baselines": baselines}
 
 
 def _arm_row(
@@ -53,16 +92,18 @@ def _arm_row(
     return row, key
 
 
-def experiment_table(dest: str | Path) -> dict[str, Any]:
+def experiment_table(dest: str | Path, metrics: list[str] | tuple[str, ...] = ()) -> dict[str, Any]:
     """The figures of publication ``dest``, per protocol: each arm's headline (the behaviour's,
     as ``devlearn eval``'s summary picks it: the per-episode mean where the evaluator reports
     one) as the mean and 95% t-interval over seeds (:func:`devlearn.api.stats.mean_ci`) with
     every seed's value and its seconds of learning where recorded; each baseline's headline
     under the same protocol (with its interval over episodes); the references of the protocol
-    with their source.
+    with their source. Each of ``metrics`` (an eval.json number by its dotted key) adds, per
+    protocol, the same figures for that number (``"metrics"``: arms over seeds, baselines as
+    evaluated).
 
     Raises:
-        UsageError: ``dest`` is not a publication.
+        UsageError: ``dest`` is not a publication, or no evaluation in it has one of ``metrics``.
     """
     dest = Path(dest)
     info = read_json(dest / EXPERIMENT_INFO)
@@ -105,16 +146,23 @@ def experiment_table(dest: str | Path) -> dict[str, Any]:
             for row in ref.rows
         ]
         found_keys = sorted({k for k in keys if k})
-        tables.append(
-            {
-                "protocol": protocol.name,
-                "description": protocol.describe(),
-                "headline": found_keys[0] if len(found_keys) == 1 else found_keys or headline,
-                "arms": arms,
-                "baselines": baselines,
-                "references": references,
-            }
-        )
+        table: dict[str, Any] = {
+            "protocol": protocol.name,
+            "description": protocol.describe(),
+            "headline": found_keys[0] if len(found_keys) == 1 else found_keys or headline,
+            "arms": arms,
+            "baselines": baselines,
+            "references": references,
+        }
+        if metrics:
+            table["metrics"] = _metric_rows(dest, spec, protocol, list(metrics))
+        tables.append(table)
+    for key in metrics:
+        if not any(_has_metric(t["metrics"], key) for t in tables):
+            raise UsageError(
+                f"--metric {key}: no evaluation in {dest} has a number there (a dotted key of "
+                "eval.json, e.g. likeness.touches_per_minute or episode_balance_mean)"
+            )
     return {
         "experiment": spec.name,
         "behavior": spec.behavior,
@@ -128,6 +176,12 @@ def experiment_table(dest: str | Path) -> dict[str, Any]:
     }
 
 
+def _has_metric(table: dict[str, Any], key: str) -> bool:
+    return any(arm["metrics"][key]["n"] for arm in table["arms"]) or any(
+        base["metrics"][key] is not None for base in table["baselines"]
+    )
+
+
 def figure(value: float | None) -> str:
     """A figure as the tables print it: 4 significant digits (``-`` for none)."""
     return "-" if value is None else f"{value:.4g}"
@@ -139,6 +193,21 @@ def _interval(stats: dict[str, Any]) -> str:
     if stats.get("ci_low") is None:
         return figure(stats["mean"])
     return f"{figure(stats['mean'])} [{figure(stats['ci_low'])}, {figure(stats['ci_high'])}]"
+
+
+def _metric_lines(metrics: dict[str, Any]) -> list[str]:
+    """The ``--metric`` figures of one protocol: a row per arm (mean [95% interval over the
+    seeds], how many seeds) and per baseline (its one evaluation)."""
+    keys = metrics["keys"]
+    lines = ["| policy | seeds | " + " | ".join(keys) + " |", "|" + "---|" * (len(keys) + 2)]
+    for arm in metrics["arms"]:
+        seeds = max(arm["metrics"][key]["n"] for key in keys)
+        cells = [_interval(arm["metrics"][key]) for key in keys]
+        lines.append(f"| {arm['arm']} | {seeds} | " + " | ".join(cells) + " |")
+    for base in metrics["baselines"]:
+        cells = [figure(base["metrics"][key]) for key in keys]
+        lines.append(f"| {base['baseline']} actions (baseline) | - | " + " | ".join(cells) + " |")
+    return [*lines, ""]
 
 
 def markdown(table: dict[str, Any]) -> str:
@@ -181,6 +250,8 @@ def markdown(table: dict[str, Any]) -> str:
             cells += [_interval({"mean": ref["value"], **ref}), "-"]
             lines.append("| " + " | ".join(cells + (["-"] if seconds else [])) + " |")
         lines.append("")
+        if protocol.get("metrics"):
+            lines += _metric_lines(protocol["metrics"])
     lines.append(
         "Arms: the headline's mean and 95% t-interval over seeds, each seed's value beside. "
         "Baselines: one evaluation under the same protocol, with its interval over episodes."
@@ -188,6 +259,12 @@ def markdown(table: dict[str, Any]) -> str:
             " s of learning: devlearn's collect + update seconds summed over metrics.jsonl, "
             "SB3's seconds inside learn()."
             if any(arm["learn_s"] for p in table["protocols"] for arm in p["arms"])
+            else ""
+        )
+        + (
+            " Other figures (--metric): each eval.json number's mean and 95% t-interval over the "
+            "seeds that report it; a baseline's one evaluation."
+            if any(p.get("metrics") for p in table["protocols"])
             else ""
         )
     )

@@ -1,0 +1,98 @@
+"""devlearn experiment table's --metric: any eval.json number, per protocol, over seeds."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from devlearn.api.errors import UsageError
+from devlearn.experiment.table import experiment_table, markdown, metric_value
+
+SPEC = """\
+name = "made_up"
+behavior = "self_touch"
+seeds = [1, 2, 3]
+baselines = ["zero"]
+
+[[arms]]
+name = "a"
+
+[[arms]]
+name = "b"
+
+[[protocols]]
+name = "random_mean"
+episodes = 2
+seed = 0
+"""
+TOUCHES = {"a": {1: 10.0, 2: 14.0, 3: 21.0}, "b": {1: 3.0, 2: 5.0}}
+"""Touches per minute by arm and seed; b's seed 3 has no evaluation, its seed 2 no likeness."""
+
+
+def _write(path: Path, data: dict) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(data))
+
+
+@pytest.fixture
+def dest(tmp_path: Path) -> Path:
+    """A publication in devlearn experiment publish's layout, written by hand."""
+    (tmp_path / "experiment.toml").write_text(SPEC)
+    _write(tmp_path / "experiment.json", {"published": "now", "headline_metric": "score"})
+    for arm, seeds in TOUCHES.items():
+        for seed, touches in seeds.items():
+            summary = {"score": 0.1 * seed, "likeness": {"touches_per_minute": touches}}
+            if (arm, seed) == ("b", 2):
+                summary["likeness"] = {"touches_per_minute": None}
+            _write(tmp_path / arm / f"seed={seed}" / "eval_random_mean" / "eval.json", summary)
+    zero = {"score": 0.0, "likeness": {"touches_per_minute": 38.25}}
+    _write(tmp_path / "baseline_zero" / "eval_random_mean" / "eval.json", zero)
+    return tmp_path
+
+
+def test_a_metric_is_tabulated_over_the_seeds_that_report_it(dest):
+    table = experiment_table(dest, ["likeness.touches_per_minute"])
+    (protocol,) = table["protocols"]
+    metrics = protocol["metrics"]
+    a, b = metrics["arms"]
+    values = list(TOUCHES["a"].values())
+    x = np.asarray(values)
+    half = stats.t.ppf(0.975, 2) * x.std(ddof=1) / np.sqrt(3)
+    figures = a["metrics"]["likeness.touches_per_minute"]
+    assert figures["n"] == 3 and figures["seeds"] == {"1": 10.0, "2": 14.0, "3": 21.0}
+    assert (figures["mean"], figures["ci_low"], figures["ci_high"]) == pytest.approx(
+        (x.mean(), x.mean() - half, x.mean() + half)
+    )
+    only = b["metrics"]["likeness.touches_per_minute"]  # seed 2 reports none, seed 3 is missing
+    assert only["n"] == 1 and only["mean"] == 3.0 and only["ci_low"] is None
+    assert metrics["baselines"] == [
+        {"baseline": "zero", "metrics": {"likeness.touches_per_minute": 38.25}}
+    ]
+    lines = markdown(table).splitlines()
+    at = lines.index("| policy | seeds | likeness.touches_per_minute |")
+    low, high = x.mean() - half, x.mean() + half
+    assert lines[at + 2] == f"| a | 3 | {x.mean():.4g} [{low:.4g}, {high:.4g}] |"
+    assert lines[at + 3] == "| b | 1 | 3 |"
+    assert lines[at + 4] == "| zero actions (baseline) | - | 38.25 |"
+
+
+def test_without_metrics_the_tables_are_the_headline_only(dest):
+    table = experiment_table(dest)
+    assert "metrics" not in table["protocols"][0]
+    assert "likeness" not in markdown(table)
+
+
+def test_a_metric_no_evaluation_has_is_refused_naming_it(dest):
+    with pytest.raises(UsageError, match="--metric likeness.touches: no evaluation"):
+        experiment_table(dest, ["likeness.touches"])
+
+
+def test_metric_value_reads_dotted_numbers_only():
+    summary = {"a": {"b": 2, "flag": True, "text": "x"}, "c": 1.5}
+    assert metric_value(summary, "a.b") == 2.0 and metric_value(summary, "c") == 1.5
+    assert metric_value(summary, "a.flag") is None and metric_value(summary, "a.text") is None
+    assert metric_value(summary, "a.b.c") is None and metric_value(None, "c") is None
