@@ -37,9 +37,14 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
 
     from devlearn.cli.folders import removed_on_failure
 
+    def headline(behavior: str) -> str:
+        if behavior not in registry.behaviors():
+            return ""  # its plugin is not installed: the protocol's headline alone
+        return registry.behavior(behavior).headline_metric
+
     skipped: list[str] = []
     with removed_on_failure(args.out):
-        write_report(args.paths, args.out, paper_results, as_loaded, skipped)
+        write_report(args.paths, args.out, paper_results, as_loaded, skipped, headline)
     for reason in skipped:  # a stray file beside the evaluations: left out, said so
         print(f"devlearn: warning: left out an evaluation beside them: {reason}", file=sys.stderr)
     text = (Path(args.out) / "report.md").read_text()

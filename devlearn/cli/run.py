@@ -88,7 +88,10 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
         )
     budget = paper_budget(behavior_cls.presets)
     metric = behavior_cls.headline_metric
-    print(run_summary(result, cfg.behavior_name, metric, cfg.total_steps, cfg.num_envs, budget))
+    summary = run_summary(
+        result, cfg.behavior_name, metric, cfg.total_steps, cfg.num_envs, budget, cfg.behavior
+    )
+    print(summary)
     return 0
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import shlex
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -62,6 +63,26 @@ def baseline_dirs(behavior_name: str) -> dict[str, Path]:
     return {p: Path(f"eval_{behavior_name}_{p}") for p in ("random", "zero")}
 
 
+def run_calibration(behavior_config: Any, run_dir: Path) -> dict[str, str]:
+    """``{"behavior.FIELD": path}`` for each field of the behaviour's config that names a file
+    the run made in its folder (hand regard's ``detector_file``: the detector that babbling
+    calibrated). A baseline evaluated without it is scored by no calibration at all (hand
+    regard's ``detector`` figures are then 0), so the summary's baseline commands pass it:
+    the run and its baselines are measured alike (issue #55)."""
+    if behavior_config is None or not dataclasses.is_dataclass(behavior_config):
+        return {}
+    inside = run_dir.resolve()
+    found = {}
+    for field in dataclasses.fields(behavior_config):
+        value = getattr(behavior_config, field.name)
+        if not isinstance(value, str) or not value:
+            continue
+        path = Path(value)
+        if path.is_file() and inside in path.resolve().parents:
+            found[f"behavior.{field.name}"] = value
+    return found
+
+
 def _baseline_values(behavior_name: str, metric: str) -> dict[str, Any]:
     """The headline of the baseline evaluations already in their default folders, as ``devlearn
     eval`` headlines it (:func:`~devlearn.evaluation.report.headline_of`: the per-episode
@@ -85,6 +106,7 @@ def run_summary(
     total_steps: int,
     num_envs: int = 1,
     budget: tuple[str, int] | None = None,
+    behavior_config: Any = None,
 ) -> str:
     """The lines printed when a run finishes.
 
@@ -96,6 +118,8 @@ def run_summary(
         num_envs: Environments per rank (to say why no episode finished, if none did).
         budget: ``(preset, steps)`` of a full run (:func:`paper_budget`), if the behaviour
             has one: a shorter run is said to be a demonstration.
+        behavior_config: The run's behaviour config: the files it names in the run folder
+            (:func:`run_calibration`) go into the baseline commands.
     """
     run_dir = Path(result.run_dir)
     rows = _rows(run_dir)
@@ -152,8 +176,12 @@ def run_summary(
         f"  devlearn eval {behavior_name} --checkpoint {checkpoint} --episodes 100",
     ]
     missing = [p for p in dirs if p not in baselines]
+    calibration = run_calibration(behavior_config, run_dir)
+    same = "".join(f" --set {shlex.quote(f'{k}={v}')}" for k, v in calibration.items())
+    why = " and this run's calibration" if calibration else ""
     lines += [
-        f"  devlearn eval {behavior_name} --policy {p} --episodes 100   # baseline, same protocol"
+        f"  devlearn eval {behavior_name} --policy {p} --episodes 100{same}"
+        f"   # baseline, same protocol{why}"
         for p in missing
     ]
     lines += [

@@ -287,6 +287,7 @@ def write_report(
     paper_results: PaperResults | None = None,
     as_loaded: ConfigLoader | None = None,
     skipped: list[str] | None = None,
+    behavior_headline: Callable[[str], str] | None = None,
 ) -> dict[str, Any]:
     """Write ``out_dir/report.md`` (table) and ``out_dir/report.png`` (bars with error bars).
 
@@ -301,6 +302,10 @@ def write_report(
             trained with, not by how old their config files are; None: as saved.
         skipped: Receives why each evaluation found beside ``paths`` was skipped (an
             unreadable eval.json that was not given: the report is made without it).
+        behavior_headline: The headline metric of a behaviour by name (in the CLI, the
+            behaviour's :attr:`~devlearn.Behavior.headline_metric`), for evaluations whose
+            protocol names a criterion rather than a metric (hand regard's ``detector``): the
+            first row and the first panel.
     Returns:
         ``{"behavior", "metrics": [...], "columns": {name: {"kind", "seeds", "paths"}},
         "table": {metric: {column: {"n", "mean", "std", "ci_low", "ci_high", "values"}}},
@@ -328,7 +333,8 @@ def write_report(
     ]
     # the behaviour's headline first, as a reader wants it: the per-episode mean where the
     # evaluator reports one (self-touch's episode_score_mean, not the union score)
-    found = headline_of(evaluations[0][1])
+    own = behavior_headline(behavior) if behavior_headline is not None else ""
+    found = headline_of(evaluations[0][1], own)
     headline = found[0] if found else None
     if headline in names:
         names.remove(headline)

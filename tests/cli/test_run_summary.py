@@ -159,3 +159,39 @@ def test_one_headline_from_training_to_evaluation(cli, tmp_path, capsys):
     assert cli(["eval", "tiny", "--checkpoint", str(out), "--episodes", "2", "--out",
                 str(tmp_path / "ev")]) == 0  # fmt: skip
     assert "headline  episode_close_mean = " in capsys.readouterr().out
+
+
+def test_the_baseline_commands_carry_the_runs_calibration(tmp_path):
+    """Hand regard's baselines were suggested without the detector the run calibrated, so
+    their ``detector`` figures were 0 whatever they did: the summary's baseline commands pass
+    every behaviour-config file the run made in its folder, and nothing else."""
+    import dataclasses
+    from types import SimpleNamespace
+
+    from devlearn.cli.summary import run_calibration, run_summary
+
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "hand_detector.json").write_text("{}")
+    (tmp_path / "elsewhere.json").write_text("{}")
+
+    @dataclasses.dataclass
+    class Config:
+        detector_file: str = str(run / "hand_detector.json")
+        prior_file: str = str(tmp_path / "elsewhere.json")  # not the run's: left out
+        missing_file: str = str(run / "not_made.json")  # named, never made: left out
+        scene: str = "sitting"
+        steps: int = 3
+
+    found = run_calibration(Config(), run)
+    assert found == {"behavior.detector_file": str(run / "hand_detector.json")}
+    assert run_calibration(None, run) == {}
+    result = SimpleNamespace(run_dir=run, last={}, warnings=[], env_steps=100, iterations=1)
+    text = run_summary(result, "tiny", "close", 100, behavior_config=Config())
+    baselines = [line for line in text.splitlines() if "--policy" in line]
+    assert len(baselines) == 2
+    for line in baselines:
+        assert f"--set behavior.detector_file={run / 'hand_detector.json'}" in line
+        assert "this run's calibration" in line
+    plain = run_summary(result, "tiny", "close", 100)
+    assert all("--set" not in line for line in plain.splitlines() if "--policy" in line)

@@ -349,3 +349,23 @@ def test_cli_report_prints_the_first_rows_unless_full(tmp_path, capsys):
     full = capsys.readouterr().out
     assert [line for line in full.splitlines() if line.startswith("| `")] == md_rows
     assert "more metrics" not in full
+
+
+def test_a_protocol_naming_a_criterion_leads_with_the_behaviours_headline(tmp_path, capsys):
+    """Hand regard's protocol names its criterion (``detector``), not a metric: the report led
+    with the first metric it met (one eye-hand pair) instead of the headline, the average over
+    the four pairs. The behaviour's headline metric leads the table and the first panel."""
+    protocol = {"episodes": 100, "seed": 0, "settle_steps": 0, "headline": "detector"}
+    figures = {"visibility": {"left_eye_left_hand": 0.9}, "protocol": protocol}
+    paths = [
+        fake_eval(tmp_path / f"s{s}" / "eval", 0.5, s, behavior="hand_regard", **figures,
+                  average=0.4 + s / 100, episode_average_mean=0.4 + s / 100)
+        for s in (1, 2)
+    ]
+    unled = write_report(paths, tmp_path / "r1")
+    assert unled["metrics"][0] != "episode_average_mean"  # today's fault, without the behaviour
+    led = write_report(paths, tmp_path / "r2", behavior_headline=lambda name: "average")
+    assert led["metrics"][0] == "episode_average_mean"
+    assert main(["report", *map(str, paths), "--out", str(tmp_path / "r3")]) == 0
+    rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| `")]
+    assert rows[0].startswith("| `episode_average_mean` |")  # the CLI asks the behaviour
