@@ -135,6 +135,11 @@ PUBLISHED_TABLES: dict[str, tuple[str, str, tuple[str, ...]]] = {
         "results/plugins/README.md",
         (),
     ),
+    "results/learners/i45": (
+        "learners_i45",
+        "results/learners/README.md",
+        ("score",),
+    ),
     "results/self_touch/i43/pilots_2M": (
         "self_touch_pilots_2M",
         "results/self_touch/i43/pilots_2M/README.md",
@@ -175,7 +180,6 @@ SCRIPTS_NOT_YET_CONVERTED = {
     "results/hand_regard/i40/saturation/saturation.py", "results/hand_regard/publish.sh",
     "results/hand_regard/table.py", "results/hand_regard/view_prior.py",
     "results/learner/pilot.sh", "results/learner/run.sh", "results/learner/table.py",
-    "results/learners/experiment.sh", "results/learners/publish.sh", "results/learners/table.py",
     "results/publish_lib.sh",
 }
 """Issue #56's scripts whose publications are not converted yet: this set only shrinks (each
