@@ -135,6 +135,16 @@ PUBLISHED_TABLES: dict[str, tuple[str, str, tuple[str, ...]]] = {
         "results/plugins/README.md",
         (),
     ),
+    "results/learner/final": (
+        "learner_i28_final",
+        "results/learner/README.md",
+        ("score",),
+    ),
+    "results/learner/pilot": (
+        "learner_i28_pilots",
+        "results/learner/README.md",
+        ("score",),
+    ),
     "results/learners/i45": (
         "learners_i45",
         "results/learners/README.md",
@@ -179,7 +189,6 @@ SCRIPTS_NOT_YET_CONVERTED = {
     "results/hand_regard/experiment.sh", "results/hand_regard/gate.py",
     "results/hand_regard/i40/saturation/saturation.py", "results/hand_regard/publish.sh",
     "results/hand_regard/table.py", "results/hand_regard/view_prior.py",
-    "results/learner/pilot.sh", "results/learner/run.sh", "results/learner/table.py",
     "results/publish_lib.sh",
 }
 """Issue #56's scripts whose publications are not converted yet: this set only shrinks (each
