@@ -104,6 +104,18 @@ LIKENESS = tuple(
 )
 """Issue #43's likeness measures, as its README tables them (``--metric``)."""
 
+HAND_REGARD = (
+    "criteria.pixels.average",
+    *(
+        f"criteria.{measure}.visibility.{eye}_eye_{hand}_hand"
+        for measure in ("detector", "pixels")
+        for hand in ("left", "right")
+        for eye in ("left", "right")
+    ),
+)
+"""Hand regard's ground-truth average and every eye-hand pair under the detector and the
+ground truth (``--metric``), as issue #39's README tables them."""
+
 PUBLISHED_TABLES: dict[str, tuple[str, str, tuple[str, ...]]] = {
     "results/self_touch/i30/curriculum": (
         "self_touch_curriculum",
@@ -144,6 +156,11 @@ PUBLISHED_TABLES: dict[str, tuple[str, str, tuple[str, ...]]] = {
         "growth_i41_pilot",
         "results/growth/i41_pilot/README.md",
         (),
+    ),
+    "results/hand_regard/i39": (
+        "hand_regard_i39",
+        "results/hand_regard/i39/README.md",
+        HAND_REGARD,
     ),
     "results/learner/final": (
         "learner_i28_final",
