@@ -44,7 +44,7 @@ REFERENCE_KIND: dict[str, str] = {
     "hand_regard__i39__paper.npz": "authenticamd-avx512",
     "hand_regard__i39__reach_t4.npz": "authenticamd-avx512",
     # issue #40's median CNN policy, recorded when it was published
-    "hand_regard__i40__policy-cnn_seed-4.npz": "authenticamd-avx512",
+    "hand_regard__i40__cnn.npz": "authenticamd-avx512",
     # issue #54's reruns with the new core learner, recorded when they were published
     "plugins__i54__hand_to_mouth__core_defaults.npz": "genuineintel-avx512",
     "learners__i54__proof__devlearn_ppo.npz": "genuineintel-avx512",

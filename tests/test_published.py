@@ -162,6 +162,11 @@ PUBLISHED_TABLES: dict[str, tuple[str, str, tuple[str, ...]]] = {
         "results/hand_regard/i39/README.md",
         HAND_REGARD,
     ),
+    "results/hand_regard/i40": (
+        "hand_regard_i40",
+        "results/hand_regard/i40/README.md",
+        HAND_REGARD,
+    ),
     "results/learner/final": (
         "learner_i28_final",
         "results/learner/README.md",
