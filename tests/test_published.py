@@ -157,6 +157,11 @@ PUBLISHED_TABLES: dict[str, tuple[str, str, tuple[str, ...]]] = {
         "results/growth/i41_pilot/README.md",
         (),
     ),
+    "results/hand_regard/i29": (
+        "hand_regard_i29",
+        "results/hand_regard/README.md",
+        HAND_REGARD,
+    ),
     "results/hand_regard/i39": (
         "hand_regard_i39",
         "results/hand_regard/i39/README.md",

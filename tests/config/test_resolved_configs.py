@@ -44,7 +44,7 @@ BEHAVIORS = ("hand_regard", "hand_to_mouth", "self_touch")
 SAVED = (
     "results/growth/i41_pilot/fixed18/seed=1/config.json",
     "results/growth/i41_pilot/grow6to18/seed=1/config.json",
-    "results/hand_regard/i29/curiosity=forward_model,seed=1/config.json",
+    "results/hand_regard/i29/forward_model/seed=1/config.json",
     "results/hand_regard/i39/paper/seed=1/config.json",
     "results/hand_regard/i39_pilot/reward=bilateral,seed=1/config.json",
     "results/hand_regard/i39_pilot/reward=reach,seed=1/config.json",
