@@ -167,9 +167,19 @@ PUBLISHED_TABLES: dict[str, tuple[str, str, tuple[str, ...]]] = {
         "results/hand_regard/i39/README.md",
         HAND_REGARD,
     ),
+    "results/hand_regard/i39_pilot": (
+        "hand_regard_i39_pilots",
+        "results/hand_regard/i39_pilot/README.md",
+        HAND_REGARD,
+    ),
     "results/hand_regard/i40": (
         "hand_regard_i40",
         "results/hand_regard/i40/README.md",
+        HAND_REGARD,
+    ),
+    "results/hand_regard/i40_pilot": (
+        "hand_regard_i40_pilot",
+        "results/hand_regard/i40_pilot/README.md",
         HAND_REGARD,
     ),
     "results/learner/final": (
