@@ -230,9 +230,7 @@ def test_readme_tables_are_the_experiment_tables(dest):
 
 
 SCRIPTS_NOT_YET_CONVERTED = {
-    "results/hand_regard/attribution.py", "results/hand_regard/attribution.sh",
-    "results/hand_regard/gate.py", "results/hand_regard/i40/saturation/saturation.py",
-    "results/hand_regard/view_prior.py",
+    "results/hand_regard/i40/saturation/saturation.py",
 }
 """Issue #56's scripts whose publications are not converted yet: this set only shrinks (each
 conversion removes its scripts and their names here) and the issue is done when it is empty."""
