@@ -41,10 +41,10 @@ REFERENCE_KIND: dict[str, str] = {
     "plugins__hand_to_mouth__core_defaults.npz": "genuineintel-avx512",
     # issue #39's median policies, recorded when they were published (the other four seeds'
     # policies left the tree in issue #56)
-    "hand_regard__i39__reward-paper_seed-3.npz": "authenticamd-avx512",
-    "hand_regard__i39__reward-reach_t4_seed-4.npz": "authenticamd-avx512",
+    "hand_regard__i39__paper.npz": "authenticamd-avx512",
+    "hand_regard__i39__reach_t4.npz": "authenticamd-avx512",
     # issue #40's median CNN policy, recorded when it was published
-    "hand_regard__i40__policy-cnn_seed-4.npz": "authenticamd-avx512",
+    "hand_regard__i40__cnn.npz": "authenticamd-avx512",
     # issue #54's reruns with the new core learner, recorded when they were published
     "plugins__i54__hand_to_mouth__core_defaults.npz": "genuineintel-avx512",
     "learners__i54__proof__devlearn_ppo.npz": "genuineintel-avx512",

@@ -104,6 +104,18 @@ LIKENESS = tuple(
 )
 """Issue #43's likeness measures, as its README tables them (``--metric``)."""
 
+HAND_REGARD = (
+    "criteria.pixels.average",
+    *(
+        f"criteria.{measure}.visibility.{eye}_eye_{hand}_hand"
+        for measure in ("detector", "pixels")
+        for hand in ("left", "right")
+        for eye in ("left", "right")
+    ),
+)
+"""Hand regard's ground-truth average and every eye-hand pair under the detector and the
+ground truth (``--metric``), as issue #39's README tables them."""
+
 PUBLISHED_TABLES: dict[str, tuple[str, str, tuple[str, ...]]] = {
     "results/self_touch/i30/curriculum": (
         "self_touch_curriculum",
@@ -134,6 +146,56 @@ PUBLISHED_TABLES: dict[str, tuple[str, str, tuple[str, ...]]] = {
         "plugins_my_behavior_i38",
         "results/plugins/README.md",
         (),
+    ),
+    "results/growth/i41": (
+        "growth_i41",
+        "results/growth/README.md",
+        (),
+    ),
+    "results/growth/i41_pilot": (
+        "growth_i41_pilot",
+        "results/growth/i41_pilot/README.md",
+        (),
+    ),
+    "results/hand_regard/i29": (
+        "hand_regard_i29",
+        "results/hand_regard/README.md",
+        HAND_REGARD,
+    ),
+    "results/hand_regard/i39": (
+        "hand_regard_i39",
+        "results/hand_regard/i39/README.md",
+        HAND_REGARD,
+    ),
+    "results/hand_regard/i39_pilot": (
+        "hand_regard_i39_pilots",
+        "results/hand_regard/i39_pilot/README.md",
+        HAND_REGARD,
+    ),
+    "results/hand_regard/i40": (
+        "hand_regard_i40",
+        "results/hand_regard/i40/README.md",
+        HAND_REGARD,
+    ),
+    "results/hand_regard/i40_pilot": (
+        "hand_regard_i40_pilot",
+        "results/hand_regard/i40_pilot/README.md",
+        HAND_REGARD,
+    ),
+    "results/learner/final": (
+        "learner_i28_final",
+        "results/learner/README.md",
+        ("score",),
+    ),
+    "results/learner/pilot": (
+        "learner_i28_pilots",
+        "results/learner/README.md",
+        ("score",),
+    ),
+    "results/learners/i45": (
+        "learners_i45",
+        "results/learners/README.md",
+        ("score",),
     ),
     "results/self_touch/i43/pilots_2M": (
         "self_touch_pilots_2M",
@@ -168,15 +230,7 @@ def test_readme_tables_are_the_experiment_tables(dest):
 
 
 SCRIPTS_NOT_YET_CONVERTED = {
-    "results/growth/experiment.sh", "results/growth/publish.sh", "results/growth/table.py",
-    "results/hand_regard/attribution.py", "results/hand_regard/attribution.sh",
-    "results/hand_regard/both_hands.sh", "results/hand_regard/both_hands_publish.sh",
-    "results/hand_regard/experiment.sh", "results/hand_regard/gate.py",
-    "results/hand_regard/i40/saturation/saturation.py", "results/hand_regard/publish.sh",
-    "results/hand_regard/table.py", "results/hand_regard/view_prior.py",
-    "results/learner/pilot.sh", "results/learner/run.sh", "results/learner/table.py",
-    "results/learners/experiment.sh", "results/learners/publish.sh", "results/learners/table.py",
-    "results/publish_lib.sh",
+    "results/hand_regard/i40/saturation/saturation.py",
 }
 """Issue #56's scripts whose publications are not converted yet: this set only shrinks (each
 conversion removes its scripts and their names here) and the issue is done when it is empty."""

@@ -80,9 +80,15 @@ class ExperimentPlan:
         return [r for r in self.runs if r.arm is not None]
 
 
-def eval_args(protocol: Protocol, workers: int, baseline: str | None = None) -> list[str]:
+def eval_args(
+    protocol: Protocol,
+    workers: int,
+    baseline: str | None = None,
+    baseline_overrides: tuple[str, ...] = (),
+) -> list[str]:
     """``devlearn eval`` options of one evaluation under ``protocol`` (after ``--out``): a
-    trained policy's (``--action``), or ``baseline``'s (``--policy``)."""
+    trained policy's (``--action``), or ``baseline``'s (``--policy``, and the experiment's
+    ``baseline_set`` items after the protocol's)."""
     args = ["--policy", baseline] if baseline else []
     args += ["--episodes", str(protocol.episodes), "--seed", str(protocol.seed)]
     args += ["--start", protocol.start, "--workers", str(workers), "--json"]
@@ -90,13 +96,16 @@ def eval_args(protocol: Protocol, workers: int, baseline: str | None = None) -> 
         args += ["--action", protocol.action]
     if protocol.session_s is not None:
         args += ["--session", f"{protocol.session_s:.12g}"]
-    for item in protocol.overrides:
+    for item in (*protocol.overrides, *(baseline_overrides if baseline else ())):
         args += ["--set", item]
     return args
 
 
-def _eval_request(behavior: str, protocol: Protocol, policy: str) -> EvalRequest:
-    """``devlearn eval``'s request (checked when made) of an evaluation under ``protocol``."""
+def _eval_request(
+    behavior: str, protocol: Protocol, policy: str, baseline_overrides: tuple[str, ...] = ()
+) -> EvalRequest:
+    """``devlearn eval``'s request (checked when made) of an evaluation under ``protocol``
+    (a baseline's with the experiment's ``baseline_set`` items)."""
     from devlearn.evaluation.evaluate import EvalRequest
 
     return EvalRequest(
@@ -107,7 +116,7 @@ def _eval_request(behavior: str, protocol: Protocol, policy: str) -> EvalRequest
         seed=protocol.seed,
         start=protocol.start,
         action=protocol.action if policy == "checkpoint" else "mean",
-        overrides=protocol.overrides,
+        overrides=(*protocol.overrides, *(baseline_overrides if policy != "checkpoint" else ())),
         session=protocol.session_s,
     )
 
@@ -124,9 +133,12 @@ def _check_protocols(spec: ExperimentSpec, registry: PluginRegistry) -> None:
         try:
             _eval_request(spec.behavior, protocol, "checkpoint")
             for baseline in spec.baselines:
-                _eval_request(spec.behavior, protocol, baseline)
+                _eval_request(spec.behavior, protocol, baseline, spec.baseline_overrides)
             if protocol.overrides:
                 resolve_config(RunRequest(spec.behavior, list(protocol.overrides)), registry)
+            if spec.baselines and spec.baseline_overrides:
+                items = [*protocol.overrides, *spec.baseline_overrides]
+                resolve_config(RunRequest(spec.behavior, items), registry)
         except UsageError as exc:
             raise UsageError(f"{where}: {exc}") from None
         if protocol.action == "sample" and scripted:
@@ -234,7 +246,12 @@ def _baseline_run(
         eval_args=[],
         launcher=spec.launcher,
         global_args=list(global_args),
-        evals={p.folder: eval_args(p, workers, baseline=policy) for p in spec.protocols},
+        evals={
+            p.folder: eval_args(
+                p, workers, baseline=policy, baseline_overrides=spec.baseline_overrides
+            )
+            for p in spec.protocols
+        },
         policy=None,
     )
     return PlannedRun(job, 0, None, None)

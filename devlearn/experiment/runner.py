@@ -62,6 +62,10 @@ def check_experiment_folder(spec: ExperimentSpec, out: Path) -> dict[str, Any] |
         )
     new = spec.what()
     changed = differences(what.get("train"), new["train"], "train.")
+    changed += differences(
+        {"baseline_set": what.get("baseline_set", [])},
+        {"baseline_set": new.get("baseline_set", [])},
+    )
     for section in ("arms", "protocols"):
         old = what.get(section) or {}
         for name, settings in new[section].items():

@@ -9,6 +9,7 @@ FILE OUT`` runs it, ``publish`` keeps what a reader needs, ``table`` tabulates i
     description = "devlearn's PPO against SB3's PPO"
     seeds = [1, 2, 3]                 # or "1-3"
     baselines = ["zero", "random"]    # evaluated once per protocol (also: held_random)
+    baseline_set = []                 # --set items of every baseline's evaluation
 
     [train]                           # every arm x seed
     steps = 2_048_000
@@ -85,8 +86,8 @@ ACTIONS = ("mean", "sample")
 """``devlearn eval --action`` values."""
 KEYS = {
     "": {
-        "name", "behavior", "description", "seeds", "baselines", "train", "arms", "protocols",
-        "references", "executor",
+        "name", "behavior", "description", "seeds", "baselines", "baseline_set", "train", "arms",
+        "protocols", "references", "executor",
     },
     "train": {"steps", "envs", "workers", "torch_threads", "cores", "set"},
     "arms": {"name", "learner", "set", "preset", "note"},
@@ -261,6 +262,10 @@ class ExperimentSpec:
     """Seeds of every arm."""
     baselines: list[str] = field(default_factory=list)
     """Baseline policies evaluated once per protocol."""
+    baseline_overrides: tuple[str, ...] = ()
+    """``devlearn eval --set`` items of every baseline's evaluation, after the protocol's: what
+    a baseline needs that the arms' runs hold in their configs (hand regard's shared detector,
+    ``behavior.detector_file``; a trained policy's evaluation takes its run's config)."""
     train: TrainSettings = field(default_factory=TrainSettings)
     """Budget and settings of every run."""
     references: list[Reference] = field(default_factory=list)
@@ -288,12 +293,15 @@ class ExperimentSpec:
     def what(self) -> dict[str, Any]:
         """The settings that decide the numbers; an experiment folder keeps them across starts
         (arms, protocols, seeds and baselines may be added)."""
-        return {
+        what: dict[str, Any] = {
             "behavior": self.behavior,
             "train": self.train.what(),
             "arms": {arm.name: arm.what() for arm in self.arms},
             "protocols": {p.name: p.what() for p in self.protocols},
         }
+        if self.baseline_overrides:  # only where set: folders started before the key match
+            what["baseline_set"] = list(self.baseline_overrides)
+        return what
 
 
 class _Checker:
@@ -566,6 +574,7 @@ def read_experiment(path: str | Path) -> ExperimentSpec:
         protocols=protocols,
         seeds=check.seeds(data.get("seeds")),
         baselines=list(baselines),
+        baseline_overrides=check.overrides(data.get("baseline_set"), "baseline_set"),
         train=TrainSettings(
             steps=check.maybe_integer(train.get("steps"), "[train] steps", 1, STEPS_MAX),
             envs=check.maybe_integer(train.get("envs"), "[train] envs", 1, ENVS_MAX),

@@ -42,16 +42,16 @@ from published_policies import published_policies  # noqa: E402
 BEHAVIORS = ("hand_regard", "hand_to_mouth", "self_touch")
 """The installed behaviours (the core's two plugins and the example)."""
 SAVED = (
-    "results/growth/i41_pilot/fixed/runs/age_months=18,seed=1/config.json",
-    "results/growth/i41_pilot/grow/runs/growth=6-_18,seed=1/config.json",
-    "results/hand_regard/i29/curiosity=forward_model,seed=1/config.json",
-    "results/hand_regard/i39/reward=paper,seed=1/config.json",
-    "results/hand_regard/i39_pilot/reward=bilateral,seed=1/config.json",
-    "results/hand_regard/i39_pilot/reward=reach,seed=1/config.json",
+    "results/growth/i41_pilot/fixed18/seed=1/config.json",
+    "results/growth/i41_pilot/grow6to18/seed=1/config.json",
+    "results/hand_regard/i29/forward_model/seed=1/config.json",
+    "results/hand_regard/i39/paper/seed=1/config.json",
+    "results/hand_regard/i39_pilot/bilateral/seed=1/config.json",
+    "results/hand_regard/i39_pilot/reach/seed=1/config.json",
     "results/hand_regard/run/config.json",
     "results/learner/final/defaults_2M/seed=1/config.json",
     "results/learners/i54/proof/devlearn_ppo/seed=1/config.json",
-    "results/plugins/hand_to_mouth/runs/seed=1/config.json",
+    "results/plugins/hand_to_mouth/core_defaults/seed=1/config.json",
     "results/plugins/i54/hand_to_mouth/core_defaults/seed=1/config.json",
     "results/self_touch/ablation/ablation_fixed_only/config.json",
     "results/self_touch/i20/two_stage_s1/run/config.json",

@@ -25,7 +25,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[2]
 DATA = ROOT / "tests" / "data" / "rollouts"
-HAND_REGARD_CHECKPOINT = ROOT / "results/hand_regard/i29/reward=bilateral,seed=2/policy.pt"
+HAND_REGARD_CHECKPOINT = ROOT / "results/hand_regard/i29/bilateral/policy.pt"
 """A published hand-regard run whose config and calibrated detector the rollout uses (its
 detector sees hands, so the hand terms pay something; its reward is ``bilateral``: 4 terms)."""
 

@@ -28,7 +28,7 @@ PUBLISHED = {
     # issue #30's median seed (shared layout)
     "self_touch": ROOT / "results/self_touch/i30/curriculum/two_stage/policy.pt",
     # issue #40's CNN policy at the paper's budget (separate layout, sees the eyes; its detector)
-    "hand_regard": ROOT / "results/hand_regard/i40/policy=cnn,seed=4/policy.pt",
+    "hand_regard": ROOT / "results/hand_regard/i40/cnn/policy.pt",
     # a small fixture as every run before the layouts saved it (separate, double uint8 scale)
     "hand_to_mouth": ROOT / "tests/training/data/hand_to_mouth_separate_legacy.pt",
 }

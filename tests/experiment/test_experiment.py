@@ -217,7 +217,7 @@ BAD = [
     (
         'name = "tiny_targets"',
         "sed = 3",
-        "the top level: unknown key 'sed'; valid: arms, baselines",
+        "the top level: unknown key 'sed'; valid: arms, baseline_set, baselines",
     ),
     (
         'baselines = ["zero"]',
@@ -339,6 +339,36 @@ def test_a_session_protocol_evaluates_whole_sessions(cli, capsys, tmp_path):
     assert spec.protocols[1].what()["session_s"] == 300.0
     assert "session_s" not in spec.protocols[0].what()  # folders started before the key match
     assert spec.protocols[1].describe().startswith("3 sessions of 300 s from rest starts")
+
+
+def test_baseline_set_goes_to_every_baseline_evaluation_only(cli, capsys, tmp_path):
+    # hand regard's baselines scored by the arms' shared detector (issue #56)
+    from devlearn.experiment.spec import read_experiment
+
+    file, out = tmp_path / "tiny.toml", tmp_path / "out"
+    file.write_text(
+        TINY.replace(
+            'baselines = ["zero"]', 'baselines = ["zero"]\nbaseline_set = ["behavior.target=0.2"]'
+        )
+    )
+    assert cli(["experiment", "run", str(file), str(out), "--dry-run"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    evaluations = [line for line in lines if "eval_rest2:" in line]
+    baseline = [line for line in evaluations if "--policy zero" in line]
+    assert len(baseline) == 1 and baseline[0].endswith("--set behavior.target=0.2")
+    assert len(evaluations) == 5
+    assert not any("behavior.target" in line for line in evaluations if line not in baseline)
+    assert read_experiment(file).what()["baseline_set"] == ["behavior.target=0.2"]
+    file.write_text(TINY)  # folders started before the key match
+    assert "baseline_set" not in read_experiment(file).what()
+    # checked like any --set item, before anything starts
+    file.write_text(
+        TINY.replace(
+            'baselines = ["zero"]', 'baselines = ["zero"]\nbaseline_set = ["behavior.targt=0.2"]'
+        )
+    )
+    assert cli(["experiment", "run", str(file), str(out), "--dry-run"]) == 2
+    assert "behavior.targt" in capsys.readouterr().err and not out.exists()
 
 
 @pytest.mark.slow

@@ -30,7 +30,7 @@ DETECTOR = (
     / "results/hand_regard/detector/babybench_mittens_sides_detector.json"
 )
 """Issue #29's shared calibration with the visibility model learned from one-arm babbling
-(``results/hand_regard/attribution.sh``)."""
+(the commands of results/hand_regard/README.md, "Which hand is it")."""
 BOTH_ARMS = {"active_arms": ["left", "right"]}
 LEFT_HAND_HELD = (  # 17 joint angles in actuator order (head 3, shoulders, elbows, wrists)
     [1.309, 0.402, 0.0, -0.328, 1.193, -1.126, -0.513, 1.066, -0.188, 1.632, -0.004]
@@ -89,7 +89,9 @@ def hold(infant, pose: list[float]) -> None:
 )
 @pytest.mark.parametrize("held", [0, 1], ids=["left_hand_held", "right_hand_held"])
 def test_one_hand_before_both_eyes_earns_nothing_for_the_other(infant, attribution, held):
-    assert DETECTOR.is_file(), "run results/hand_regard/attribution.sh to make the detector"
+    assert DETECTOR.is_file(), (
+        "make the detector: results/hand_regard/README.md, 'Which hand is it'"
+    )
     behavior = HandRegard(
         HandRegardConfig(detector_file=str(DETECTOR), hand_attribution=attribution)
     )
