@@ -190,10 +190,12 @@ COMMANDS: tuple[Command, ...] = (
         ),
         option(
             "--action",
-            choices=("mean", "sample"),
+            choices=("mean", "sample", "expected_clipped"),
             default="mean",
-            help="""a checkpoint's action: mean (deterministic, default) or sample (drawn from
-            the policy's distribution, seeded by --seed, as in training)""",
+            help="""a checkpoint's action: mean (deterministic, default), sample (drawn from
+            the policy's distribution, seeded by --seed, as in training) or expected_clipped
+            (deterministic: the action the env applies on average when the policy samples,
+            E[clip(mean + std * noise, -1, 1)])""",
         ),
         option(
             "--set",

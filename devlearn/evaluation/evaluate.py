@@ -65,7 +65,7 @@ step (i.i.d.), or ``held_random``: uniform actions each held for
 actuator redraws with probability 1 / HOLD_STEPS per physics step, as motor babbling does;
 with a decision rate K, K / HOLD_STEPS per decision), which moves the damped limbs much
 further than i.i.d. noise. All seeded by the evaluation seed."""
-ACTIONS = ("mean", "sample")
+ACTIONS = ("mean", "sample", "expected_clipped")
 """How a checkpoint acts in ``evaluate``: its mean action, or one sampled from its policy."""
 STARTS = ("stage", "babybench", "rest", "random")
 """Where episodes start: ``stage``, as the behaviour's evaluation stage says (self-touch:
@@ -253,8 +253,11 @@ class EvalRequest:
         start: One of :data:`STARTS`; other than ``stage`` it overrides the stage's
             ``random_pose`` and the infant's start.
         action: One of :data:`ACTIONS`, a checkpoint's: ``mean`` (deterministic, the default
-            protocol) or ``sample`` (drawn from the policy's distribution, as in training: a
-            behaviour whose skill lives in the policy's noise shows it only so).
+            protocol), ``sample`` (drawn from the policy's distribution, as in training: a
+            behaviour whose skill lives in the policy's noise shows it only so) or
+            ``expected_clipped`` (deterministic: the action the env applies on average when
+            the policy samples, ``E[clip(mean + std * noise, -1, 1)]``; a mean past the bounds
+            plays them only as often as training's samples did, issue #40's seed 1).
         overrides: ``key=value`` settings of a baseline's config (``--set``), e.g. a
             calibrated detector for hand regard's baselines
             (``behavior.detector_file=runs/hr/hand_detector.json``); with a checkpoint, whose
@@ -417,8 +420,8 @@ def open_subject(request: EvalRequest, registry: PluginRegistry) -> EvalSubject:
     path = resolve_checkpoint(request.checkpoint)
     policy: Policy
     if is_scripted_policy(path):  # another learner's (devlearn.gym.save_policy)
-        if request.action == "sample":
-            raise sampling_refused(path)
+        if request.action != "mean":
+            raise sampling_refused(path, request.action)
         policy = ScriptedPolicy.open(path, registry, request.behavior)
     else:
         policy = CheckpointPolicy.open(path, registry, request.behavior)
@@ -592,7 +595,7 @@ class Evaluation:
         try:
             prepare_env(env, conditions.stage, conditions.infant_start)
             actions = subject.policy.actions(
-                batch_of_one(env.reset()), env.action_dim, request.seed, request.action == "sample"
+                batch_of_one(env.reset()), env.action_dim, request.seed, request.action
             )
             episode_steps, step_dt = env.episode_steps, env.step_dt
         finally:

@@ -88,7 +88,7 @@ class Policy(Protocol):
         detector calibration); built once."""
         ...
 
-    def actions(self, obs: Observations, action_dim: int, seed: int, sample: bool) -> Actions:
+    def actions(self, obs: Observations, action_dim: int, seed: int, action: str) -> Actions:
         """Its actions in one evaluation, in their initial state, for batches of ``obs``'s
         size (the first observation of its envs, which a network is built for).
 
@@ -97,8 +97,10 @@ class Policy(Protocol):
             action_dim: Number of actions.
             seed: The evaluation seed (a baseline's draws; a checkpoint samples from torch's
                 global generator, seeded with it before the network is built).
-            sample: Draw actions from the policy's distribution instead of its mean action
-                (a devlearn checkpoint's; the others act as they are).
+            action: One of :data:`~devlearn.evaluation.evaluate.ACTIONS`: ``mean``, or (a
+                devlearn checkpoint's; the others act as they are) ``sample`` (drawn from the
+                policy's distribution) or ``expected_clipped`` (the action the env applies
+                on average when the policy samples).
         """
         ...
 
@@ -207,10 +209,12 @@ class ActorActions(Actions):
         action_dim: int,
         sample: bool,
         generator_state: torch.Tensor,
+        expected: bool = False,
     ) -> None:
         super().__init__(rows, action_dim)
         self.actor = actor
         self.sample = sample
+        self.expected = expected
         self.state = generator_state.clone()
         self.at_bound = 0  # mean components at or past the bounds, this episode
         self.components = 0
@@ -222,9 +226,15 @@ class ActorActions(Actions):
         if self.sample:
             torch.set_rng_state(self.state)
         with torch.inference_mode():
-            action = self.actor(batch, stochastic_output=self.sample).numpy()
-            # the mean as the head plays it (clipped, or squashed); no draw from the generator
-            mean = self.actor(batch).numpy() if self.sample else action
+            if self.expected:
+                mean = self.actor(batch).numpy()
+                dist = self.actor.distribution
+                dist.update(self.actor.mlp(self.actor.get_latent(batch)))
+                action = expected_clipped(dist.mean, dist.std).numpy()
+            else:
+                action = self.actor(batch, stochastic_output=self.sample).numpy()
+                # the mean as the head plays it (clipped, or squashed); no draw from the generator
+                mean = self.actor(batch).numpy() if self.sample else action
         if self.sample:
             self.state = torch.get_rng_state()
         self.at_bound += int((np.abs(mean) >= SATURATED).sum())
@@ -261,6 +271,22 @@ class ActorActions(Actions):
         return copy.deepcopy(self, {id(self.actor): self.actor})  # one network, shared
 
 
+def expected_clipped(mu: torch.Tensor, sigma: torch.Tensor) -> torch.Tensor:
+    """``E[clip(X, -1, 1)]`` for ``X ~ N(mu, sigma)``, per component: the action the env
+    applies on average when a policy with a linear-mean Gaussian head samples (its samples are
+    clipped to the action bounds). A mean past a bound plays the bound; this action instead
+    gives the bound only in the share of samples past it, as training saw them.
+
+    With ``a = (-1 - mu) / sigma`` and ``b = (1 - mu) / sigma``:
+    ``-P(X < -1) + P(X > 1) + mu (Phi(b) - Phi(a)) + sigma (phi(a) - phi(b))``."""
+    a, b = (-1.0 - mu) / sigma, (1.0 - mu) / sigma
+    unit = torch.distributions.Normal(0.0, 1.0)
+    cdf_a, cdf_b = unit.cdf(a), unit.cdf(b)
+    pdf_a, pdf_b = unit.log_prob(a).exp(), unit.log_prob(b).exp()
+    inside = mu * (cdf_b - cdf_a) + sigma * (pdf_a - pdf_b)
+    return (-cdf_a + (1.0 - cdf_b) + inside).clamp(-1.0, 1.0)
+
+
 def batch_of_one(obs: dict[str, Any]) -> Observations:
     """One env's observation (name -> unbatched array) as a batch of one, copied: (1, *shape)
     per group."""
@@ -283,11 +309,31 @@ class CheckpointPolicy(Checkpoint):
     name: ClassVar[str] = "checkpoint"
     learner: ClassVar[str | None] = None
 
-    def actions(self, obs: Observations, action_dim: int, seed: int, sample: bool) -> Actions:
+    def actions(self, obs: Observations, action_dim: int, seed: int, action: str) -> Actions:
         """Its network, built for ``obs`` (torch's global generator draws its initialisation
-        and then, with ``sample``, its actions)."""
+        and then, with ``sample``, its actions).
+
+        Raises:
+            UsageError: ``expected_clipped`` with a head whose samples the env never clips
+                (``squashed``: its deterministic action is already the squashed mean).
+        """
+        from devlearn.api.errors import UsageError
+        from devlearn.training.distribution import SquashedGaussian
+
         actor = self.actor({k: v[0] for k, v in obs.items()}, action_dim)
-        return ActorActions(actor, batch_rows(obs), action_dim, sample, torch.get_rng_state())
+        if action == "expected_clipped" and isinstance(actor.distribution, SquashedGaussian):
+            raise UsageError(
+                "--action expected_clipped: this policy's head is squashed (network.head="
+                "squashed), whose samples never reach the env's clip; valid: mean, sample"
+            )
+        return ActorActions(
+            actor,
+            batch_rows(obs),
+            action_dim,
+            action == "sample",
+            torch.get_rng_state(),
+            expected=action == "expected_clipped",
+        )
 
 
 class Baseline:
@@ -322,8 +368,8 @@ class Baseline:
     def behavior(self) -> Behavior:
         return self._behavior
 
-    def actions(self, obs: Observations, action_dim: int, seed: int, sample: bool) -> Actions:
-        """Zero, uniform or held-uniform actions seeded by ``seed`` (``sample`` is not a
+    def actions(self, obs: Observations, action_dim: int, seed: int, action: str) -> Actions:
+        """Zero, uniform or held-uniform actions seeded by ``seed`` (``action`` is not a
         baseline's: it acts as it is named)."""
         rows = batch_rows(obs)
         if self.name == "zero":

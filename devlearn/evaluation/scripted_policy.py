@@ -167,14 +167,14 @@ class ScriptedPolicy(SavedPolicy):
         with known_exporter_noise_silenced():
             self.module = torch.jit.load(str(self.path), map_location="cpu").eval()
 
-    def actions(self, obs: Observations, action_dim: int, seed: int, sample: bool) -> Actions:
+    def actions(self, obs: Observations, action_dim: int, seed: int, action: str) -> Actions:
         """Its deterministic action (nothing to draw, nothing to skip).
 
         Raises:
-            UsageError: ``sample``: it has no distribution to draw from.
+            UsageError: ``sample`` or ``expected_clipped``: it has no distribution.
         """
-        if sample:
-            raise sampling_refused(self.path)
+        if action != "mean":
+            raise sampling_refused(self.path, action)
         return ScriptedActions(self, batch_rows(obs), action_dim)
 
     def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
@@ -207,11 +207,12 @@ class ScriptedPolicy(SavedPolicy):
             return self.module(*inputs).numpy().astype(np.float64)
 
 
-def sampling_refused(path: str | Path) -> UsageError:
-    """The error for ``--action sample`` with the scripted policy ``path``."""
+def sampling_refused(path: str | Path, action: str = "sample") -> UsageError:
+    """The error for ``--action sample`` (or ``expected_clipped``) with the scripted policy
+    ``path``."""
     return UsageError(
-        f"--action sample: a scripted policy ({path}) gives one deterministic action; "
-        "sampling needs a devlearn checkpoint"
+        f"--action {action}: a scripted policy ({path}) gives one deterministic action; "
+        f"{action} needs a devlearn checkpoint's distribution (valid here: mean)"
     )
 
 

@@ -141,9 +141,10 @@ def _check_protocols(spec: ExperimentSpec, registry: PluginRegistry) -> None:
                 resolve_config(RunRequest(spec.behavior, items), registry)
         except UsageError as exc:
             raise UsageError(f"{where}: {exc}") from None
-        if protocol.action == "sample" and scripted:
+        if protocol.action != "mean" and scripted:
             raise UsageError(
-                f"{where}: action 'sample' needs a devlearn checkpoint; arm '{scripted[0]}' "
+                f"{where}: action '{protocol.action}' needs a devlearn checkpoint; arm "
+                f"'{scripted[0]}' "
                 "writes a scripted policy, which acts with one deterministic action"
             )
 

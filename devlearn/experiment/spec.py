@@ -82,7 +82,7 @@ BASELINES = ("zero", "random", "held_random")
 """``devlearn eval --policy`` baselines an experiment can evaluate."""
 STARTS = ("stage", "babybench", "rest", "random")
 """``devlearn eval --start`` values (checked again by ``devlearn eval`` itself at plan time)."""
-ACTIONS = ("mean", "sample")
+ACTIONS = ("mean", "sample", "expected_clipped")
 """``devlearn eval --action`` values."""
 KEYS = {
     "": {

@@ -107,8 +107,8 @@ def test_actions_act_on_a_batch_of_observations(checkpoint, scripted, first_obs)
     obs, action_dim = first_obs
     rows = {k: np.stack([v, v * 0.5, v + 0.25]) for k, v in obs.items()}
     ours = CheckpointPolicy.open(checkpoint, REGISTRY, "tiny")
-    network = ours.actions(batch_of_one(obs), action_dim, seed=0, sample=False)
-    three = ours.actions(rows, action_dim, seed=0, sample=False)
+    network = ours.actions(batch_of_one(obs), action_dim, seed=0, action="mean")
+    three = ours.actions(rows, action_dim, seed=0, action="mean")
     together = three.act(rows)
     assert together.shape == (3, action_dim)
     for i in range(3):
@@ -116,15 +116,15 @@ def test_actions_act_on_a_batch_of_observations(checkpoint, scripted, first_obs)
         assert alone.shape == (1, action_dim)
         np.testing.assert_allclose(alone[0], together[i], atol=1e-6)
     theirs = ScriptedPolicy.open(scripted, REGISTRY, "tiny")
-    acted = theirs.actions(rows, action_dim, seed=0, sample=False).act(rows)
+    acted = theirs.actions(rows, action_dim, seed=0, action="mean").act(rows)
     expected = np.clip(5 * (0.5 - rows["proprioception"]), -1, 1)
     np.testing.assert_allclose(acted, expected, atol=1e-6)
     assert theirs.act(obs) == pytest.approx(expected[0], abs=1e-6)
     with pytest.raises(UsageError, match="a scripted policy .* gives one deterministic action"):
-        theirs.actions(rows, action_dim, seed=0, sample=True)
+        theirs.actions(rows, action_dim, seed=0, action="sample")
     cfg = resolve_config(RunRequest("tiny", ["env.action_repeat=2"]), REGISTRY)
     for name in ("zero", "random", "held_random"):
-        actions = Baseline(name, cfg, TinyBehavior()).actions(rows, action_dim, 3, False)
+        actions = Baseline(name, cfg, TinyBehavior()).actions(rows, action_dim, 3, "mean")
         acted = actions.act(rows)
         assert acted.shape == (3, action_dim) and np.all(np.abs(acted) <= 1)
         assert np.any(acted != 0) == (name != "zero")
@@ -157,11 +157,11 @@ def test_skipping_draws_what_acting_would(name, checkpoint, first_obs):
     if name == "sample":
         policy = CheckpointPolicy.open(checkpoint, REGISTRY, "tiny")
         torch.manual_seed(2)
-        reference = policy.actions(one, action_dim, seed=2, sample=True)
+        reference = policy.actions(one, action_dim, seed=2, action="sample")
         slot = reference.for_slot()
     else:
         cfg = resolve_config(RunRequest("tiny", ["env.action_repeat=2"]), REGISTRY)
-        reference = Baseline(name, cfg, TinyBehavior()).actions(one, action_dim, 2, False)
+        reference = Baseline(name, cfg, TinyBehavior()).actions(one, action_dim, 2, "mean")
         slot = reference.for_slot()
     for _ in range(5):
         reference.act(one)
@@ -213,3 +213,46 @@ def test_an_evaluation_says_where_the_mean_action_sits_past_the_bounds(
     zero = EvalRequest("tiny", policy="zero", episodes=2)
     assert saved["policy"] == "checkpoint"  # the policy's name stays
     assert "policy_figures" not in Evaluation(zero, REGISTRY, infant_factory=fake_infant_factory).run()
+
+
+def test_the_expected_clipped_action_is_the_mean_of_the_clipped_samples():
+    """``--action expected_clipped`` plays E[clip(mean + std * noise, -1, 1)] (issue #40's seed
+    1: its mean past the bounds played them, where training's clipped samples did not)."""
+    from devlearn.evaluation.policy import expected_clipped
+
+    mu = torch.tensor([0.0, 2.0, -3.0, 0.5, 0.9, 5.0])
+    sigma = torch.tensor([1.0, 0.5, 2.0, 0.1, 3.0, 0.01])
+    draws = mu + sigma * torch.randn(400_000, 6, generator=torch.Generator().manual_seed(0))
+    monte_carlo = draws.clamp(-1.0, 1.0).mean(dim=0)
+    exact = expected_clipped(mu, sigma)
+    torch.testing.assert_close(exact, monte_carlo, atol=4e-3, rtol=0)
+    assert exact[0] == pytest.approx(0.0, abs=1e-6) and exact[5] == pytest.approx(1.0)
+    assert 0.9 < exact[1] < 1.0  # a mean past the bound plays less than the bound
+
+
+def test_an_evaluation_plays_the_expected_clipped_action(tmp_path, first_obs, scripted):
+    from devlearn.evaluation.evaluate import Evaluation
+
+    obs, action_dim = first_obs
+    cfg = resolve_config(RunRequest("tiny", ["seed=6"]), REGISTRY)
+    behavior = REGISTRY.create("tiny", cfg.behavior)
+    actor = policy_network(cfg, behavior, obs, action_dim)
+    with torch.no_grad():
+        actor.mlp[-1].weight.zero_()
+        actor.mlp[-1].bias.copy_(torch.tensor([3.0, -1.5, 0.2]))
+    save_checkpoint(
+        policy_file(to_dict(cfg), behavior, actor.state_dict(), env_steps=96), tmp_path / "p.pt"
+    )
+    ours = CheckpointPolicy.open(tmp_path / "p.pt", REGISTRY, "tiny")
+    played = {
+        action: ours.actions(batch_of_one(obs), action_dim, 0, action).act(batch_of_one(obs))[0]
+        for action in ("mean", "expected_clipped")
+    }
+    np.testing.assert_allclose(played["mean"], [1.0, -1.0, 0.2], atol=1e-6)
+    assert 0 < played["expected_clipped"][0] < 1 and -1 < played["expected_clipped"][1] < 0
+    assert 0 < played["expected_clipped"][2] < 0.2  # a mean inside: pulled in by both bounds
+    request = EvalRequest("tiny", tmp_path / "p.pt", episodes=2, action="expected_clipped")
+    summary = Evaluation(request, REGISTRY, infant_factory=fake_infant_factory).run()
+    assert summary["protocol"]["action"] == "expected_clipped"
+    with pytest.raises(UsageError, match="--action expected_clipped: a scripted policy"):
+        open_subject(EvalRequest("tiny", scripted, action="expected_clipped"), REGISTRY)
