@@ -229,22 +229,14 @@ def test_readme_tables_are_the_experiment_tables(dest):
     assert _without_heading_marks(tables) in _without_heading_marks((ROOT / readme).read_text())
 
 
-SCRIPTS_NOT_YET_CONVERTED = {
-    "results/hand_regard/i40/saturation/saturation.py",
-}
-"""Issue #56's scripts whose publications are not converted yet: this set only shrinks (each
-conversion removes its scripts and their names here) and the issue is done when it is empty."""
-
-
 def test_no_script_is_left_under_results():
     """Results are data, not code (issue #56): an experiment is a file under experiments/ that
-    ``devlearn experiment`` runs, publishes and tabulates; an analysis is a plugin's command. No
-    script under results/ but the ones still to convert, and each of those still there (a
-    converted one leaves the set)."""
+    ``devlearn experiment`` runs, publishes and tabulates; an analysis is a plugin's command or
+    a ``devlearn`` option (issue #40's saturation test is ``devlearn eval --action
+    expected_clipped``). No script under results/."""
     scripts = {
         str(p.relative_to(ROOT))
         for p in tracked()
         if p.relative_to(ROOT).parts[0] == "results" and p.suffix in (".sh", ".py")
     }
-    assert scripts - SCRIPTS_NOT_YET_CONVERTED == set(), "new scripts under results/"
-    assert SCRIPTS_NOT_YET_CONVERTED - scripts == set(), "converted: remove them from the set"
+    assert scripts == set(), f"scripts under results/: {sorted(scripts)}"
