@@ -37,6 +37,8 @@ class BlobTable:
             (0 left, 1 right; -1 neither or no blob): ground truth, for scoring only.
         moving_arm: (T,) int8, the babbling arm (-1: both or unknown).
         image_width: Pixels across an eye image.
+        other_arm_hangs: The arm that did not babble hung limp (action 0, ``babble(arms=
+            "alternate")``), rather than holding a posture (``"turns"``).
     """
 
     blobs: np.ndarray
@@ -46,6 +48,7 @@ class BlobTable:
     blob_hand: np.ndarray
     moving_arm: np.ndarray
     image_width: int = 64
+    other_arm_hangs: bool = False
 
     def __len__(self) -> int:
         return len(self.blobs)
@@ -67,6 +70,7 @@ class BlobTable:
             blob_hand=self.blob_hand.astype(np.int8),
             moving_arm=self.moving_arm.astype(np.int8),
             image_width=np.asarray(self.image_width),
+            other_arm_hangs=np.asarray(self.other_arm_hangs),
         )
         return path
 
@@ -82,24 +86,23 @@ class BlobTable:
                 blob_hand=data["blob_hand"],
                 moving_arm=data["moving_arm"],
                 image_width=int(data["image_width"]),
+                other_arm_hangs=bool(data["other_arm_hangs"])
+                if "other_arm_hangs" in data
+                else False,
             )
 
     def concatenate(self, other: BlobTable) -> BlobTable:
         """This table then ``other`` (its episodes renumbered after this table's)."""
         offset = int(self.episode.max()) + 1 if len(self) else 0
         return BlobTable(
-            *(
-                np.concatenate([a, b])
-                for a, b in (
-                    (self.blobs, other.blobs),
-                    (self.proprioception, other.proprioception),
-                    (self.episode, other.episode + offset),
-                    (self.hand_pixels, other.hand_pixels),
-                    (self.blob_hand, other.blob_hand),
-                    (self.moving_arm, other.moving_arm),
-                )
-            ),
+            blobs=np.concatenate([self.blobs, other.blobs]),
+            proprioception=np.concatenate([self.proprioception, other.proprioception]),
+            episode=np.concatenate([self.episode, other.episode + offset]),
+            hand_pixels=np.concatenate([self.hand_pixels, other.hand_pixels]),
+            blob_hand=np.concatenate([self.blob_hand, other.blob_hand]),
+            moving_arm=np.concatenate([self.moving_arm, other.moving_arm]),
             image_width=self.image_width,
+            other_arm_hangs=self.other_arm_hangs and other.other_arm_hangs,
         )
 
 
@@ -119,6 +122,7 @@ def tabulate(
     segmentation: np.ndarray | None = None,
     moving_arm: np.ndarray | None = None,
     hand_labels: tuple[int, int] = (1, 2),
+    other_arm_hangs: bool = False,
 ) -> BlobTable:
     """Reduce recorded frames to a :class:`BlobTable` with ``detector``'s colour step.
 
@@ -130,6 +134,7 @@ def tabulate(
         segmentation: (T, 2, H, W) labels (ground truth) or None.
         moving_arm: (T,) the babbling arm, or None (-1).
         hand_labels: Segmentation labels of the left and right hand.
+        other_arm_hangs: See :class:`BlobTable`.
     """
     steps = len(eyes)
     blobs = np.full((steps, 2, MAX_BLOBS, 3), np.nan, np.float32)
@@ -159,4 +164,5 @@ def tabulate(
             np.full(steps, -1, np.int8) if moving_arm is None else np.asarray(moving_arm, np.int8)
         ),
         image_width=int(eyes.shape[3]),
+        other_arm_hangs=other_arm_hangs,
     )

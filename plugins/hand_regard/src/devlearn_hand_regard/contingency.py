@@ -20,7 +20,7 @@ a blob to a side only when both agree:
    image displacements against each arm's predicted ones (the regression's prediction at
    each posture, differenced: the arm's joint velocities mapped into the image, head turns
    included). A blob is that arm's when its track follows that arm closer than the other
-   (relative error under :data:`MOTION_TOLERANCE`), or when the arm and the blob are both
+   (the cosine of their displacements, :data:`MIN_COSINE`), or when the arm and the blob are both
    still.
 
 The labels come from babbling without the segmentation: ``babble(arms="turns",
@@ -36,6 +36,7 @@ queries (tens of microseconds).
 
 from __future__ import annotations
 
+import base64
 import itertools
 from collections import deque
 from typing import TYPE_CHECKING, Any
@@ -43,7 +44,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from scipy.spatial import cKDTree
 
-from devlearn_hand_regard.attribution import polynomial_features
+from devlearn_hand_regard.attribution import VisibilityPredictor, assign, polynomial_features
 
 if TYPE_CHECKING:
     from devlearn_hand_regard.blob_table import BlobTable
@@ -59,15 +60,19 @@ MOVE_PIXELS = 1.0
 """A blob that moved at least this far over :data:`LABEL_LAG` steps moved."""
 STILL_PIXELS = 0.25
 """A blob that moved at most this far over :data:`LABEL_LAG` steps stayed still."""
-ARM_STILL = 0.05
+ARM_STILL = 0.1
 """An arm whose placing joints' speed (rad/s, norm) is under this is still."""
 ARM_MOVING = 2.0
 """An arm whose placing joints' speed is at least this is moving."""
-MAX_JUMP = 10.0
+HEAD_STILL = 0.5
+"""A blob's motion is credited to the babbling arm only while the head turns slower than
+this (rad/s): a turning head moves everything in view; a still blob is credited to the
+still arm only while the head is still (:data:`ARM_STILL`)."""
+MAX_JUMP = 20.0
 """Largest blob move (pixels) between the frames of a track."""
-MAX_SUPPORT = 3000
+MAX_SUPPORT = 1500
 """Babbled postures kept per (hand, eye) as the model's support (a random subset)."""
-SUPPORT_RADIUS = 0.6
+SUPPORT_RADIUS = 1.2
 """A posture is inside the babbling's range for a (hand, eye) when a babbled posture that
 showed that hand in that eye lies within this distance (standardised joint angles)."""
 SIGMAS = 3.0
@@ -78,9 +83,16 @@ WINDOW = 4
 STILL_MOTION = 1.5
 """Image motion (pixels, summed over the window's steps) under which a blob, or an arm's
 predicted hand, counts as still."""
-MOTION_TOLERANCE = 0.6
-"""A moving blob follows an arm when the error of that arm's predicted displacements is
-under this share of the blob's own motion (summed over the window)."""
+MIN_COSINE = 0.3
+"""A moving blob follows an arm when the cosine of its displacements over the window with
+that arm's predicted ones is above this and above the other arm's."""
+MAX_SIGMA = 4.0
+"""Largest residual spread the place check allows (pixels of x, y and sqrt(area)): a hand is
+about 12 pixels across at arm's length, so SIGMAS x 4 px is a hand's width; where babbling
+was too sparse to predict a place better than that, the place says nothing and no side is
+credited."""
+NEIGHBOURS = 5
+"""Babbled postures whose blob places make a posture's expected place."""
 MIN_LABELS = 50
 """A (hand, eye) with fewer labelled blobs gets no model (that hand is never credited there)."""
 
@@ -119,10 +131,13 @@ def _track_displacement(table: BlobTable, lag: int) -> np.ndarray:
 def contingency_labels(table: BlobTable, joints: list[list[int]]) -> np.ndarray:
     """Which hand each blob of a turn-taking babbling recording is, from contingency alone.
 
-    On frames where one arm babbles (``moving_arm``), the other arm and the head are still: a
-    blob that moved over the last :data:`LABEL_LAG` steps is the babbling arm's hand; a blob
-    that stayed still while that arm moved fast is the still arm's hand. Everything else is
-    left unlabelled. No segmentation is read.
+    On frames where one arm babbles (``moving_arm``) and the other is still: when the other
+    arm hangs limp (``other_arm_hangs``, one-arm babbling: its hand hangs out of view, as
+    issue #39's visibility model assumed), every blob is the babbling arm's hand. When it
+    holds a posture (turn-taking babbling, both hands possibly in view) and the head is
+    still, a blob that moved over the last :data:`LABEL_LAG` steps is the babbling arm's
+    hand, and a blob that stayed still while that arm moved fast is the still arm's hand.
+    Everything else is left unlabelled. No segmentation is read.
 
     Args:
         table: The recording's blobs.
@@ -138,11 +153,16 @@ def contingency_labels(table: BlobTable, joints: list[list[int]]) -> np.ndarray:
     labels = np.full(moved.shape, -1, np.int8)
     for t in range(len(table)):
         m = int(table.moving_arm[t])
-        if m < 0 or speed[t, 1 - m] >= ARM_STILL or head_speed[t] >= ARM_STILL:
+        if m < 0 or speed[t, 1 - m] >= ARM_STILL:
+            continue
+        if table.other_arm_hangs:  # the other hand hangs limp out of view: every blob is m's
+            labels[t][np.isfinite(table.blobs[t, :, :, 0])] = m
+            continue
+        if head_speed[t] >= HEAD_STILL:
             continue
         d = moved[t]
         labels[t][d >= MOVE_PIXELS] = m
-        if speed[t, m] >= ARM_MOVING:
+        if speed[t, m] >= ARM_MOVING and head_speed[t] < ARM_STILL:
             labels[t][d <= STILL_PIXELS] = 1 - m
     return labels
 
@@ -170,24 +190,31 @@ def fit_contingency_model(
         had fewer than :data:`MIN_LABELS` labelled blobs; ``label_counts``.
     """
     rng = np.random.default_rng(seed)
-    postures, targets, eyes, hands = [], [], [], []
-    for table in tables:
+    postures, targets, eyes, hands, episodes = [], [], [], [], []
+    unseen: list[np.ndarray] = []  # (T, 2 hands, 2 eyes) the hand surely out of that eye
+    for number, table in enumerate(tables):
         labels = contingency_labels(table, joints)
-        t, eye, i = np.nonzero(labels >= 0)
-        blob = table.blobs[t, eye, i]
-        postures.append(table.proprioception[t])
+        frame, seen_by, slot = np.nonzero(labels >= 0)
+        blob = table.blobs[frame, seen_by, slot]
+        postures.append(table.proprioception[frame])
         targets.append(np.c_[blob[:, :2], np.sqrt(blob[:, 2])])
-        eyes.append(eye)
-        hands.append(labels[t, eye, i])
+        eyes.append(seen_by)
+        hands.append(labels[frame, seen_by, slot])
+        episodes.append(table.episode[frame] * len(tables) + number)  # unique across tables
+        unseen.append(_unseen(table, joints))
     proprioception = np.concatenate(postures).astype(float)
     target = np.concatenate(targets).astype(float)
     eye_of, hand_of = np.concatenate(eyes), np.concatenate(hands)
+    episode_of = np.concatenate(episodes)
+    all_postures = np.concatenate([t.proprioception for t in tables]).astype(float)
+    out_of_view = np.concatenate(unseen)
     model: dict[str, Any] = {
         "joints": [list(map(int, j)) for j in joints],
         "degree": degree,
         "mean": [],
         "scale": [],
         "pairs": [[None, None], [None, None]],
+        "unseen": [[None, None], [None, None]],
         "label_counts": [[0, 0], [0, 0]],
     }
     for hand in range(2):
@@ -207,16 +234,72 @@ def fit_contingency_model(
             weights = np.linalg.solve(
                 features.T @ features + np.diag(penalty), features.T @ target[rows]
             )
-            residual = target[rows] - features @ weights
-            sigma = 1.4826 * np.median(np.abs(residual - np.median(residual, 0)), axis=0)
             keep = rng.permutation(len(z))[:MAX_SUPPORT]
+            support, place = np.round(z[keep], 3), np.round(target[rows][keep], 2)
+            # the neighbours' spread: the places of odd episodes' postures predicted from
+            # the even episodes' (consecutive frames of one episode are near copies)
+            odd = episode_of[rows][keep] % 2 == 1
+            even_tree = cKDTree(support[~odd]) if (~odd).any() else cKDTree(support)
+            residual = place[odd] - _neighbour_mean(even_tree, place[~odd], support[odd])
+            residual = residual[np.isfinite(residual).all(axis=1)]
+            if len(residual) < MIN_LABELS // 5:
+                continue
+            sigma = 1.4826 * np.median(np.abs(residual - np.median(residual, 0)), axis=0)
             model["pairs"][hand][eye] = {
                 "weights": np.round(weights, 5).tolist(),
                 "sigma": np.round(np.maximum(sigma, 0.5), 4).tolist(),
-                "support": np.round(z[keep], 3).tolist(),
+                "support": pack(support),
+                "place": pack(place),
                 "labels": int(rows.sum()),
             }
+        for eye in range(2):  # where babbling showed this hand out of this eye
+            away = (all_postures[out_of_view[:, hand, eye]][:, joints[hand]] - mean) / scale
+            keep = rng.permutation(len(away))[:MAX_SUPPORT]
+            model["unseen"][hand][eye] = pack(away[keep])
     return model
+
+
+def pack(array: np.ndarray) -> dict[str, Any]:
+    """A float array as JSON in little space: its shape and its float16 bytes in base64
+    (postures to 0.01 standard deviation, places to 0.06 pixel: below what the rule resolves)."""
+    array = np.asarray(array, dtype="<f2")
+    return {"shape": list(array.shape), "float16": base64.b64encode(array.tobytes()).decode()}
+
+
+def unpack(packed: dict[str, Any]) -> np.ndarray:
+    """:func:`pack`'s array, as float64."""
+    raw = np.frombuffer(base64.b64decode(packed["float16"]), dtype="<f2")
+    return raw.reshape(packed["shape"]).astype(float)
+
+
+def _unseen(table: BlobTable, joints: list[list[int]]) -> np.ndarray:
+    """(T, 2 hands, 2 eyes) frames of one-arm babbling (the other arm hanging limp) where a
+    hand was surely out of an eye: the babbling arm's where that eye saw no blob, the
+    hanging arm's in both eyes while it was still."""
+    out = np.zeros((len(table), 2, 2), dtype=bool)
+    if not table.other_arm_hangs:
+        return out
+    speed = np.stack([joint_speeds(table.proprioception, a) for a in arm_joints(joints)], 1)
+    blobless = ~np.isfinite(table.blobs[:, :, :, 0]).any(axis=2)  # (T, 2 eyes)
+    for hand in range(2):
+        babbling = table.moving_arm == hand
+        out[:, hand] = babbling[:, None] & blobless
+        hanging = (table.moving_arm == 1 - hand) & (speed[:, hand] < ARM_STILL)
+        out[hanging, hand] = True
+    return out
+
+
+def _neighbour_mean(tree: cKDTree, place: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """(N, 3) inverse-distance weighted mean of the places of the :data:`NEIGHBOURS` babbled
+    postures nearest each of (N, k) postures ``z`` within :data:`SUPPORT_RADIUS` (NaN rows
+    where none is)."""
+    distance, index = tree.query(z, k=NEIGHBOURS, distance_upper_bound=SUPPORT_RADIUS)
+    found = np.isfinite(distance)
+    weight = np.where(found, 1.0 / (distance + 0.05), 0.0)
+    safe = np.where(found, index, 0)
+    total = weight.sum(axis=1, keepdims=True)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.einsum("nk,nkc->nc", weight, place[safe]) / total
 
 
 class ContingencyModel:
@@ -230,40 +313,66 @@ class ContingencyModel:
         self.weights: list[list[np.ndarray | None]] = [[None, None], [None, None]]
         self.sigma: list[list[np.ndarray | None]] = [[None, None], [None, None]]
         self.trees: list[list[cKDTree | None]] = [[None, None], [None, None]]
+        self.places: list[list[np.ndarray | None]] = [[None, None], [None, None]]
+        self.unseen: list[list[cKDTree | None]] = [[None, None], [None, None]]
         for hand, eye in itertools.product(range(2), range(2)):
+            away = model["unseen"][hand][eye]
+            if away:
+                self.unseen[hand][eye] = cKDTree(unpack(away))
             pair = model["pairs"][hand][eye]
             if pair:
                 self.weights[hand][eye] = np.asarray(pair["weights"], dtype=float)
                 self.sigma[hand][eye] = np.asarray(pair["sigma"], dtype=float)
-                self.trees[hand][eye] = cKDTree(np.asarray(pair["support"], dtype=float))
+                self.trees[hand][eye] = cKDTree(unpack(pair["support"]))
+                self.places[hand][eye] = unpack(pair["place"])
 
     def standardised(self, proprioception: np.ndarray) -> list[np.ndarray]:
         """Per hand its (k,) standardised posture."""
         p = np.asarray(proprioception, dtype=float)
         return [(p[self.joints[h]] - self.mean[h]) / self.scale[h] for h in range(2)]
 
-    def predict(self, z: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    def out_of_view(self, z: list[np.ndarray]) -> np.ndarray:
+        """(2 hands, 2 eyes) bool: babbling showed this posture with the hand out of that eye
+        (a posture within :data:`SUPPORT_RADIUS` of one) and never in it (none of the
+        postures that showed it there within twice that: a hand at the image's edge is often
+        too cut to be a blob, so "not seen" is weaker evidence than "seen")."""
+        out = np.zeros((2, 2), dtype=bool)
+        for hand, eye in itertools.product(range(2), range(2)):
+            away, seen = self.unseen[hand][eye], self.trees[hand][eye]
+            if away is None:
+                continue
+            near_away = np.isfinite(away.query(z[hand], distance_upper_bound=SUPPORT_RADIUS)[0])
+            near_seen = seen is not None and np.isfinite(
+                seen.query(z[hand], distance_upper_bound=2 * SUPPORT_RADIUS)[0]
+            )
+            out[hand, eye] = bool(near_away and not near_seen)
+        return out
+
+    def predict(self, z: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Where each hand should show in each eye, and whether the posture is babbled.
 
         Args:
             z: :meth:`standardised` postures.
         Returns:
-            prediction: (2 hands, 2 eyes, 3) [x, y, sqrt(area)] (NaN without a model).
+            prediction: (2 hands, 2 eyes, 3) [x, y, sqrt(area)] from the smooth regression
+                (its differences are the arm's predicted image motion; NaN without a model).
+            place: (2 hands, 2 eyes, 3) the same from the nearest babbled postures (the
+                place check's; NaN where none is within :data:`SUPPORT_RADIUS`).
             supported: (2 hands, 2 eyes) bool, a babbled posture that showed that hand in
                 that eye lies within :data:`SUPPORT_RADIUS`.
         """
         prediction = np.full((2, 2, 3), np.nan)
-        supported = np.zeros((2, 2), dtype=bool)
+        place = np.full((2, 2, 3), np.nan)
         for hand in range(2):
             features = polynomial_features(z[hand][None], self.degree)[0]
             for eye in range(2):
                 weights, tree = self.weights[hand][eye], self.trees[hand][eye]
-                if weights is None or tree is None:
+                places = self.places[hand][eye]
+                if weights is None or tree is None or places is None:
                     continue
                 prediction[hand, eye] = features @ weights
-                distance, _ = tree.query(z[hand], k=1, distance_upper_bound=SUPPORT_RADIUS)
-                supported[hand, eye] = bool(np.isfinite(distance))
-        return prediction, supported
+                place[hand, eye] = _neighbour_mean(tree, places, z[hand][None])[0]
+        return prediction, place, np.isfinite(place).all(axis=2)
 
 
 class ContingencyAttribution:
@@ -273,8 +382,13 @@ class ContingencyAttribution:
     :meth:`reset` at its start).
     """
 
-    def __init__(self, model: dict[str, Any] | ContingencyModel) -> None:
+    def __init__(
+        self,
+        model: dict[str, Any] | ContingencyModel,
+        visibility_model: dict[str, Any] | None = None,
+    ) -> None:
         self.model = model if isinstance(model, ContingencyModel) else ContingencyModel(model)
+        self.visibility = VisibilityPredictor(visibility_model) if visibility_model else None
         self.history: deque[tuple[np.ndarray, np.ndarray]] = deque(maxlen=WINDOW + 1)
 
     def reset(self) -> None:
@@ -291,7 +405,11 @@ class ContingencyAttribution:
             (2 eyes, B) int: the hand credited with each blob (0 left, 1 right, -1 none).
         """
         blobs = np.asarray(blobs, dtype=float)
-        prediction, supported = self.model.predict(self.model.standardised(proprioception))
+        z = self.model.standardised(proprioception)
+        prediction, place, supported = self.model.predict(z)
+        away = self.model.out_of_view(z)
+        # issue #39's posture-only evidence, when the detector has it: P(eye sees hand)
+        likelihood = self.visibility(proprioception) if self.visibility is not None else None
         self.history.append((blobs[:, :, :2].copy(), prediction[:, :, :2].copy()))
         out = np.full(blobs.shape[:2], -1, dtype=int)
         for eye in range(2):
@@ -302,12 +420,17 @@ class ContingencyAttribution:
             cost = np.zeros((len(present), 2))
             for row, b in enumerate(present):
                 where, cost[row] = self._in_place(
-                    eye, blobs[eye, b], prediction[:, eye], supported[:, eye]
+                    eye, blobs[eye, b], place[:, eye], supported[:, eye]
                 )
                 if where.any():
-                    consistent[row] = where & self._moves_with(eye, b)
+                    consistent[row] = where & self._moves_with(eye, int(b))
             for row, hand in _agreed(consistent, cost).items():
-                out[eye, present[row]] = hand
+                # the other hand must be accounted for: known out of this eye, or placed
+                # by its model (in the babbled range) where it could be told apart
+                accounted = away[1 - hand, eye] or supported[1 - hand, eye]
+                agrees = likelihood is None or hand in assign(likelihood[eye], len(present))
+                if accounted and agrees:
+                    out[eye, present[row]] = hand
         return out
 
     def _in_place(
@@ -322,6 +445,7 @@ class ContingencyAttribution:
         for hand in range(2):
             sigma = self.model.sigma[hand][eye]
             if sigma is not None:
+                sigma = np.minimum(sigma, MAX_SIGMA)
                 distance[hand] = float(np.max(np.abs(observed - prediction[hand]) / sigma))
                 inside[hand] = bool(supported[hand] and distance[hand] <= SIGMAS)
         return inside, distance
@@ -336,17 +460,19 @@ class ContingencyAttribution:
         expected = np.diff(predicted, axis=0)  # (k, 2 hands, 2)
         motion = float(np.linalg.norm(moves, axis=1).sum())
         arm_motion = np.linalg.norm(expected, axis=2).sum(axis=0)  # (2 hands,)
-        error = np.linalg.norm(moves[:, None] - expected, axis=2).sum(axis=0)  # (2 hands,)
-        error = np.where(np.isfinite(error), error, np.inf)
-        still = motion < STILL_MOTION
+        # how well the blob's displacements follow each arm's predicted ones: their cosine
+        # over the window's steps (x and y together), 1 when they move alike
+        flat, predicted = moves.ravel(), expected.transpose(1, 0, 2).reshape(2, -1)
+        norms = np.linalg.norm(flat) * np.linalg.norm(predicted, axis=1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            cosine = np.where(norms > 0, predicted @ flat / norms, 0.0)
+        cosine = np.where(np.isfinite(cosine), cosine, -1.0)
         out = np.zeros(2, dtype=bool)
         for hand in range(2):
-            if still:
+            if motion < STILL_MOTION:
                 out[hand] = arm_motion[hand] < STILL_MOTION
             else:
-                out[hand] = (
-                    error[hand] < MOTION_TOLERANCE * motion and error[hand] < error[1 - hand]
-                )
+                out[hand] = cosine[hand] > MIN_COSINE and cosine[hand] > cosine[1 - hand]
         return out
 
     def _track(self, eye: int, b: int) -> tuple[np.ndarray, np.ndarray] | None:

@@ -69,7 +69,7 @@ def credits(detector: HandDetector, rule: str, table: BlobTable) -> np.ndarray:
     params = detector.params
     assert params is not None
     if rule == "contingency":
-        attribution = ContingencyAttribution(params.contingency_model)
+        attribution = ContingencyAttribution(params.contingency_model, params.visibility_model)
         for t in range(len(table)):
             if t == 0 or table.episode[t] != table.episode[t - 1]:
                 attribution.reset()
@@ -201,8 +201,12 @@ def published_detector(path: Path) -> HandDetector:
     config's ``hand_attribution``)."""
     from devlearn.plugins import PluginRegistry
     from devlearn.training.checkpoint import Checkpoint
+    from devlearn_hand_regard.behavior import HandRegard
 
-    return Checkpoint.open(path, PluginRegistry(), "hand_regard").behavior().detector
+    behavior = Checkpoint.open(path, PluginRegistry(), "hand_regard").behavior()
+    if not isinstance(behavior, HandRegard):
+        raise SystemExit(f"{path}: not a hand_regard policy")
+    return behavior.detector
 
 
 def _with_model(params: DetectorParams, model: dict[str, Any]) -> HandDetector:

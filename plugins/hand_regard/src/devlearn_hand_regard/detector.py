@@ -239,7 +239,7 @@ def _check_contingency(model: dict[str, Any], source: str) -> None:
     try:
         built = ContingencyModel(model)
         joints = max(int(j.max()) for j in built.joints if j.size)
-        prediction, _ = built.predict(built.standardised(np.zeros(joints + 1)))
+        prediction, _, _ = built.predict(built.standardised(np.zeros(joints + 1)))
         learned = [w is not None for row in built.weights for w in row]
         ok = bool(np.isfinite(prediction[np.array(learned).reshape(2, 2)]).all())
     except (KeyError, TypeError, ValueError, IndexError):
@@ -359,7 +359,7 @@ class HandDetector:
         self.attribution = attribution
         self._predictor: tuple[dict[str, Any], VisibilityPredictor] | None = None
         self._contingency = (
-            ContingencyAttribution(params.contingency_model)
+            ContingencyAttribution(params.contingency_model, params.visibility_model)
             if attribution == "contingency" and params is not None
             else None
         )

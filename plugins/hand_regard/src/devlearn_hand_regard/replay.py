@@ -89,8 +89,11 @@ def save_frames(path: str | Path, frames: dict[str, np.ndarray], **meta: Any) ->
     """Write a recording (compressed) with ``meta`` as 0-d string arrays; return the path."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    extra = {f"meta_{k}": np.asarray(str(v)) for k, v in meta.items()}
-    np.savez_compressed(path, **frames, **extra)
+    arrays: dict[str, Any] = {
+        **frames,
+        **{f"meta_{k}": np.asarray(str(v)) for k, v in meta.items()},
+    }
+    np.savez_compressed(path, **arrays)
     return path
 
 
