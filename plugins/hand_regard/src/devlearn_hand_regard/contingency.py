@@ -1,37 +1,43 @@
 """Which hand is it, from where each arm puts its hand and which blob moves with which arm
-(issue #58; ``hand_attribution=contingency``).
+(issue #58; ``hand_attribution=contingency``; measured, not a default).
 
 Issue #39's rule gave a blob to the hand whose arm's posture made it likelier in view; its
 policies learned postures one-arm babbling never showed (the left hand across the midline, in
 the right eye), where both hands were rated near zero and the larger near-zero took the blob:
 an absent right hand was credited on 8-95% of steps. Infants tell their hands apart by
 contingency (Bahrick and Watson 1985; Rochat): the hand that moves in view when an arm moves
-is that arm's hand. This module learns, from babbling, two things per arm and eye, and credits
-a blob to a side only when both agree:
+is that arm's hand. This module learns from babbling, per arm and eye (the arm's shoulder and
+elbow angles and the head's swivel: the visibility model's joints, standardised):
 
-1. **Where the arm puts its hand** (:func:`fit_contingency_model`): a ridge regression from
-   the quadratic features of the arm's posture (shoulder and elbow angles, the head's swivel;
-   the visibility model's joints) to the blob's image position and size (x, y, sqrt(area)),
-   with its residual spread; and the postures it was learned from (its support). A posture
-   farther than :data:`SUPPORT_RADIUS` (standardised units) from every babbled posture that
-   showed that hand in that eye is out of the babbling's range: the hand is not credited
-   there, whatever the image shows.
-2. **Which blob moves with which arm**: over the last :data:`WINDOW` decisions, a blob's
-   image displacements against each arm's predicted ones (the regression's prediction at
-   each posture, differenced: the arm's joint velocities mapped into the image, head turns
-   included). A blob is that arm's when its track follows that arm closer than the other
-   (the cosine of their displacements, :data:`MIN_COSINE`), or when the arm and the blob are both
-   still.
+1. **Where the arm puts its hand** (:func:`fit_contingency_model`): the image place (x, y,
+   sqrt(area)) of the blobs seen at the :data:`NEIGHBOURS` nearest babbled postures within
+   :data:`SUPPORT_RADIUS` (none: the posture is out of the babbling's range, the hand is not
+   credited there whatever the image shows), with that guess's spread on other episodes
+   (capped at :data:`MAX_SIGMA`); and a smooth quadratic regression of the same places, whose
+   differences are the arm's predicted image motion (joint velocities mapped into the image,
+   head turns included).
+2. **Which blob moves with which arm**: over the last :data:`WINDOW` decisions, the cosine of
+   the blob's image displacements with each arm's predicted ones; the blob follows the arm
+   with the larger cosine (above :data:`MIN_COSINE`), or an arm when both are still.
+3. **Where babbling saw the hand out of that eye** (:meth:`ContingencyModel.out_of_view`).
 
-The labels come from babbling without the segmentation: ``babble(arms="turns",
-random_pose=True)`` starts both arms anywhere (hands crossing the midline included) and lets
-them take turns, one babbling while the other holds still; a blob that moves while one arm
-moves is that arm's hand, a blob that stays still while it moves is the other's
-(:func:`contingency_labels`). Validation against the segmentation, and the adversarial replay
-of every published policy: ``python -m devlearn_hand_regard.contingency_check``.
+A blob is credited to a side only when the evidence agrees (:meth:`ContingencyAttribution.
+step`): in place and moving with that arm, the same side in every largest consistent pairing
+of blobs and hands, the other hand accounted for (seen out of that eye at its posture, or
+placed by its own model), and issue #39's visibility model assigning it that side too;
+otherwise no side.
 
-Per decision the rule costs two polynomial feature rows per hand and four nearest-neighbour
-queries (tens of microseconds).
+The labels come from babbling without the segmentation (:func:`contingency_labels`): one arm
+at a time with the other hanging limp (every blob is the babbling arm's), and
+``babble(arms="turns", random_pose=True)``: both arms anywhere (crossings included) taking
+turns, a blob that moves while one arm moves being that arm's hand, a still blob while it
+moves fast the other's. Validation and the adversarial replay of every published policy:
+``python -m devlearn_hand_regard.contingency_check`` (``results/hand_regard/i58_attribution``:
+no absent hand credited on 10 of 11 published policies, 5% on one; recall far below issue
+#39's rule, babbling shows hands too seldom for a place model this local).
+
+Per decision: about 0.9 ms (k-d tree queries, two polynomial feature rows per hand, the
+visibility model; measured on a loaded core), beside a render of both eyes.
 """
 
 from __future__ import annotations

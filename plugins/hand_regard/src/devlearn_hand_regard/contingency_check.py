@@ -176,7 +176,13 @@ def record_table(
     finally:
         infant.close()
     return tabulate(
-        detector, data.eyes, data.proprioception, data.episode, segmentation, data.moving_arm
+        detector,
+        data.eyes,
+        data.proprioception,
+        data.episode,
+        segmentation,
+        data.moving_arm,
+        other_arm_hangs=arms == "alternate",
     )
 
 
