@@ -63,3 +63,38 @@ def test_contingency_needs_a_detector_with_its_model(params):
     without = DetectorParams(**{**params.__dict__, "contingency_model": {}})
     with pytest.raises(ValueError, match="contingency_model"):
         HandDetector(without, attribution="contingency")
+
+
+def test_the_detector_detects_what_the_rule_credits(params, monkeypatch):
+    """``HandDetector.detect`` under ``contingency``: the blobs its colour step finds (here
+    the recorded episode's, each a small square mask) go through the rule once per decision;
+    the detections and masks are the credited blobs', the same pairs as the offline
+    replay, and :meth:`HandDetector.reset` starts the tracks anew."""
+    import numpy as np
+    from devlearn_hand_regard.detector import Blob
+
+    table = BlobTable.load(DATA / "i29_bilateral_seed2_episode1.npz")
+    detector = HandDetector(params, attribution="contingency")
+    frame = {"t": 0, "eye": 0}
+
+    def recorded_blobs(image, side=None):
+        t, eye = frame["t"], frame["eye"]
+        frame["eye"] = 1 - eye
+        found = []
+        for x, y, area in table.blobs[t, eye]:
+            if np.isfinite(x):
+                mask = np.zeros((64, 64), dtype=bool)
+                mask[int(y) - 2 : int(y) + 3, int(x) - 2 : int(x) + 3] = True
+                found.append(Blob((float(x), float(y)), float(area), mask))
+        return found
+
+    monkeypatch.setattr(detector, "blobs", recorded_blobs)
+    eyes = np.zeros((2, 64, 64, 3), dtype=np.uint8)
+    detector.reset()
+    detected = np.zeros((len(table), 2, 2), dtype=bool)
+    for t in range(len(table)):
+        frame["t"] = t
+        detected[t], masks = detector.detect(eyes, table.proprioception[t])
+        assert (masks.any(axis=(2, 3)) == detected[t]).all()
+    np.testing.assert_array_equal(detected, credits(detector, "contingency", table))
+    assert detected[:, :, 0].mean() > 0.3 and not detected[:, :, 1].any()

@@ -476,8 +476,10 @@ class HandDetector:
     ) -> tuple[np.ndarray, np.ndarray]:
         """Detect and attribute the hands in both eyes: by each hand's own colour when the
         calibration learned two (``side_hsv_ranges``), else as ``attribution`` says: by the
-        posture's predicted visibility (:meth:`attribute_by_visibility`) or by position
-        (:meth:`attribute`).
+        posture's predicted visibility (:meth:`attribute_by_visibility`), by position
+        (:meth:`attribute`), or by place and motion (``contingency``: a stateful rule fed once
+        per decision, :meth:`reset` at an episode's start; a blob no side is sure of is no
+        hand's).
 
         Args:
             eyes: (2, H, W, 3) uint8 RGB, [left eye, right eye].
@@ -512,7 +514,8 @@ class HandDetector:
                 attributed = [self.blobs(eyes[eye], side)[:1] for side in range(2)]
             elif hands is not None and len(hands) == 1:
                 attributed = [[], []]
-                attributed[hands[0]] = self.blobs(eyes[eye])[:1]
+                found = found_by_eye[eye] if found_by_eye else self.blobs(eyes[eye])
+                attributed[hands[0]] = found[:1]
             elif credited is not None:
                 attributed = [[], []]
                 for blob, hand in zip(found_by_eye[eye], credited[eye]):
