@@ -203,16 +203,20 @@ def policy_table(path: Path, episodes: int, detector: HandDetector | None = None
 
 
 def published_detector(path: Path) -> HandDetector:
-    """The detector a policy file was published with (its stored calibration and its
-    config's ``hand_attribution``)."""
-    from devlearn.plugins import PluginRegistry
-    from devlearn.training.checkpoint import Checkpoint
-    from devlearn_hand_regard.behavior import HandRegard
+    """The detector a policy file was published with: its stored calibration, attributing as
+    its config's ``hand_attribution`` says (a config without the key: the legacy rule,
+    ``position``)."""
+    from devlearn.testing import load_checkpoint
+    from devlearn_hand_regard.config import HandRegardConfig
 
-    behavior = Checkpoint.open(path, PluginRegistry(), "hand_regard").behavior()
-    if not isinstance(behavior, HandRegard):
-        raise SystemExit(f"{path}: not a hand_regard policy")
-    return behavior.detector
+    state = load_checkpoint(path)
+    stored = (state.get("artifacts") or {}).get("hand_detector")
+    if state.get("behavior") != "hand_regard" or not stored:
+        raise SystemExit(f"{path}: not a hand_regard policy with its hand detector")
+    params = DetectorParams.from_dict(stored, source=f"{path}: hand detector")
+    legacy = HandRegardConfig.LEGACY_DEFAULTS["hand_attribution"]
+    rule = state["config"]["behavior"].get("hand_attribution", legacy)
+    return HandDetector(params, attribution=rule)
 
 
 def _with_model(params: DetectorParams, model: dict[str, Any]) -> HandDetector:

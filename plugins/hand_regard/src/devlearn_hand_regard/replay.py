@@ -66,9 +66,11 @@ def record_policy(path: Path, episodes: int, seed: int = 0) -> dict[str, np.ndar
     Returns:
         :meth:`FrameRecorder.frames` of the infant that played the episodes.
     """
-    from devlearn.evaluation.evaluate import EvalRequest, Evaluation
-    from devlearn.infant import build_infant
-    from devlearn.plugins import PluginRegistry
+    # devlearn eval's own loop, through the plugin kit's entry to it (plugins import only
+    # devlearn, devlearn.api and devlearn.testing); one env in this process, so the factory's
+    # infant is the one that plays
+    from devlearn import build_infant
+    from devlearn.testing import PluginRegistry, evaluate_policy
 
     recorders: list[FrameRecorder] = []
 
@@ -76,11 +78,9 @@ def record_policy(path: Path, episodes: int, seed: int = 0) -> dict[str, np.ndar
         recorders.append(FrameRecorder(build_infant(scene, *args, **options)))
         return recorders[-1]
 
-    Evaluation(
-        EvalRequest("hand_regard", path, episodes=episodes, seed=seed),
-        PluginRegistry(),
-        infant_factory=factory,
-    ).run()
+    evaluate_policy(
+        "hand_regard", path, episodes, PluginRegistry(), infant_factory=factory, seed=seed
+    )
     played = max(recorders, key=lambda r: len(r.eyes_seen))
     return played.frames()
 
