@@ -25,8 +25,11 @@ PLACING_JOINTS = ("shoulder", "elbow")
 and the elbow carry the hand across the view; the wrist turns the mitten but barely moves it,
 and fewer inputs need fewer babbling frames (issue #39: with the wrist's three joints added the
 side attribution's pair precision fell from 0.94 to 0.91 on the same frames)."""
-ARMS = ("both", "alternate")
+ARMS = ("both", "alternate", "turns")
 """Valid ``arms`` of :func:`babble`."""
+TURN_STEPS = 150
+"""``arms="turns"``: steps each arm babbles while the other holds its action (issue #58): a
+held arm takes about 100 steps (0.5 s) to come to rest from a swing."""
 
 
 @dataclass
@@ -42,7 +45,8 @@ class BabblingData:
         episode: (T,) int, episode index (tracks never cross an episode boundary).
         head_pose: (T, 3) float32 head joint angles (from proprioception), or (T, 0).
         moving_arm: (T,) int, the arm that babbled at each step when one arm babbled at a
-            time (0 left, 1 right; ``arms="alternate"``), -1 when both did; None: unknown.
+            time (0 left, 1 right; ``arms="alternate"`` or ``"turns"``), -1 when both did;
+            None: unknown. Under ``"turns"`` the other arm is not hanging but held still.
         posture_joints: Per hand [left, right], the proprioception indices of the joint
             angles that place that hand (:func:`posture_joints`); empty when unknown.
         posture_mirror: Per position in those lists, the sign an angle takes in the body's
@@ -158,6 +162,14 @@ def babble(
     correlates with both arms' speeds, so calibration cannot tell which hand it is. With one
     arm moving at a time, the infant knows which arm it moved (issue #29).
 
+    ``arms="turns"`` (issue #58) covers two-arm postures, hands crossing the midline included:
+    the arms take turns of :data:`TURN_STEPS` steps, one babbling while the other holds the
+    action it had (so it settles and stays still wherever it was, in view or not), and the
+    head holds one action per episode; use it with ``random_pose`` (both arms start anywhere
+    in their ranges) and short episodes. Which blob is which hand then follows from
+    contingency: the blob that moves while one arm moves is that arm's hand
+    (:mod:`devlearn_hand_regard.contingency`).
+
     Args:
         steps: Steps to record (paper: 10,000).
         seed: Seed of the actions and the initial poses.
@@ -172,8 +184,8 @@ def babble(
         scene: The scene when the infant is built here.
         start: How episodes start (``devlearn.infant.starts.STARTS``) unless ``random_pose``.
         progress: Print a line to stderr every :data:`PROGRESS_SECONDS` (steps done, rate).
-        arms: ``both`` (every arm babbles all the time) or ``alternate`` (one arm per
-            episode, see above).
+        arms: ``both`` (every arm babbles all the time), ``alternate`` (one arm per
+            episode) or ``turns`` (the arms take turns within an episode; see above).
     Returns:
         The recording.
     """
@@ -221,6 +233,10 @@ def babble(
                     flush=True,
                 )
             redraw = rng.random(infant.action_dim) < switch
+            if arms == "turns":
+                turn = ((t % length) // TURN_STEPS + (t // length)) % 2  # the babbling arm
+                redraw[groups[f"{SIDES[1 - turn]}_arm"]] = False  # the other arm holds
+                redraw[groups["head"]] = t % length == 0  # one head action per episode
             action = np.where(redraw, rng.uniform(-scale, scale), action)
             action[still] = 0.0
             infant.step(action)
@@ -232,7 +248,10 @@ def babble(
             speeds.append(speed)
             heads.append(head)
             episode.append(t // length)
-            moving.append((t // length) % 2 if arms == "alternate" else -1)
+            if arms == "turns":
+                moving.append(((t % length) // TURN_STEPS + (t // length)) % 2)
+            else:
+                moving.append((t // length) % 2 if arms == "alternate" else -1)
         return BabblingData(
             eyes=np.stack(eyes),
             proprioception=np.stack(proprio),

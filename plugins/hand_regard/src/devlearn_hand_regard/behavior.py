@@ -254,6 +254,8 @@ class HandRegard(Behavior):
         """A new episode: forget the previous frame (no motion across episodes) and read the
         arm actuator groups that :meth:`process_action` masks."""
         self._flow.reset()
+        if self._detector is not None:  # the contingency rule's blob tracks end with the episode
+            self._detector.reset()
         self._arm_actuators = {
             side: np.asarray(infant.actuator_groups[f"{side}_arm"]) for side in HANDS
         }

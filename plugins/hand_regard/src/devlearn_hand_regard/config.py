@@ -48,7 +48,7 @@ CRITIC_CHOICES = ("same", "proprio")
 """Valid ``critic`` values."""
 BABBLING_ARMS_CHOICES = ("alternate", "both")
 """Valid ``babbling_arms`` values."""
-HAND_ATTRIBUTION_CHOICES = ("visibility", "position")
+HAND_ATTRIBUTION_CHOICES = ("visibility", "position", "contingency")
 """Valid ``hand_attribution`` values (``detector.ATTRIBUTIONS``)."""
 
 
@@ -156,7 +156,11 @@ class HandRegardConfig(BehaviorConfig):
     both-arm babbling pair precision / recall 0.95 / 0.86 against ``pixels``) or ``position``
     (the image position each hand is expected at: the rule of every run before issue #39,
     0.55 / 0.54 on the committed protocol's frames, where ``visibility`` has 0.95 / 0.93; and
-    of saved configs without this key)."""
+    of saved configs without this key) or ``contingency`` (issue #58): a blob is credited to
+    a side only when it is where that arm puts its hand (a regression from the arm's posture,
+    within its residual spread, in a posture babbling covered) and its track moves with that
+    arm, else to no side; needs a detector file with a ``contingency_model``
+    (``python -m devlearn_hand_regard.contingency_check fit``; plugin README)."""
     attribution_babbling_share: float = 5.0
     """One-arm babbling recorded after calibration (seeds from ``babbling_seed + 2``), in steps
     as a share of ``babbling_steps`` (5.0: 50,000 more at the paper's 10,000; ~2 min of

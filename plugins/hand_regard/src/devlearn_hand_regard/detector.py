@@ -20,6 +20,8 @@ import numpy as np
 from devlearn import write_text_atomically
 from devlearn.api.json_files import read_json_object
 from devlearn_hand_regard.attribution import VisibilityPredictor, assign
+from devlearn_hand_regard.blob_table import MAX_BLOBS, blob_row
+from devlearn_hand_regard.contingency import ContingencyAttribution, ContingencyModel
 
 FORMAT_VERSION = 2
 """2: no static-body masks (the mittens made them unnecessary); 1 files are refused."""
@@ -53,6 +55,9 @@ class DetectorParams:
         visibility_model: Each hand's visibility per eye predicted from its own arm's posture,
             learned from one-arm babbling (:func:`attribution.fit_visibility_model`): the
             detector's ``visibility`` attribution. Empty: not learned (files before issue #39).
+        contingency_model: Where each arm puts its hand in each eye and the postures babbling
+            showed it in (:func:`contingency.fit_contingency_model`): the ``contingency``
+            attribution (issue #58). Empty: not learned.
     """
 
     hsv_ranges: list[list[int]]
@@ -66,6 +71,7 @@ class DetectorParams:
     position_model: dict[str, Any] = field(default_factory=dict)
     side_hsv_ranges: list[list[list[int]]] = field(default_factory=list)
     visibility_model: dict[str, Any] = field(default_factory=dict)
+    contingency_model: dict[str, Any] = field(default_factory=dict)
 
     def save(self, path: str | Path) -> Path:
         """Write the parameters as JSON; return the path."""
@@ -120,6 +126,7 @@ _OPTIONAL = (
     "position_model",
     "side_hsv_ranges",
     "visibility_model",
+    "contingency_model",
 )
 HSV_MAX = (179, 255, 255)
 """Largest H, S and V in OpenCV's 8-bit HSV (the bounds of a colour box)."""
@@ -207,7 +214,7 @@ def check_detector_values(data: dict[str, Any], source: str) -> None:
         raise ValueError(
             f"{source}: kernel must be a whole number of pixels from 1, got {kernel!r}"
         )
-    for name in ("calibration", "position_model", "visibility_model"):
+    for name in ("calibration", "position_model", "visibility_model", "contingency_model"):
         if not isinstance(data.get(name, {}), dict):
             raise ValueError(f"{source}: {name} must be a JSON object")
     model = data.get("position_model") or {}
@@ -222,6 +229,25 @@ def check_detector_values(data: dict[str, Any], source: str) -> None:
     visibility = data.get("visibility_model") or {}
     if visibility:
         _check_visibility(visibility, source)
+    contingency = data.get("contingency_model") or {}
+    if contingency:
+        _check_contingency(contingency, source)
+
+
+def _check_contingency(model: dict[str, Any], source: str) -> None:
+    """The contingency model predicts finite hand positions for a posture."""
+    try:
+        built = ContingencyModel(model)
+        joints = max(int(j.max()) for j in built.joints if j.size)
+        prediction, _, _ = built.predict(built.standardised(np.zeros(joints + 1)))
+        learned = [w is not None for row in built.weights for w in row]
+        ok = bool(np.isfinite(prediction[np.array(learned).reshape(2, 2)]).all())
+    except (KeyError, TypeError, ValueError, IndexError):
+        ok = False
+    if not ok:
+        raise ValueError(
+            f"{source}: contingency_model is damaged (its arrays must be finite and fit together)"
+        )
 
 
 def _check_visibility(model: dict[str, Any], source: str) -> None:
@@ -282,12 +308,14 @@ def colour_blobs(mask: np.ndarray, min_area: float, max_area: float, kernel: int
     return sorted(blobs, key=lambda b: -b.area)
 
 
-ATTRIBUTIONS = ("visibility", "position")
+ATTRIBUTIONS = ("visibility", "position", "contingency")
 """How a detector says which blob is which hand when both mittens have one colour:
 ``visibility`` (issue #39): each hand's visibility predicted from its own arm's posture
 (:mod:`devlearn_hand_regard.attribution`); ``position``: the image position each hand is
 expected at (the posture model or the mean babbling positions, :meth:`HandDetector.attribute`),
-the rule before issue #39."""
+the rule before issue #39; ``contingency`` (issue #58): a blob is a hand's only when it is
+where that arm puts its hand and moves with that arm, else no side's
+(:mod:`devlearn_hand_regard.contingency`)."""
 
 
 class HandDetector:
@@ -320,10 +348,27 @@ class HandDetector:
                 stacklevel=2,
             )
             attribution = "position"
+        if attribution == "contingency" and params is not None and not params.contingency_model:
+            raise ValueError(
+                "hand attribution 'contingency' needs a detector with a contingency_model "
+                "(python -m devlearn_hand_regard.contingency_check fit gives one one); valid "
+                "for this detector: visibility, position"
+            )
         self.params = params
         self.max_hands = max_hands
         self.attribution = attribution
         self._predictor: tuple[dict[str, Any], VisibilityPredictor] | None = None
+        self._contingency = (
+            ContingencyAttribution(params.contingency_model, params.visibility_model)
+            if attribution == "contingency" and params is not None
+            else None
+        )
+
+    def reset(self) -> None:
+        """A new episode: the ``contingency`` rule forgets its blob tracks (no motion is
+        compared across a reset)."""
+        if self._contingency is not None:
+            self._contingency.reset()
 
     def view_prior(self, proprioception: np.ndarray) -> np.ndarray | None:
         """P(eye e sees hand h | posture), (2 eyes, 2 hands), from the visibility model
@@ -431,8 +476,10 @@ class HandDetector:
     ) -> tuple[np.ndarray, np.ndarray]:
         """Detect and attribute the hands in both eyes: by each hand's own colour when the
         calibration learned two (``side_hsv_ranges``), else as ``attribution`` says: by the
-        posture's predicted visibility (:meth:`attribute_by_visibility`) or by position
-        (:meth:`attribute`).
+        posture's predicted visibility (:meth:`attribute_by_visibility`), by position
+        (:meth:`attribute`), or by place and motion (``contingency``: a stateful rule fed once
+        per decision, :meth:`reset` at an episode's start; a blob no side is sure of is no
+        hand's).
 
         Args:
             eyes: (2, H, W, 3) uint8 RGB, [left eye, right eye].
@@ -455,13 +502,25 @@ class HandDetector:
         likelihood = None  # (2 eyes, 2 hands) P(eye sees hand | posture), when attributing so
         if self.attribution == "visibility" and self.params and proprioception is not None:
             likelihood = view_prior if view_prior is not None else self.view_prior(proprioception)
+        credited = None  # (2 eyes, MAX_BLOBS) hand per blob, under ``contingency``
+        found_by_eye: list[list[Blob]] = []
+        if self._contingency is not None and proprioception is not None and not by_colour:
+            found_by_eye = [self.blobs(eyes[eye])[:MAX_BLOBS] for eye in range(n_eyes)]
+            rows = np.stack([blob_row(found) for found in found_by_eye])
+            credited = self._contingency.step(rows, proprioception)
         for eye in range(n_eyes):
             attributed: list[list[Blob]]
             if by_colour:  # each hand is the largest blob of its own colour
                 attributed = [self.blobs(eyes[eye], side)[:1] for side in range(2)]
             elif hands is not None and len(hands) == 1:
                 attributed = [[], []]
-                attributed[hands[0]] = self.blobs(eyes[eye])[:1]
+                found = found_by_eye[eye] if found_by_eye else self.blobs(eyes[eye])
+                attributed[hands[0]] = found[:1]
+            elif credited is not None:
+                attributed = [[], []]
+                for blob, hand in zip(found_by_eye[eye], credited[eye]):
+                    if hand >= 0:
+                        attributed[hand].append(blob)
             elif likelihood is not None:
                 attributed = self.attribute_by_visibility(
                     self.blobs(eyes[eye]), eye, likelihood[eye]
