@@ -288,6 +288,7 @@ class WorkerPool:
         # interrupt checkpoint then asks for state) first drains the stale replies.
         self._pending = set(range(len(self.conns)))
         replies: list = [None] * len(self.conns)
+        guards: dict[int, BaseException] = {}
         while self._pending:
             ready = wait([self.conns[k] for k in sorted(self._pending)])
             for k in sorted(self._pending):
@@ -299,12 +300,20 @@ class WorkerPool:
                         progress(payload)
                     continue
                 self._pending.discard(k)
-                replies[k] = payload
+                if status == "guard":
+                    guards[k] = payload
+                else:
+                    replies[k] = payload
+        if guards:  # the first worker's, whichever replied first: the same report on any load
+            self.close()
+            raise guards[min(guards)]
         return replies
 
     def _receive(self, k: int) -> tuple[str, Any]:
-        """Worker ``k``'s next message; its failure (a traceback, a guard, death) is raised here
-        after the pool is closed."""
+        """Worker ``k``'s next message; its failure (a traceback, death) is raised here after
+        the pool is closed. A guard (a reward term's bad value or exception) is returned:
+        :meth:`_gather` raises the first worker's once every worker has replied, so that the
+        same run reports the same env whichever worker's reply came first."""
         conn, proc = self.conns[k], self.procs[k]
         try:
             status, payload = conn.recv()
@@ -322,9 +331,8 @@ class WorkerPool:
             error = EnvWorkerError(f"env worker {k} (pid {proc.pid}) died unexpectedly, {how}")
             error.died = True
             raise error from None
-        if status == "guard":
-            self.close()
-            raise payload
+        if status == "guard":  # raised by _gather once every worker replied
+            return status, payload
         if status == "error":
             self.close()
             raise EnvWorkerError(f"env worker {k} (pid {proc.pid}) failed:\n{payload}")
