@@ -197,6 +197,11 @@ PUBLISHED_TABLES: dict[str, tuple[str, str, tuple[str, ...]]] = {
         "results/learners/README.md",
         ("score",),
     ),
+    "results/learners/i54/pilots": (
+        "learners_i54_pilots",
+        "results/learners/README.md",
+        (),
+    ),
     "results/self_touch/i43/pilots_2M": (
         "self_touch_pilots_2M",
         "results/self_touch/i43/pilots_2M/README.md",
