@@ -151,16 +151,10 @@ class ZeroActions(Actions):
         return np.zeros((self.rows, self.action_dim))
 
 
-class UniformActions(Actions):
-    """Actions uniform in [-1, 1], drawn afresh every decision from the evaluation seed's
-    stream ``[seed, 1]`` (apart from the env's)."""
+class SeededActions(Actions):
+    """A baseline's actions drawn from its own generator (``self.rng``), whatever it sees."""
 
-    def __init__(self, rows: int, action_dim: int, seed: int) -> None:
-        super().__init__(rows, action_dim)
-        self.rng = np.random.default_rng([seed, 1])
-
-    def act(self, obs: Observations) -> np.ndarray:
-        return self.rng.uniform(-1.0, 1.0, (self.rows, self.action_dim))
+    rng: np.random.Generator
 
     def skip(self, decisions: int) -> None:
         """Baselines do not read the observation: the same draws, without one."""
@@ -171,7 +165,19 @@ class UniformActions(Actions):
         return self.rng.bit_generator.state
 
 
-class HeldActions(Actions):
+class UniformActions(SeededActions):
+    """Actions uniform in [-1, 1], drawn afresh every decision from the evaluation seed's
+    stream ``[seed, 1]`` (apart from the env's)."""
+
+    def __init__(self, rows: int, action_dim: int, seed: int) -> None:
+        super().__init__(rows, action_dim)
+        self.rng = np.random.default_rng([seed, 1])
+
+    def act(self, obs: Observations) -> np.ndarray:
+        return self.rng.uniform(-1.0, 1.0, (self.rows, self.action_dim))
+
+
+class HeldActions(SeededActions):
     """Uniform actions each held for :data:`HOLD_STEPS` physics steps on average: every
     actuator redraws with probability ``repeat / HOLD_STEPS`` per decision (stream
     ``[seed, 2]``)."""
@@ -186,14 +192,6 @@ class HeldActions(Actions):
         redraw = self.rng.random((self.rows, self.action_dim)) < self.redraw
         self.held[redraw] = self.rng.uniform(-1.0, 1.0, int(redraw.sum()))
         return self.held.copy()
-
-    def skip(self, decisions: int) -> None:
-        """Baselines do not read the observation: the same draws, without one."""
-        for _ in range(decisions):
-            self.act({})
-
-    def rng_state(self) -> Any:
-        return self.rng.bit_generator.state
 
 
 class ActorActions(Actions):
@@ -226,10 +224,11 @@ class ActorActions(Actions):
         if self.sample:
             torch.set_rng_state(self.state)
         with torch.inference_mode():
-            if self.expected:
-                mean = self.actor(batch).numpy()
+            if self.expected:  # one pass: the head's mean as played, and its distribution
                 dist = self.actor.distribution
-                dist.update(self.actor.mlp(self.actor.get_latent(batch)))
+                out = self.actor.mlp(self.actor.get_latent(batch))
+                mean = dist.deterministic_output(out).numpy()
+                dist.update(out)
                 action = expected_clipped(dist.mean, dist.std).numpy()
             else:
                 action = self.actor(batch, stochastic_output=self.sample).numpy()

@@ -177,6 +177,20 @@ def test_a_baseline_is_one_of_the_named_ones():
         Baseline("greedy", cfg, TinyBehavior())
 
 
+def fixed_mean_policy(path, first_obs, mean):
+    """A policy file of the tiny behaviour whose network's mean is ``mean`` whatever it sees
+    (its last layer's weights zero, its bias ``mean``)."""
+    obs, action_dim = first_obs
+    cfg = resolve_config(RunRequest("tiny", ["seed=6"]), REGISTRY)
+    behavior = REGISTRY.create("tiny", cfg.behavior)
+    actor = policy_network(cfg, behavior, obs, action_dim)
+    with torch.no_grad():
+        actor.mlp[-1].weight.zero_()
+        actor.mlp[-1].bias.copy_(torch.tensor(mean))
+    save_checkpoint(policy_file(to_dict(cfg), behavior, actor.state_dict(), env_steps=96), path)
+    return path
+
+
 @pytest.mark.parametrize("sample", [False, True])
 def test_an_evaluation_says_where_the_mean_action_sits_past_the_bounds(
     tmp_path, first_obs, sample
@@ -189,14 +203,7 @@ def test_an_evaluation_says_where_the_mean_action_sits_past_the_bounds(
 
     obs, action_dim = first_obs
     assert action_dim == 3
-    cfg = resolve_config(RunRequest("tiny", ["seed=6"]), REGISTRY)
-    behavior = REGISTRY.create("tiny", cfg.behavior)
-    actor = policy_network(cfg, behavior, obs, action_dim)
-    with torch.no_grad():
-        actor.mlp[-1].weight.zero_()
-        actor.mlp[-1].bias.copy_(torch.tensor([3.0, -3.0, 0.0]))
-    state = policy_file(to_dict(cfg), behavior, actor.state_dict(), env_steps=96)
-    save_checkpoint(state, tmp_path / "policy.pt")
+    fixed_mean_policy(tmp_path / "policy.pt", first_obs, [3.0, -3.0, 0.0])
     request = EvalRequest(
         "tiny",
         tmp_path / "policy.pt",
@@ -212,7 +219,8 @@ def test_an_evaluation_says_where_the_mean_action_sits_past_the_bounds(
     assert saved["policy_figures"]["mean_at_bound"] == pytest.approx(2 / 3)
     zero = EvalRequest("tiny", policy="zero", episodes=2)
     assert saved["policy"] == "checkpoint"  # the policy's name stays
-    assert "policy_figures" not in Evaluation(zero, REGISTRY, infant_factory=fake_infant_factory).run()
+    baseline = Evaluation(zero, REGISTRY, infant_factory=fake_infant_factory).run()
+    assert "policy_figures" not in baseline
 
 
 def test_the_expected_clipped_action_is_the_mean_of_the_clipped_samples():
@@ -234,15 +242,7 @@ def test_an_evaluation_plays_the_expected_clipped_action(tmp_path, first_obs, sc
     from devlearn.evaluation.evaluate import Evaluation
 
     obs, action_dim = first_obs
-    cfg = resolve_config(RunRequest("tiny", ["seed=6"]), REGISTRY)
-    behavior = REGISTRY.create("tiny", cfg.behavior)
-    actor = policy_network(cfg, behavior, obs, action_dim)
-    with torch.no_grad():
-        actor.mlp[-1].weight.zero_()
-        actor.mlp[-1].bias.copy_(torch.tensor([3.0, -1.5, 0.2]))
-    save_checkpoint(
-        policy_file(to_dict(cfg), behavior, actor.state_dict(), env_steps=96), tmp_path / "p.pt"
-    )
+    fixed_mean_policy(tmp_path / "p.pt", first_obs, [3.0, -1.5, 0.2])
     ours = CheckpointPolicy.open(tmp_path / "p.pt", REGISTRY, "tiny")
     played = {
         action: ours.actions(batch_of_one(obs), action_dim, 0, action).act(batch_of_one(obs))[0]
