@@ -49,6 +49,11 @@ FILE OUT`` runs it, ``publish`` keeps what a reader needs, ``table`` tabulates i
     protocol = "random_mean"          # default: the first protocol
     rows = [{ label = "Model I", value = 0.65, low = 0.6, high = 0.7 }]
 
+    [[references]]                    # figures for --metric columns, in the source's words
+    source = "DiMercurio et al. 2018, abstract"
+    protocol = "sessions"
+    rows = [{ label = "infants", metrics = { "likeness_coded.touches_per_minute" = "<= 40" } }]
+
     [executor]                        # how, not what: may change between starts
     kind = "local"
     jobs = 2
@@ -93,7 +98,7 @@ KEYS = {
     "arms": {"name", "learner", "set", "preset", "note"},
     "protocols": {"name", "start", "episodes", "seed", "action", "session_s", "set"},
     "references": {"source", "protocol", "note", "rows"},
-    "rows": {"label", "value", "low", "high"},
+    "rows": {"label", "value", "low", "high", "metrics"},
     "executor": {"kind", "jobs", "address", "launcher"},
 }  # fmt: skip
 """Valid keys of each table ("" is the top level; ``rows`` are a reference's)."""
@@ -182,12 +187,18 @@ class Protocol:
 
 @dataclass(frozen=True)
 class ReferenceRow:
-    """One published figure: its label, value and interval if given."""
+    """One published figure: its label, value and interval if given, and figures for other
+    eval.json numbers (``experiment table --metric`` columns) by their dotted keys."""
 
     label: str
-    value: float
+    value: float | None
+    """The headline's figure; None where the source has only ``metrics`` (infants have no
+    per-episode score)."""
     low: float | None = None
     high: float | None = None
+    metrics: tuple[tuple[str, str], ...] = ()
+    """``(dotted key, figure as the source gives it)``: a number or words such as ``<= 40``
+    or ``~0.5`` (a source's figure is often a bound or an approximation, not a mean)."""
 
 
 @dataclass(frozen=True)
@@ -504,12 +515,32 @@ def _reference(
         )
         if (low is None) != (high is None):
             raise check.error(at, "give both low and high (an interval), or neither")
-        value = check.number(row.get("value"), f"{at} value", required=True)
-        assert value is not None
-        rows.append(
-            ReferenceRow(check.text(row.get("label"), f"{at} label", True), value, low, high)
-        )
+        metrics = _reference_metrics(check, row.get("metrics"), f"{at} metrics")
+        value = check.number(row.get("value"), f"{at} value", required=not metrics)
+        label = check.text(row.get("label"), f"{at} label", True)
+        rows.append(ReferenceRow(label, value, low, high, metrics))
     return Reference(source, protocol, tuple(rows), check.text(table.get("note"), f"{where} note"))
+
+
+def _reference_metrics(check: _Checker, value: Any, where: str) -> tuple[tuple[str, str], ...]:
+    """A reference row's ``metrics`` table: dotted eval.json keys to a number or short text."""
+    if value is None:
+        return ()
+    if not isinstance(value, dict) or not value:
+        raise check.error(
+            where,
+            "must be a table of eval.json keys to figures, e.g. "
+            '{ "likeness_coded.touches_per_minute" = "<= 40" }',
+        )
+    figures = []
+    for key, figure in value.items():
+        if isinstance(figure, bool) or not isinstance(figure, (int, float, str)):
+            raise check.error(f"{where}.{key}", f"must be a number or text, got {figure!r}")
+        if isinstance(figure, str) and not figure.strip():
+            raise check.error(f"{where}.{key}", "must not be empty")
+        text = figure if isinstance(figure, str) else f"{float(figure):.4g}"
+        figures.append((str(key), text))
+    return tuple(figures)
 
 
 def read_experiment(path: str | Path) -> ExperimentSpec:

@@ -132,7 +132,7 @@ def experiment_table(dest: str | Path, metrics: list[str] | tuple[str, ...] = ()
             baselines.append(
                 {"baseline": policy, "value": found[1], "ci_low": low, "ci_high": high}
             )
-        references = [
+        references: list[dict[str, Any]] = [
             {
                 "label": row.label,
                 "value": row.value,
@@ -140,6 +140,7 @@ def experiment_table(dest: str | Path, metrics: list[str] | tuple[str, ...] = ()
                 "ci_high": row.high,
                 "source": ref.source,
                 "note": ref.note,
+                "metrics": dict(row.metrics),
             }
             for ref in spec.references
             if ref.protocol == protocol.name
@@ -156,6 +157,11 @@ def experiment_table(dest: str | Path, metrics: list[str] | tuple[str, ...] = ()
         }
         if metrics:
             table["metrics"] = _metric_rows(dest, spec, protocol, list(metrics))
+            table["metrics"]["references"] = [
+                {"label": ref["label"], "source": _source(ref), "metrics": ref["metrics"]}
+                for ref in references
+                if any(key in ref["metrics"] for key in metrics)
+            ]
         tables.append(table)
     for key in metrics:
         if not any(_has_metric(t["metrics"], key) for t in tables):
@@ -195,9 +201,15 @@ def _interval(stats: dict[str, Any]) -> str:
     return f"{figure(stats['mean'])} [{figure(stats['ci_low'])}, {figure(stats['ci_high'])}]"
 
 
-def _metric_lines(metrics: dict[str, Any]) -> list[str]:
+def _source(ref: dict[str, Any]) -> str:
+    """A reference's source as the tables' footnotes name it (with its note)."""
+    return str(ref["source"]) + (f" ({ref['note']})" if ref.get("note") else "")
+
+
+def _metric_lines(metrics: dict[str, Any], sources: list[str]) -> list[str]:
     """The ``--metric`` figures of one protocol: a row per arm (mean [95% interval over the
-    seeds], how many seeds) and per baseline (its one evaluation)."""
+    seeds], how many seeds), per baseline (its one evaluation) and per reference that gives
+    one of them (its figure as the source gives it, numbered in ``sources``)."""
     keys = metrics["keys"]
     lines = ["| policy | seeds | " + " | ".join(keys) + " |", "|" + "---|" * (len(keys) + 2)]
     for arm in metrics["arms"]:
@@ -207,6 +219,12 @@ def _metric_lines(metrics: dict[str, Any]) -> list[str]:
     for base in metrics["baselines"]:
         cells = [figure(base["metrics"][key]) for key in keys]
         lines.append(f"| {base['baseline']} actions (baseline) | - | " + " | ".join(cells) + " |")
+    for ref in metrics.get("references", []):
+        if ref["source"] not in sources:
+            sources.append(ref["source"])
+        cells = [str(ref["metrics"].get(key, "-")) for key in keys]
+        label = f"{ref['label']} (reference [{sources.index(ref['source']) + 1}])"
+        lines.append(f"| {label} | - | " + " | ".join(cells) + " |")
     return [*lines, ""]
 
 
@@ -242,7 +260,9 @@ def markdown(table: dict[str, Any]) -> str:
             cells = [f"{base['baseline']} actions (baseline)", "-", value, "-"]
             lines.append("| " + " | ".join(cells + (["-"] if seconds else [])) + " |")
         for ref in protocol["references"]:
-            source = ref["source"] + (f" ({ref['note']})" if ref.get("note") else "")
+            if ref["value"] is None:  # figures for --metric columns only
+                continue
+            source = _source(ref)
             if source not in sources:
                 sources.append(source)
             number = sources.index(source) + 1
@@ -251,7 +271,7 @@ def markdown(table: dict[str, Any]) -> str:
             lines.append("| " + " | ".join(cells + (["-"] if seconds else [])) + " |")
         lines.append("")
         if protocol.get("metrics"):
-            lines += _metric_lines(protocol["metrics"])
+            lines += _metric_lines(protocol["metrics"], sources)
     lines.append(
         "Arms: the headline's mean and 95% t-interval over seeds, each seed's value beside. "
         "Baselines: one evaluation under the same protocol, with its interval over episodes."

@@ -96,3 +96,36 @@ def test_metric_value_reads_dotted_numbers_only():
     assert metric_value(summary, "a.b") == 2.0 and metric_value(summary, "c") == 1.5
     assert metric_value(summary, "a.flag") is None and metric_value(summary, "a.text") is None
     assert metric_value(summary, "a.b.c") is None and metric_value(None, "c") is None
+
+
+REFERENCES = """
+[[references]]
+source = "DiMercurio et al. 2018, abstract"
+rows = [{ label = "infants, 3-9 weeks", metrics = { "likeness.touches_per_minute" = "<= 40" } }]
+
+[[references]]
+source = "the paper"
+rows = [{ label = "model", value = 0.5 }]
+"""
+
+
+def test_a_reference_row_gives_metric_figures_as_its_source_words_them(dest):
+    (dest / "experiment.toml").write_text(SPEC + REFERENCES)
+    table = experiment_table(dest, ["likeness.touches_per_minute"])
+    lines = markdown(table).splitlines()
+    at = lines.index("| policy | seeds | likeness.touches_per_minute |")
+    # the infants' row carries no headline value: only the --metric table shows it
+    assert lines[at + 5] == "| infants, 3-9 weeks (reference [2]) | - | <= 40 |"
+    assert not any(line.startswith("| infants") for line in lines[:at])
+    assert any(line.startswith("| model (reference [1]) | - | 0.5 |") for line in lines[:at])
+    assert lines[-1] == "- [2] DiMercurio et al. 2018, abstract"
+    # without --metric the metrics-only row is not a headline row
+    assert "infants" not in markdown(experiment_table(dest))
+
+
+def test_a_reference_row_needs_a_value_or_metrics(dest):
+    (dest / "experiment.toml").write_text(
+        SPEC + '[[references]]\nsource = "x"\nrows = [{ label = "y" }]\n'
+    )
+    with pytest.raises(UsageError, match="value"):
+        experiment_table(dest)
