@@ -134,6 +134,16 @@ def _train(registry: PluginRegistry, quick: bool, progress: Callable[[str], None
         steps = 8192 if quick else 32768
         result["self_touch_train_steps_per_s"] = bench_training("self_touch", steps, [], progress)
         result.update(decision_rate(registry, "self_touch", steps, [], progress))
+        # the rollout's policy on every core too: the automatic plan on an idle machine before
+        # rollouts beside env workers took one thread (ThreadPlan: libgomp's idle thread then
+        # spun on the workers' cores)
+        from devlearn.training.process import rank_cores
+
+        cores = ["--set", f"torch_threads={rank_cores()}"]
+        progress("self_touch: end-to-end training, rollouts on every core (the plan before)")
+        result["self_touch_train_steps_per_s_rollout_all_cores"] = bench_training(
+            "self_touch", steps, cores, progress
+        )
     if "hand_regard" in behaviors:
         progress("hand_regard: end-to-end training (short babbling, any correlation accepted)")
         # prepare() babbles before training (10,000 rendered steps by default); a short babble

@@ -86,6 +86,11 @@ ROWS = (
     Row("hand_regard_train_steps_per_s", "hand-regard training steps/s", "/s", "-", ">= 60"),
     Row("self_touch_train_action_repeat", "self-touch physics steps per decision", ""),
     Row("self_touch_train_steps_per_s_k1", "self-touch training, a decision every step", "/s"),
+    Row(
+        "self_touch_train_steps_per_s_rollout_all_cores",
+        "self-touch training, rollouts on every core (torch_threads = cores)",
+        "/s",
+    ),
     Row("hand_regard_train_action_repeat", "hand-regard physics steps per decision", ""),
     Row("hand_regard_train_steps_per_s_k1", "hand-regard training, a decision every step", "/s"),
     Row("self_touch_update_us_per_sample_old", "self-touch update/sample, old", "us"),

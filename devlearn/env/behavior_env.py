@@ -210,13 +210,15 @@ class BehaviorEnv:
         return advance_batch([self], [action])[0][0]
 
     def finish(
-        self, ctx: StepContext, weighted: np.ndarray, steps: int = 1
+        self, ctx: StepContext, weighted: np.ndarray | list[float], steps: int = 1
     ) -> tuple[dict[str, np.ndarray], float, bool, bool, dict[str, float] | None]:
-        """Second half of a step: sum the weighted term values (T,), each paid ``steps`` times
-        (a decision whose facts ran once), record, maybe reset."""
+        """Second half of a step: sum the weighted term values (T,) (an array or its
+        ``tolist()``), each paid ``steps`` times (a decision whose facts ran once), record,
+        maybe reset."""
         reward = 0.0
         decision = self.decision_rewards
-        for k, (term, value) in enumerate(zip(self.terms, weighted.tolist())):
+        values = weighted.tolist() if isinstance(weighted, np.ndarray) else weighted
+        for k, (term, value) in enumerate(zip(self.terms, values)):
             value *= steps
             self._sums[term.name] += value
             decision[k] += value
@@ -438,9 +440,9 @@ def step_physics(
     if obs_out is not None and batch is not None:
         for name, array in batch.items():  # the whole batch at once; resets overwrite rows
             obs_out[name][...] = array
-    results = [
-        env.finish(ctx, values[:, i], paid) for i, (env, ctx) in enumerate(zip(envs, contexts))
-    ]
+    # every env's column as Python floats in one call (not a view and tolist() per env)
+    columns = values.T.tolist()
+    results = [env.finish(ctx, column, paid) for env, ctx, column in zip(envs, contexts, columns)]
     if obs_out is not None:
         for i, (obs, _, done, _, _) in enumerate(results):
             if batch is None or done:

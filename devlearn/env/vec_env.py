@@ -118,6 +118,11 @@ class DevVecEnv(VecEnv):
         self.cfg: Any = {"behavior": behavior.name, "num_envs": num_envs, "seed": seed}
 
     @property
+    def workers(self) -> int:
+        """Worker processes stepping the envs (0: they step in this process)."""
+        return 0 if self._pool is None else len(self._pool.conns)
+
+    @property
     def unwrapped(self) -> DevVecEnv:
         """This env (rsl-rl's RND extension reads ``env.unwrapped.step_dt``)."""
         return self

@@ -27,6 +27,14 @@ def unique_parameters(*modules: nn.Module) -> list[nn.Parameter]:
     return params
 
 
+def _multi_tensor(optimizer: type[torch.optim.Optimizer]) -> dict[str, Any]:
+    """``{"foreach": True}`` for Adam and AdamW: torch steps CPU parameters one tensor at a
+    time from Python (``_single_tensor_adam``) unless told otherwise; the multi-tensor form
+    runs the same elementwise operations in the same order (bit for bit the same parameters,
+    ``tests/training/test_learner.py``) with one call per operation for all tensors."""
+    return {"foreach": True} if optimizer in (torch.optim.Adam, torch.optim.AdamW) else {}
+
+
 class UniqueParamPPO(PPO):
     """PPO whose optimiser holds every parameter once.
 
@@ -58,8 +66,19 @@ class UniqueParamPPO(PPO):
             super().__init__(actor, critic, storage, *args, **kwargs)
         # the parent's optimiser class (Adam...) takes lr; torch's Optimizer base does not
         self.optimizer = type(self.optimizer)(  # type: ignore[call-arg]
-            unique_parameters(self.actor, self.critic), lr=self.learning_rate, eps=adam_eps
+            unique_parameters(self.actor, self.critic),
+            lr=self.learning_rate,
+            eps=adam_eps,
+            **_multi_tensor(type(self.optimizer)),
         )
+
+    def load(self, loaded_dict: dict, load_cfg: dict | None, strict: bool) -> bool:
+        """rsl-rl's load; the optimiser keeps its multi-tensor steps (a state saved before
+        them carries ``foreach: None`` in its parameter groups, which loading restores)."""
+        resumed = super().load(loaded_dict, load_cfg, strict)
+        for group in self.optimizer.param_groups:
+            group.update(_multi_tensor(type(self.optimizer)))
+        return resumed
 
     def reduce_parameters(self) -> None:
         """Average gradients across ranks, each tensor once."""

@@ -56,21 +56,35 @@ class ThreadPlan:
     also times the update with one thread and keeps whichever count was faster, trying the
     other again every ``probe_every`` iterations. The first update (warm-up) is not timed.
 
+    Rollouts whose envs step in worker processes get one thread when automatic: the policy's
+    forward pass on one batch of observations gains little from a second thread, and after
+    each of its operations libgomp's idle thread spin-waits (up to its ``GOMP_SPINCOUNT``) on a
+    core that a worker is stepping on: with 2 threads the training process burnt about 0.05 s
+    more CPU per self-touch rollout than with one (64 decisions; the workers' time).
+
     Results repeat bit for bit only for a fixed thread count (floating-point sums split
     differently); set ``torch_threads`` for runs that must repeat exactly.
 
     Args:
-        collect: Threads during rollouts (0: automatic, the update's count).
+        collect: Threads during rollouts (0: automatic: 1 with env ``workers``, else the
+            update's count).
         update: Threads of the update (0: ``collect`` if fixed, else automatic).
         cores: Cores available (default :func:`rank_cores`).
         probe_every: Iterations between trials of the slower count.
+        workers: Env worker processes stepping while the rollout's policy waits (0: the envs
+            step in this process).
     """
 
     def __init__(
-        self, collect: int, update: int, cores: int | None = None, probe_every: int = 25
+        self,
+        collect: int,
+        update: int,
+        cores: int | None = None,
+        probe_every: int = 25,
+        workers: int = 0,
     ) -> None:
         self.cores = cores or rank_cores()
-        self.fixed_collect = collect
+        self.fixed_collect = collect or (1 if workers > 0 else 0)
         fixed = update or collect
         self.candidates = [fixed] if fixed else sorted({self.cores, 1}, reverse=True)
         self.probe_every = probe_every

@@ -68,12 +68,14 @@ class RunningMoments(nn.Module):
             var_sum_x = x.shape[0] * (var_x + (local_mean_x - mean_x).square())
             torch.distributed.all_reduce(var_sum_x)
             var_x = var_sum_x / count_x
-        self.count += count_x
+        # in place, the same operations as ``self.count += count_x`` etc. (bit for bit), without
+        # nn.Module's attribute hooks or a new _std tensor on every call (once per decision)
+        self.count.add_(count_x)
         rate = count_x / self.count
         delta_mean = mean_x - self._mean
-        self._mean += rate * delta_mean
-        self._var += rate * (var_x - self._var + delta_mean * (mean_x - self._mean))
-        self._std = torch.sqrt(self._var)
+        self._mean.add_(rate * delta_mean)
+        self._var.add_(rate * (var_x - self._var + delta_mean * (mean_x - self._mean)))
+        torch.sqrt(self._var, out=self._std)
 
 
 class RewardNormalizer(nn.Module):
@@ -110,8 +112,9 @@ class RewardNormalizer(nn.Module):
         Returns:
             (num_envs,) ``clip(rewards / std)``, float32.
         """
-        self.returns.mul_(self.gamma).add_(rewards.view(-1, 1).to(self.returns.dtype))
-        self.moments.update(self.returns)
+        returns = self.returns
+        returns.mul_(self.gamma).add_(rewards.view(-1, 1).to(returns.dtype))
+        self.moments.update(returns)
         scaled = rewards / self.std
-        self.returns[dones.view(-1).bool()] = 0.0
-        return scaled.clamp(-self.clip, self.clip)
+        returns.masked_fill_(dones.view(-1, 1).bool(), 0.0)  # returns[dones] = 0, in place
+        return scaled.clamp_(-self.clip, self.clip)

@@ -229,7 +229,9 @@ class DevRunner:
     def learn(self, total_steps: int) -> None:
         """Train until ``total_steps`` environment steps (all envs, all ranks) are done."""
         env, alg = self.env, self.alg
-        threads = ThreadPlan(self.run_cfg.torch_threads, self.run_cfg.update_threads)
+        threads = ThreadPlan(
+            self.run_cfg.torch_threads, self.run_cfg.update_threads, workers=env.workers
+        )
         # physics steps: each decision holds its action for action_repeat of them
         per_iteration = (
             self.cfg["num_steps_per_env"] * env.num_envs * self.gpu_world_size * self.action_repeat

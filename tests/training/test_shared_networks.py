@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import importlib
+from functools import partial
 from types import SimpleNamespace
 
 import pytest
@@ -177,3 +178,31 @@ def test_features_are_not_reused_after_the_normaliser_moved():
         )
         after = alg.critic.get_latent(obs)
     assert not torch.allclose(before, after)
+
+
+def observation_batch(gen: torch.Generator) -> TensorDict:
+    return TensorDict({"proprioception": torch.randn(ENVS, 3, generator=gen)}, [ENVS])
+
+
+def test_multi_tensor_adam_steps_the_parameters_bit_for_bit_and_survives_a_resume():
+    """The optimiser's multi-tensor (foreach) steps give the same parameters as torch's
+    one-tensor-at-a-time default (which results were recorded with), and loading a state
+    saved without them (``foreach: None``) keeps them."""
+    alg, _ = build("separate")
+    assert all(group["foreach"] for group in alg.optimizer.param_groups)
+    single, _ = build("separate")
+    params = unique_parameters(single.actor, single.critic)
+    eps = alg.optimizer.param_groups[0]["eps"]
+    single.optimizer = torch.optim.Adam(params, lr=single.learning_rate, eps=eps)
+    for learner in (alg, single):  # the same observations and action noise for both
+        gen = torch.Generator().manual_seed(1)
+        torch.manual_seed(2)
+        for _ in range(2):
+            fill(learner, partial(observation_batch, gen))
+            learner.update()
+    for ours, theirs in zip(unique_parameters(alg.actor, alg.critic), params):
+        assert torch.equal(ours, theirs)
+    saved = single.save()
+    assert saved["optimizer_state_dict"]["param_groups"][0]["foreach"] is None
+    alg.load(saved, None, strict=True)
+    assert all(group["foreach"] for group in alg.optimizer.param_groups)

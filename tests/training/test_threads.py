@@ -51,3 +51,11 @@ def test_workers_are_spawned_single_threaded():
     with _worker_environment():
         assert {key: os.environ[key] for key in WORKER_THREADS} == WORKER_THREADS
     assert {key: os.environ.get(key) for key in WORKER_THREADS} == before
+
+
+def test_rollouts_beside_env_workers_take_one_thread():
+    """Automatic: the rollout's policy runs on one thread while env workers step (an idle
+    libgomp thread would spin on their cores); the update still gets every core."""
+    assert ThreadPlan(0, 0, cores=2, workers=2).next_iteration() == (1, 2)
+    assert ThreadPlan(0, 0, cores=2, workers=0).next_iteration() == (2, 2)  # in-process envs
+    assert ThreadPlan(2, 0, cores=2, workers=2).next_iteration() == (2, 2)  # as configured
