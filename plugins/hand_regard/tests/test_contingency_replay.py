@@ -84,7 +84,7 @@ def test_the_detector_detects_what_the_rule_credits(params, monkeypatch):
         for x, y, area in table.blobs[t, eye]:
             if np.isfinite(x):
                 mask = np.zeros((64, 64), dtype=bool)
-                mask[int(y) - 2 : int(y) + 3, int(x) - 2 : int(x) + 3] = True
+                mask[max(int(y) - 2, 0) : int(y) + 3, max(int(x) - 2, 0) : int(x) + 3] = True
                 found.append(Blob((float(x), float(y)), float(area), mask))
         return found
 
