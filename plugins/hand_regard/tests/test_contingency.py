@@ -5,7 +5,6 @@ other cannot, and it moves with that arm (synthetic blob tables and the committe
 
 from __future__ import annotations
 
-import itertools
 from pathlib import Path
 
 import numpy as np
@@ -107,8 +106,9 @@ def posture(**angles: float) -> np.ndarray:
 def test_the_body_schema_is_mujocos_forward_kinematics():
     """The numpy chain puts each hand where MuJoCo's kinematics and the eye cameras do."""
     import mujoco
-    from devlearn import build_infant
     from devlearn_hand_regard.contingency_body import BodySchema, body_schema
+
+    from devlearn import build_infant
 
     infant = build_infant("sitting_babybench", senses=("proprioception",), appearance="mittens")
     try:
