@@ -251,3 +251,23 @@ def test_labels_from_contingency_name_the_true_hand():
     assert known.sum() > 500  # both kinds of label: the moving blob and the still one
     assert (labels[known] == table.blob_hand[known]).mean() > 0.97
     assert set(np.unique(labels[known])) == {0, 1}
+
+
+@pytest.mark.slow
+def test_a_fresh_contingency_run_fits_its_model_after_babbling():
+    """``hand_attribution=contingency`` without a detector file: calibration babbling yields
+    the contingency model (body schema from the infant, reach from the babbling's labels), so
+    the run's detector is built instead of failing after babbling (issue #58's gap)."""
+    from devlearn_hand_regard.config import HandRegardConfig
+    from devlearn_hand_regard.detector import HandDetector
+    from devlearn_hand_regard.detector_store import calibrate_by_babbling
+
+    # the default 10,000 steps (~1 min): from 3,000 the colour step also finds skin-coloured
+    # blobs that are no mitten, and the reach then covers the view (no side is credited)
+    cfg = HandRegardConfig(hand_attribution="contingency")
+    params = calibrate_by_babbling(cfg, progress=False, held_out_steps=0)
+    model = params.contingency_model
+    check_contingency_model(model)
+    assert sum(map(sum, model["label_counts"])) >= 50
+    assert 0.02 < model["reach"]["radius"] < 0.1  # the committed model's: 0.055 m
+    HandDetector(params, attribution="contingency")
