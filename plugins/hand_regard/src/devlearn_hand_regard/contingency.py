@@ -286,17 +286,23 @@ class ContingencyAttribution:
         self.history.append((blobs[:, :, :2].copy(), projected[:, :, :2].copy()))
         out = np.full(blobs.shape[:2], -1, dtype=int)
         for eye in range(2):
-            for b in np.flatnonzero(np.isfinite(blobs[eye, :, 0])):
-                centre = projected[:, eye, :2]  # (2 hands, 2)
-                distance = np.linalg.norm(centre - blobs[eye, b, :2], axis=1)
-                behind = projected[:, eye, 2] <= 0
-                can = ~behind & (distance <= reach[:, eye])
-                cannot = behind | (distance > self.margin * reach[:, eye])
+            present = np.flatnonzero(np.isfinite(blobs[eye, :, 0]))
+            behind = projected[:, eye, 2] <= 0
+            # (blobs, 2 hands) distance from each hand's projected centre, in its reaches
+            relative = np.full((len(present), 2), np.inf)
+            for row, b in enumerate(present):
+                distance = np.linalg.norm(projected[:, eye, :2] - blobs[eye, b, :2], axis=1)
+                relative[row] = np.where(behind, np.inf, distance / reach[:, eye])
+            can, cannot = relative <= 1.0, relative > self.margin
+            for row, b in enumerate(present):
                 for hand in range(2):
-                    if can[hand] and cannot[1 - hand]:
-                        if not self.use_motion or self._moves_with(eye, int(b), hand):
-                            out[eye, b] = hand
+                    if can[row, hand] and cannot[row, 1 - hand] and self._agrees(eye, b, hand):
+                        out[eye, b] = hand
         return out
+
+    def _agrees(self, eye: int, b: int, hand: int) -> bool:
+        """The motion evidence allows crediting blob ``b`` to ``hand`` (always, without it)."""
+        return not self.use_motion or self._moves_with(eye, int(b), hand)
 
     def _moves_with(self, eye: int, b: int, hand: int) -> bool:
         """The blob's track over the window moves with ``hand``'s projected centre, or

@@ -347,8 +347,9 @@ class HandDetector:
         if attribution == "contingency" and params is not None and not params.contingency_model:
             raise ValueError(
                 "hand attribution 'contingency' needs a detector with a contingency_model "
-                "(python -m devlearn_hand_regard.contingency_check fit gives one one); valid "
-                "for this detector: visibility, position"
+                "(a fresh run fits one after babbling; for a detector file: python -m "
+                "devlearn_hand_regard.contingency_check fit); valid for this detector: "
+                "visibility, position"
             )
         self.params = params
         self.max_hands = max_hands
