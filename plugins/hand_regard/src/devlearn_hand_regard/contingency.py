@@ -296,7 +296,7 @@ class ContingencyAttribution:
             can, cannot = relative <= 1.0, relative > self.margin
             for row, b in enumerate(present):
                 for hand in range(2):
-                    if can[row, hand] and cannot[row, 1 - hand] and self._agrees(eye, b, hand):
+                    if can[row, hand] and cannot[row, 1 - hand] and self._agrees(eye, int(b), hand):
                         out[eye, b] = hand
         return out
 
