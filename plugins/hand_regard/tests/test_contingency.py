@@ -1,17 +1,26 @@
-"""The contingency attribution (issue #58): labels from turn-taking babbling, the per-arm
-position model with its support, and the run-time rule that credits a blob to a side only
-when place and motion agree (synthetic blob tables, no rendering)."""
+"""The contingency attribution (issue #58): labels from turn-taking babbling, the body schema
+(forward kinematics read from the MuJoCo model), the reach calibrated from labelled babbling,
+and the run-time rule that credits a blob to a hand only when that hand can be it and the
+other cannot, and it moves with that arm (synthetic blob tables and the committed model)."""
 
 from __future__ import annotations
+
+from pathlib import Path
 
 import numpy as np
 import pytest
 from devlearn_hand_regard.blob_table import MAX_BLOBS, BlobTable
 from devlearn_hand_regard.contingency import (
     ContingencyAttribution,
-    _agreed,
+    check_contingency_model,
     contingency_labels,
     fit_contingency_model,
+)
+from devlearn_hand_regard.detector import DetectorParams
+
+DETECTOR = (
+    Path(__file__).resolve().parents[3]
+    / "results/hand_regard/i58_attribution/contingency_detector.json"
 )
 
 JOINTS = [[1, 2, 0], [3, 4, 0]]
@@ -78,7 +87,161 @@ def turn_babbling(episodes: int = 24, length: int = 300, seed: int = 0) -> BlobT
 
 @pytest.fixture(scope="module")
 def model():
-    return fit_contingency_model([turn_babbling()], JOINTS)
+    return DetectorParams.load(DETECTOR).contingency_model
+
+
+def posture(**angles: float) -> np.ndarray:
+    """(102,) proprioception of BabyBench's infant: the named joint angles, the rest 0."""
+    names = [
+        "head_swivel", "head_tilt", "head_tilt_side", "left_shoulder_flexion",
+        "left_shoulder_abduction", "left_shoulder_rotation", "right_shoulder_flexion",
+        "right_shoulder_abduction", "right_shoulder_rotation", "left_elbow", "right_elbow",
+    ]  # fmt: skip
+    p = np.zeros(102)
+    for name, value in angles.items():
+        p[names.index(name)] = value
+    return p
+
+
+def test_the_body_schema_is_mujocos_forward_kinematics():
+    """The numpy chain puts each hand where MuJoCo's kinematics and the eye cameras do."""
+    import mujoco
+    from devlearn_hand_regard.contingency_body import BodySchema, body_schema
+
+    from devlearn import build_infant
+
+    infant = build_infant("sitting_babybench", senses=("proprioception",), appearance="mittens")
+    try:
+        m = infant.model
+        schema = BodySchema(body_schema(m, list(infant.actuator_names)))
+        data = mujoco.MjData(m)
+        rng = np.random.default_rng(0)
+        ranges = np.array([m.joint(j).range for j in infant.actuator_names])
+        address = [m.joint(j).qposadr[0] for j in infant.actuator_names]
+        for _ in range(20):
+            angles = rng.uniform(ranges[:, 0], ranges[:, 1])
+            data.qpos[address] = angles
+            mujoco.mj_kinematics(m, data)
+            mujoco.mj_camlight(m, data)
+            projected = schema.project(np.r_[angles, np.zeros(5 * len(angles))])
+            for hand, side in enumerate(("left", "right")):
+                bodies = {m.body(f"{side}_hand").id, m.body(f"{side}_fingers").id}
+                geoms = [g for g in range(m.ngeom) if m.geom_bodyid[g] in bodies]
+                centre = data.geom_xpos[geoms].mean(axis=0)
+                for eye, camera in enumerate(("left_eye", "right_eye")):
+                    c = m.camera(camera).id
+                    v = data.cam_xmat[c].reshape(3, 3).T @ (centre - data.cam_xpos[c])
+                    assert projected[hand, eye, 2] == pytest.approx(-v[2], abs=1e-4)
+                    if -v[2] > 0.05:
+                        focal = 32 / np.tan(np.deg2rad(m.cam_fovy[c]) / 2)
+                        x, y = 32 + focal * v[0] / -v[2], 32 - focal * v[1] / -v[2]
+                        assert projected[hand, eye, :2] == pytest.approx([x, y], abs=0.05)
+    finally:
+        infant.close()
+
+
+def test_the_reach_is_calibrated_from_labelled_babbling(model):
+    """One-arm babbling with every blob 5 px from where the body puts the babbling hand:
+    the fitted reach holds 99% of them and is far below the committed model's (which holds
+    real blobs: cut by the edge, near the eye, a step late)."""
+    from devlearn_hand_regard.contingency_body import BodySchema
+
+    body = BodySchema(model["body"])
+    rng = np.random.default_rng(0)
+    steps = 1200
+    proprioception = np.zeros((steps, 102), np.float32)
+    blobs = np.full((steps, 2, MAX_BLOBS, 3), np.nan, np.float32)
+    moving = np.zeros(steps, np.int8)
+    for t in range(steps):
+        p = posture(left_shoulder_flexion=rng.uniform(0.5, 2.0), left_elbow=rng.uniform(0.5, 1.5))
+        p[17 + 3] = 1.0  # the left shoulder moves, the right arm hangs still
+        proprioception[t] = p
+        for eye in range(2):
+            x, y, depth = body.project(p)[0, eye]
+            if depth > 0 and 0 <= x < 64 and 0 <= y < 64:
+                angle = rng.uniform(0, 2 * np.pi)
+                blobs[t, eye, 0] = (x + 5 * np.cos(angle), y + 5 * np.sin(angle), 100.0)
+    table = BlobTable(
+        blobs, proprioception, np.zeros(steps, np.int32), np.zeros((steps, 2, 2), np.int32),
+        np.full((steps, 2, MAX_BLOBS), -1, np.int8), moving, other_arm_hangs=True,
+    )  # fmt: skip
+    assert np.isfinite(blobs[:, :, 0, 0]).sum() > 100
+    fitted = fit_contingency_model([table], JOINTS_INFANT, model["body"])
+    check_contingency_model(fitted)
+    assert fitted["reach"]["radius"] < 0.2 * model["reach"]["radius"]
+    assert fitted["distance_quantiles"][1] == pytest.approx(5.0, abs=0.01)
+    with pytest.raises(ValueError, match="labelled blobs"):
+        fit_contingency_model([_empty(table)], JOINTS_INFANT, model["body"])
+
+
+def _empty(table: BlobTable) -> BlobTable:
+    blobs = np.full_like(table.blobs, np.nan)
+    return BlobTable(
+        blobs, table.proprioception, table.episode, table.hand_pixels, table.blob_hand,
+        table.moving_arm, other_arm_hangs=True,
+    )  # fmt: skip
+
+
+JOINTS_INFANT = [[3, 4, 5, 9, 0], [6, 7, 8, 10, 0]]
+"""BabyBench's infant: per hand its shoulder and elbow angles and the head's swivel."""
+
+
+def _blob_at(place: np.ndarray) -> np.ndarray:
+    blobs = np.full((2, MAX_BLOBS, 3), np.nan)
+    blobs[1, 0] = (place[0], place[1], 100.0)
+    return blobs
+
+
+def test_a_blob_where_only_one_hand_can_be_is_that_hand(model):
+    """The left hand raised across into the right eye, the right arm hanging: a blob at the
+    left hand's projected place is the left hand's; the same blob far from both is no one's."""
+    rule = ContingencyAttribution(model, use_motion=False)
+    # a recorded frame of issue #39's reach_t4 seed 2: the left hand in the right eye
+    table = BlobTable.load(Path(__file__).parent / "data/reach_t4_seed2_episode1.npz")
+    t = int(np.flatnonzero((table.blob_hand[:, 1, 0] == 0) & (table.hand_pixels[:, 1, 1] == 0))[0])
+    p = table.proprioception[t].astype(float)
+    projected = rule.body.project(p)
+    place = projected[0, 1]
+    assert rule.step(_blob_at(place), p)[1, 0] == 0
+    assert rule.step(_blob_at(np.array([place[0], place[1] + 200, 0.0])), p)[1, 0] == -1
+
+
+def test_where_both_hands_can_be_no_side_is_credited(model, monkeypatch):
+    """Both hands projected 6 px apart, 20 cm before each eye (each within the other's
+    reach): a blob on either is no one's; the other hand moved behind the eye: it is."""
+    rule = ContingencyAttribution(model, use_motion=False)
+    projected = np.array([[[30.0, 30.0, 0.2]] * 2, [[36.0, 30.0, 0.2]] * 2])
+    monkeypatch.setattr(rule.body, "project", lambda p: projected)
+    for hand in range(2):
+        blobs = np.full((2, MAX_BLOBS, 3), np.nan)
+        blobs[:, 0] = (*projected[hand, 0, :2], 100.0)
+        assert (rule.step(blobs, np.zeros(102)) == -1).all()
+    projected[1, :, 2] = -0.05
+    blobs[:, 0] = (*projected[0, 0, :2], 100.0)
+    assert (rule.step(blobs, np.zeros(102))[:, 0] == 0).all()
+
+
+def test_a_blob_that_moves_against_the_arm_is_not_credited(model):
+    """Motion agreement: the left arm swings one way over the window while the blob at its
+    hand's place moves the other way: not credited; moving with it: credited."""
+    p0 = posture(left_shoulder_flexion=1.6, left_shoulder_abduction=-0.5, left_elbow=1.2)
+    steps = [p0.copy() for _ in range(5)]
+    for k, p in enumerate(steps):
+        p[9] = 1.2 + 0.08 * k  # the elbow bends: the hand moves in the image
+    for sign, expected in ((1.0, 0), (-1.0, -1)):
+        rule = ContingencyAttribution(model)
+        start = rule.body.project(steps[0])[0, 1, :2]
+        out = None
+        for p in steps:
+            place = rule.body.project(p)[0, 1, :2]
+            blob = start + sign * (place - start)
+            out = rule.step(_blob_at(np.r_[blob, 0.0]), p)
+        assert out is not None and out[1, 0] == expected
+
+
+def test_a_model_of_the_first_version_is_refused_with_what_to_do(model):
+    with pytest.raises(ValueError, match="refit"):
+        check_contingency_model({**model, "version": 1})
 
 
 def test_labels_from_contingency_name_the_true_hand():
@@ -90,105 +253,21 @@ def test_labels_from_contingency_name_the_true_hand():
     assert set(np.unique(labels[known])) == {0, 1}
 
 
-def test_the_model_predicts_where_each_arm_puts_its_hand(model):
-    attribution = ContingencyAttribution(model)
-    q = np.array([0.1, 0.4, 0.2, -0.3, -0.5])
-    prediction, place, supported = attribution.model.predict(
-        attribution.model.standardised(np.r_[q, np.zeros(5 * N)])
-    )
-    for hand in range(2):
-        for eye in range(2):
-            assert supported[hand, eye]
-            truth = hand_place(q, hand, eye)[:2]
-            np.testing.assert_allclose(prediction[hand, eye, :2], truth, atol=1.5)
-            # the nearest babbled postures' place is coarser: the true blob passes its check
-            inside, _ = attribution._in_place(
-                eye, hand_place(q, hand, eye), place[:, eye], supported[:, eye]
-            )
-            assert inside[hand]
-    assert not attribution.model.predict(  # far outside every babbled posture
-        attribution.model.standardised(np.r_[0.1, 4.0, 4.0, -4.0, 4.0, np.zeros(5 * N)])
-    )[2].any()
+@pytest.mark.slow
+def test_a_fresh_contingency_run_fits_its_model_after_babbling():
+    """``hand_attribution=contingency`` without a detector file: calibration babbling yields
+    the contingency model (body schema from the infant, reach from the babbling's labels), so
+    the run's detector is built instead of failing after babbling (issue #58's gap)."""
+    from devlearn_hand_regard.config import HandRegardConfig
+    from devlearn_hand_regard.detector import HandDetector
+    from devlearn_hand_regard.detector_store import calibrate_by_babbling
 
-
-def play(model, qpos: np.ndarray, blobs_of) -> np.ndarray:
-    """Run the rule over a synthetic episode; ``blobs_of(t, q)`` gives (2, B, 3) blobs.
-    Returns (T, 2 eyes, 2 hands) credited."""
-    attribution = ContingencyAttribution(model)
-    steps = len(qpos)
-    qvel = np.zeros_like(qpos)
-    qvel[1:] = np.diff(qpos, axis=0) / 0.025
-    out = np.zeros((steps, 2, 2), bool)
-    for t in range(steps):
-        p = np.r_[qpos[t], qvel[t], np.zeros(4 * N)]
-        blobs = blobs_of(t, qpos[t])
-        hands = attribution.step(blobs, p)
-        for eye in range(2):
-            for hand in hands[eye]:
-                if hand >= 0:
-                    out[t, eye, hand] = True
-    return out
-
-
-def blobs_of_hands(hands):
-    def of(t, q):
-        rows = np.full((2, MAX_BLOBS, 3), np.nan)
-        for eye in range(2):
-            seen = [hand_place(q, h, eye) for h in hands if in_image(hand_place(q, h, eye))]
-            for i, place in enumerate(seen):
-                rows[eye, i] = place
-        return rows
-
-    return of
-
-
-def test_a_moving_hand_is_credited_to_its_arm_and_a_still_one_too(model):
-    steps = 40
-    qpos = np.tile([0.0, 0.3, 0.1, -0.2, -0.4], (steps, 1))
-    qpos[:, 1] += np.linspace(0, 0.4, steps)  # the left arm moves, the right holds still
-    credited = play(model, qpos, blobs_of_hands((0, 1)))
-    assert credited[2:, :, 1].all()  # the still right hand, still where its arm puts it
-    assert credited[12:, :, 0].all()  # the moving left hand (its first postures at the edge
-    assert credited[:, :, 0].mean() > 0.6  # of the babbled range)
-    assert not credited[:2].any()  # no track yet: no evidence of motion, no side
-
-
-def test_a_blob_that_moves_with_the_other_arm_is_credited_to_no_side(model):
-    """The fooling case of issue #39: the policy holds the right arm still where the right
-    hand would show in view, and the blob there moves with the left arm. Place says right,
-    motion says left: no side is credited (the visibility rule of issue #39 gave it to the
-    hand likelier in view)."""
-    steps = 40
-    qpos = np.tile([0.0, 0.3, 0.1, 0.5, 0.3], (steps, 1))  # the hands 20 px apart
-    qpos[:, 1] += 0.05 * np.sin(np.arange(steps) * np.pi / 2)  # the left arm swings
-
-    def blobs(t, q):
-        rows = np.full((2, MAX_BLOBS, 3), np.nan)
-        for eye in range(2):  # at the right hand's place, moving as the left hand does
-            swing = hand_place(q, 0, eye) - hand_place(qpos[0], 0, eye)
-            rows[eye, 0] = hand_place(q, 1, eye) + swing
-        return rows
-
-    credited = play(model, qpos, blobs)
-    assert not credited.any()
-    # the same blob, held still: place and motion (both still) agree on the right hand
-    still = np.tile(qpos[0], (steps, 1))
-    assert play(model, still, blobs)[3:, :, 1].all()
-
-
-def test_out_of_the_babbled_range_no_side_is_credited(model):
-    steps = 30
-    qpos = np.tile([0.0, 3.5, 3.5, -3.5, 3.5], (steps, 1))  # both arms beyond babbling
-    credited = play(model, qpos, lambda t, q: np.array([[[30, 30, 120], [np.nan] * 3]] * 2))
-    assert not credited.any()
-
-
-def test_agreement_leaves_a_choice_uncredited():
-    assert _agreed(np.array([[True, False]])) == {0: 0}
-    assert _agreed(np.array([[True, True]])) == {}  # one blob, either hand: no side
-    assert _agreed(np.array([[True, True], [False, True]])) == {0: 0, 1: 1}
-    # both hands surely in view, which blob is which open: both credited, the cheaper pairing
-    both = np.array([[True, True], [True, True]])
-    assert _agreed(both, np.array([[0.5, 2.0], [2.0, 0.5]])) == {0: 0, 1: 1}
-    assert _agreed(both, np.array([[2.0, 0.5], [0.5, 2.0]])) == {0: 1, 1: 0}
-    assert _agreed(np.array([[False, False], [False, True]])) == {1: 1}
+    # the default 10,000 steps (~1 min): from 3,000 the colour step also finds skin-coloured
+    # blobs that are no mitten, and the reach then covers the view (no side is credited)
+    cfg = HandRegardConfig(hand_attribution="contingency")
+    params = calibrate_by_babbling(cfg, progress=False, held_out_steps=0)
+    model = params.contingency_model
+    check_contingency_model(model)
+    assert sum(map(sum, model["label_counts"])) >= 50
+    assert 0.02 < model["reach"]["radius"] < 0.1  # the committed model's: 0.055 m
+    HandDetector(params, attribution="contingency")

@@ -157,9 +157,9 @@ class HandRegardConfig(BehaviorConfig):
     (the image position each hand is expected at: the rule of every run before issue #39,
     0.55 / 0.54 on the committed protocol's frames, where ``visibility`` has 0.95 / 0.93; and
     of saved configs without this key) or ``contingency`` (issue #58): a blob is credited to
-    a side only when it is where that arm puts its hand (a regression from the arm's posture,
-    within its residual spread, in a posture babbling covered) and its track moves with that
-    arm, else to no side; needs a detector file with a ``contingency_model``
+    a hand only when it lies where the body's kinematics put that hand and not the other, and
+    its track moves with that arm, else to no side; its ``contingency_model`` is fitted from
+    the calibration babbling of a fresh run, or read from a detector file
     (``python -m devlearn_hand_regard.contingency_check fit``; plugin README)."""
     attribution_babbling_share: float = 5.0
     """One-arm babbling recorded after calibration (seeds from ``babbling_seed + 2``), in steps

@@ -247,12 +247,25 @@ def _cmd_fit(args: argparse.Namespace) -> None:
         raise SystemExit(f"{args.detector}: no visibility model (its joints are the posture's)")
     tables = [BlobTable.load(p) for p in args.tables]
     joints = params.visibility_model["joints"]
-    model = fit_contingency_model(tables, joints)
+    model = fit_contingency_model(tables, joints, scene_body_schema(tables[0].image_width))
     labelled = _label_accuracy(tables, joints)
     model["label_accuracy"] = labelled
     out = DetectorParams(**{**params.__dict__, "contingency_model": model})
     out.save(args.save)
-    print(json.dumps({"label_counts": model["label_counts"], "labels": labelled}), flush=True)
+    print(json.dumps({k: model[k] for k in ("reach", "label_counts", "distance_quantiles")}))
+    print(json.dumps({"labels": labelled}), flush=True)
+
+
+def scene_body_schema(image_size: int = 64) -> dict[str, Any]:
+    """:func:`contingency_body.body_schema` of BabyBench's seated infant (the babbling's)."""
+    from devlearn import build_infant
+    from devlearn_hand_regard.contingency_body import body_schema
+
+    infant = build_infant(SCENE, senses=("proprioception",), appearance="mittens")
+    try:
+        return body_schema(infant.model, list(infant.actuator_names), image_size)
+    finally:
+        infant.close()
 
 
 def _label_accuracy(tables: list[BlobTable], joints: list[list[int]]) -> dict[str, Any]:

@@ -21,7 +21,7 @@ from devlearn import write_text_atomically
 from devlearn.api.json_files import read_json_object
 from devlearn_hand_regard.attribution import VisibilityPredictor, assign
 from devlearn_hand_regard.blob_table import MAX_BLOBS, blob_row
-from devlearn_hand_regard.contingency import ContingencyAttribution, ContingencyModel
+from devlearn_hand_regard.contingency import ContingencyAttribution, check_contingency_model
 
 FORMAT_VERSION = 2
 """2: no static-body masks (the mittens made them unnecessary); 1 files are refused."""
@@ -235,19 +235,15 @@ def check_detector_values(data: dict[str, Any], source: str) -> None:
 
 
 def _check_contingency(model: dict[str, Any], source: str) -> None:
-    """The contingency model predicts finite hand positions for a posture."""
+    """The contingency model places both hands (:func:`contingency.check_contingency_model`)."""
     try:
-        built = ContingencyModel(model)
-        joints = max(int(j.max()) for j in built.joints if j.size)
-        prediction, _, _ = built.predict(built.standardised(np.zeros(joints + 1)))
-        learned = [w is not None for row in built.weights for w in row]
-        ok = bool(np.isfinite(prediction[np.array(learned).reshape(2, 2)]).all())
-    except (KeyError, TypeError, ValueError, IndexError):
-        ok = False
-    if not ok:
+        check_contingency_model(model)
+    except ValueError as error:
+        raise ValueError(f"{source}: {error}") from None
+    except (KeyError, TypeError, IndexError):
         raise ValueError(
             f"{source}: contingency_model is damaged (its arrays must be finite and fit together)"
-        )
+        ) from None
 
 
 def _check_visibility(model: dict[str, Any], source: str) -> None:
@@ -351,8 +347,9 @@ class HandDetector:
         if attribution == "contingency" and params is not None and not params.contingency_model:
             raise ValueError(
                 "hand attribution 'contingency' needs a detector with a contingency_model "
-                "(python -m devlearn_hand_regard.contingency_check fit gives one one); valid "
-                "for this detector: visibility, position"
+                "(a fresh run fits one after babbling; for a detector file: python -m "
+                "devlearn_hand_regard.contingency_check fit); valid for this detector: "
+                "visibility, position"
             )
         self.params = params
         self.max_hands = max_hands

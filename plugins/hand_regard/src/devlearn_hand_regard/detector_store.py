@@ -67,6 +67,12 @@ def calibrate_by_babbling(
         )
         if cfg.hand_attribution == "visibility":
             learn_side_attribution(params, cfg, infant, data, progress)
+        if cfg.hand_attribution == "contingency":  # issue #58: from this babbling
+            from devlearn_hand_regard.contingency import fit_from_calibration
+
+            params.contingency_model = fit_from_calibration(
+                params, infant, data, other_arm_hangs=cfg.babbling_arms == "alternate"
+            )
         del data
         if held_out_steps >= 2:
             test, segmentation = held_out(
