@@ -81,10 +81,13 @@ class SelfTouch(Behavior):
 
     def observe(self, infant: Infant, facts: dict[str, Any]) -> dict[str, np.ndarray]:
         """Return ``body_map`` (68,) log1p(g / body_map_scale) and ``proprioception`` (P,)."""
-        return {
+        obs = {
             "body_map": body_map_observation(facts["body_map"], self.config.body_map_scale),
             "proprioception": np.asarray(infant.proprioception(), dtype=np.float32),
         }
+        if self.config.critic_memory:  # PILOT: a fresh episode remembers nothing yet
+            obs["touch_memory"] = np.zeros(3 * 68, np.float32)
+        return obs
 
     def batch_facts(self, infants: Sequence[Infant]) -> list[dict[str, Any]]:
         """:meth:`facts` of a worker's infants at once, bit for bit the same
@@ -101,7 +104,42 @@ class SelfTouch(Behavior):
         ``proprioception`` (num_envs, P), row i bit for bit ``observe(infants[i], facts[i])``."""
         from devlearn_self_touch.batched_facts import batch_touch_observations
 
-        return batch_touch_observations(infants, facts, self.config.body_map_scale)
+        obs = batch_touch_observations(infants, facts, self.config.body_map_scale)
+        if self.config.critic_memory:
+            obs["touch_memory"] = self._memory_rows(infants, facts)
+        return obs
+
+    def _memory_rows(self, infants: Sequence[Infant], facts: Sequence[dict[str, Any]]) -> np.ndarray:
+        """PILOT: the episode's touch memory (what the reward terms remember), for the critic:
+        per hand the regions it touched this episode (2 x 68), and log1p of the steps each
+        region counted as touched (68). Episodes are told apart by the physics clock."""
+        n = len(infants)
+        mem = getattr(self, "_mem", None)
+        if mem is None or mem["hands"].shape[0] != n:
+            mem = self._mem = {
+                "hands": np.zeros((n, 2, 68), bool),
+                "count": np.zeros((n, 68), np.float64),
+                "time": np.full(n, np.inf),
+            }
+        for i, (infant, f) in enumerate(zip(infants, facts)):
+            t = float(infant.data.time)
+            if t < mem["time"][i]:
+                mem["hands"][i] = False
+                mem["count"][i] = 0.0
+            mem["time"][i] = t
+            mem["hands"][i] |= f["hand_contacts"]
+            mem["count"][i] += f["touched"]
+        return np.concatenate(
+            [mem["hands"].reshape(n, -1).astype(np.float32), np.log1p(mem["count"]).astype(np.float32) / 7.0],
+            axis=1,
+        )
+
+    def obs_groups(self, observation_names: list[str]) -> dict[str, list[str]]:
+        """PILOT: the touch memory is the critic's only."""
+        return {
+            "actor": [n for n in observation_names if n != "touch_memory"],
+            "critic": list(observation_names),
+        }
 
     def network(self) -> NetworkSpec:
         """The paper's Model I network (sec. II-A2 and II-A4)."""
@@ -109,6 +147,7 @@ class SelfTouch(Behavior):
             encoders={
                 "body_map": MLPEncoder((128, 256)),
                 "proprioception": MLPEncoder((128, 256)),
+                **({"touch_memory": MLPEncoder((128, 256))} if self.config.critic_memory else {}),
             },
             fusion_dims=(512,),
             trunk_dims=(256, 256),

@@ -125,6 +125,8 @@ class SelfTouchConfig(BehaviorConfig):
     (sec. II-A3), which on our skin also counts lying on the mattress. ``"hands_or_threshold"``:
     either. We measured mattress-only and self-touch g_j to overlap entirely (README,
     ``python -m devlearn_self_touch.calibrate``), so no threshold separates them."""
+    critic_memory: bool = False
+    """PILOT (issue #54): the critic also sees the episode's touch memory."""
     touch_threshold: float = 0.1
     """Threshold on g_j (N per sensor) for the ``threshold`` sources (paper: 0.1, in MIMo's
     units, sec. II-A3). Lying still, mattress regions read 0.12 (median) to 1.0 N."""
