@@ -28,7 +28,7 @@ LEARNER = {
     "network.layout": "separate",
     "network.head": "free",
     "network.init_std": 0.0,  # the free head's own: 1.0
-    "network.final_std": 0.1,
+    "network.final_std": 0.3,
     "network.encoders": "flat",
     "network.activation": "tanh",
     "network.init": "orthogonal",

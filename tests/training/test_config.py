@@ -155,10 +155,10 @@ def test_to_rsl_rl():
     assert train_cfg["obs_groups"] == {"actor": ["proprioception"], "critic": ["proprioception"]}
     assert train_cfg["actor"]["class_name"] == "devlearn.training.networks:MultiSenseModel"
     dist = train_cfg["actor"]["distribution_cfg"]
-    assert dist == {  # the default head (issue #54): free spread from 1.0, ceiling to 0.1
+    assert dist == {  # the default head (issue #54): free spread from 1.0, ceiling to 0.3
         "class_name": "devlearn.training.distribution:FreeGaussian",
         "init_std": 1.0,
-        "final_std": 0.1,
+        "final_std": 0.3,
     }
     paper = to_rsl_rl(tiny_run.config("unused", 256, "network.head=paper"), behavior)
     dist = paper["actor"]["distribution_cfg"]

@@ -127,10 +127,10 @@ def test_the_knobs_reach_rsl_rl_and_the_optimiser():
     assert train["actor"]["distribution_cfg"] == {
         "class_name": "devlearn.training.distribution:SquashedGaussian",
         "init_std": 0.8,
-        "final_std": 0.1,  # the default ceiling
+        "final_std": 0.3,  # the default ceiling
     }
     free = to_rsl_rl(config("unused"), TinyBehavior(cfg.behavior))["actor"]["distribution_cfg"]
-    assert free["init_std"] == 1.0 and free["final_std"] == 0.1  # the free head's own start
+    assert free["init_std"] == 1.0 and free["final_std"] == 0.3  # the free head's own start
     assert train["actor"]["init"] == train["critic"]["init"] == "orthogonal"
     assert train["algorithm"]["adam_eps"] == 1e-5
     assert train["algorithm"]["normalize_advantage_per_mini_batch"] is True

@@ -212,9 +212,9 @@ def test_a_run_records_health_figures_and_its_warnings(tmp_path):
         "loss/surrogate",
     ):
         assert key in row, key
-    # the free head starts at 1.0 under a ceiling falling to 0.1 over the run: 64 steps of
+    # the free head starts at 1.0 under a ceiling falling to 0.3 over the run: 64 steps of
     # 32 per iteration, the second iteration collected under the ceiling at half the run
-    assert row["health/std_min"] == pytest.approx((1.0 * 0.1) ** 0.5, abs=0.02)
+    assert row["health/std_min"] == pytest.approx((1.0 * 0.3) ** 0.5, abs=0.02)
     assert result.warnings == []
     state = torch.load(tmp_path / "run" / "checkpoint_latest.pt", weights_only=False)
     assert set(state["reward_norm"]) == {
