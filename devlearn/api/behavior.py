@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
+from devlearn.api.capabilities import About, Artifacts, EpisodeHooks, EpisodeSpec, EvalProtocol
 from devlearn.api.curriculum import Curriculum, Stage
 from devlearn.api.errors import UsageError
 from devlearn.api.rewards import (
@@ -204,6 +205,9 @@ def check_reward_table(config: Any) -> None:
                     )
 
 
+_DERIVED_ABOUT: set[type] = set()
+
+
 class Behavior(ABC):
     """What the infant should learn: scene, senses, observations, rewards, curriculum, metrics.
 
@@ -227,7 +231,7 @@ class Behavior(ABC):
     that does nothing special, in groups:
 
     ===================  =====================================================================
-    episode              ``senses``, ``infant_options``, ``episode_seconds``,
+    ~episode             ``senses``, ``infant_options``, ``episode_seconds``,
                          ``on_episode_start``, ``before_step``, ``process_action``,
                          ``obs_groups``: the body a behaviour reads, how long an episode
                          lasts, and hooks around every reset and step
@@ -235,10 +239,10 @@ class Behavior(ABC):
                          facts are computed with a decision rate and over a worker's envs
     run settings         ``train_defaults``, ``run_length_defaults``, ``presets``,
                          ``paper_results``: run-config values as data, and the paper's figures
-    evaluation           ``description``, ``headline_metric``, ``eval_stage``, ``eval_start``,
+    ~evaluation          ``description``, ``headline_metric``, ``eval_stage``, ``eval_start``,
                          ``run_metrics``, ``render_frame``: what ``devlearn eval``, ``report``
                          and the progress bar show, and where evaluation episodes start
-    artifacts            ``prepare``, ``policy_artifacts``, ``load_policy_artifacts``: one-off
+    ~artifacts           ``prepare``, ``policy_artifacts``, ``load_policy_artifacts``: one-off
                          work before training and what a policy file must carry
     ===================  =====================================================================
 
@@ -319,6 +323,51 @@ class Behavior(ABC):
     def evaluator(self, training: bool) -> Evaluator:
         """Return a fresh metrics collector (``training=False`` for ``devlearn eval``)."""
         return Evaluator()
+
+    # --- composed capabilities -------------------------------------------------------------
+    about: ClassVar[About] = About()
+    """What is known of this behaviour without building it (:class:`About`)."""
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        written = [k for k in cls.__mro__ if "about" in vars(k) and k not in _DERIVED_ABOUT]
+        if written and written[0] is not Behavior:
+            return
+        _DERIVED_ABOUT.add(cls)
+        # transition: the old members, read as an About
+        plain = object.__new__(cls)
+        cls.about = About(
+            description=cls.description,
+            headline_metric=cls.headline_metric,
+            train_defaults=cls.train_defaults(plain),
+            presets=cls.presets,
+            run_length_defaults=lambda steps: cls.run_length_defaults(plain, steps),
+            paper_results=cls.paper_results,
+        )
+
+    def episode(self) -> EpisodeSpec:
+        """The body this behaviour reads and how its episodes go (:class:`EpisodeSpec`)."""
+        return EpisodeSpec(
+            senses=tuple(self.senses),
+            infant_options=self.infant_options(),
+            seconds=self.episode_seconds(),
+            facts_every_physics_step=self.facts_every_physics_step,
+            hooks=_BehaviorHooks(self),
+        )
+
+    def evaluation(self) -> EvalProtocol:
+        """How episodes are scored and evaluated (:class:`EvalProtocol`)."""
+        return EvalProtocol(
+            evaluator=lambda training: self.evaluator(training),
+            run_metrics=self.run_metrics(),
+            stage=self.eval_stage(),
+            start=self.eval_start(),
+            render_frame=self.render_frame,
+        )
+
+    def artifacts(self) -> Artifacts:
+        """One-off work before training and what a policy file carries (:class:`Artifacts`)."""
+        return _BehaviorArtifacts(self)
 
     # --- optional: episode (the body read, hooks around resets and steps) ---------------------
     senses: ClassVar[tuple[str, ...]] = ("touch", "proprioception", "vestibular")
@@ -558,9 +607,38 @@ BEHAVIOR_OPTIONAL: dict[str, tuple[str, ...]] = {
         "render_frame",
     ),
     "artifacts": ("prepare", "policy_artifacts", "load_policy_artifacts"),
+    "composed": ("about", "episode", "evaluation", "artifacts"),
 }
 """The optional capabilities of :class:`Behavior` by group, each declared there with a default;
 together with :data:`BEHAVIOR_CORE` every public member of the contract, once."""
+
+
+class _BehaviorHooks(EpisodeHooks):
+    def __init__(self, behavior: Behavior) -> None:
+        self.behavior = behavior
+
+    def on_episode_start(self, infant: Infant, rng: np.random.Generator) -> None:
+        self.behavior.on_episode_start(infant, rng)
+
+    def before_step(self, infant: Infant, action: np.ndarray) -> None:
+        self.behavior.before_step(infant, action)
+
+    def process_action(self, action: np.ndarray, stage: dict[str, Any]) -> np.ndarray:
+        return self.behavior.process_action(action, stage)
+
+
+class _BehaviorArtifacts(Artifacts):
+    def __init__(self, behavior: Behavior) -> None:
+        self.behavior = behavior
+
+    def prepare(self, run_dir: Path) -> None:
+        self.behavior.prepare(run_dir)
+
+    def policy_artifacts(self) -> dict[str, Any]:
+        return self.behavior.policy_artifacts()
+
+    def load_policy_artifacts(self, artifacts: dict[str, Any], folder: Path) -> None:
+        self.behavior.load_policy_artifacts(artifacts, folder)
 
 
 def evaluation_stage(behavior: Behavior, trained_steps: int) -> dict[str, Any]:
@@ -568,7 +646,7 @@ def evaluation_stage(behavior: Behavior, trained_steps: int) -> dict[str, Any]:
     under: its declared :meth:`Behavior.eval_stage`, or else the options of its curriculum's
     stage at ``trained_steps`` (where a policy trained for that many steps ended its training).
     """
-    declared = behavior.eval_stage()
+    declared = behavior.evaluation().stage
     if declared is not None:
         return dict(declared)
     curriculum = behavior.curriculum()

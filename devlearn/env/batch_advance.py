@@ -45,8 +45,8 @@ def apply_action(env: BehaviorEnv, action: np.ndarray) -> None:
     (:meth:`~devlearn.env.behavior_env.BehaviorEnv.motor_command`), the behaviour's hooks,
     the body's step."""
     action = env.motor_command(action)
-    env.behavior.before_step(env.infant, action)
-    env.infant.step(env.behavior.process_action(action, env.stage))
+    env.hooks.before_step(env.infant, action)
+    env.infant.step(env.hooks.process_action(action, env.stage))
 
 
 def advance_batch(

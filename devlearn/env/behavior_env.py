@@ -29,6 +29,7 @@ from devlearn.timing import decision_rate_error, physics_steps
 
 if TYPE_CHECKING:
     from devlearn.api.behavior import Behavior
+    from devlearn.api.capabilities import EpisodeSpec
 
 EPISODE_RECORD = "episode_record"
 """Key of an episode summary holding :meth:`~devlearn.api.behavior.Evaluator.episode_record`
@@ -101,6 +102,9 @@ class BehaviorEnv:
         self.settings = env_settings(settings, action_repeat)
         """The run's settled env settings (the decision rate)."""
         self.behavior = behavior
+        self.episode = behavior.episode()
+        """The behaviour's :class:`~devlearn.api.capabilities.EpisodeSpec`, read once."""
+        self.hooks = self.episode.hooks
         self.index = index
         self._factory = infant_factory or build_default_infant
         self.age_months = age_months
@@ -113,10 +117,10 @@ class BehaviorEnv:
             term.bind(1)
         self.batch_index = 0
         """This env's index in its batched terms' arrays."""
-        self.evaluator = behavior.evaluator(training=training)
+        self.evaluator = behavior.evaluation().evaluator(training)
         self.stage: dict[str, Any] = dict(behavior.curriculum().stage.options)
         self.action_dim = int(self.infant.action_dim)
-        self.episode_steps = episode_length(self.infant, behavior, self.settings)
+        self.episode_steps = episode_length(self.infant, self.episode, self.settings, behavior.name)
         """Physics steps per episode (:func:`episode_length`)."""
         self.step_dt = float(self.infant.control_timestep)
         self.motor_noise: PowerLawNoise | None = None
@@ -156,10 +160,10 @@ class BehaviorEnv:
         return self.settings.action_repeat
 
     def _build_infant(self) -> Any:
-        options = self.behavior.infant_options()
+        options = dict(self.episode.infant_options)
         if self.age_months is not None:
             options["age_months"] = self.age_months
-        return self._factory(self.behavior.scene, senses=tuple(self.behavior.senses), **options)
+        return self._factory(self.behavior.scene, senses=tuple(self.episode.senses), **options)
 
     def set_age(self, age_months: float | None) -> None:
         """Rebuild the infant's physics at ``age_months`` without ending the episode: the new
@@ -177,7 +181,7 @@ class BehaviorEnv:
     def reset(self) -> dict[str, np.ndarray]:
         """Start a new episode; return its first observations (name -> array)."""
         self.infant.reset(self.rng, random_pose=bool(self.stage.get("random_pose", False)))
-        self.behavior.on_episode_start(self.infant, self.rng)
+        self.hooks.on_episode_start(self.infant, self.rng)
         for term in self.terms:
             term.reset(self.batch_index)
         self.episode_step = 0
@@ -347,17 +351,17 @@ def term_values(envs: list[BehaviorEnv], contexts: list[StepContext]) -> np.ndar
     return weights * raw
 
 
-def episode_length(infant: Any, behavior: Behavior, settings: EnvSettings) -> int:
+def episode_length(infant: Any, episode: EpisodeSpec, settings: EnvSettings, name: str) -> int:
     """Physics steps per episode: ``settings.episode_seconds`` (an evaluation's session), else
-    the behaviour's :meth:`~devlearn.api.behavior.Behavior.episode_seconds`, converted with
-    the body's physics step, else the infant's own ``episode_steps`` (5 s).
+    the behaviour's ``episode().seconds`` (:class:`~devlearn.api.capabilities.EpisodeSpec`),
+    converted with the body's physics step, else the infant's own ``episode_steps`` (5 s).
 
     Raises:
         UsageError: The seconds are not a whole number of physics steps (one line).
     """
     seconds, whose = settings.episode_seconds, "the evaluation's session"
     if seconds is None:
-        seconds, whose = behavior.episode_seconds(), f"{type(behavior).name}'s episode_seconds()"
+        seconds, whose = episode.seconds, f"{name}'s episode().seconds"
     if seconds is None:
         return int(infant.episode_steps)
     try:
@@ -402,7 +406,7 @@ def step_batch(
     repeat = envs[0].action_repeat
     if repeat == 1:
         return step_physics(envs, actions, obs_out)
-    if not envs[0].behavior.facts_every_physics_step:
+    if not envs[0].episode.facts_every_physics_step:
         for _ in range(repeat - 1):
             for env, action in zip(envs, clipped_actions(actions)):
                 apply_action(env, action)

@@ -33,20 +33,21 @@ def describe_behavior(
         the action repeat), ``episode_steps`` (physics steps), ``reward_terms`` and
         ``curriculum``.
     """
+    episode = behavior.episode()
     if infant_factory is None:
         from devlearn.infant import build_infant
 
         # The numpy references of the compiled senses: the same shapes, and describing compiles
         # nothing (no numba import, no kernel load: `devlearn info` starts in about a second).
         infant = build_infant(
-            behavior.scene, senses=behavior.senses, compiled=False, **behavior.infant_options()
+            behavior.scene, senses=episode.senses, compiled=False, **episode.infant_options
         )
     else:
-        infant = infant_factory(behavior.scene, behavior.senses, **behavior.infant_options())
+        infant = infant_factory(behavior.scene, episode.senses, **episode.infant_options)
     try:
         rng = np.random.default_rng(0)
         infant.reset(rng, random_pose=False)
-        behavior.on_episode_start(infant, rng)
+        episode.hooks.on_episode_start(infant, rng)
         # Shapes only: warnings about what an unprepared behaviour would perceive or learn
         # (hand regard's uncalibrated detector) do not change them, so they are not shown.
         with warnings.catch_warnings():
@@ -58,11 +59,11 @@ def describe_behavior(
     curriculum = behavior.curriculum()
     return {
         "behavior": behavior.name,
-        "description": behavior.description,
+        "description": behavior.about.description,
         "scene": behavior.scene,
-        "senses": list(behavior.senses),
+        "senses": list(episode.senses),
         "observations": {k: list(np.shape(v)) for k, v in observations.items()},
-        "obs_groups": behavior.obs_groups(list(observations)),
+        "obs_groups": behavior.network().obs_groups(list(observations)),
         "action_dim": int(body["action_dim"]),
         "touch_sensors": int(body["touch_sensors"]),
         "skin_regions": int(body["skin_regions"]),

@@ -56,7 +56,7 @@ def check_behavior_class(behavior_cls: type[Behavior]) -> None:
     config = behavior_cls.config_class()
     behavior = behavior_cls(config)
     check_picklable(behavior, f"behavior '{name}'")  # travels to worker processes
-    start = behavior.eval_start()
+    start = behavior.evaluation().start
     require(
         start is None or start in STARTS,
         f"eval_start() must return None or one of {', '.join(STARTS)}, got {start!r}",
@@ -222,7 +222,7 @@ def check_behavior(
     check_behavior_class(behavior_cls)
     behavior = behavior_cls(config if config is not None else behavior_cls.config_class())
     for training, label in ((True, "training"), (False, "evaluation")):
-        check_evaluator_class(behavior.evaluator(training), label)
+        check_evaluator_class(behavior.evaluation().evaluator(training), label)
     check_reward_terms(behavior.reward_terms())
     curriculum = behavior.curriculum()
     check_curriculum(curriculum)
@@ -232,15 +232,16 @@ def check_behavior(
         env.terms = checked_terms(env.terms, phase)
         checked = CheckedEvaluator(
             env.evaluator,
-            behavior.evaluator(training=False),
+            behavior.evaluation().evaluator(False),
             phase,
-            fresh=lambda: behavior.evaluator(training=False),
+            fresh=lambda: behavior.evaluation().evaluator(False),
         )
         env.evaluator = checked  # records in both, and checks what they return
         env.episode_steps = max(1, min(env.episode_steps, episode_steps))
         first = env.reset()
         shapes = check_observations(first, None, "after reset")
-        check_network(behavior.network(), first, behavior.obs_groups(list(shapes)))
+        spec = behavior.network()
+        check_network(spec, first, spec.obs_groups(list(shapes)))
         rng = np.random.default_rng(seed)
 
         batches = overrides(behavior, "batch_facts") or overrides(behavior, "batch_observe")

@@ -151,7 +151,7 @@ def policy_file(
         "iteration": 0,
         "env_steps": env_steps,
         "actor_state_dict": actor_state,
-        "artifacts": behavior.policy_artifacts(),
+        "artifacts": behavior.artifacts().policy_artifacts(),
     }
 
 

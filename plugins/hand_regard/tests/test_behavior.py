@@ -181,7 +181,11 @@ def test_cnn_policy_sees_the_eyes(behavior):
     env = BehaviorEnv(behavior, seed=0, infant_factory=FakeSittingInfant)
     obs = env.reset()
     assert set(obs) == {"left_eye", "right_eye", "proprioception", "hands_seen"}
-    assert behavior.obs_groups(list(obs))["actor"] == ["left_eye", "right_eye", "proprioception"]
+    assert behavior.network().obs_groups(list(obs))["actor"] == [
+        "left_eye",
+        "right_eye",
+        "proprioception",
+    ]
     assert obs["left_eye"].shape == (64, 64, 3) and obs["left_eye"].dtype == np.uint8
     behavior.config.critic = "same"
     obs = BehaviorEnv(behavior, seed=0, infant_factory=FakeSittingInfant).reset()
@@ -304,7 +308,7 @@ def test_asymmetric_critic_trains_without_eye_cnns(tmp_path, detector_file):
     behavior = HandRegard(cfg.behavior)
     obs = BehaviorEnv(behavior, seed=0, infant_factory=FakeSittingInfant).reset()
     assert set(obs) == {"left_eye", "right_eye", "proprioception", "hands_seen"}
-    assert behavior.obs_groups(list(obs)) == {
+    assert behavior.network().obs_groups(list(obs)) == {
         "actor": ["left_eye", "right_eye", "proprioception"],
         "critic": ["proprioception", "hands_seen"],
     }
@@ -346,8 +350,10 @@ def test_the_cnn_policy_trains_with_the_asymmetric_critic_unless_told_or_saved_o
 
     fresh = run_config(HandRegard, ["behavior.policy=cnn"])
     assert fresh.behavior.critic == "proprio"
-    groups = HandRegard(fresh.behavior).obs_groups(
-        ["left_eye", "right_eye", "proprioception", "hands_seen"]
+    groups = (
+        HandRegard(fresh.behavior)
+        .network()
+        .obs_groups(["left_eye", "right_eye", "proprioception", "hands_seen"])
     )
     assert groups["critic"] == ["proprioception", "hands_seen"]
     assert run_config(HandRegard, preset="paper").behavior.critic == "same"

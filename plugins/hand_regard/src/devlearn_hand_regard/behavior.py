@@ -312,25 +312,15 @@ class HandRegard(Behavior):
             obs["hands_seen"] = hand_features(facts["hand_detections"], facts["hand_masks"])
         return obs
 
-    def obs_groups(self, observation_names: list[str]) -> dict[str, list[str]]:
-        """The actor sees every observation but ``hands_seen`` under ``policy=cnn``; the
-        critic sees what the actor sees, or (``critic=proprio``) proprioception and
-        ``hands_seen`` alone."""
-        if self.config.policy != "cnn":
-            return super().obs_groups(observation_names)
-        actor = [name for name in observation_names if name != "hands_seen"]
-        if self.config.critic == "proprio":
-            critic = [n for n in observation_names if n in ("proprioception", "hands_seen")]
-            return {"actor": actor, "critic": critic}
-        return {"actor": actor, "critic": list(actor)}
-
     def network(self) -> NetworkSpec:
         """``config.policy``: ``cnn``, the paper's Model II network (sec. II-B3); ``proprio``,
         the same proprioception MLP beside a small MLP on the detector's output.
 
         The paper's eye CNN ends in global average pooling: its 256 features say what is in
         view, not where in the image, so a policy that must centre a hand learns that from
-        proprioception alone. NetworkSpec checks the spread settings.
+        proprioception alone. NetworkSpec checks the spread settings. Under ``cnn`` the actor
+        sees every observation but ``hands_seen``; the critic sees what the actor sees, or
+        (``critic=proprio``) proprioception and ``hands_seen`` alone.
         """
         cfg = self.config
         _check_choice("policy", cfg.policy, POLICY_CHOICES)
@@ -360,7 +350,10 @@ class HandRegard(Behavior):
         }
         if cfg.critic == "proprio":  # the asymmetric critic's view of the detector
             encoders["hands_seen"] = MLPEncoder((32,))
+        actor = ("left_eye", "right_eye", "proprioception")
         return NetworkSpec(
+            actor=actor,
+            critic=("proprioception", "hands_seen") if cfg.critic == "proprio" else actor,
             encoders=encoders,
             fusion_dims=(cfg.fusion_dim,),  # 256 + 256 + 64 = 576 -> 256 (sec. II-B3)
             trunk_dims=(),  # the paper's heads sit directly on the fused features
