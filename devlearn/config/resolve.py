@@ -266,8 +266,8 @@ def _start(
 
 
 def _apply_behavior_defaults(cfg: RunConfig, behavior_cls: type[Behavior]) -> None:
-    """Apply the behaviour's ``train_defaults()`` (read from a behaviour built on the default
-    config: run settings are data) to a new run's ``cfg``."""
+    """Apply the behaviour's ``about.train_defaults`` (read from its class: run settings are
+    data) to a new run's ``cfg``."""
     apply_overrides(cfg, dict(behavior_cls.about.train_defaults))
 
 
@@ -310,7 +310,7 @@ def _build_behavior(cfg: RunConfig, behavior_cls: type[Behavior]) -> Behavior:
 
 
 def _scale_to_length(cfg: RunConfig, behavior: Behavior, keep: set[str]) -> None:
-    """Stage 6 of a new run: apply ``behavior.run_length_defaults(cfg.total_steps)`` (values
+    """Stage 6 of a new run: apply ``behavior.about.run_length_defaults(cfg.total_steps)`` (values
     that scale with the run's length) to ``cfg``, except the keys in ``keep`` (what ``--set``
     or the preset gave). ``behavior`` is the one built on ``cfg.behavior``, so it sees the
     values."""

@@ -15,7 +15,12 @@ from devlearn.api.rewards import (
     StepContext,
     as_batched,
 )
-from devlearn.env.batch_advance import advance_batch, apply_action, clipped_actions
+from devlearn.env.batch_advance import (
+    advance_batch,
+    apply_action,
+    clipped_actions,
+    facts_and_observations,
+)
 from devlearn.env.guards import (
     REWARD_BOUND,
     check_observations,
@@ -36,14 +41,14 @@ EPISODE_RECORD = "episode_record"
 (not a float: the runner hands it to the behaviour's :class:`~devlearn.api.behavior.RunMetrics`)."""
 
 InfantFactory = Callable[..., Any]
-"""``factory(scene, senses=..., **behavior.infant_options()) -> Infant``; defaults to
+"""``factory(scene, senses=..., **episode.infant_options) -> Infant``; defaults to
 :func:`devlearn.infant.build_infant`."""
 
 
 def build_default_infant(scene: str, senses: tuple[str, ...], **options: Any) -> Any:
     """Build the real infant (imported lazily so this module imports without it).
 
-    ``options`` are the behaviour's :meth:`~devlearn.api.behavior.Behavior.infant_options`.
+    ``options`` are the behaviour's ``episode().infant_options``.
 
     Raises:
         UsageError: ``senses`` include the eyes and ``MUJOCO_GL`` names no backend.
@@ -75,9 +80,9 @@ class BehaviorEnv:
     Args:
         behavior: The behaviour (this env's own instance; it may keep per-env state).
         seed: Seed of this env's numpy Generator (initial poses).
-        infant_factory: ``factory(scene, senses=..., **behavior.infant_options()) -> Infant``;
+        infant_factory: ``factory(scene, senses=..., **episode.infant_options) -> Infant``;
             tests pass a fake one.
-        training: Passed to ``behavior.evaluator`` (False for ``devlearn eval``).
+        training: Passed to the behaviour's evaluator factory (False for ``devlearn eval``).
         index: This env's index on its rank (named by the reward and observation guards).
         action_repeat: Shorthand for ``settings=EnvSettings(action_repeat)``; not with
             ``settings``.
@@ -186,7 +191,8 @@ class BehaviorEnv:
             term.reset(self.batch_index)
         self.episode_step = 0
         self._sums = {term.name: 0.0 for term in self.terms}
-        obs = self.behavior.observe(self.infant, self.behavior.facts(self.infant))
+        _, batch = facts_and_observations([self])
+        obs = {name: array[0] for name, array in batch.items()}
         check_observations(obs, self.index, 0)
         return obs
 
@@ -391,7 +397,7 @@ def step_batch(
 ) -> list[tuple]:
     """One decision of ``envs``: ``action_repeat`` physics steps with ``actions[i]`` held.
 
-    With ``Behavior.facts_every_physics_step`` (the default) this is :func:`step_physics`
+    With ``episode().facts_every_physics_step`` (the default) this is :func:`step_physics`
     ``action_repeat`` times, the rewards summed; otherwise physics runs ``action_repeat - 1``
     times bare, then one :func:`step_physics` computes facts, observations, rewards (paid
     ``action_repeat`` times) and the evaluator's record. Envs step in lockstep (their episodes
@@ -426,7 +432,7 @@ def step_physics(
     paid: int = 1,
 ) -> list[tuple]:
     """Step ``envs`` one physics step with ``actions[i]`` each: physics per env, facts and
-    observations (batched when the behaviour batches them), every reward term (batched ones
+    observations (once for the batch), every reward term (batched ones
     once for all, each value paid ``paid`` times), then each env's bookkeeping and auto-reset.
 
     Args:
@@ -439,7 +445,7 @@ def step_physics(
     """
     contexts, batch = advance_batch(envs, actions)
     values = term_values(envs, contexts)
-    if obs_out is not None and batch is not None:
+    if obs_out is not None:
         for name, array in batch.items():  # the whole batch at once; resets overwrite rows
             obs_out[name][...] = array
     results = [
@@ -447,7 +453,7 @@ def step_physics(
     ]
     if obs_out is not None:
         for i, (obs, _, done, _, _) in enumerate(results):
-            if batch is None or done:
+            if done:
                 for name, value in obs.items():
                     obs_out[name][i] = value
     return results

@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from devlearn.api.batching import EnvBatch
 from devlearn.api.behavior import Behavior
 
 if TYPE_CHECKING:
@@ -20,7 +21,7 @@ def describe_behavior(
 
     Args:
         behavior: A behaviour instance (its default config is fine).
-        infant_factory: Optional ``(scene, senses, **behavior.infant_options()) -> Infant``
+        infant_factory: Optional ``(scene, senses, **episode.infant_options) -> Infant``
             replacement for tests.
         action_repeat: Physics steps per policy decision of the run described
             (``env.action_repeat``).
@@ -52,7 +53,9 @@ def describe_behavior(
         # (hand regard's uncalibrated detector) do not change them, so they are not shown.
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", UserWarning)
-            observations = behavior.observe(infant, behavior.facts(infant))
+            one = EnvBatch([infant], [behavior])
+            batch = behavior.observe(one, behavior.facts(one))
+        observations = {name: np.asarray(array)[0] for name, array in batch.items()}
         body = infant.describe()
     finally:
         infant.close()

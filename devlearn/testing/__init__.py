@@ -16,7 +16,9 @@ and the vector env, :mod:`devlearn.gym`): ``check_gymnasium(MyBehavior)``.
 and :func:`registry_for` to build a plugin registry from classes, without installing anything
 (:class:`PluginRegistry`: the installed plugins').
 :func:`place_hand_on_body` poses an infant with a hand on its body (a scripted contact), and
-:func:`random_transitions` gives a learned reward a batch to train on.
+:func:`random_transitions` gives a learned reward a batch to train on. :func:`facts_of` and
+:func:`observations_of` give one environment's facts and observations as the core computes
+them (a batch of one).
 Fixtures ``crib_infant`` and ``sitting_infant`` (module-scoped) are available after
 ``from devlearn.testing import crib_infant, sitting_infant`` in a ``conftest.py``.
 
@@ -38,7 +40,7 @@ of the episode hooks devlearn calls.
 Modules: :mod:`~devlearn.testing.behavior` (the behaviour check), :mod:`~devlearn.testing.gym_env`
 (the Gymnasium check), :mod:`~devlearn.testing.learned`
 (the learned-reward check), :mod:`~devlearn.testing.values` (value checks and
-:class:`ConformanceError`), :mod:`~devlearn.testing.fixtures`,
+:class:`ConformanceError`), :mod:`~devlearn.testing.verbs`, :mod:`~devlearn.testing.fixtures`,
 :mod:`~devlearn.testing.fake_infant`, :mod:`~devlearn.testing.hook_tracker`,
 :mod:`~devlearn.testing.runs`, :mod:`~devlearn.testing.envs`.
 """
@@ -75,6 +77,7 @@ from devlearn.testing.runs import (
     train,
 )
 from devlearn.testing.values import ConformanceError
+from devlearn.testing.verbs import facts_of, observations_of
 
 __all__ = [
     "CommandResult",
@@ -97,8 +100,10 @@ __all__ = [
     "check_reward_terms",
     "crib_infant",
     "evaluate_policy",
+    "facts_of",
     "fake_infant_factory",
     "load_checkpoint",
+    "observations_of",
     "open_scripted_policy",
     "place_hand_on_body",
     "policy_file",

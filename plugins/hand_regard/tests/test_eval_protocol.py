@@ -30,7 +30,7 @@ def starts(seed, episodes, sitting, detector_file, eval_start="random"):
     behavior = HandRegard(HandRegardConfig(eval_start=eval_start))
     behavior.config.detector_file = str(detector_file)
     env = BehaviorEnv(behavior, seed, lambda scene, senses, **options: sitting, training=False)
-    env.set_stage(behavior.eval_stage())
+    env.set_stage(behavior.evaluation().stage)
     toys = [g for g in range(sitting.model.ngeom) if sitting.model.geom(g).name.startswith("toy")]
     out = []
     for _ in range(episodes):
@@ -53,7 +53,7 @@ def test_evaluation_episodes_differ_and_repeat_with_the_seed(sitting, detector_f
     head, arms = sitting.actuator_groups["head"], sitting.actuator_groups["left_arm"]
     assert np.ptp([q[head] for q, _ in first], axis=0).min() > 0  # every head joint varies
     assert np.ptp([q[arms] for q, _ in first], axis=0).min() > 0
-    random = HandRegard(HandRegardConfig(eval_start="random")).eval_stage()
+    random = HandRegard(HandRegardConfig(eval_start="random")).evaluation().stage
     assert random == {"active_arms": ["left", "right"], "random_pose": True}
 
 
@@ -97,21 +97,21 @@ def test_detector_is_found_beside_a_relocated_checkpoint(tmp_path, detector_file
     moved = tmp_path / "elsewhere" / "run"
     shutil.copytree(original, moved)
     shutil.rmtree(original)
-    behavior.load_policy_artifacts({}, moved)
+    behavior.artifacts().load_policy_artifacts({}, moved)
     assert behavior.config.detector_file == str(moved / "hand_detector.json")
     assert behavior.detector.params is not None
     (moved / "hand_detector.json").unlink()
     with pytest.raises(UsageError, match="hand_detector.json"):
-        HandRegard(behavior.config).load_policy_artifacts({}, moved)
+        HandRegard(behavior.config).artifacts().load_policy_artifacts({}, moved)
 
 
 def test_policy_artifacts_carry_the_detector(detector_file):
     behavior = HandRegard()
     behavior.config.detector_file = str(detector_file)
-    artifacts = json.loads(json.dumps(behavior.policy_artifacts()))  # plain data only
+    artifacts = json.loads(json.dumps(behavior.artifacts().policy_artifacts()))  # plain data only
     restored = HandRegard()
     restored.config.detector_file = "/nowhere/hand_detector.json"
-    restored.load_policy_artifacts(artifacts, detector_file.parent)
+    restored.artifacts().load_policy_artifacts(artifacts, detector_file.parent)
     assert restored.detector.params == behavior.detector.params
 
 
@@ -129,7 +129,7 @@ def old_run_policy(detector_file: Path) -> dict:
     behavior = HandRegard(cfg.behavior)
     env = BehaviorEnv(behavior, 0, training=False)
     try:
-        env.set_stage(behavior.eval_stage())
+        env.set_stage(behavior.evaluation().stage)
         obs = env.reset()
         actor = policy_network(cfg, behavior, obs, env.action_dim)
     finally:

@@ -74,7 +74,7 @@ def test_reward_switch_on_the_command_line():
 def test_unknown_choice_names_the_valid_ones(key, value, valid):
     behavior = HandRegard(HandRegardConfig(**{key: value}))
     with pytest.raises(UsageError, match=f"unknown behavior.{key} '{value}'; valid: {valid}"):
-        behavior.reward_terms() if key == "reward" else behavior.infant_options()
+        behavior.reward_terms() if key == "reward" else behavior.episode().infant_options
 
 
 @pytest.mark.parametrize("appearance", ["skin", "mittens"])
@@ -99,7 +99,7 @@ def test_old_run_config_loads_with_mittens_and_the_bilateral_term():
     assert "bilateral_balance" in _names(cfg.behavior)
     # Its policy file (in git history since 2d704d9) carried this config: the old scene.
     behavior = HandRegard(cfg.behavior)
-    assert behavior.infant_options() == {"appearance": "mittens", "start": "rest"}
+    assert behavior.episode().infant_options == {"appearance": "mittens", "start": "rest"}
     assert behavior.scene == "sitting" and behavior.config.policy == "cnn"
     # A config saved now keeps its own values; no saved behaviour section: today's defaults.
     fresh = run_config(HandRegard, ["behavior.appearance=skin", "behavior.reward=paper"])

@@ -117,7 +117,7 @@ def test_the_episode_length_in_seconds():
     assert infos[:-1] == [None] * 11 and infos[-1]["reward/balance"] == 10.0
     with pytest.raises(ValueError, match="episode_s must be above 0 seconds"):
         SelfTouch(SelfTouchConfig(episode_s=0.0))
-    with pytest.raises(UsageError, match=r"self_touch's episode_seconds\(\): 0.0123 s is not"):
+    with pytest.raises(UsageError, match=r"self_touch's episode\(\).seconds: 0.0123 s is not"):
         BehaviorEnv(SelfTouch(SelfTouchConfig(episode_s=0.0123)), 0, ScriptedInfant)
 
 

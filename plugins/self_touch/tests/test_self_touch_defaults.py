@@ -73,7 +73,7 @@ def test_the_old_runs_policy_is_rebuilt_with_its_unbounded_spread():
     behavior = registry.create("self_touch", cfg.behavior)
     env = BehaviorEnv(behavior, 0, training=False)
     try:
-        env.set_stage(behavior.eval_stage())
+        env.set_stage(behavior.evaluation().stage)
         obs = env.reset()
         saved = policy_network(cfg, behavior, obs, env.action_dim).state_dict()
         actor = policy_network(cfg, behavior, obs, env.action_dim, weights=saved)

@@ -73,13 +73,13 @@ def test_window_state_round_trips_and_a_shorter_window_keeps_the_newest():
 
 
 def test_training_evaluator_records_each_episode_for_the_run():
-    evaluator = SelfTouch().evaluator(training=True)
+    evaluator = SelfTouch().evaluation().evaluator(True)
     evaluator.record(make_ctx(hand_parts=[(0, 4), (1, 4), (1, 9)], step=0))
     evaluator.end_episode()
     assert np.array_equal(evaluator.episode_record(), episode(left=[4], right=[4, 9]))
-    assert SelfTouch().evaluator(training=False).episode_record() is None
+    assert SelfTouch().evaluation().evaluator(False).episode_record() is None
     behavior = SelfTouch(SelfTouchConfig(training_score_episodes=7))
-    assert behavior.run_metrics().episodes == 7
+    assert behavior.evaluation().run_metrics.episodes == 7
     with pytest.raises(ValueError, match="training_score_episodes must be at least 1"):
         SelfTouchConfig(training_score_episodes=0)
 
