@@ -13,8 +13,7 @@ from devlearn_hand_regard.detector import DetectorParams
 from fake_sitting import LEFT_ARM, RIGHT_ARM, FakeSittingInfant
 
 from devlearn.api.errors import UsageError
-from devlearn.testing import facts_of, observations_of
-from devlearn.testing.envs import BehaviorEnv
+from devlearn.testing import Play, facts_of, observations_of
 
 
 @pytest.fixture()
@@ -85,14 +84,14 @@ def test_facts_detect_hands_and_motion(behavior):
 
 
 def test_env_steps_with_rewards_and_metrics(behavior):
-    env = BehaviorEnv(behavior, seed=0, infant_factory=FakeSittingInfant)
-    obs = env.reset()
+    env = Play(behavior, infant_factory=FakeSittingInfant)
+    [obs] = env.reset()
     assert set(obs) == {"proprioception", "hands_seen"}  # the default policy: no images
     assert obs["hands_seen"].shape == (16,) and obs["hands_seen"].dtype == np.float32
     env.set_stage(stage_options(behavior, "left_arm"))
     info = None
     for _ in range(env.episode_steps):
-        obs, reward, done, _, info = env.step(np.zeros(17))
+        [(obs, reward, done, _, info)] = env.step(np.zeros(17))
     assert done and info is not None
     # Left arm stage: both eyes see the left hand every step -> 0.5 - 0.05 per step.
     assert info["reward/hand_count"] == pytest.approx(0.5 * 20)
@@ -179,8 +178,7 @@ def test_cnn_policy_sees_the_eyes(behavior):
     """The actor sees the eyes and proprioception; the default (asymmetric) critic adds the
     detector's output, which the paper's critic (``critic=same``) does without."""
     behavior.config.policy = "cnn"
-    env = BehaviorEnv(behavior, seed=0, infant_factory=FakeSittingInfant)
-    obs = env.reset()
+    [obs] = Play(behavior, infant_factory=FakeSittingInfant).reset()
     assert set(obs) == {"left_eye", "right_eye", "proprioception", "hands_seen"}
     assert behavior.network().obs_groups(list(obs))["actor"] == [
         "left_eye",
@@ -189,7 +187,7 @@ def test_cnn_policy_sees_the_eyes(behavior):
     ]
     assert obs["left_eye"].shape == (64, 64, 3) and obs["left_eye"].dtype == np.uint8
     behavior.config.critic = "same"
-    obs = BehaviorEnv(behavior, seed=0, infant_factory=FakeSittingInfant).reset()
+    [obs] = Play(behavior, infant_factory=FakeSittingInfant).reset()
     assert set(obs) == {"left_eye", "right_eye", "proprioception"}
 
 
@@ -219,15 +217,15 @@ def test_proprio_policy_sees_the_detector_output(behavior):
 
 
 def test_scene_start_and_policy_defaults_and_legacy():
-    from devlearn.testing.runs import from_dict
+    from devlearn.testing import load_saved_config
 
     behavior = HandRegard()
     assert behavior.scene == "sitting_babybench" and HandRegard.scene == "sitting_babybench"
     assert behavior.episode().infant_options == {"appearance": "mittens", "start": "babybench"}
     assert behavior.evaluation().stage == {"active_arms": ["left", "right"], "random_pose": False}
-    assert behavior.config.policy == "proprio" and HandRegard.facts_every_physics_step is False
+    assert behavior.config.policy == "proprio" and not behavior.episode().facts_every_physics_step
     # A config saved before issue #29 lacks these keys: the old scene, start, eval and network.
-    old = from_dict({"behavior": {"detector_file": "x.json"}}, HandRegard)
+    old = load_saved_config({"behavior": {"detector_file": "x.json"}}, HandRegard)
     legacy = HandRegard(old.behavior)
     assert legacy.scene == "sitting" and legacy.config.policy == "cnn"
     assert legacy.episode().infant_options["start"] == "rest"
@@ -307,7 +305,7 @@ def test_asymmetric_critic_trains_without_eye_cnns(tmp_path, detector_file):
     )
     assert cfg.network.layout == "separate"
     behavior = HandRegard(cfg.behavior)
-    obs = BehaviorEnv(behavior, seed=0, infant_factory=FakeSittingInfant).reset()
+    [obs] = Play(behavior, infant_factory=FakeSittingInfant).reset()
     assert set(obs) == {"left_eye", "right_eye", "proprioception", "hands_seen"}
     assert behavior.network().obs_groups(list(obs)) == {
         "actor": ["left_eye", "right_eye", "proprioception"],
@@ -346,8 +344,7 @@ def test_an_asymmetric_critic_with_a_shared_body_is_refused_up_front():
 def test_the_cnn_policy_trains_with_the_asymmetric_critic_unless_told_or_saved_otherwise():
     """Issue #40: ``policy=cnn`` gets the critic without eye CNNs by default; the paper preset
     keeps the paper's critic, and a config saved before the key existed loads as trained."""
-    from devlearn.testing import run_config
-    from devlearn.testing.runs import from_dict, to_dict
+    from devlearn.testing import load_saved_config, run_config, saved_config
 
     fresh = run_config(HandRegard, ["behavior.policy=cnn"])
     assert fresh.behavior.critic == "proprio"
@@ -358,9 +355,9 @@ def test_the_cnn_policy_trains_with_the_asymmetric_critic_unless_told_or_saved_o
     )
     assert groups["critic"] == ["proprioception", "hands_seen"]
     assert run_config(HandRegard, preset="paper").behavior.critic == "same"
-    saved = to_dict(fresh)
+    saved = saved_config(fresh)
     del saved["behavior"]["critic"]  # as issue #29's CNN runs saved theirs
-    assert from_dict(saved, HandRegard).behavior.critic == "same"
+    assert load_saved_config(saved, HandRegard).behavior.critic == "same"
 
 
 def test_a_detector_file_with_values_no_calibration_writes_is_one_line(tmp_path, detector_file):

@@ -13,7 +13,7 @@ from devlearn_hand_regard import HandRegard, HandRegardConfig
 
 from devlearn import build_infant
 from devlearn.api.errors import UsageError
-from devlearn.testing.envs import BehaviorEnv
+from devlearn.testing import Play
 
 RESULTS = Path(__file__).resolve().parents[3] / "results" / "hand_regard"
 
@@ -29,7 +29,9 @@ def starts(seed, episodes, sitting, detector_file, eval_start="random"):
     """Joint angles and toy positions at the start of each evaluation episode."""
     behavior = HandRegard(HandRegardConfig(eval_start=eval_start))
     behavior.config.detector_file = str(detector_file)
-    env = BehaviorEnv(behavior, seed, lambda scene, senses, **options: sitting, training=False)
+    env = Play(
+        behavior, seed=seed, infant_factory=lambda scene, senses, **options: sitting, training=False
+    )
     env.set_stage(behavior.evaluation().stage)
     toys = [g for g in range(sitting.model.ngeom) if sitting.model.geom(g).name.startswith("toy")]
     out = []
@@ -120,17 +122,16 @@ def old_run_policy(detector_file: Path) -> dict:
     config (old scene, random starts; its policy file is in git history since 2d704d9) with
     an actor of that config and the detector among its artifacts. The weights are fresh: these
     tests check the evaluation protocol, not what the policy does."""
-    from devlearn.testing import policy_file, policy_network
-    from devlearn.testing.runs import from_dict
+    from devlearn.testing import load_saved_config, policy_file, policy_network
 
     saved = json.loads((RESULTS / "run" / "config.json").read_text())
     saved["behavior"]["detector_file"] = str(detector_file)
-    cfg = from_dict(saved, HandRegard)
+    cfg = load_saved_config(saved, HandRegard)
     behavior = HandRegard(cfg.behavior)
-    env = BehaviorEnv(behavior, 0, training=False)
+    env = Play(behavior, training=False)
     try:
         env.set_stage(behavior.evaluation().stage)
-        obs = env.reset()
+        [obs] = env.reset()
         actor = policy_network(cfg, behavior, obs, env.action_dim)
     finally:
         env.close()

@@ -14,11 +14,11 @@ import devlearn
 from devlearn import EnvBatch, build_infant
 from devlearn.testing import (
     ConformanceError,
+    Play,
     check_batched_observations,
     facts_of,
     place_hand_on_body,
 )
-from devlearn.testing.envs import BehaviorEnv, make_envs, step_batch
 
 SOURCES = ("hands", "threshold", "hands_or_threshold")
 
@@ -101,11 +101,9 @@ def test_a_worker_batch_calls_facts_once_per_step():
             calls.append(len(batch))
             return super().facts(batch)
 
-    envs = make_envs(Counting(), [0, 1, 2], ScriptedInfant)
-    for env in envs:
-        env.reset()
-    for _ in range(5):
-        step_batch(envs, np.zeros((3, ScriptedInfant.action_dim)))
+    envs = Play(Counting(), 3, infant_factory=ScriptedInfant)
+    envs.reset()
+    envs.play(5)
     assert calls == [1, 1, 1] + [3] * 5  # the resets alone, then one call a step
 
 
@@ -113,33 +111,33 @@ def test_real_rollout_is_the_same_on_the_batched_and_per_env_paths():
     """Observations, rewards, dones and episode summaries of a worker's three envs (batched
     facts, observations and terms) against three envs on the per-environment path."""
     config = SelfTouchConfig(lifetime_memory="per_env")  # the reference terms are per env
-    batch = make_envs(SelfTouch(config), [0, 1, 2], None)
-    reference = [BehaviorEnv(PerEnvSelfTouch(config), seed, index=seed) for seed in range(3)]
+    batch = Play(SelfTouch(config), 3)
+    reference = [Play(PerEnvSelfTouch(config), seed=seed) for seed in range(3)]
     rng = np.random.default_rng(2)
     try:
-        for env in batch + reference:
+        for env in [batch, *reference]:
             env.set_stage({"random_pose": True})
             env.episode_steps = 60
-        for a, b in zip(batch, reference):
-            assert _same_obs(a.reset(), b.reset())
+        for a, b in zip(batch.reset(), reference):
+            assert _same_obs(a, b.reset()[0])
         paid = 0.0
         for step in range(150):
             if step % 15 == 5:
-                for a, b in zip(batch, reference):
+                for a, b in zip(batch.infants, reference):
                     state = rng.bit_generator.state
-                    place_hand_on_body(a.infant, rng)
+                    place_hand_on_body(a, rng)
                     rng.bit_generator.state = state  # the same placement for both
-                    place_hand_on_body(b.infant, rng)
-            actions = rng.uniform(-1, 1, (3, batch[0].action_dim))
-            got = step_batch(batch, actions)
-            want = [env.step(action) for env, action in zip(reference, actions)]
+                    place_hand_on_body(b.infants[0], rng)
+            actions = rng.uniform(-1, 1, (3, batch.action_dim))
+            got = batch.step(actions)
+            want = [env.step(action)[0] for env, action in zip(reference, actions)]
             for (o1, r1, d1, t1, i1), (o2, r2, d2, t2, i2) in zip(got, want):
                 assert _same_obs(o1, o2), step
                 assert (r1, d1, t1) == (r2, d2, t2) and same_info(i1, i2), step
                 paid += r1
         assert paid > 0  # touches were paid for
     finally:
-        for env in batch + reference:
+        for env in [batch, *reference]:
             env.close()
 
 
