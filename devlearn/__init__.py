@@ -18,12 +18,20 @@ from typing import TYPE_CHECKING
 from devlearn.lazy import lazy_getattr
 
 if TYPE_CHECKING:  # the same names, for type checkers (which do not run __getattr__)
+    from devlearn.api.batching import EnvBatch, per_env
     from devlearn.api.behavior import (
         Behavior,
         BehaviorConfig,
         Evaluator,
         RunMetrics,
         evaluation_stage,
+    )
+    from devlearn.api.capabilities import (
+        About,
+        Artifacts,
+        EpisodeHooks,
+        EpisodeSpec,
+        EvalProtocol,
     )
     from devlearn.api.curriculum import Curriculum, Stage
     from devlearn.api.errors import UsageError
@@ -58,6 +66,13 @@ os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 # that neither train nor evaluate (``devlearn --help``, ``plugins``, ``config``) do not pay for
 # torch; a plugin that imports only Behavior, IntrinsicReward, Curriculum... stays light too.
 _PUBLIC = {
+    "About": "devlearn.api.capabilities",
+    "Artifacts": "devlearn.api.capabilities",
+    "EnvBatch": "devlearn.api.batching",
+    "EpisodeHooks": "devlearn.api.capabilities",
+    "EpisodeSpec": "devlearn.api.capabilities",
+    "EvalProtocol": "devlearn.api.capabilities",
+    "per_env": "devlearn.api.batching",
     "BatchContext": "devlearn.api.rewards",
     "BatchedFromPerEnv": "devlearn.api.rewards",
     "BatchedIntrinsicReward": "devlearn.api.rewards",
@@ -97,6 +112,13 @@ def __dir__() -> list[str]:
 __version__ = "0.1.0"
 
 __all__ = [
+    "About",
+    "Artifacts",
+    "EnvBatch",
+    "EpisodeHooks",
+    "EpisodeSpec",
+    "EvalProtocol",
+    "per_env",
     "BatchContext",
     "BatchedFromPerEnv",
     "BatchedIntrinsicReward",

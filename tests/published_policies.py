@@ -62,7 +62,7 @@ def replay(path: Path) -> dict[str, Any]:
     registry = PluginRegistry()
     cfg = from_dict(state["config"], registry.behavior(state["behavior"]))
     behavior = registry.create(state["behavior"], cfg.behavior)
-    behavior.load_policy_artifacts(dict(state.get("artifacts") or {}), path.parent)
+    behavior.artifacts().load_policy_artifacts(dict(state.get("artifacts") or {}), path.parent)
     repeat = cfg.env.action_repeat
     env = BehaviorEnv(behavior, 0, training=False, action_repeat=repeat)
     try:

@@ -25,7 +25,7 @@ def _behavior(name: str) -> type[Behavior]:
         scene = "crib"
         config_class = _Config
 
-        def observe(self, infant, facts):
+        def observe(self, batch, facts):
             return {}
 
         def network(self):

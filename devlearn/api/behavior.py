@@ -11,6 +11,8 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
+from devlearn.api.batching import EnvBatch
+from devlearn.api.capabilities import About, Artifacts, EpisodeSpec, EvalProtocol
 from devlearn.api.curriculum import Curriculum, Stage
 from devlearn.api.errors import UsageError
 from devlearn.api.rewards import (
@@ -24,7 +26,6 @@ from devlearn.api.rewards import (
 
 if TYPE_CHECKING:
     from devlearn.api.network_spec import NetworkSpec
-    from devlearn.infant import Infant
 
 
 class Evaluator:
@@ -89,7 +90,7 @@ class Evaluator:
 
 class RunMetrics:
     """Metrics over all of a run's finished training episodes (every env, worker and rank),
-    kept by the runner: one instance per run, from :meth:`Behavior.run_metrics`.
+    kept by the runner: one instance per run, from ``Behavior.evaluation().run_metrics``.
 
     After each PPO iteration the runner passes the :meth:`Evaluator.episode_record` of every
     episode that ended in it (all ranks', in rank order) to :meth:`add`, and logs
@@ -208,48 +209,45 @@ class Behavior(ABC):
     """What the infant should learn: scene, senses, observations, rewards, curriculum, metrics.
 
     A behaviour knows nothing of rsl-rl. It is constructed from its config dataclass
-    (``config_class``) in every environment process, so it must be picklable and cheap.
-    Plugins register Behavior subclasses through the ``register_behaviors`` hook.
+    (``config_class``) in every environment process, so it must be picklable and cheap; each
+    environment owns its own instance (``self.config`` is the config it was built on). Plugins
+    register Behavior subclasses through the ``register_behaviors`` hook.
 
-    **The core** (:data:`BEHAVIOR_CORE`), what every behaviour writes: the class attributes
-    ``name``, ``scene`` and ``config_class``, and six methods, two of them abstract:
+    The whole contract is these twelve members; a behaviour writes ``name``, ``scene``,
+    ``config_class``, ``observe`` and ``network`` and whichever others it needs:
 
-    ================  ==========================================================================
-    ``facts``         per-step facts shared by observations, rewards and metrics (default: none)
-    ``observe``       the observations (abstract)
-    ``network``       the policy and value networks (abstract)
-    ``reward_terms``  the reward terms (default: those the config's ``rewards`` field declares)
-    ``curriculum``    the training stages (default: one stage)
-    ``evaluator``     the metrics collector (default: one that records nothing)
-    ================  ==========================================================================
+    ==================  =========================================================================
+    ``name``            the name on the command line (``devlearn run NAME``)
+    ``scene``           the infant's scene
+    ``config_class``    the dataclass of its options (``--set behavior.FIELD=VALUE``)
+    ``about``           what is known without building it (:class:`About`: description,
+                        headline metric, run-config defaults, presets, the paper's figures)
+    ``facts``           per-step facts of a batch of environments, shared by observations,
+                        rewards and metrics (default: none)
+    ``observe``         the observations of a batch of environments (abstract)
+    ``network``         the policy and value networks, and what actor and critic see (abstract)
+    ``reward_terms``    the reward terms (default: those the config's ``rewards`` declares)
+    ``curriculum``      the training stages (default: one stage)
+    ``episode``         the body read and the episode (:class:`EpisodeSpec`: senses, infant
+                        options, length, facts under a decision rate, :class:`EpisodeHooks`)
+    ``evaluation``      how episodes are scored (:class:`EvalProtocol`: the evaluator, run
+                        metrics, the evaluation's stage and start, the video frame)
+    ``artifacts``       one-off work before training and what a policy file carries
+                        (:class:`Artifacts`)
+    ==================  =========================================================================
 
-    **Optional capabilities** (:data:`BEHAVIOR_OPTIONAL`), each declared below with a default
-    that does nothing special, in groups:
+    Facts, observations and reward terms have one batched form, which the core calls once per
+    step for a worker's environments (:class:`~devlearn.api.batching.EnvBatch`). An author who
+    prefers to write facts and observations for one environment decorates them with
+    :func:`~devlearn.api.batching.per_env`; a reward term for one environment is an
+    :class:`~devlearn.api.rewards.IntrinsicReward` (the core wraps it in
+    :class:`~devlearn.api.rewards.BatchedFromPerEnv`). Per environment and step::
 
-    ===================  =====================================================================
-    episode              ``senses``, ``infant_options``, ``episode_seconds``,
-                         ``on_episode_start``, ``before_step``, ``process_action``,
-                         ``obs_groups``: the body a behaviour reads, how long an episode
-                         lasts, and hooks around every reset and step
-    batching             ``facts_every_physics_step``, ``batch_facts``, ``batch_observe``: how
-                         facts are computed with a decision rate and over a worker's envs
-    run settings         ``train_defaults``, ``run_length_defaults``, ``presets``,
-                         ``paper_results``: run-config values as data, and the paper's figures
-    evaluation           ``description``, ``headline_metric``, ``eval_stage``, ``eval_start``,
-                         ``run_metrics``, ``render_frame``: what ``devlearn eval``, ``report``
-                         and the progress bar show, and where evaluation episodes start
-    artifacts            ``prepare``, ``policy_artifacts``, ``load_policy_artifacts``: one-off
-                         work before training and what a policy file must carry
-    ===================  =====================================================================
-
-    Each environment owns its own copy of the behaviour and calls, per episode and step::
-
-        reset:  infant.reset(rng) -> on_episode_start(infant, rng) -> facts -> observe
-        step:   before_step(infant, action) -> process_action -> physics step -> facts
-                -> observe -> reward terms -> evaluator.record
+        reset:  infant.reset(rng) -> hooks.on_episode_start(infant, rng) -> facts -> observe
+        step:   hooks.before_step(infant, action) -> hooks.process_action -> physics step
+                -> facts -> observe -> reward terms -> evaluator.record
     """
 
-    # --- the core: what every behaviour writes ------------------------------------------------
     name: ClassVar[str]
     """Unique name used on the command line (``devlearn run NAME``)."""
 
@@ -260,6 +258,10 @@ class Behavior(ABC):
     config_class: ClassVar[type]
     """Dataclass of the behaviour's own options; every field documented. Overridable on the CLI
     as ``--set behavior.FIELD=VALUE``."""
+
+    about: ClassVar[About] = About()
+    """What is known of this behaviour without building it (:class:`About`), read from the
+    class by ``devlearn plugins``, ``config``, ``run``, ``report`` and config resolution."""
 
     def __init__(self, config: Any | None = None) -> None:
         """Build on ``config`` (the config class's defaults when None), checked: its
@@ -275,17 +277,34 @@ class Behavior(ABC):
             self.config.validate()
         check_reward_table(self.config)
 
-    def facts(self, infant: Infant) -> dict[str, Any]:
-        """Compute per-step facts shared by observations, rewards and metrics (once a step)."""
-        return {}
+    def facts(self, batch: EnvBatch) -> list[dict[str, Any]]:
+        """Per-step facts shared by observations, rewards and metrics (computed once a step).
+
+        Args:
+            batch: The environments after this step's physics (or one after its reset).
+        Returns:
+            One facts dict per environment, in batch order (default: empty ones). Row ``i``
+            depends on environment ``i`` alone: a batch gives what each environment alone
+            would (``devlearn.testing.check_batched_observations`` checks it).
+        """
+        return [{} for _ in range(len(batch))]
 
     @abstractmethod
-    def observe(self, infant: Infant, facts: dict[str, Any]) -> dict[str, np.ndarray]:
-        """Return this step's observations, name -> float32 array of a fixed shape."""
+    def observe(self, batch: EnvBatch, facts: Sequence[dict[str, Any]]) -> dict[str, np.ndarray]:
+        """This step's observations of every environment in ``batch``.
+
+        Args:
+            batch: The environments, as :meth:`facts` got them.
+            facts: Their facts, as :meth:`facts` returned them.
+        Returns:
+            Observation name -> (num_envs, *shape) float32 (or uint8 image) array, a fixed
+            shape per name.
+        """
 
     @abstractmethod
     def network(self) -> NetworkSpec:
-        """Return how to build the policy and value networks."""
+        """Return how to build the policy and value networks (and which observations the actor
+        and the critic see: :attr:`NetworkSpec.actor`, :attr:`NetworkSpec.critic`)."""
 
     def reward_terms(self) -> Sequence[IntrinsicReward | BatchedIntrinsicReward]:
         """Return fresh reward-term instances for one environment.
@@ -296,9 +315,9 @@ class Behavior(ABC):
         or swept with ``--set behavior.rewards.NAME.weight=W``. Override it to add options of
         the behaviour's own to some terms (self_touch's ``lifetime_memory``) or to leave terms
         out. A :class:`~devlearn.api.rewards.BatchedIntrinsicReward` is computed once per
-        worker over all its environments; a plain :class:`IntrinsicReward` runs in each
-        environment (the core wraps it in :class:`~devlearn.api.rewards.BatchedFromPerEnv`).
-        Both kinds may be mixed.
+        worker over all its environments; a per-environment
+        :class:`~devlearn.api.rewards.IntrinsicReward` is wrapped by the core (in one place)
+        into that form. Both kinds may be mixed.
 
         Raises:
             TypeError: The config has no ``rewards`` field and the behaviour does not override
@@ -316,259 +335,31 @@ class Behavior(ABC):
         """Return the training curriculum (default: one stage, fixed initial pose)."""
         return Curriculum([Stage("main", None, {})])
 
-    def evaluator(self, training: bool) -> Evaluator:
-        """Return a fresh metrics collector (``training=False`` for ``devlearn eval``)."""
-        return Evaluator()
+    def episode(self) -> EpisodeSpec:
+        """The body this behaviour reads and how its episodes go (:class:`EpisodeSpec`).
+        Each environment reads it once, when it is built. Default: touch, proprioception and
+        the vestibular sense, the infant's own episode length, no hooks."""
+        return EpisodeSpec()
 
-    # --- optional: episode (the body read, hooks around resets and steps) ---------------------
-    senses: ClassVar[tuple[str, ...]] = ("touch", "proprioception", "vestibular")
-    """Infant senses read: ``touch``, ``proprioception``, ``vestibular``, ``eyes``."""
+    def evaluation(self) -> EvalProtocol:
+        """How this behaviour's episodes are scored and evaluated (:class:`EvalProtocol`).
+        Default: an evaluator that records nothing, no run metrics, evaluation where the policy
+        trained."""
+        return EvalProtocol()
 
-    def infant_options(self) -> dict[str, Any]:
-        """Keyword arguments for :func:`devlearn.infant.build_infant` beyond the scene and
-        senses, e.g. ``{"appearance": "skin"}``: how the infant looks, without building it."""
-        return {}
-
-    def episode_seconds(self) -> float | None:
-        """Simulated seconds per episode (the environment converts them with the body's
-        physics step; a whole number of decisions), or None (the default): the infant's own,
-        BabyBench's 5 s. ``devlearn eval --session S`` overrides it for an evaluation."""
-        return None
-
-    def on_episode_start(self, infant: Infant, rng: np.random.Generator) -> None:
-        """Called at the start of every episode, after the infant's reset, before its first
-        :meth:`facts` (also in worker processes, and for the first episode of a new env).
-
-        Use it to reset per-episode state kept on the behaviour (e.g. the previous eye frame of
-        an optical-flow fact) and to read things from the infant once (actuator groups).
-
-        Args:
-            infant: The infant, already in the episode's initial pose.
-            rng: The environment's generator (the one that drew the initial pose); draw from it
-                for per-episode randomness so runs stay reproducible from the seed.
-        """
-
-    def before_step(self, infant: Infant, action: np.ndarray) -> None:
-        """Called before every control step, with the policy's action clipped to [-1, 1],
-        before :meth:`process_action` and the physics step.
-
-        Args:
-            infant: The infant before the step.
-            action: (action_dim,) float64, read-only use (e.g. an action-cost fact).
-        """
-
-    def process_action(self, action: np.ndarray, stage: dict[str, Any]) -> np.ndarray:
-        """Adjust a policy action before it reaches the body (e.g. zero an inactive arm).
-
-        Args:
-            action: (action_dim,) in [-1, 1].
-            stage: The active stage's options.
-        Returns:
-            (action_dim,) array.
-        """
-        return action
-
-    def obs_groups(self, observation_names: list[str]) -> dict[str, list[str]]:
-        """Map rsl-rl's observation sets (``actor``, ``critic``) to observation names."""
-        return {"actor": list(observation_names), "critic": list(observation_names)}
-
-    # --- optional: batching -------------------------------------------------------------------
-    facts_every_physics_step: ClassVar[bool] = True
-    """With a decision rate (``env.action_repeat=K``, one action held for K physics steps):
-    True (cheap facts, e.g. touch): facts, reward terms and the evaluator run at every physics
-    step and the decision's reward is their sum, exactly an env stepped K times with the same
-    action. False (facts that need renders, e.g. eye images and a detector): physics runs K
-    times, then facts, observations, reward terms and the evaluator run once, on the state the
-    decision reached, and the reward terms are paid K times (held over the decision)."""
-
-    def batch_facts(self, infants: Sequence[Infant]) -> list[dict[str, Any]]:
-        """:meth:`facts` of several environments at once, in their order.
-
-        Override it (and :meth:`batch_observe`) when per-step Python cost matters: a worker
-        then calls it once per step, on its first environment's behaviour, with all its
-        infants. An override must return, for every infant, exactly what :meth:`facts` would
-        (:func:`devlearn.testing.check_batched_observations` compares them), so it suits
-        behaviours whose facts keep no per-environment state on ``self``. Without an
-        override every environment calls its own behaviour's :meth:`facts`, as before.
-
-        Args:
-            infants: The environments' infants after this step's physics, (num_envs,).
-        Returns:
-            One facts dict per infant (default: ``[self.facts(i) for i in infants]``).
-        """
-        return [self.facts(infant) for infant in infants]
-
-    def batch_observe(
-        self, infants: Sequence[Infant], facts: Sequence[dict[str, Any]]
-    ) -> dict[str, np.ndarray]:
-        """:meth:`observe` of several environments at once, as arrays over them.
-
-        Called like :meth:`batch_facts` (once per worker step, when overridden) with its
-        result. Row ``i`` of every array must equal ``observe(infants[i], facts[i])``.
-
-        Args:
-            infants: The environments' infants, (num_envs,).
-            facts: Their facts, as :meth:`batch_facts` returned them.
-        Returns:
-            Observation name -> (num_envs, *shape) array (default: :meth:`observe` per
-            environment, stacked).
-        """
-        rows = [self.observe(infant, f) for infant, f in zip(infants, facts)]
-        return {name: np.stack([row[name] for row in rows]) for name in rows[0]}
-
-    # --- optional: run settings and the paper's figures ---------------------------------------
-    def train_defaults(self) -> dict[str, Any]:
-        """Run-config overrides this behaviour prefers, as dotted keys (``{"total_steps": 8e6}``).
-
-        Returns:
-            Mapping of dotted RunConfig keys to values.
-        """
-        return {}
-
-    def run_length_defaults(self, total_steps: int) -> dict[str, Any]:
-        """Run-config values that depend on the run's length (dotted keys), applied to a new
-        run after ``--steps`` and ``--set`` for every key that neither ``--set`` nor the preset
-        gave: e.g. stage lengths as shares of the run (hand regard: 10% left arm, 10% right
-        arm, the rest both), so that a short run goes through every stage. Default: none.
-
-        Args:
-            total_steps: The run's ``total_steps``.
-        """
-        return {}
-
-    presets: ClassVar[dict[str, dict[str, Any]]] = {}
-    """Named sets of run-config overrides (data), chosen with ``devlearn run NAME --preset P``
-    (e.g. ``{"paper": {"behavior.max_std": 0.0}}``: the paper's values one switch away from a
-    default that differs): preset name -> dotted RunConfig keys -> values. Applied over
-    :meth:`train_defaults` and under the command line's options and ``--set``; ``devlearn
-    config NAME`` lists them. Default: none."""
-
-    @classmethod
-    def paper_results(cls, config: dict[str, Any]) -> tuple[str, dict[str, float]] | None:
-        """The paper's figures a run with ``config`` (a saved config dict, as in an eval JSON)
-        is compared with: a column of ``devlearn report`` beside ours and the baselines.
-
-        Returns:
-            ``(column label, {metric: value})`` with metric names as the eval JSON's keys
-            (nested ones dotted, e.g. ``visibility.left_eye_left_hand``), or None.
-        """
-        return None
-
-    # --- optional: evaluation and display -----------------------------------------------------
-    description: ClassVar[str] = ""
-    """One line shown by ``devlearn plugins`` and ``devlearn info``."""
-
-    headline_metric: ClassVar[str] = ""
-    """Key of :meth:`Evaluator.end_episode` shown on the progress bar."""
-
-    def eval_stage(self) -> dict[str, Any] | None:
-        """The stage options of ``devlearn eval``, when the behaviour declares its evaluation
-        protocol (self-touch: random initial poses, the paper's sec. II-A6; hand regard: both
-        arms from BabyBench's start).
-
-        None (the default): evaluation starts where the policy trained, the curriculum stage
-        of the checkpoint's training steps (a baseline: the stage a default run ends in), so
-        that a policy is first judged on the skill it trained
-        (:func:`evaluation_stage`). ``devlearn eval --start random|rest|babybench`` overrides
-        the start either way, and the eval JSON records the start used."""
-        return None
-
-    def eval_start(self) -> str | None:
-        """The infant start (:data:`devlearn.infant.starts.STARTS`: ``babybench``, ``rest``)
-        ``devlearn eval`` plays episodes from when the evaluation stage does not randomise
-        the pose, e.g. hand regard's ``babybench``, BabyBench's start.
-
-        None (the default): the infant's own start, where the policy trained.
-        ``devlearn eval --start`` overrides it."""
-        return None
-
-    def run_metrics(self) -> RunMetrics | None:
-        """Return the run-wide metrics over finished training episodes (:class:`RunMetrics`),
-        or None (the default) when the behaviour keeps none."""
-        return None
-
-    def render_frame(self, infant: Infant) -> np.ndarray:
-        """One frame of ``devlearn eval --video``, (H, W, 3) uint8.
-
-        Default: the scene's third-person view (``infant.render_view()``); override to add
-        what this behaviour attends to (hand regard puts both eyes' views beside it).
-        """
-        return infant.render_view()
-
-    # --- optional: artifacts ------------------------------------------------------------------
-    def prepare(self, run_dir: Path) -> None:
-        """One-off work before training (e.g. motor babbling); may update ``self.config``.
-
-        Called in the main process once per run, before environments are built; on resume
-        it is called again and should reuse what it saved in ``run_dir``.
-        """
-
-    def policy_artifacts(self) -> dict[str, Any]:
-        """Data evaluation needs besides the policy weights (e.g. a calibrated detector).
-
-        Stored in policy files (``devlearn slim``) so that they evaluate anywhere; plain
-        dicts, lists, numbers and strings only (checkpoints load with ``weights_only``).
-        """
-        return {}
-
-    def load_policy_artifacts(self, artifacts: dict[str, Any], folder: Path) -> None:
-        """Get ready to evaluate a checkpoint: restore :meth:`policy_artifacts`' output.
-
-        Args:
-            artifacts: What the checkpoint stored (empty for a training checkpoint).
-            folder: The checkpoint's folder; files the config names resolve against it when
-                they are not where the config says (a copied or relocated run folder).
-        Raises:
-            UsageError: Something evaluation needs is neither stored nor found.
-        """
-
-
-BEHAVIOR_CORE: tuple[str, ...] = (
-    "name",
-    "scene",
-    "config_class",
-    "facts",
-    "observe",
-    "network",
-    "reward_terms",
-    "curriculum",
-    "evaluator",
-)
-"""What every behaviour writes: three class attributes and six methods (:class:`Behavior`'s
-table); ``devlearn new`` writes them first."""
-
-BEHAVIOR_OPTIONAL: dict[str, tuple[str, ...]] = {
-    "episode": (
-        "senses",
-        "infant_options",
-        "episode_seconds",
-        "on_episode_start",
-        "before_step",
-        "process_action",
-        "obs_groups",
-    ),
-    "batching": ("facts_every_physics_step", "batch_facts", "batch_observe"),
-    "run settings": ("train_defaults", "run_length_defaults", "presets", "paper_results"),
-    "evaluation": (
-        "description",
-        "headline_metric",
-        "eval_stage",
-        "eval_start",
-        "run_metrics",
-        "render_frame",
-    ),
-    "artifacts": ("prepare", "policy_artifacts", "load_policy_artifacts"),
-}
-"""The optional capabilities of :class:`Behavior` by group, each declared there with a default;
-together with :data:`BEHAVIOR_CORE` every public member of the contract, once."""
+    def artifacts(self) -> Artifacts:
+        """One-off work before training and what a policy file carries besides its weights
+        (:class:`Artifacts`). Default: none."""
+        return Artifacts()
 
 
 def evaluation_stage(behavior: Behavior, trained_steps: int) -> dict[str, Any]:
     """The stage options ``devlearn eval`` (and the conformance kit) evaluate ``behavior``
-    under: its declared :meth:`Behavior.eval_stage`, or else the options of its curriculum's
-    stage at ``trained_steps`` (where a policy trained for that many steps ended its training).
+    under: its declared ``evaluation().stage`` (:class:`EvalProtocol`), or else the options of
+    its curriculum's stage at ``trained_steps`` (where a policy trained for that many steps ended
+    its training).
     """
-    declared = behavior.eval_stage()
+    declared = behavior.evaluation().stage
     if declared is not None:
         return dict(declared)
     curriculum = behavior.curriculum()

@@ -37,6 +37,8 @@ class NetworkSpec:
             ``("proprioception",)`` whose joint velocities and torques have mixed scales.
         share: One set of encoders, fusion and trunk feeds both heads (paper: the trunk
             "feeds both policy and value heads"); False: separate actor and critic networks.
+        actor: The observations the actor sees (rsl-rl's ``actor`` set), or None: all.
+        critic: The observations the critic sees (``critic``), or None: all.
     """
 
     encoders: dict[str, SensorEncoder]
@@ -46,9 +48,20 @@ class NetworkSpec:
     max_std: float = 0.0
     normalize: tuple[str, ...] = ()
     share: bool = True
+    actor: tuple[str, ...] | None = None
+    critic: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
         check_spread(self.init_std, self.max_std)
+
+    def obs_groups(self, observation_names: list[str]) -> dict[str, list[str]]:
+        """rsl-rl's observation sets: ``actor`` and ``critic`` -> the names of
+        ``observation_names`` each sees (:attr:`actor`, :attr:`critic`), in that order."""
+
+        def seen(names: tuple[str, ...] | None) -> list[str]:
+            return [n for n in observation_names if names is None or n in names]
+
+        return {"actor": seen(self.actor), "critic": seen(self.critic)}
 
 
 def check_spread(init_std: float, max_std: float, min_std: float = 1e-3) -> None:

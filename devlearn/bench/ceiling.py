@@ -18,9 +18,9 @@ if TYPE_CHECKING:
 
 BREAKDOWN_PARTS = ("physics", "touch", "eyes", "facts", "observe", "rewards", "env")
 """Parts of an environment step: physics (``infant.step``); touch (the compiled contact routine:
-sparse touch and hand contacts); eyes (both eye renders); facts (the behaviour's ``facts()``, or
-``batch_facts()`` when it batches them, beyond those senses); observe (``observe()`` or
-``batch_observe()``, proprioception included); rewards (every reward term and the reward
+sparse touch and hand contacts); eyes (both eye renders); facts (the behaviour's ``facts()`` of
+the env as a batch of one, beyond those senses); observe (``observe()``, proprioception
+included); rewards (every reward term and the reward
 guard); env (action clipping, hooks, ``process_action``, the observation guard, per-term sums,
 the evaluator, and the episode resets, spread over the steps)."""
 
@@ -52,19 +52,16 @@ def env_breakdown(behavior: Behavior, steps: int, seed: int = 0) -> dict[str, fl
     Returns:
         Part -> ms per step, and ``total``.
     """
+    from devlearn.api.batching import EnvBatch
     from devlearn.api.rewards import StepContext
     from devlearn.env import BehaviorEnv
-    from devlearn.env.batch_advance import overrides
     from devlearn.env.behavior_env import term_values
     from devlearn.env.guards import check_observations
 
     env = BehaviorEnv(behavior, seed=seed)
     env.reset()
-    infant, behavior = env.infant, env.behavior
-    batch_facts, batch_observe = (
-        overrides(behavior, "batch_facts"),
-        overrides(behavior, "batch_observe"),
-    )
+    infant, behavior, hooks = env.infant, env.behavior, env.hooks
+    one = EnvBatch([infant], [behavior])
     senses = set(getattr(infant, "senses", ()))
     rng = np.random.default_rng(seed)
     actions = rng.uniform(-1, 1, (steps + 50, env.action_dim))
@@ -75,8 +72,8 @@ def env_breakdown(behavior: Behavior, steps: int, seed: int = 0) -> dict[str, fl
     for a in actions[50:]:
         t0 = clock()
         action = np.clip(np.asarray(a, dtype=np.float64), -1.0, 1.0)
-        behavior.before_step(infant, action)
-        processed = behavior.process_action(action, env.stage)
+        hooks.before_step(infant, action)
+        processed = hooks.process_action(action, env.stage)
         t1 = clock()
         infant.step(processed)
         t2 = clock()
@@ -88,12 +85,9 @@ def env_breakdown(behavior: Behavior, steps: int, seed: int = 0) -> dict[str, fl
         if "eyes" in senses:
             infant.eyes()
             t4 = clock()
-        facts = behavior.batch_facts([infant])[0] if batch_facts else behavior.facts(infant)
+        facts = behavior.facts(one)[0]
         t5 = clock()
-        if batch_observe:
-            obs = {k: v[0] for k, v in behavior.batch_observe([infant], [facts]).items()}
-        else:
-            obs = behavior.observe(infant, facts)
+        obs = {k: v[0] for k, v in behavior.observe(one, [facts]).items()}
         t6 = clock()
         check_observations(obs, env.index, env.episode_step + 1)
         last = env.episode_step == env.episode_steps - 1
@@ -124,18 +118,21 @@ def reference_env_steps_per_s(behavior: Behavior, steps: int) -> float:
 
 
 def with_per_env_observations(behavior: Behavior) -> Behavior:
-    """A copy of ``behavior`` on the per-environment path: its class's ``batch_facts`` and
-    ``batch_observe`` replaced by :class:`~devlearn.Behavior`'s, so every env calls ``facts``
-    and ``observe`` (the path before batched observations; in-process use only: the copy's
-    class is made here and does not pickle)."""
-    from devlearn.api.behavior import Behavior
+    """A copy of ``behavior`` on the per-environment path: its ``facts`` and ``observe`` called
+    for each env of a batch alone, as a batch of one (the path before batched observations;
+    in-process use only: the copy's class is made here and does not pickle)."""
+    from devlearn.api.batching import EnvBatch
 
     cls = type(behavior)
-    per_env = type(
-        f"PerEnv{cls.__name__}",
-        (cls,),
-        {"batch_facts": Behavior.batch_facts, "batch_observe": Behavior.batch_observe},
-    )
+
+    def facts(self: Behavior, batch: EnvBatch) -> list[dict[str, Any]]:
+        return [cls.facts(self, batch.one(i))[0] for i in range(len(batch))]
+
+    def observe(self: Behavior, batch: EnvBatch, facts: Any) -> dict[str, np.ndarray]:
+        rows = [cls.observe(self, batch.one(i), [facts[i]]) for i in range(len(batch))]
+        return {name: np.concatenate([row[name] for row in rows]) for name in rows[0]}
+
+    per_env = type(f"PerEnv{cls.__name__}", (cls,), {"facts": facts, "observe": observe})
     clone = copy.deepcopy(behavior)
     clone.__class__ = per_env
     return clone
@@ -179,20 +176,17 @@ def touch_old_and_new(steps: int, seed: int = 0) -> dict[str, Any]:
 
 
 def observations_old_and_new(behavior: Behavior, steps: int, vec_steps: int) -> dict[str, Any]:
-    """Steps/s of a behaviour that batches its facts and observations against the same
-    behaviour on the per-environment path (:func:`with_per_env_observations`), same run.
+    """Steps/s of a behaviour's batched facts and observations against the same behaviour on
+    the per-environment path (:func:`with_per_env_observations`), same run.
 
     One process, one env (``<name>_steps_per_s[_per_env_observations]``) and 16 envs stepped
     as one batch (``<name>_vec_steps_per_s_in_process[_per_env_observations]``); each figure
     is the better of two runs, old and new alternating, so that a burst of other work on the
     machine does not favour either. Also the per-env path's breakdown
-    (``<name>_breakdown_per_env_observations_ms``). Empty for a behaviour that does not batch.
+    (``<name>_breakdown_per_env_observations_ms``).
     """
     from devlearn.bench.speed import bench_behavior_env, bench_vec_env
-    from devlearn.env.batch_advance import overrides
 
-    if not (overrides(behavior, "batch_facts") or overrides(behavior, "batch_observe")):
-        return {}
     name, old = behavior.name, with_per_env_observations(behavior)
     figures: dict[str, list[float]] = {}
     for _ in range(2):

@@ -10,7 +10,7 @@ as issue #29's CNN runs did) spends it:
   ``touch`` (the compiled contact routine), ``render`` (both eyes), ``facts`` (the
   behaviour's facts beyond the senses: hand regard's detector and the hands' motion),
   ``observe``, ``rewards`` and ``env`` (bookkeeping and resets), all but the physics once per
-  decision for a behaviour whose facts render (``Behavior.facts_every_physics_step`` False),
+  decision for a behaviour whose facts render (``episode().facts_every_physics_step`` False),
   else once per physics step; and ``inference``, the actor and the critic on the batch of
   observations, as the runner acts;
 - the update, one ``alg.update()`` on a random rollout of the run's size with clocks around
@@ -120,7 +120,7 @@ def iteration_profile(
     cfg = run_config(behavior, overrides, registry)
     envs, decisions, repeat = cfg.num_envs, cfg.ppo.num_steps_per_env, cfg.env.action_repeat
     step = env_breakdown(behavior, env_steps)  # ms per physics step, part by part
-    once = repeat if behavior.facts_every_physics_step else 1
+    once = repeat if behavior.episode().facts_every_physics_step else 1
     per_decision = {"physics": repeat * step["physics"], "render": once * step["eyes"]}
     for part in ("touch", "facts", "observe", "rewards", "env"):
         per_decision[part] = once * step[part]

@@ -43,7 +43,7 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
         print(json.dumps(rows, indent=2))
         return 0
     print(f"config keys of `devlearn run {behavior_cls.name}` (override with --set KEY=VALUE)")
-    presets = behavior_cls.presets
+    presets = behavior_cls.about.presets
     for name, values in presets.items():
         shown = ", ".join(f"{k}={json.dumps(v)}" for k, v in values.items())
         print(f"preset {name} (--preset {name}): {shown}")

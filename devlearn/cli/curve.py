@@ -160,7 +160,7 @@ def run_headline(run_dir: Path, registry: PluginRegistry | None) -> str | None:
 
     try:
         name = read_json(run_dir / "config.json")["behavior_name"]
-        headline = registry.behavior(name).headline_metric if registry is not None else ""
+        headline = registry.behavior(name).about.headline_metric if registry is not None else ""
     except (OSError, ValueError, KeyError, TypeError, UsageError):
         return None
     return headline_key(headline) if headline else None

@@ -227,7 +227,7 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     )
     out_dir = Path(args.out) if args.out else default_out_dir(request)
     request = dataclasses.replace(request, out_dir=out_dir)
-    headline = registry.behavior(args.behavior).headline_metric
+    headline = registry.behavior(args.behavior).about.headline_metric
     baselines = _baselines(args.behavior, args.compare) if not args.json else {}
 
     def human(summary: dict, json_path: Path | None) -> list[str]:

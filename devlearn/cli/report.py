@@ -20,7 +20,7 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     def paper_results(behavior: str, config: dict) -> tuple[str, dict[str, float]] | None:
         if behavior not in registry.behaviors():
             return None  # its plugin is not installed: no paper column
-        return registry.behavior(behavior).paper_results(config)
+        return registry.behavior(behavior).about.paper_figures(config)
 
     def as_loaded(behavior: str, config: dict) -> dict:
         from devlearn.api.errors import UsageError
@@ -40,7 +40,7 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
     def headline(behavior: str) -> str:
         if behavior not in registry.behaviors():
             return ""  # its plugin is not installed: the protocol's headline alone
-        return registry.behavior(behavior).headline_metric
+        return registry.behavior(behavior).about.headline_metric
 
     skipped: list[str] = []
     with removed_on_failure(args.out):

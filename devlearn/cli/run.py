@@ -86,8 +86,8 @@ def run(args: argparse.Namespace, registry: PluginRegistry) -> int:
             force=args.force,
             started=started,
         )
-    budget = paper_budget(behavior_cls.presets)
-    metric = behavior_cls.headline_metric
+    budget = paper_budget(behavior_cls.about.presets)
+    metric = behavior_cls.about.headline_metric
     summary = run_summary(
         result, cfg.behavior_name, metric, cfg.total_steps, cfg.num_envs, budget, cfg.behavior
     )

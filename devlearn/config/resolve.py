@@ -182,7 +182,7 @@ def resolve_run(
     _record_source(cfg, request)
     behavior = _build_behavior(cfg, behavior_cls)
     if fresh:  # values that scale with the run's length, unless given
-        preset_keys = set(behavior_cls.presets[request.preset]) if request.preset else set()
+        preset_keys = set(behavior_cls.about.presets[request.preset]) if request.preset else set()
         _scale_to_length(cfg, behavior, preset_keys | override_keys(request.overrides))
     finish_config(cfg, behavior)
     check_config(cfg)
@@ -266,9 +266,9 @@ def _start(
 
 
 def _apply_behavior_defaults(cfg: RunConfig, behavior_cls: type[Behavior]) -> None:
-    """Apply the behaviour's ``train_defaults()`` (read from a behaviour built on the default
-    config: run settings are data) to a new run's ``cfg``."""
-    apply_overrides(cfg, behavior_cls(cfg.behavior).train_defaults())
+    """Apply the behaviour's ``about.train_defaults`` (read from its class: run settings are
+    data) to a new run's ``cfg``."""
+    apply_overrides(cfg, dict(behavior_cls.about.train_defaults))
 
 
 def _apply_preset(cfg: RunConfig, behavior_cls: type[Behavior], preset: str) -> None:
@@ -278,7 +278,7 @@ def _apply_preset(cfg: RunConfig, behavior_cls: type[Behavior], preset: str) -> 
     Raises:
         UsageError: The behaviour has no such preset (the valid ones are named).
     """
-    presets = behavior_cls.presets
+    presets = behavior_cls.about.presets
     if preset not in presets:
         raise UsageError(
             f"unknown preset '{preset}' for {behavior_cls.name}; "
@@ -310,11 +310,11 @@ def _build_behavior(cfg: RunConfig, behavior_cls: type[Behavior]) -> Behavior:
 
 
 def _scale_to_length(cfg: RunConfig, behavior: Behavior, keep: set[str]) -> None:
-    """Stage 6 of a new run: apply ``behavior.run_length_defaults(cfg.total_steps)`` (values
+    """Stage 6 of a new run: apply ``behavior.about.run_length_defaults(cfg.total_steps)`` (values
     that scale with the run's length) to ``cfg``, except the keys in ``keep`` (what ``--set``
     or the preset gave). ``behavior`` is the one built on ``cfg.behavior``, so it sees the
     values."""
-    scaled = behavior.run_length_defaults(int(cfg.total_steps))
+    scaled = behavior.about.length_defaults(int(cfg.total_steps))
     apply_overrides(cfg, {k: v for k, v in scaled.items() if k not in keep})
 
 

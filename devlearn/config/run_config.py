@@ -334,7 +334,7 @@ def finish_config(cfg: RunConfig, behavior: Behavior) -> None:
     if not cfg.network.layout:
         cfg.network.layout = "shared" if spec.share else "separate"
     if cfg.network.layout == "shared":  # one body serves one set of observations
-        groups = behavior.obs_groups(list(spec.encoders))
+        groups = spec.obs_groups(list(spec.encoders))
         if set(groups["actor"]) != set(groups["critic"]):
             raise UsageError(
                 f"{name}: network.layout=shared needs the actor and the critic to see the same "
@@ -566,7 +566,7 @@ def to_rsl_rl(cfg: RunConfig, behavior: Any, observation_names: list[str] | None
         },
         "actor": {**model, "distribution_cfg": distribution},
         "critic": dict(model),
-        "obs_groups": behavior.obs_groups(names),
+        "obs_groups": spec.obs_groups(names),
         "num_steps_per_env": num_steps,
         "save_interval": cfg.save_interval,
         "run_name": cfg.behavior_name,

@@ -1,8 +1,8 @@
 """The first half of a batched step: physics per env, then facts and observations of all envs.
 
-Facts and observations come from the behaviour's :meth:`~devlearn.Behavior.batch_facts` and
-:meth:`~devlearn.Behavior.batch_observe`, once for the batch, when its class overrides them;
-otherwise from every env's own behaviour, one env at a time, as before.
+Facts and observations come from the first env's behaviour, once for the batch
+(:meth:`~devlearn.Behavior.facts`, :meth:`~devlearn.Behavior.observe` on an
+:class:`~devlearn.api.batching.EnvBatch`): the one path, whatever form the author wrote them in.
 """
 
 from __future__ import annotations
@@ -11,24 +11,12 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from devlearn.api.batching import EnvBatch
 from devlearn.api.rewards import StepContext
 from devlearn.env.guards import check_observations, observation_within_bound
 
 if TYPE_CHECKING:
-    from devlearn.api.behavior import Behavior
     from devlearn.env.behavior_env import BehaviorEnv
-
-_OVERRIDES: dict[tuple[type, str], bool] = {}
-
-
-def overrides(behavior: Behavior, method: str) -> bool:
-    """True when ``behavior``'s class overrides :class:`~devlearn.Behavior`'s ``method``."""
-    key = (type(behavior), method)
-    if key not in _OVERRIDES:
-        from devlearn.api.behavior import Behavior  # torch comes with it: not at import time
-
-        _OVERRIDES[key] = getattr(key[0], method) is not getattr(Behavior, method)
-    return _OVERRIDES[key]
 
 
 def clipped_actions(actions: Any) -> np.ndarray | list[np.ndarray]:
@@ -42,16 +30,16 @@ def clipped_actions(actions: Any) -> np.ndarray | list[np.ndarray]:
 
 def apply_action(env: BehaviorEnv, action: np.ndarray) -> None:
     """One physics step of ``env`` under ``action`` (clipped): the env's motor noise added
-    (:meth:`~devlearn.env.behavior_env.BehaviorEnv.motor_command`), the behaviour's hooks,
-    the body's step."""
+    (:meth:`~devlearn.env.behavior_env.BehaviorEnv.motor_command`), the behaviour's episode
+    hooks, the body's step."""
     action = env.motor_command(action)
-    env.behavior.before_step(env.infant, action)
-    env.infant.step(env.behavior.process_action(action, env.stage))
+    env.hooks.before_step(env.infant, action)
+    env.infant.step(env.hooks.process_action(action, env.stage))
 
 
 def advance_batch(
     envs: list[BehaviorEnv], actions: Any
-) -> tuple[list[StepContext], dict[str, np.ndarray] | None]:
+) -> tuple[list[StepContext], dict[str, np.ndarray]]:
     """Motor noise, hooks, ``process_action`` and physics per env (:func:`apply_action`),
     then facts and observations.
 
@@ -63,27 +51,15 @@ def advance_batch(
         actions: (num_envs, action_dim) array, or one (action_dim,) action per env.
     Returns:
         ``(contexts, batch)``: one :class:`~devlearn.api.rewards.StepContext` per env (no rewards
-        yet), and the observations as name -> (num_envs, *shape) arrays when the behaviour
-        batched them (each context's observations are row views of these), else None.
+        yet), and the observations as name -> (num_envs, *shape) arrays (each context's
+        observations are row views of these).
     """
     for env, action in zip(envs, clipped_actions(actions)):
         apply_action(env, action)
-    lead = envs[0].behavior
-    infants = [env.infant for env in envs]
-    if overrides(lead, "batch_facts"):
-        facts = lead.batch_facts(infants)
-    else:
-        facts = [env.behavior.facts(env.infant) for env in envs]
-    batch = None
-    if overrides(lead, "batch_observe"):
-        batch = lead.batch_observe(infants, facts)
-        observations = [{name: a[i] for name, a in batch.items()} for i in range(len(envs))]
-        fine = all(a.dtype.kind not in "fc" or observation_within_bound(a) for a in batch.values())
-        if not fine:  # find the first env with a bad value, and name it
-            for env, obs in zip(envs, observations):
-                check_observations(obs, env.index, env.episode_step + 1)
-    else:
-        observations = [env.behavior.observe(env.infant, f) for env, f in zip(envs, facts)]
+    facts, batch = facts_and_observations(envs)
+    observations = [{name: a[i] for name, a in batch.items()} for i in range(len(envs))]
+    fine = all(a.dtype.kind not in "fc" or observation_within_bound(a) for a in batch.values())
+    if not fine:  # find the first env with a bad value, and name it
         for env, obs in zip(envs, observations):
             check_observations(obs, env.index, env.episode_step + 1)
     contexts = [
@@ -98,3 +74,14 @@ def advance_batch(
         for env, obs, f in zip(envs, observations, facts)
     ]
     return contexts, batch
+
+
+def facts_and_observations(
+    envs: list[BehaviorEnv],
+) -> tuple[list[dict[str, Any]], dict[str, np.ndarray]]:
+    """The facts (one dict per env) and the observations (name -> (num_envs, *shape) array) of
+    ``envs``, from the first env's behaviour, once for the batch."""
+    lead = envs[0].behavior
+    batch = EnvBatch([env.infant for env in envs], [env.behavior for env in envs])
+    facts = lead.facts(batch)
+    return facts, {name: np.asarray(a) for name, a in lead.observe(batch, facts).items()}

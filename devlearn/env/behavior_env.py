@@ -15,7 +15,12 @@ from devlearn.api.rewards import (
     StepContext,
     as_batched,
 )
-from devlearn.env.batch_advance import advance_batch, apply_action, clipped_actions
+from devlearn.env.batch_advance import (
+    advance_batch,
+    apply_action,
+    clipped_actions,
+    facts_and_observations,
+)
 from devlearn.env.guards import (
     REWARD_BOUND,
     check_observations,
@@ -29,20 +34,21 @@ from devlearn.timing import decision_rate_error, physics_steps
 
 if TYPE_CHECKING:
     from devlearn.api.behavior import Behavior
+    from devlearn.api.capabilities import EpisodeSpec
 
 EPISODE_RECORD = "episode_record"
 """Key of an episode summary holding :meth:`~devlearn.api.behavior.Evaluator.episode_record`
 (not a float: the runner hands it to the behaviour's :class:`~devlearn.api.behavior.RunMetrics`)."""
 
 InfantFactory = Callable[..., Any]
-"""``factory(scene, senses=..., **behavior.infant_options()) -> Infant``; defaults to
+"""``factory(scene, senses=..., **episode.infant_options) -> Infant``; defaults to
 :func:`devlearn.infant.build_infant`."""
 
 
 def build_default_infant(scene: str, senses: tuple[str, ...], **options: Any) -> Any:
     """Build the real infant (imported lazily so this module imports without it).
 
-    ``options`` are the behaviour's :meth:`~devlearn.api.behavior.Behavior.infant_options`.
+    ``options`` are the behaviour's ``episode().infant_options``.
 
     Raises:
         UsageError: ``senses`` include the eyes and ``MUJOCO_GL`` names no backend.
@@ -74,9 +80,9 @@ class BehaviorEnv:
     Args:
         behavior: The behaviour (this env's own instance; it may keep per-env state).
         seed: Seed of this env's numpy Generator (initial poses).
-        infant_factory: ``factory(scene, senses=..., **behavior.infant_options()) -> Infant``;
+        infant_factory: ``factory(scene, senses=..., **episode.infant_options) -> Infant``;
             tests pass a fake one.
-        training: Passed to ``behavior.evaluator`` (False for ``devlearn eval``).
+        training: Passed to the behaviour's evaluator factory (False for ``devlearn eval``).
         index: This env's index on its rank (named by the reward and observation guards).
         action_repeat: Shorthand for ``settings=EnvSettings(action_repeat)``; not with
             ``settings``.
@@ -101,6 +107,9 @@ class BehaviorEnv:
         self.settings = env_settings(settings, action_repeat)
         """The run's settled env settings (the decision rate)."""
         self.behavior = behavior
+        self.episode = behavior.episode()
+        """The behaviour's :class:`~devlearn.api.capabilities.EpisodeSpec`, read once."""
+        self.hooks = self.episode.hooks
         self.index = index
         self._factory = infant_factory or build_default_infant
         self.age_months = age_months
@@ -113,10 +122,10 @@ class BehaviorEnv:
             term.bind(1)
         self.batch_index = 0
         """This env's index in its batched terms' arrays."""
-        self.evaluator = behavior.evaluator(training=training)
+        self.evaluator = behavior.evaluation().evaluator(training)
         self.stage: dict[str, Any] = dict(behavior.curriculum().stage.options)
         self.action_dim = int(self.infant.action_dim)
-        self.episode_steps = episode_length(self.infant, behavior, self.settings)
+        self.episode_steps = episode_length(self.infant, self.episode, self.settings, behavior.name)
         """Physics steps per episode (:func:`episode_length`)."""
         self.step_dt = float(self.infant.control_timestep)
         self.motor_noise: PowerLawNoise | None = None
@@ -156,10 +165,10 @@ class BehaviorEnv:
         return self.settings.action_repeat
 
     def _build_infant(self) -> Any:
-        options = self.behavior.infant_options()
+        options = dict(self.episode.infant_options)
         if self.age_months is not None:
             options["age_months"] = self.age_months
-        return self._factory(self.behavior.scene, senses=tuple(self.behavior.senses), **options)
+        return self._factory(self.behavior.scene, senses=tuple(self.episode.senses), **options)
 
     def set_age(self, age_months: float | None) -> None:
         """Rebuild the infant's physics at ``age_months`` without ending the episode: the new
@@ -177,12 +186,13 @@ class BehaviorEnv:
     def reset(self) -> dict[str, np.ndarray]:
         """Start a new episode; return its first observations (name -> array)."""
         self.infant.reset(self.rng, random_pose=bool(self.stage.get("random_pose", False)))
-        self.behavior.on_episode_start(self.infant, self.rng)
+        self.hooks.on_episode_start(self.infant, self.rng)
         for term in self.terms:
             term.reset(self.batch_index)
         self.episode_step = 0
         self._sums = {term.name: 0.0 for term in self.terms}
-        obs = self.behavior.observe(self.infant, self.behavior.facts(self.infant))
+        _, batch = facts_and_observations([self])
+        obs = {name: array[0] for name, array in batch.items()}
         check_observations(obs, self.index, 0)
         return obs
 
@@ -349,17 +359,17 @@ def term_values(envs: list[BehaviorEnv], contexts: list[StepContext]) -> np.ndar
     return weights * raw
 
 
-def episode_length(infant: Any, behavior: Behavior, settings: EnvSettings) -> int:
+def episode_length(infant: Any, episode: EpisodeSpec, settings: EnvSettings, name: str) -> int:
     """Physics steps per episode: ``settings.episode_seconds`` (an evaluation's session), else
-    the behaviour's :meth:`~devlearn.api.behavior.Behavior.episode_seconds`, converted with
-    the body's physics step, else the infant's own ``episode_steps`` (5 s).
+    the behaviour's ``episode().seconds`` (:class:`~devlearn.api.capabilities.EpisodeSpec`),
+    converted with the body's physics step, else the infant's own ``episode_steps`` (5 s).
 
     Raises:
         UsageError: The seconds are not a whole number of physics steps (one line).
     """
     seconds, whose = settings.episode_seconds, "the evaluation's session"
     if seconds is None:
-        seconds, whose = behavior.episode_seconds(), f"{type(behavior).name}'s episode_seconds()"
+        seconds, whose = episode.seconds, f"{name}'s episode().seconds"
     if seconds is None:
         return int(infant.episode_steps)
     try:
@@ -389,7 +399,7 @@ def step_batch(
 ) -> list[tuple]:
     """One decision of ``envs``: ``action_repeat`` physics steps with ``actions[i]`` held.
 
-    With ``Behavior.facts_every_physics_step`` (the default) this is :func:`step_physics`
+    With ``episode().facts_every_physics_step`` (the default) this is :func:`step_physics`
     ``action_repeat`` times, the rewards summed; otherwise physics runs ``action_repeat - 1``
     times bare, then one :func:`step_physics` computes facts, observations, rewards (paid
     ``action_repeat`` times) and the evaluator's record. Envs step in lockstep (their episodes
@@ -404,7 +414,7 @@ def step_batch(
     repeat = envs[0].action_repeat
     if repeat == 1:
         return step_physics(envs, actions, obs_out)
-    if not envs[0].behavior.facts_every_physics_step:
+    if not envs[0].episode.facts_every_physics_step:
         for _ in range(repeat - 1):
             for env, action in zip(envs, clipped_actions(actions)):
                 apply_action(env, action)
@@ -424,7 +434,7 @@ def step_physics(
     paid: int = 1,
 ) -> list[tuple]:
     """Step ``envs`` one physics step with ``actions[i]`` each: physics per env, facts and
-    observations (batched when the behaviour batches them), every reward term (batched ones
+    observations (once for the batch), every reward term (batched ones
     once for all, each value paid ``paid`` times), then each env's bookkeeping and auto-reset.
 
     Args:
@@ -437,7 +447,7 @@ def step_physics(
     """
     contexts, batch = advance_batch(envs, actions)
     values = term_values(envs, contexts)
-    if obs_out is not None and batch is not None:
+    if obs_out is not None:
         for name, array in batch.items():  # the whole batch at once; resets overwrite rows
             obs_out[name][...] = array
     # every env's column as Python floats in one call (not a view and tolist() per env)
@@ -445,7 +455,7 @@ def step_physics(
     results = [env.finish(ctx, column, paid) for env, ctx, column in zip(envs, contexts, columns)]
     if obs_out is not None:
         for i, (obs, _, done, _, _) in enumerate(results):
-            if batch is None or done:
+            if done:
                 for name, value in obs.items():
                     obs_out[name][i] = value
     return results

@@ -74,7 +74,7 @@ class DevVecEnv(VecEnv):
         if num_envs < 1:
             raise ValueError(f"num_envs must be at least 1, got {num_envs}")
         if infant_factory is None:  # the real infant, rendered in worker processes too
-            check_senses_render(behavior.senses, behavior.name)
+            check_senses_render(behavior.episode().senses, behavior.name)
         rank = int(os.environ.get("RANK", "0")) if rank is None else rank
         seeds = [seed + rank * num_envs + i for i in range(num_envs)]
         self.settings = env_settings(settings, action_repeat)

@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from devlearn.api.batching import EnvBatch
 from devlearn.api.behavior import Behavior
 
 if TYPE_CHECKING:
@@ -20,7 +21,7 @@ def describe_behavior(
 
     Args:
         behavior: A behaviour instance (its default config is fine).
-        infant_factory: Optional ``(scene, senses, **behavior.infant_options()) -> Infant``
+        infant_factory: Optional ``(scene, senses, **episode.infant_options) -> Infant``
             replacement for tests.
         action_repeat: Physics steps per policy decision of the run described
             (``env.action_repeat``).
@@ -33,36 +34,39 @@ def describe_behavior(
         the action repeat), ``episode_steps`` (physics steps), ``reward_terms`` and
         ``curriculum``.
     """
+    episode = behavior.episode()
     if infant_factory is None:
         from devlearn.infant import build_infant
 
         # The numpy references of the compiled senses: the same shapes, and describing compiles
         # nothing (no numba import, no kernel load: `devlearn info` starts in about a second).
         infant = build_infant(
-            behavior.scene, senses=behavior.senses, compiled=False, **behavior.infant_options()
+            behavior.scene, senses=episode.senses, compiled=False, **episode.infant_options
         )
     else:
-        infant = infant_factory(behavior.scene, behavior.senses, **behavior.infant_options())
+        infant = infant_factory(behavior.scene, episode.senses, **episode.infant_options)
     try:
         rng = np.random.default_rng(0)
         infant.reset(rng, random_pose=False)
-        behavior.on_episode_start(infant, rng)
+        episode.hooks.on_episode_start(infant, rng)
         # Shapes only: warnings about what an unprepared behaviour would perceive or learn
         # (hand regard's uncalibrated detector) do not change them, so they are not shown.
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", UserWarning)
-            observations = behavior.observe(infant, behavior.facts(infant))
+            one = EnvBatch([infant], [behavior])
+            batch = behavior.observe(one, behavior.facts(one))
+        observations = {name: np.asarray(array)[0] for name, array in batch.items()}
         body = infant.describe()
     finally:
         infant.close()
     curriculum = behavior.curriculum()
     return {
         "behavior": behavior.name,
-        "description": behavior.description,
+        "description": behavior.about.description,
         "scene": behavior.scene,
-        "senses": list(behavior.senses),
+        "senses": list(episode.senses),
         "observations": {k: list(np.shape(v)) for k, v in observations.items()},
-        "obs_groups": behavior.obs_groups(list(observations)),
+        "obs_groups": behavior.network().obs_groups(list(observations)),
         "action_dim": int(body["action_dim"]),
         "touch_sensors": int(body["touch_sensors"]),
         "skin_regions": int(body["skin_regions"]),

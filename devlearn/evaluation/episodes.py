@@ -189,7 +189,7 @@ def play(
     filmed = next((s for s in slots if s.first == 0), None) if plan.video else None
     film = Film(plan.video) if plan.video is not None and filmed is not None else None
     if filmed is not None:  # this process plays episode 0
-        frame = partial(filmed.env.behavior.render_frame, filmed.env.infant)
+        frame = partial(filmed.env.behavior.evaluation().frame, filmed.env.infant)
     try:
         while playing := [s for s in slots if s.left]:
             batch = [s.env for s in playing]

@@ -461,12 +461,12 @@ def evaluation_conditions(
     elif not stage.get("random_pose"):
         # a behaviour may evaluate from another start than it trains from (hand regard's
         # eval_start); the infant was built with the training start
-        infant_start = behavior.eval_start()
+        infant_start = behavior.evaluation().start
     envs, workers = parallelism(
         request.episodes,
         request.envs,
         request.workers,
-        behavior.evaluator(training=False).mergeable,
+        behavior.evaluation().evaluator(False).mergeable,
         cores,
     )
     settings = EnvSettings.of(subject.config.env, request.session)  # the body's motor noise too
@@ -526,7 +526,7 @@ class Evaluation:
         out = prepare_out_dir(request.out_dir) if request.out_dir is not None else None
         subject = open_subject(request, self.registry)
         if self.infant_factory is None:  # before any env or worker renders
-            check_senses_render(subject.behavior.senses, subject.behavior.name)
+            check_senses_render(subject.behavior.episode().senses, subject.behavior.name)
         torch.manual_seed(request.seed)
         threads = torch.get_num_threads()
         # A batch of one gains nothing from more threads, and several threads on a core that
@@ -549,7 +549,7 @@ class Evaluation:
             evaluator, episode_metrics, started = merged_results(results)
             video_error = next((r.video_error for r in results if r.video_error), None)
             summary = self.measures(subject, conditions, evaluator, started)
-            per_episode_headline(summary, episode_metrics, subject.behavior.headline_metric)
+            per_episode_headline(summary, episode_metrics, subject.behavior.about.headline_metric)
             policy_figures(summary, episode_metrics)
             summary["execution"] = {
                 "envs": conditions.envs,

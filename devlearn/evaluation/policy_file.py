@@ -44,7 +44,7 @@ def slim_checkpoint(
     actor_on_one_observation(opened)  # a file eval would refuse is not written
     slim = {"format": FORMAT, "policy_only": True}
     slim.update({k: state[k] for k in KEPT if k in state})
-    slim["artifacts"] = opened.behavior().policy_artifacts()
+    slim["artifacts"] = opened.behavior().artifacts().policy_artifacts()
     target.parent.mkdir(parents=True, exist_ok=True)
     save_atomic(slim, target)
     return slim

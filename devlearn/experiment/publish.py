@@ -204,7 +204,7 @@ def publish_experiment(
             f"{EXPERIMENT_COPY}); give the OUT of devlearn experiment run"
         )
     spec = read_experiment(out / EXPERIMENT_COPY)
-    headline = registry.behavior(spec.behavior).headline_metric
+    headline = registry.behavior(spec.behavior).about.headline_metric
     _check_dest(out, dest)
     staging = dest.parent / f".{dest.name}.publishing-{os.getpid()}"
     shutil.rmtree(staging, ignore_errors=True)

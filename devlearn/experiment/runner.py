@@ -174,7 +174,7 @@ def run_experiment(
             f"{str(folder.commit)[:12]} (each run's record keeps the commit of every command)",
             file=stream,
         )
-    headline = registry.behavior(spec.behavior).headline_metric
+    headline = registry.behavior(spec.behavior).about.headline_metric
     progress = Progress(len(plan.runs), headline, stream)
     try:
         totals = {run.job.name: run.total_steps for run in plan.runs}

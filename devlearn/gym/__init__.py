@@ -157,7 +157,7 @@ def save_policy(
         config=to_dict(base.setup.config),
         env_steps=steps,
         learner=learner,
-        artifacts=base.setup.behavior.policy_artifacts(),
+        artifacts=base.setup.behavior.artifacts().policy_artifacts(),
     )
 
 

@@ -118,7 +118,7 @@ class RunSetup:
         else:
             self.folder = self._temporary = Path(tempfile.mkdtemp(prefix=f"devlearn-{behavior}-"))
         try:
-            self.behavior.prepare(self.folder)
+            self.behavior.artifacts().prepare(self.folder)
         except BaseException:
             self.close()
             raise

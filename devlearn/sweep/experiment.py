@@ -173,7 +173,7 @@ def run_sweep(
     except BaseException:
         executor.close()
         raise
-    headline = registry.behavior(spec.behavior).headline_metric
+    headline = registry.behavior(spec.behavior).about.headline_metric
     print(
         f"sweep {spec.out}: {len(runs)} runs of {spec.behavior}, {executor.describe()}", file=stream
     )

@@ -16,19 +16,23 @@ and the vector env, :mod:`devlearn.gym`): ``check_gymnasium(MyBehavior)``.
 and :func:`registry_for` to build a plugin registry from classes, without installing anything
 (:class:`PluginRegistry`: the installed plugins').
 :func:`place_hand_on_body` poses an infant with a hand on its body (a scripted contact), and
-:func:`random_transitions` gives a learned reward a batch to train on.
+:func:`random_transitions` gives a learned reward a batch to train on. :func:`facts_of` and
+:func:`observations_of` give one environment's facts and observations as the core computes
+them (a batch of one).
 Fixtures ``crib_infant`` and ``sitting_infant`` (module-scoped) are available after
 ``from devlearn.testing import crib_infant, sitting_infant`` in a ``conftest.py``.
 
-Runs through the core for a plugin's tests (:mod:`~devlearn.testing.runs`): :func:`run_config`
-(a run's config, resolved and checked as ``devlearn run``'s), :func:`train`,
+Behaviour-level verbs (:mod:`~devlearn.testing.verbs`, :mod:`~devlearn.testing.runs`): play a
+behaviour's environments as training plays them (:class:`Play`: ``reset``, ``step``,
+``play(N)``, ``term_values``, ``state``/``load_state``, ``sync_run_memory``), the facts and
+observations of one environment (:func:`facts_of`, :func:`observations_of`), a config's round
+trip (:func:`run_config`, resolved and checked as ``devlearn run``'s; :func:`saved_config`,
+:func:`load_saved_config`, :func:`config_round_trip`), a tiny run (:func:`train`,
 :func:`load_checkpoint`, :func:`save_checkpoint`, :func:`policy_network`, :func:`policy_file`,
-:func:`evaluate_policy`, :func:`open_scripted_policy` and :func:`run_command` (``devlearn
-ARGS`` in a new process); saved configs as runs read them (``devlearn.testing.runs``:
-``from_dict``, ``to_dict``, ``load_run_config``); a behaviour's envs as training steps them
-(:mod:`~devlearn.testing.envs`: ``BehaviorEnv``, ``make_envs``, ``step_batch``,
-``DevVecEnv``...). Plugin tests import only ``devlearn``, ``devlearn.api`` and
-``devlearn.testing`` (checked by ``tests/testing/test_plugin_test_imports.py``).
+:func:`evaluate_policy`, :func:`open_scripted_policy`, :func:`run_command`: ``devlearn ARGS``
+in a new process). Plugin tests import only ``devlearn``, ``devlearn.api`` and the names
+``devlearn.testing`` exports (checked by ``tests/testing/test_plugin_test_imports.py`` and
+``tests/testing/test_kit_names.py``): no core internals.
 
 For trainings in seconds without MuJoCo: :class:`FakeInfant` (a point moved by its actions, with
 faults on demand) through :func:`fake_infant_factory`, the tiny behaviour that learns on it
@@ -38,9 +42,9 @@ of the episode hooks devlearn calls.
 Modules: :mod:`~devlearn.testing.behavior` (the behaviour check), :mod:`~devlearn.testing.gym_env`
 (the Gymnasium check), :mod:`~devlearn.testing.learned`
 (the learned-reward check), :mod:`~devlearn.testing.values` (value checks and
-:class:`ConformanceError`), :mod:`~devlearn.testing.fixtures`,
+:class:`ConformanceError`), :mod:`~devlearn.testing.verbs`, :mod:`~devlearn.testing.fixtures`,
 :mod:`~devlearn.testing.fake_infant`, :mod:`~devlearn.testing.hook_tracker`,
-:mod:`~devlearn.testing.runs`, :mod:`~devlearn.testing.envs`.
+:mod:`~devlearn.testing.runs`.
 """
 
 from __future__ import annotations
@@ -58,30 +62,45 @@ from devlearn.testing.behavior import (
     place_hand_on_body,
 )
 from devlearn.testing.fake_infant import FakeInfant, TinyBehavior, TinyConfig, fake_infant_factory
-from devlearn.testing.fixtures import PluginRegistry, crib_infant, registry_for, sitting_infant
+from devlearn.testing.fixtures import (
+    SKIN_RGBA,
+    TOY_COLOURS,
+    PluginRegistry,
+    crib_infant,
+    registry_for,
+    sitting_infant,
+)
 from devlearn.testing.gym_env import check_gymnasium
 from devlearn.testing.hook_tracker import HookTracker
 from devlearn.testing.learned import check_learned_reward, random_transitions
 from devlearn.testing.runs import (
     CommandResult,
+    config_round_trip,
     evaluate_policy,
     load_checkpoint,
+    load_saved_config,
     open_scripted_policy,
     policy_file,
     policy_network,
     run_command,
     run_config,
     save_checkpoint,
+    saved_config,
     train,
 )
 from devlearn.testing.values import ConformanceError
+from devlearn.testing.verbs import EPISODE_RECORD, Play, facts_of, observations_of
 
 __all__ = [
+    "EPISODE_RECORD",
     "CommandResult",
     "ConformanceError",
     "FakeInfant",
     "HookTracker",
+    "Play",
     "PluginRegistry",
+    "SKIN_RGBA",
+    "TOY_COLOURS",
     "TinyBehavior",
     "TinyConfig",
     "check_batched_observations",
@@ -95,10 +114,14 @@ __all__ = [
     "check_learned_reward",
     "check_network",
     "check_reward_terms",
+    "config_round_trip",
     "crib_infant",
     "evaluate_policy",
+    "facts_of",
     "fake_infant_factory",
     "load_checkpoint",
+    "load_saved_config",
+    "observations_of",
     "open_scripted_policy",
     "place_hand_on_body",
     "policy_file",
@@ -108,6 +131,7 @@ __all__ = [
     "run_command",
     "run_config",
     "save_checkpoint",
+    "saved_config",
     "sitting_infant",
     "train",
 ]

@@ -4,6 +4,7 @@ and evaluator checked (the instrumented wrappers are at the end of this module).
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import difflib
 import json
@@ -15,13 +16,9 @@ import mujoco
 import numpy as np
 import torch
 
-from devlearn.api.behavior import (
-    BEHAVIOR_CORE,
-    BEHAVIOR_OPTIONAL,
-    Behavior,
-    Evaluator,
-    evaluation_stage,
-)
+from devlearn.api.batching import EnvBatch
+from devlearn.api.behavior import Behavior, Evaluator, evaluation_stage
+from devlearn.api.capabilities import About, Artifacts, EpisodeHooks, EpisodeSpec, EvalProtocol
 from devlearn.api.curriculum import Curriculum
 from devlearn.api.network_spec import NetworkSpec
 from devlearn.api.rewards import BatchedFromPerEnv, BatchedIntrinsicReward, IntrinsicReward
@@ -40,49 +37,63 @@ from devlearn.testing.values import (
 
 def check_behavior_class(behavior_cls: type[Behavior]) -> None:
     """Check the class-level contract: name, scene, senses, config dataclass, docstrings, the
-    contract's members as declared (:func:`check_contract_members`), a picklable instance and
-    its declared evaluation start."""
+    composed capabilities of their declared types (:func:`check_contract_members`), a
+    picklable instance and its declared evaluation start."""
     name = getattr(behavior_cls, "name", None)
     require(isinstance(name, str) and name.isidentifier(), "Behavior.name must be an identifier")
     require(
         behavior_cls.scene in ("crib", "sitting", "sitting_babybench"),
         "Behavior.scene must be crib, sitting or sitting_babybench",
     )
-    valid = {"touch", "proprioception", "vestibular", "eyes"}
-    require(set(behavior_cls.senses) <= valid, f"Behavior.senses must be within {sorted(valid)}")
     require(dataclasses.is_dataclass(behavior_cls.config_class), "config_class: a dataclass")
     require(bool(behavior_cls.__doc__), f"{behavior_cls.__name__} needs a docstring")
     check_contract_members(behavior_cls)
     config = behavior_cls.config_class()
     behavior = behavior_cls(config)
+    valid = {"touch", "proprioception", "vestibular", "eyes"}
+    senses = behavior.episode().senses
+    require(set(senses) <= valid, f"episode().senses must be within {sorted(valid)}")
     check_picklable(behavior, f"behavior '{name}'")  # travels to worker processes
-    start = behavior.eval_start()
+    start = behavior.evaluation().start
     require(
         start is None or start in STARTS,
-        f"eval_start() must return None or one of {', '.join(STARTS)}, got {start!r}",
+        f"evaluation().start must be None or one of {', '.join(STARTS)}, got {start!r}",
     )
 
 
 def check_contract_members(behavior_cls: type[Behavior]) -> None:
-    """Check that ``behavior_cls`` writes the members of the Behavior contract
-    (:data:`~devlearn.api.behavior.BEHAVIOR_CORE`, :data:`~devlearn.api.behavior.BEHAVIOR_OPTIONAL`)
-    as declared (a method as a method), and that none of its own methods misspells one: the
-    contract's default would then run instead, silently (``eval_starts`` for ``eval_start``)."""
-    contract = [*BEHAVIOR_CORE, *(n for names in BEHAVIOR_OPTIONAL.values() for n in names)]
-    for name in contract:
-        declared = getattr(Behavior, name, None)  # None: an annotation (name, config_class)
-        written_method = callable(getattr(behavior_cls, name, None))
-        if callable(declared):
-            require(
-                written_method,
-                f"{behavior_cls.__name__}.{name} must be a method, as Behavior declares it",
-            )
-        elif declared is not None:  # data (presets, a dict): a method would be read as data
-            require(
-                not written_method,
-                f"{behavior_cls.__name__}.{name} must be a value, not a method, as Behavior "
-                f"declares it (e.g. presets = {{'paper': {{...}}}})",
-            )
+    """Check that ``behavior_cls`` writes the members of the Behavior contract as declared:
+    ``about`` an :class:`~devlearn.api.capabilities.About`, and ``episode()``,
+    ``evaluation()`` and ``artifacts()`` methods returning an
+    :class:`~devlearn.api.capabilities.EpisodeSpec`, an
+    :class:`~devlearn.api.capabilities.EvalProtocol` and an
+    :class:`~devlearn.api.capabilities.Artifacts`."""
+    cls = behavior_cls.__name__
+    require(
+        isinstance(behavior_cls.about, About),
+        f"{cls}.about must be a devlearn.About (description, headline_metric, presets...), "
+        f"got {type(behavior_cls.about).__name__}",
+    )
+    for member in ("facts", "observe", "network", "reward_terms", "curriculum"):
+        require(callable(getattr(behavior_cls, member)), f"{cls}.{member} must be a method")
+    behavior = behavior_cls(behavior_cls.config_class())
+    for member, kind in (
+        ("episode", EpisodeSpec),
+        ("evaluation", EvalProtocol),
+        ("artifacts", Artifacts),
+    ):
+        method = getattr(behavior_cls, member)
+        require(callable(method), f"{cls}.{member} must be a method, as Behavior declares it")
+        got = getattr(behavior, member)()
+        require(
+            isinstance(got, kind),
+            f"{cls}.{member}() must return a devlearn.{kind.__name__}, got {type(got).__name__}",
+        )
+    require(
+        isinstance(behavior.episode().hooks, EpisodeHooks),
+        f"{cls}.episode().hooks must be a devlearn.EpisodeHooks",
+    )
+    contract = contract_members()
     own = {
         name
         for klass in behavior_cls.__mro__[: behavior_cls.__mro__.index(Behavior)]
@@ -93,9 +104,16 @@ def check_contract_members(behavior_cls: type[Behavior]) -> None:
         near = difflib.get_close_matches(name, contract, n=1, cutoff=0.85)
         require(
             not near,
-            f"{behavior_cls.__name__}.{name} is no member of the Behavior contract: did you "
-            f"mean {near[0] if near else ''}? (its default runs instead)",
+            f"{cls}.{name} is no member of the Behavior contract: did you mean "
+            f"{near[0] if near else ''}? (its default runs instead)",
         )
+
+
+def contract_members() -> list[str]:
+    """The public members :class:`~devlearn.api.behavior.Behavior` itself defines (methods,
+    class attributes and annotated attributes): the whole contract, read from the class."""
+    names = set(vars(Behavior)) | set(Behavior.__annotations__)
+    return sorted(name for name in names if not name.startswith("_"))
 
 
 def check_evaluator_class(evaluator: Any, label: str) -> None:
@@ -196,9 +214,9 @@ def check_behavior(
     implemented (:func:`check_evaluator_class`); an evaluation
     evaluator that merges (``Evaluator.merge``, for ``devlearn eval --envs N``) must merge
     evaluators of single episodes into the summary of one that saw them all
-    (:func:`check_evaluator_merge`). A behaviour that
-    batches its facts or observations (``batch_facts``, ``batch_observe``) must give on every
-    step exactly what ``facts`` and ``observe`` give (:func:`check_batched_observations`).
+    (:func:`check_evaluator_merge`). On the random-action steps a batch must give every
+    environment exactly the facts and observations it gives alone
+    (:func:`check_batched_observations`).
 
     Args:
         behavior_cls: The Behavior subclass.
@@ -217,12 +235,11 @@ def check_behavior(
     from pathlib import Path
 
     from devlearn.env import BehaviorEnv
-    from devlearn.env.batch_advance import overrides
 
     check_behavior_class(behavior_cls)
     behavior = behavior_cls(config if config is not None else behavior_cls.config_class())
     for training, label in ((True, "training"), (False, "evaluation")):
-        check_evaluator_class(behavior.evaluator(training), label)
+        check_evaluator_class(behavior.evaluation().evaluator(training), label)
     check_reward_terms(behavior.reward_terms())
     curriculum = behavior.curriculum()
     check_curriculum(curriculum)
@@ -232,18 +249,18 @@ def check_behavior(
         env.terms = checked_terms(env.terms, phase)
         checked = CheckedEvaluator(
             env.evaluator,
-            behavior.evaluator(training=False),
+            behavior.evaluation().evaluator(False),
             phase,
-            fresh=lambda: behavior.evaluator(training=False),
+            fresh=lambda: behavior.evaluation().evaluator(False),
         )
         env.evaluator = checked  # records in both, and checks what they return
         env.episode_steps = max(1, min(env.episode_steps, episode_steps))
         first = env.reset()
         shapes = check_observations(first, None, "after reset")
-        check_network(behavior.network(), first, behavior.obs_groups(list(shapes)))
+        spec = behavior.network()
+        check_network(spec, first, spec.obs_groups(list(shapes)))
         rng = np.random.default_rng(seed)
-
-        batches = overrides(behavior, "batch_facts") or overrides(behavior, "batch_observe")
+        batches = [steps]  # the random-action steps compare batched and lone observations
 
         def step(action: np.ndarray, where: str) -> bool:
             phase[0] = where
@@ -255,8 +272,9 @@ def check_behavior(
                 raise
             check_number(reward, "the summed reward", where)
             check_observations(obs, shapes, where)
-            if batches:
-                check_batched_observations(env.behavior, [env.infant], where)
+            if batches[0] > 0:  # a batch of the env twice gives each row what it gives alone
+                batches[0] -= 1
+                check_batched_observations(env.behavior, [env.infant, env.infant], where)
             return done
 
         for _ in range(steps):
@@ -347,43 +365,53 @@ def check_observations(
 
 
 def check_batched_observations(behavior: Any, infants: list[Any], where: str = "") -> None:
-    """Require ``batch_facts`` / ``batch_observe`` to give, for every infant, exactly (bit for
-    bit) what ``facts`` / ``observe`` give for it alone.
+    """Require a batch of environments to give every environment exactly (bit for bit) the
+    facts and observations it gives alone, as a batch of one: what a worker of several envs
+    computes must not depend on its other envs or on how runs split envs over workers.
+
+    Each environment gets its own copy of ``behavior`` (as each env owns its behaviour), the
+    same copies' state for both, so the check leaves ``behavior`` as it was.
 
     Args:
-        behavior: The behaviour (one instance serves every infant, as in a worker).
+        behavior: The behaviour (in the state of the step to compare).
         infants: Infants in the states to compare (after a step or a reset).
         where: Which phase of the check this is, for messages.
     """
     n = len(infants)
-    per_env = [behavior.facts(infant) for infant in infants]
-    batched = behavior.batch_facts(infants)
+    alone = [copy.deepcopy(behavior) for _ in infants]
+    want_facts = [b.facts(EnvBatch([i], [b]))[0] for b, i in zip(alone, infants)]
+    alone = [copy.deepcopy(behavior) for _ in infants]
+    want_obs = [b.observe(EnvBatch([i], [b]), [f]) for b, i, f in zip(alone, infants, want_facts)]
+    together = [copy.deepcopy(behavior) for _ in infants]
+    batch = EnvBatch(list(infants), together)
+    batched = together[0].facts(batch)
     require(
         isinstance(batched, list) and len(batched) == n,
-        f"batch_facts() must return a list of {n} facts dicts, one per infant {where}",
+        f"facts() must return a list of {n} facts dicts, one per environment {where}",
     )
-    for i, (got, want) in enumerate(zip(batched, per_env)):
+    for i, (got, want) in enumerate(zip(batched, want_facts)):
         require(
             set(got) == set(want),
-            f"batch_facts()[{i}] has facts {sorted(got)}, facts() {sorted(want)} {where}",
+            f"facts()[{i}] has facts {sorted(got)}, environment {i} alone {sorted(want)} {where}",
         )
         for key, value in want.items():
             require(
                 _identical(got[key], value),
-                f"batch_facts()[{i}]['{key}'] differs from facts()['{key}'] {where}",
+                f"facts()[{i}]['{key}'] of a batch differs from environment {i}'s alone {where}",
             )
-    observed = behavior.batch_observe(infants, batched)
-    for i, (infant, facts) in enumerate(zip(infants, per_env)):
-        want = behavior.observe(infant, facts)
+    together = [copy.deepcopy(behavior) for _ in infants]
+    observed = together[0].observe(EnvBatch(list(infants), together), want_facts)
+    for i, want in enumerate(want_obs):
         require(
             set(observed) == set(want),
-            f"batch_observe() gives {sorted(observed)}, observe() {sorted(want)} {where}",
+            f"observe() gives {sorted(observed)}, environment {i} alone {sorted(want)} {where}",
         )
         for key, value in want.items():
+            row = np.asarray(value)[0]
             require(
-                np.shape(observed[key]) == (n, *np.shape(value))
-                and _identical(np.asarray(observed[key])[i], np.asarray(value)),
-                f"batch_observe()['{key}'][{i}] differs from observe()['{key}'] {where}",
+                np.shape(observed[key]) == (n, *np.shape(row))
+                and _identical(np.asarray(observed[key])[i], row),
+                f"observe()['{key}'][{i}] of a batch differs from environment {i}'s alone {where}",
             )
 
 

@@ -203,16 +203,32 @@ class CloseEvaluator(devlearn.Evaluator):
         return [path]
 
 
+TINY_TRAIN_DEFAULTS: dict[str, Any] = {
+    "ppo.num_steps_per_env": 8,
+    "ppo.num_mini_batches": 2,
+    "ppo.num_learning_epochs": 2,
+    "env.action_repeat": 1,
+    "ppo.schedule": "adaptive",
+    "network.layout": "shared",
+}
+""":class:`TinyBehavior`'s run defaults: small rollouts, and the learner the core's tests and
+recorded tiny runs were made with before issue #38 made issue #28's learner the core default: a
+decision every physics step, the adaptive schedule, the shared layout."""
+
+
 class TinyBehavior(devlearn.Behavior):
     """Move every joint of a tiny body to a target position."""
 
     name = "tiny"
-    description = "test behaviour: reach a target position"
     scene = "crib"
-    senses = ("proprioception",)
     config_class = TinyConfig
-    headline_metric = "close"
+    about = devlearn.About(
+        description="test behaviour: reach a target position",
+        headline_metric="close",
+        train_defaults=TINY_TRAIN_DEFAULTS,
+    )
 
+    @devlearn.per_env
     def observe(self, infant: Infant, facts: dict[str, Any]) -> dict[str, np.ndarray]:
         obs = {"proprioception": infant.proprioception()}
         if self.config.use_eyes:
@@ -236,18 +252,8 @@ class TinyBehavior(devlearn.Behavior):
             ]
         )
 
-    def evaluator(self, training: bool) -> devlearn.Evaluator:
-        return CloseEvaluator(self.config.target)
+    def episode(self) -> devlearn.EpisodeSpec:
+        return devlearn.EpisodeSpec(senses=("proprioception",))
 
-    def train_defaults(self) -> dict[str, Any]:
-        """Small rollouts, and the learner the core's tests and recorded tiny runs were made
-        with before issue #38 made issue #28's learner the core default: a decision every
-        physics step, the adaptive schedule, the shared layout."""
-        return {
-            "ppo.num_steps_per_env": 8,
-            "ppo.num_mini_batches": 2,
-            "ppo.num_learning_epochs": 2,
-            "env.action_repeat": 1,
-            "ppo.schedule": "adaptive",
-            "network.layout": "shared",
-        }
+    def evaluation(self) -> devlearn.EvalProtocol:
+        return devlearn.EvalProtocol(evaluator=lambda training: CloseEvaluator(self.config.target))

@@ -1,13 +1,14 @@
 """A behaviour that counts and orders its episode-hook calls (dm_control's hook tracker idea).
 
 :class:`HookTracker` runs on the fake infant (:mod:`devlearn.testing.fake_infant`) and reports,
-as episode metrics, the order in which devlearn called ``on_episode_start``, ``before_step``,
-``process_action`` and ``facts``: what docs/writing-a-plugin.md ("Episode hooks") promises a
-behaviour, in one env, a batch or worker processes.
+as episode metrics, the order in which devlearn called its episode hooks (``on_episode_start``,
+``before_step``, ``process_action``) and ``facts``: what docs/writing-a-plugin.md ("Episode
+hooks") promises a behaviour, in one env, a batch or worker processes.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -20,17 +21,11 @@ if TYPE_CHECKING:
     from devlearn.infant import Infant
 
 
-class HookTracker(TinyBehavior):
-    """TinyBehavior that logs every hook call of the current episode in ``self.calls``.
+class CallLog(devlearn.EpisodeHooks):
+    """One environment's hook calls of the current episode (``calls``), checked as they come
+    (``problems``)."""
 
-    Each step's facts carry the calls so far in this episode and the episode number, so that
-    the evaluator's episode summary (which travels back from worker processes) reports them.
-    """
-
-    name = "hook_tracker"
-
-    def __init__(self, config: TinyConfig | None = None) -> None:
-        super().__init__(config)
+    def __init__(self) -> None:
         self.episodes = 0
         self.calls: list[str] = []
         self.pending_action: np.ndarray | None = None
@@ -57,12 +52,32 @@ class HookTracker(TinyBehavior):
         self.calls.append("process")
         return action
 
-    def facts(self, infant: Infant) -> dict[str, Any]:
-        self.calls.append("facts")
-        return {"calls": list(self.calls), "episode": self.episodes, "problems": len(self.problems)}
 
-    def evaluator(self, training: bool) -> devlearn.Evaluator:
-        return CallEvaluator()
+class HookTracker(TinyBehavior):
+    """TinyBehavior whose episode hooks (:class:`CallLog`) log every call of the current
+    episode.
+
+    Each step's facts carry the calls so far in this episode and the episode number, so that
+    the evaluator's episode summary (which travels back from worker processes) reports them.
+    """
+
+    name = "hook_tracker"
+
+    def __init__(self, config: TinyConfig | None = None) -> None:
+        super().__init__(config)
+        self.log = CallLog()
+
+    def episode(self) -> devlearn.EpisodeSpec:
+        return dataclasses.replace(super().episode(), hooks=self.log)
+
+    @devlearn.per_env
+    def facts(self, infant: Infant) -> dict[str, Any]:
+        log = self.log
+        log.calls.append("facts")
+        return {"calls": list(log.calls), "episode": log.episodes, "problems": len(log.problems)}
+
+    def evaluation(self) -> devlearn.EvalProtocol:
+        return dataclasses.replace(super().evaluation(), evaluator=lambda training: CallEvaluator())
 
 
 class CallEvaluator(devlearn.Evaluator):

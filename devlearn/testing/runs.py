@@ -6,9 +6,9 @@ import only ``devlearn``, ``devlearn.api`` and ``devlearn.testing``.
 Each is a thin door onto the core's one way of doing the thing (``resolve_config``,
 ``train``, the checkpoint format, ``evaluate``, the CLI): when the core changes, this module
 changes, not every plugin's tests. torch and rsl-rl load when a function needs them.
-Saved configs are read and written as runs read and write them: :func:`from_dict` (keys a saved
-run's config lacks take the values it was trained with), :func:`to_dict`,
-:func:`load_run_config` (a run folder's ``config.json``).
+Saved configs are read and written as runs read and write them: :func:`saved_config` (the
+dict a run saves), :func:`load_saved_config` (a saved dict, keys it lacks taking the values it
+was trained with, or a run folder's ``config.json``), :func:`config_round_trip`.
 """
 
 from __future__ import annotations
@@ -36,18 +36,17 @@ if TYPE_CHECKING:
 
 __all__ = [
     "CommandResult",
-    "RunConfig",
+    "config_round_trip",
     "evaluate_policy",
-    "from_dict",
     "load_checkpoint",
-    "load_run_config",
+    "load_saved_config",
     "open_scripted_policy",
     "policy_file",
     "policy_network",
     "run_command",
     "run_config",
     "save_checkpoint",
-    "to_dict",
+    "saved_config",
     "train",
 ]
 
@@ -78,6 +77,37 @@ def run_config(
     out_dir = str(top.pop("out_dir", "") or "")
     request = RunRequest(behavior.name, list(overrides), preset or "", top, out_dir=out_dir)
     return resolve_config(request, registry or registry_for(behavior))
+
+
+def saved_config(cfg: RunConfig) -> dict[str, Any]:
+    """``cfg`` as a run saves it (its ``config.json``, a checkpoint's config): plain data."""
+    return to_dict(cfg)
+
+
+def load_saved_config(
+    saved: dict[str, Any] | str | Path,
+    behavior: type[Behavior] | PluginRegistry,
+    base: RunConfig | None = None,
+) -> RunConfig:
+    """A saved config read as runs read it: a dict (keys it lacks take the values the run was
+    trained with, or ``base``'s) or a run folder (its ``config.json``).
+
+    Args:
+        saved: The saved dict, or a run folder.
+        behavior: The behaviour's class (for a folder: or a registry that has it).
+        base: For a dict: the config whose values the keys it lacks take.
+    """
+    if isinstance(saved, dict):
+        if isinstance(behavior, type):
+            return from_dict(saved, behavior, base)
+        return from_dict(saved, behavior.behavior(str(saved.get("behavior_name", ""))), base)
+    registry = registry_for(behavior) if isinstance(behavior, type) else behavior
+    return load_run_config(Path(saved), registry)
+
+
+def config_round_trip(cfg: RunConfig, behavior: type[Behavior]) -> RunConfig:
+    """``cfg`` saved and read back as a run saves and reads it."""
+    return from_dict(to_dict(cfg), behavior)
 
 
 def train(cfg: RunConfig | None, registry: PluginRegistry, **options: Any) -> TrainResult:
@@ -151,7 +181,7 @@ def policy_file(
         "iteration": 0,
         "env_steps": env_steps,
         "actor_state_dict": actor_state,
-        "artifacts": behavior.policy_artifacts(),
+        "artifacts": behavior.artifacts().policy_artifacts(),
     }
 
 

@@ -618,7 +618,7 @@ def behavior_with_artifacts(
     (``state["artifacts"]``) loaded, or found by name next to it
     (``Behavior.load_policy_artifacts``)."""
     behavior = registry.create(str(state["behavior"]), config.behavior)
-    behavior.load_policy_artifacts(dict(state.get("artifacts") or {}), path.parent)
+    behavior.artifacts().load_policy_artifacts(dict(state.get("artifacts") or {}), path.parent)
     return behavior
 
 

@@ -257,17 +257,17 @@ def _build(ctx: RunContext) -> tuple[DevVecEnv, DevRunner]:
     # With several ranks, rank 0 prepares first; the others then reuse what it saved.
     behavior = ctx.behavior or ctx.registry.create(cfg.behavior_name, cfg.behavior)
     if ctx.infant_factory is None:  # before prepare, which may render (hand regard's babbling)
-        check_senses_render(behavior.senses, behavior.name)
+        check_senses_render(behavior.episode().senses, behavior.name)
     run_dir.mkdir(parents=True, exist_ok=True)
     if rank == 0:
         remove_temporaries(run_dir)
     init_distributed(ctx.device)
     if rank == 0:
-        behavior.prepare(run_dir)
+        behavior.artifacts().prepare(run_dir)
     if ctx.world_size > 1:
         torch.distributed.barrier()
     if rank != 0:
-        behavior.prepare(run_dir)
+        behavior.artifacts().prepare(run_dir)
     cfg.behavior = behavior.config
     if rank == 0:
         write_config_file(cfg, run_dir / CONFIG_FILE)
@@ -305,11 +305,11 @@ def _build(ctx: RunContext) -> tuple[DevVecEnv, DevRunner]:
             cfg,
             run_dir,
             behavior.curriculum(),
-            headline_metric=behavior.headline_metric,
+            headline_metric=behavior.about.headline_metric,
             device=ctx.device,
             progress=ctx.progress,
             learned=ctx.learned,
-            run_metrics=behavior.run_metrics(),
+            run_metrics=behavior.evaluation().run_metrics,
         )
         if checkpoint is not None:
             if ctx.start_from is not None and rank == 0:

@@ -1,79 +1,38 @@
-"""The Behavior contract: a small core every behaviour writes, and optional capabilities in
-groups, each declared with a default (never found by ``hasattr``)."""
+"""The Behavior contract: optional capabilities are composed objects with defaults (never
+found by ``hasattr`` or by checking overrides), and a behaviour checks its config."""
 
 from __future__ import annotations
 
-import inspect
 import re
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import pytest
 
 import devlearn
-from devlearn.api.behavior import (
-    BEHAVIOR_CORE,
-    BEHAVIOR_OPTIONAL,
-    Behavior,
-    BehaviorConfig,
-    Evaluator,
-)
+from devlearn.api.behavior import Behavior, BehaviorConfig, Evaluator
+from devlearn.api.capabilities import EpisodeHooks
 from devlearn.api.errors import UsageError
 from devlearn.api.rewards import RewardTermCfg
 from devlearn.testing import TinyBehavior
 from devlearn.testing.fake_infant import TinyConfig
 
 
-def public_members(cls: type) -> set[str]:
-    """Every public attribute and method ``cls`` declares (annotated or assigned)."""
-    declared = set(vars(cls)) | set(vars(cls).get("__annotations__", {}))
-    return {n for n in declared if not n.startswith("_")}
-
-
-def test_every_public_member_is_core_or_in_one_optional_group():
-    optional = [name for group in BEHAVIOR_OPTIONAL.values() for name in group]
-    listed = [*BEHAVIOR_CORE, *optional]
-    assert len(listed) == len(set(listed))  # once each
-    assert set(listed) == public_members(Behavior)
-
-
-def test_the_core_is_at_most_six_methods_two_of_them_abstract():
-    methods = [n for n in BEHAVIOR_CORE if callable(getattr(Behavior, n, None))]
-    assert len(methods) <= 6
-    assert Behavior.__abstractmethods__ == {"observe", "network"}
-    assert set(BEHAVIOR_CORE) - set(methods) == {"name", "scene", "config_class"}
-
-
-def test_every_optional_member_has_a_default():
+def test_the_composed_capabilities_default_to_nothing_special():
     behavior = TinyBehavior()
-    for group, names in BEHAVIOR_OPTIONAL.items():
-        for name in names:
-            assert name not in Behavior.__abstractmethods__, (group, name)
-            assert hasattr(Behavior, name), f"{group}: {name} has no default"
-    # the evaluation extras' defaults say "as trained"
-    assert Behavior.eval_start(behavior) is None and Behavior.eval_stage(behavior) is None
-    assert Behavior.run_metrics(behavior) is None
+    assert Behavior.__abstractmethods__ == {"observe", "network"}
+    episode = Behavior.episode(behavior)
+    assert episode.senses == ("touch", "proprioception", "vestibular") and episode.seconds is None
+    assert episode.facts_every_physics_step and type(episode.hooks) is EpisodeHooks
+    # the evaluation's defaults say "as trained"
+    evaluation = Behavior.evaluation(behavior)
+    assert evaluation.start is None and evaluation.stage is None
+    assert evaluation.run_metrics is None and evaluation.render_frame is None
+    assert type(evaluation.evaluator(True)) is Evaluator
     assert Evaluator().episode_record() is None and Evaluator.mergeable is False
-
-
-def test_the_class_source_lists_the_core_first():
-    """In ``Behavior`` and the class ``devlearn new`` writes, every core member comes before
-    every optional one."""
-    source = inspect.getsource(Behavior)
-    template = (
-        Path(devlearn.__file__).parent / "templates" / "plugin" / "behavior.py.tmpl"
-    ).read_text()
-    template = template[template.index("(devlearn.Behavior):") :]
-    optional = {n for names in BEHAVIOR_OPTIONAL.values() for n in names}
-    for text in (source, template):
-        order = [
-            m.group(1) or m.group(2)
-            for m in re.finditer(r"^    (?:def (\w+)|(\w+)(?:: [^=\n]+)? =?)", text, re.MULTILINE)
-        ]
-        written = [n for n in order if n in optional or n in BEHAVIOR_CORE]
-        last_core = max(i for i, n in enumerate(written) if n in BEHAVIOR_CORE)
-        first_optional = min(i for i, n in enumerate(written) if n in optional)
-        assert last_core < first_optional, written
+    assert type(Behavior.artifacts(behavior)).policy_artifacts(None) == {}
+    about = Behavior.about
+    assert about.presets == {} and about.train_defaults == {}
+    assert about.length_defaults(100) == {} and about.paper_figures({}) is None
 
 
 class Hold(devlearn.IntrinsicReward):

@@ -149,7 +149,7 @@ def test_the_guide_from_an_empty_folder_to_a_trained_evaluated_plugin(tmp_path):
     for words in walk:
         outputs[" ".join(words[:2])] = _run_guide_command(words, tmp_path, env).stdout
     assert "my_reach" in outputs["devlearn plugins"]
-    assert "5 passed" in outputs["python -m"]  # the generated tests, as generated
+    assert "7 passed" in outputs["python -m"]  # the generated tests, as generated
     assert (tmp_path / "runs/my_reach/checkpoint_latest.pt").exists()
     evaluation = outputs["devlearn eval"]
     assert "mean_regions" in json.loads(evaluation[evaluation.index("{") :])

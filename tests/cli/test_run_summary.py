@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import sys
 from pathlib import Path
@@ -103,7 +104,9 @@ class PaperTiny(TinyBehavior):
 
     name = "tiny"
 
-    presets = {"paper": {"total_steps": 320}, "other": {"seed": 3}}
+    about = dataclasses.replace(
+        TinyBehavior.about, presets={"paper": {"total_steps": 320}, "other": {"seed": 3}}
+    )
 
 
 def test_the_summary_puts_the_run_beside_baselines_and_its_budget(

@@ -10,6 +10,7 @@ from typing import Any
 
 import pytest
 
+import devlearn
 from devlearn.cli import main
 from devlearn.config.run_config import (
     from_dict,
@@ -62,9 +63,7 @@ class Plain(TinyBehavior):
     """A third-party behaviour that declares no learner settings."""
 
     name = "plain"
-
-    def train_defaults(self) -> dict[str, Any]:
-        return {}
+    about = devlearn.About()
 
 
 def value(cfg: Any, key: str) -> Any:

@@ -126,7 +126,7 @@ def requests(tmp: Path) -> dict[str, Callable[[], Result]]:
     for name in BEHAVIORS:
         cls = registry.behavior(name)
         found[f"{name} defaults"] = resolve(behavior=name)
-        for preset in cls.presets:
+        for preset in cls.about.presets:
             found[f"{name} --preset {preset}"] = resolve(behavior=name, preset=preset)
             found[f"{name} --preset {preset} --steps 2e6"] = resolve(
                 behavior=name, preset=preset, top={"total_steps": 2_000_000}
@@ -172,7 +172,7 @@ def requests(tmp: Path) -> dict[str, Callable[[], Result]]:
         found[f"{name} --from"] = resolve(
             behavior=name,
             start_from=str(written),
-            preset=next(iter(cls.presets), ""),
+            preset=next(iter(cls.about.presets), ""),
             top={"seed": 9},
             overrides=["ppo.lam=0.9", "out_dir=ignored"],
             out_dir="runs/branch",

@@ -70,7 +70,7 @@ def rollout(name: str) -> dict[str, np.ndarray]:
     env = DevVecEnv(behavior, n, seed=11, workers=0, action_repeat=spec["action_repeat"])
     try:
         stage = {"random": {"random_pose": True}, "fixed": {"random_pose": False}}.get(
-            spec["stage"], behavior.eval_stage()
+            spec["stage"], behavior.evaluation().stage
         )
         env.set_stage(stage)
         rng = np.random.default_rng(2026)

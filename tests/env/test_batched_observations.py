@@ -1,4 +1,4 @@
-"""Batched facts and observations: the defaults, the batched step path and its guard."""
+"""Facts and observations, one batched path: per_env, the batched step path and its guard."""
 
 from __future__ import annotations
 
@@ -7,6 +7,8 @@ import functools
 import numpy as np
 import pytest
 
+import devlearn
+from devlearn.api.batching import EnvBatch
 from devlearn.env.behavior_env import BehaviorEnv, step_batch
 from devlearn.env.guards import GuardError
 from devlearn.env.workers import make_envs, step_envs
@@ -18,40 +20,48 @@ factory = functools.partial(fake_infant_factory, episode_steps=5)
 class BatchedTiny(TinyBehavior):
     """TinyBehavior with batched facts and observations (one call for all infants)."""
 
-    calls: list[int] = []  # batch sizes of batch_observe calls, shared by all copies
+    calls: list[int] = []  # batch sizes of observe calls, shared by all copies
     nan_at: tuple[int, int] | None = None  # (row, infant step) that observes NaN
 
-    def facts(self, infant):
-        return {"position": infant.position.copy()}
-
-    def batch_facts(self, infants):
-        positions = np.array([infant.position for infant in infants])
+    def facts(self, batch):
+        positions = np.array([infant.position for infant in batch.infants])
         return [{"position": row} for row in positions]
 
-    def batch_observe(self, infants, facts):
-        BatchedTiny.calls.append(len(infants))
+    def observe(self, batch, facts):
+        BatchedTiny.calls.append(len(batch))
         obs = np.array([f["position"] for f in facts], dtype=np.float32)
-        if self.nan_at is not None and infants[self.nan_at[0]].steps_taken == self.nan_at[1]:
-            obs[self.nan_at[0], 1] = np.nan
+        row, step = self.nan_at or (len(batch), 0)
+        if row < len(batch) and batch.infants[row].steps_taken == step:
+            obs[row, 1] = np.nan
         return {"proprioception": obs}
 
 
-def test_default_batch_methods_loop_over_facts_and_observe():
+def test_per_env_methods_run_each_env_on_its_own_behaviour():
     behavior = TinyBehavior(TinyConfig(use_eyes=True))
     infants = [FakeInfant("crib") for _ in range(3)]
     for k, infant in enumerate(infants):
         infant.position = np.full(3, 0.5 * k)
-    assert behavior.batch_facts(infants) == [{}, {}, {}]
-    obs = behavior.batch_observe(infants, behavior.batch_facts(infants))
+    batch = EnvBatch(infants, [behavior] * 3)
+    assert behavior.facts(batch) == [{}, {}, {}]  # the contract's default: no facts
+    obs = behavior.observe(batch, behavior.facts(batch))
     assert obs["proprioception"].shape == (3, 3) and obs["eyes"].shape == (3, 2, 8, 8, 3)
-    for k, infant in enumerate(infants):
-        single = behavior.observe(infant, {})
+    for k in range(len(infants)):
+        single = behavior.observe(batch.one(k), [{}])
         for name in single:
-            assert obs[name][k].tobytes() == single[name].tobytes()
+            assert single[name].shape[0] == 1
+            assert obs[name][k].tobytes() == single[name][0].tobytes()
+
+
+def test_per_env_decorates_facts_or_observe_only():
+    with pytest.raises(TypeError, match="facts or observe, not reward_terms"):
+
+        @devlearn.per_env
+        def reward_terms(self):
+            return []
 
 
 def test_batched_envs_step_like_per_env_envs_and_fill_the_batch_arrays():
-    """A worker's batch (one batch_observe per step, written at once into its rows of the
+    """A worker's batch (one observe per step, written at once into its rows of the
     arrays) gives the observations, rewards and episode ends of envs stepped one by one; the
     rows of envs that reset hold the next episode's first observation."""
     BatchedTiny.calls = []
@@ -77,14 +87,16 @@ def test_batched_envs_step_like_per_env_envs_and_fill_the_batch_arrays():
             assert (arrays["rewards"][2 + i], arrays["dones"][2 + i]) == (np.float32(reward), done)
             assert ((2 + i, info) in infos) == done
             ends += done
-    assert ends == 6 and BatchedTiny.calls == [3] * 12
+    assert ends == 6 and BatchedTiny.calls.count(3) == 12  # one a step; resets: batches of one
+    assert set(BatchedTiny.calls) == {1, 3}
     assert np.all(arrays["obs/proprioception"][:2] == -9.0)  # other workers' rows untouched
 
 
-def test_unbatched_behaviours_use_each_env_own_instance():
-    """Without batch methods every env calls its own behaviour (it may keep per-env state)."""
+def test_per_env_facts_use_each_env_own_instance():
+    """Facts written per env: every env calls its own behaviour (it may keep per-env state)."""
 
     class Stateful(TinyBehavior):
+        @devlearn.per_env
         def facts(self, infant):
             self.seen = getattr(self, "seen", 0) + 1
             return {"seen": self.seen}

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 
 import numpy as np
 import pytest
 
+import devlearn
 from devlearn.env import BehaviorEnv
 from devlearn.testing.fake_infant import TinyBehavior, TinyConfig, fake_infant_factory
 
@@ -138,9 +140,12 @@ def test_a_decision_rate_must_divide_the_episode():
 class RenderedTiny(TinyBehavior):
     """Facts once per decision (as behaviours whose facts need renders); counts them."""
 
-    facts_every_physics_step = False
     facts_calls = 0
 
+    def episode(self):
+        return dataclasses.replace(super().episode(), facts_every_physics_step=False)
+
+    @devlearn.per_env
     def facts(self, infant):
         type(self).facts_calls += 1
         return {}

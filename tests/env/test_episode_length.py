@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 
 import numpy as np
@@ -24,8 +25,8 @@ class Tenth(TinyBehavior):
 
     name = "tenth"
 
-    def episode_seconds(self) -> float | None:
-        return 0.1
+    def episode(self) -> devlearn.EpisodeSpec:
+        return dataclasses.replace(super().episode(), seconds=0.1)
 
 
 class StepsEvaluator(devlearn.Evaluator):
@@ -58,11 +59,13 @@ class Counted(TinyBehavior):
 
     name = "counted"
 
-    def train_defaults(self) -> dict:
-        return {**super().train_defaults(), "env.action_repeat": 5}
+    about = dataclasses.replace(
+        TinyBehavior.about,
+        train_defaults={**TinyBehavior.about.train_defaults, "env.action_repeat": 5},
+    )
 
-    def evaluator(self, training: bool) -> devlearn.Evaluator:
-        return StepsEvaluator()
+    def evaluation(self) -> devlearn.EvalProtocol:
+        return devlearn.EvalProtocol(evaluator=lambda training: StepsEvaluator())
 
 
 def steps_until_reset(env: BehaviorEnv) -> int:

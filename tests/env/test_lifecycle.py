@@ -36,7 +36,7 @@ def test_hooks_in_one_env_over_several_episodes():
     behavior = HookTracker(TinyConfig())
     env = BehaviorEnv(behavior, seed=0, infant_factory=factory)
     env.reset()
-    assert behavior.episodes == 1 and behavior.calls == ["start", "facts"]
+    assert behavior.log.episodes == 1 and behavior.log.calls == ["start", "facts"]
     infos = []
     rng = np.random.default_rng(0)
     for _ in range(3 * STEPS):
@@ -44,7 +44,7 @@ def test_hooks_in_one_env_over_several_episodes():
         if info is not None:
             infos.append(metrics(info))
     assert infos == [expected(1), expected(2), expected(3)]
-    assert behavior.episodes == 4 and behavior.calls == ["start", "facts"]  # 4th just began
+    assert behavior.log.episodes == 4 and behavior.log.calls == ["start", "facts"]  # 4th just began
 
 
 @pytest.mark.parametrize("workers", [0, 2])

@@ -5,6 +5,7 @@ automatic envs and workers."""
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 from pathlib import Path
 from typing import Any
@@ -62,18 +63,14 @@ class Drift(TinyBehavior):
 
     name = "drift"
 
-    def eval_stage(self) -> dict[str, Any]:
-        return {"random_pose": True}
+    def evaluation(self) -> devlearn.EvalProtocol:
+        return devlearn.EvalProtocol(
+            evaluator=lambda training: PathEvaluator(), stage={"random_pose": True}
+        )
 
-    def evaluator(self, training: bool) -> devlearn.Evaluator:
-        return PathEvaluator()
 
-
-class StepDraws(Drift):
-    """Draws from the env's generator during episodes (against the contract parallel
-    evaluation rests on): its episodes depend on the ones played before in the same env."""
-
-    name = "step_draws"
+class RngDraws(devlearn.EpisodeHooks):
+    """Keeps the env's generator at every episode start and draws from it on every action."""
 
     def on_episode_start(self, infant: Any, rng: np.random.Generator) -> None:
         self.rng = rng
@@ -82,13 +79,23 @@ class StepDraws(Drift):
         return action + self.rng.normal(0.0, 0.1, action.shape)
 
 
+class StepDraws(Drift):
+    """Draws from the env's generator during episodes (against the contract parallel
+    evaluation rests on): its episodes depend on the ones played before in the same env."""
+
+    name = "step_draws"
+
+    def episode(self) -> devlearn.EpisodeSpec:
+        return dataclasses.replace(super().episode(), hooks=RngDraws())
+
+
 class Unmerged(Drift):
     """An evaluator that cannot merge (the contract's default)."""
 
     name = "unmerged"
 
-    def evaluator(self, training: bool) -> devlearn.Evaluator:
-        return devlearn.Evaluator()
+    def evaluation(self) -> devlearn.EvalProtocol:
+        return dataclasses.replace(super().evaluation(), evaluator=lambda t: devlearn.Evaluator())
 
 
 class CountingInfant(FakeInfant):

@@ -1,10 +1,11 @@
 """An evaluation as a request and its steps: the request checked when made, the subject opened
 and its config resolved once, the conditions taken from what the contract declares
-(``Behavior.eval_start``, ``Evaluator.mergeable``, the infant's ``start``), the measures and
+(``EvalProtocol.start``, ``Evaluator.mergeable``, the infant's ``start``), the measures and
 the records apart."""
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 import numpy as np
@@ -30,8 +31,8 @@ class Fixed(TinyBehavior):
 
     name = "fixed"
 
-    def eval_stage(self) -> dict[str, Any] | None:
-        return {"random_pose": False}
+    def evaluation(self) -> devlearn.EvalProtocol:
+        return dataclasses.replace(super().evaluation(), stage={"random_pose": False})
 
 
 class FromBabybench(Fixed):
@@ -39,8 +40,8 @@ class FromBabybench(Fixed):
 
     name = "from_babybench"
 
-    def eval_start(self) -> str | None:
-        return "babybench"
+    def evaluation(self) -> devlearn.EvalProtocol:
+        return dataclasses.replace(super().evaluation(), start="babybench")
 
 
 class Unmerged(TinyBehavior):
@@ -48,8 +49,8 @@ class Unmerged(TinyBehavior):
 
     name = "unmerged"
 
-    def evaluator(self, training: bool) -> devlearn.Evaluator:
-        return devlearn.Evaluator()
+    def evaluation(self) -> devlearn.EvalProtocol:
+        return dataclasses.replace(super().evaluation(), evaluator=lambda t: devlearn.Evaluator())
 
 
 class Decisive(TinyBehavior):
@@ -57,8 +58,10 @@ class Decisive(TinyBehavior):
 
     name = "decisive"
 
-    def train_defaults(self) -> dict[str, Any]:
-        return {**super().train_defaults(), "env.action_repeat": 2}
+    about = dataclasses.replace(
+        TinyBehavior.about,
+        train_defaults={**TinyBehavior.about.train_defaults, "env.action_repeat": 2},
+    )
 
 
 class StartingInfant(FakeInfant):
@@ -109,7 +112,7 @@ def test_a_checkpoints_request_takes_only_the_age():
 
 
 def test_eval_start_is_declared_with_the_infants_own_start_as_default(registry):
-    assert devlearn.Behavior.eval_start(TinyBehavior()) is None
+    assert devlearn.Behavior.evaluation(TinyBehavior()).start is None
     fixed = open_subject(EvalRequest("fixed", policy="zero"), registry)
     own = evaluation_conditions(EvalRequest("fixed", policy="zero"), fixed)
     assert own.infant_start is None and own.stage == {"random_pose": False}

@@ -194,7 +194,7 @@ def test_paper_figures_name_real_metrics(behavior, eval_json, config):
     root = Path(__file__).resolve().parents[2]
     if eval_json is None:  # the self-touch metrics are the same whatever the curriculum
         eval_json = "results/self_touch/i20/two_stage_s1/at_8001536/eval.json"
-    label, figures = PluginRegistry(disabled=()).behavior(behavior).paper_results(config)
+    label, figures = PluginRegistry(disabled=()).behavior(behavior).about.paper_figures(config)
     metrics = _metrics(json.loads((root / eval_json).read_text()))
     assert label.startswith("paper") and figures
     assert set(figures) <= set(metrics)

@@ -56,12 +56,13 @@ class Probe(devlearn.Behavior):
 
     name = "probe"
     scene = "crib"
-    senses = ("proprioception",)
     config_class = ProbeConfig
 
+    @devlearn.per_env
     def facts(self, infant):
         return {"contact": bool(infant.hand_contacts().any())}
 
+    @devlearn.per_env
     def observe(self, infant, facts):
         return {"proprioception": infant.proprioception().astype(np.float32)}
 
@@ -71,8 +72,11 @@ class Probe(devlearn.Behavior):
     def reward_terms(self):
         return [Touching()]
 
-    def evaluator(self, training):
-        return CountEvaluator()
+    def episode(self):
+        return devlearn.EpisodeSpec(senses=("proprioception",))
+
+    def evaluation(self):
+        return devlearn.EvalProtocol(evaluator=lambda training: CountEvaluator())
 
 
 # Each broken behaviour is a module-level class (so it pickles, as a plugin's would), named after
@@ -122,9 +126,12 @@ class BadTermValue(Probe):
 class ContactShapedObservation(Probe):
     """Observation ``x`` has 4 entries on contact steps, 3 otherwise."""
 
+    @devlearn.per_env
     def observe(self, infant, facts):
-        obs = super().observe(infant, facts)
-        return {**obs, "x": np.zeros(4 if facts["contact"] else 3, np.float32)}
+        return {
+            "proprioception": infant.proprioception().astype(np.float32),
+            "x": np.zeros(4 if facts["contact"] else 3, np.float32),
+        }
 
     def network(self):
         encoders = {"proprioception": devlearn.MLPEncoder((16,)), "x": devlearn.MLPEncoder((4,))}
@@ -144,6 +151,7 @@ class WrongDtype(Probe):
 
     config_class = DtypeConfig
 
+    @devlearn.per_env
     def observe(self, infant, facts):
         return {"proprioception": infant.proprioception().astype(self.config.dtype)}
 
@@ -158,8 +166,8 @@ class ArraySummary(CountEvaluator):
 class ArraySummaryBehavior(Probe):
     """Its evaluator's summary() is not JSON-serialisable."""
 
-    def evaluator(self, training):
-        return ArraySummary()
+    def evaluation(self):
+        return devlearn.EvalProtocol(evaluator=lambda training: ArraySummary())
 
 
 class TextMetric(CountEvaluator):
@@ -172,8 +180,8 @@ class TextMetric(CountEvaluator):
 class TextMetricBehavior(Probe):
     """Its evaluator's episode metric is a string."""
 
-    def evaluator(self, training):
-        return TextMetric()
+    def evaluation(self):
+        return devlearn.EvalProtocol(evaluator=lambda training: TextMetric())
 
 
 class HoldsALock(Probe):
@@ -303,6 +311,7 @@ def test_the_gymnasium_check_passes_a_correct_behaviour_and_names_a_broken_one()
 
         name = "jittery"
 
+        @devlearn.per_env
         def observe(self, infant, facts):
             noise = np.random.default_rng().normal(size=3).astype(np.float32)
             return {"proprioception": infant.proprioception() + noise}
@@ -334,15 +343,15 @@ class ForgetfulMerge(MergingCount):
 class MergingProbe(Probe):
     """Its evaluator merges."""
 
-    def evaluator(self, training):
-        return MergingCount()
+    def evaluation(self):
+        return devlearn.EvalProtocol(evaluator=lambda training: MergingCount())
 
 
 class ForgetfulMergeProbe(Probe):
     """Its evaluator's merge forgets episodes."""
 
-    def evaluator(self, training):
-        return ForgetfulMerge()
+    def evaluation(self):
+        return devlearn.EvalProtocol(evaluator=lambda training: ForgetfulMerge())
 
 
 def test_an_evaluator_that_merges_must_merge_into_the_whole_summary():
@@ -362,8 +371,8 @@ class UndeclaredMerge(CountEvaluator):
 class UndeclaredMergeProbe(Probe):
     """Its evaluator merges without declaring it."""
 
-    def evaluator(self, training):
-        return UndeclaredMerge()
+    def evaluation(self):
+        return devlearn.EvalProtocol(evaluator=lambda training: UndeclaredMerge())
 
 
 class ClaimedMerge(CountEvaluator):
@@ -375,8 +384,8 @@ class ClaimedMerge(CountEvaluator):
 class ClaimedMergeProbe(Probe):
     """Its evaluator claims a merge it does not have."""
 
-    def evaluator(self, training):
-        return ClaimedMerge()
+    def evaluation(self):
+        return devlearn.EvalProtocol(evaluator=lambda training: ClaimedMerge())
 
 
 class LooseEvaluator:
@@ -395,47 +404,54 @@ class LooseEvaluator:
 class LooseEvaluatorProbe(Probe):
     """Its evaluator is not a devlearn.Evaluator."""
 
-    def evaluator(self, training):
-        return LooseEvaluator()
+    def evaluation(self):
+        return devlearn.EvalProtocol(evaluator=lambda training: LooseEvaluator())
 
 
 class SidewaysStart(Probe):
     """Declares an evaluation start the infant does not have."""
 
-    def eval_start(self):
-        return "sideways"
+    def evaluation(self):
+        return devlearn.EvalProtocol(evaluator=lambda training: CountEvaluator(), start="sideways")
 
 
 class MisspelledHook(Probe):
-    """Writes ``eval_starts``: the contract's ``eval_start`` default would run instead."""
+    """Writes ``evaluations``: the contract's ``evaluation`` default would run instead."""
 
-    def eval_starts(self):
-        return "babybench"
-
-
-class StartAsValue(Probe):
-    """Gives ``eval_start`` as a value, where the contract declares a method."""
-
-    eval_start = "babybench"
+    def evaluations(self):
+        return devlearn.EvalProtocol(start="babybench")
 
 
-class PresetsAsMethod(Probe):
-    """Writes ``presets`` as a method (before issue #42), where the contract declares data."""
+class EvaluationAsValue(Probe):
+    """Gives ``evaluation`` as a value, where the contract declares a method."""
 
-    def presets(self):
-        return {"paper": {"total_steps": 320}}
+    evaluation = devlearn.EvalProtocol(start="babybench")
+
+
+class AboutAsDict(Probe):
+    """Gives ``about`` as a dict of its fields, where the contract declares an About."""
+
+    about = {"presets": {"paper": {"total_steps": 320}}}
+
+
+class EpisodeAsDict(Probe):
+    """Returns the episode's settings as a dict, where the contract declares an EpisodeSpec."""
+
+    def episode(self):
+        return {"senses": ("proprioception",)}
 
 
 @pytest.mark.parametrize(
     "probe, message",
     [
-        (PresetsAsMethod, "PresetsAsMethod.presets must be a value, not a method"),
-        (MisspelledHook, "MisspelledHook.eval_starts is no member .* did you mean eval_start"),
-        (StartAsValue, "StartAsValue.eval_start must be a method"),
+        (AboutAsDict, "AboutAsDict.about must be a devlearn.About"),
+        (EpisodeAsDict, "EpisodeAsDict.episode\\(\\) must return a devlearn.EpisodeSpec, got dict"),
+        (MisspelledHook, "MisspelledHook.evaluations is no member .* did you mean evaluation"),
+        (EvaluationAsValue, "EvaluationAsValue.evaluation must be a method"),
         (UndeclaredMergeProbe, "mergeable is False but merge\\(\\) is implemented"),
         (ClaimedMergeProbe, "mergeable is True but merge\\(\\) is not implemented"),
         (LooseEvaluatorProbe, "must be a devlearn.Evaluator, got LooseEvaluator"),
-        (SidewaysStart, "eval_start\\(\\) must return None or one of .*got 'sideways'"),
+        (SidewaysStart, "evaluation\\(\\).start must be None or one of .*got 'sideways'"),
     ],
 )
 def test_the_declared_evaluation_extras_must_match_what_is_written(probe, message):

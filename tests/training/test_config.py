@@ -104,7 +104,7 @@ def test_override_errors_are_clear(override, message):
 
 def test_precedence_defaults_behaviour_cli_set():
     cfg = run_config(TinyBehavior, ["ppo.num_mini_batches=4"], num_envs=3, seed=None)
-    assert cfg.ppo.num_steps_per_env == 8  # from TinyBehavior.train_defaults()
+    assert cfg.ppo.num_steps_per_env == 8  # from TinyBehavior.about.train_defaults
     assert cfg.ppo.num_mini_batches == 4  # --set beats train_defaults
     assert cfg.num_envs == 3 and cfg.seed == 0
     assert "ppo.clip_param" in valid_keys(cfg)

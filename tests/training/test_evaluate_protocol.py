@@ -304,7 +304,7 @@ def test_an_undeclared_protocol_evaluates_in_the_stage_the_policy_trained_in(reg
     from devlearn import evaluation_stage
 
     behavior = TinyBehavior()  # fixed pose for stage_steps (1000), then random poses
-    assert behavior.eval_stage() is None
+    assert behavior.evaluation().stage is None
     assert evaluation_stage(behavior, 0) == {"random_pose": False}
     assert evaluation_stage(behavior, 999) == {"random_pose": False}
     assert evaluation_stage(behavior, 1000) == {"random_pose": True}

@@ -37,7 +37,7 @@ def trained(tmp_path_factory):
 
 def test_fresh_layers_defaults_behaviour_top_then_overrides():
     cfg = resolve("ppo.learning_rate=1e-3", "seed=9", top={"seed": 4, "num_envs": None})
-    defaults = TinyBehavior(TinyBehavior.config_class()).train_defaults()
+    defaults = TinyBehavior.about.train_defaults
     assert cfg.seed == 9  # --set comes last
     assert cfg.num_envs == 16  # None: not given
     assert cfg.ppo.learning_rate == 1e-3

@@ -159,10 +159,11 @@ class BadTiny(TinyBehavior):
             Explode(self.config.bad_value, self.config.bad_from, self.config.bad_raise),
         ]
 
-    def observe(self, infant, facts):
-        obs = super().observe(infant, facts)
-        if self.config.bad_observation and infant.steps_taken > self.config.bad_from:
-            obs["proprioception"] = np.full_like(obs["proprioception"], np.inf)
+    def observe(self, batch, facts):
+        obs = {name: np.array(rows) for name, rows in super().observe(batch, facts).items()}
+        for i, infant in enumerate(batch.infants):
+            if self.config.bad_observation and infant.steps_taken > self.config.bad_from:
+                obs["proprioception"][i] = np.inf
         return obs
 
 

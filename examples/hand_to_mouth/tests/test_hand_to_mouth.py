@@ -12,7 +12,7 @@ from devlearn_hand_to_mouth import HandToMouth
 from devlearn_hand_to_mouth.behavior import ActionCost, MouthContact
 
 from devlearn import StepContext
-from devlearn.testing import check_behavior, check_gymnasium, registry_for
+from devlearn.testing import Play, check_behavior, check_gymnasium, facts_of, registry_for
 
 
 def _ctx(contact: bool, energy: float = 0.0) -> StepContext:
@@ -43,6 +43,16 @@ def test_action_cost_is_negative_energy():
 
 
 @pytest.mark.slow
+def test_the_action_of_each_environment_is_its_own():
+    """Two environments played in one batch: each env's hooks keep its own last action, so the
+    action-cost fact is each env's (facts written per environment, ``devlearn.per_env``)."""
+    with Play(HandToMouth(), 2) as envs:
+        envs.reset()
+        envs.step([[0.0] * envs.action_dim, [0.5] * envs.action_dim])
+        energies = [facts_of(b, i)["action_energy"] for b, i in zip(envs.behaviors, envs.infants)]
+    assert energies == [0.0, 0.25]
+
+
 def test_conformance():
     shapes = check_behavior(HandToMouth, steps=20)
     assert set(shapes) == {"proprioception"}

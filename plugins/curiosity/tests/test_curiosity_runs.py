@@ -8,8 +8,15 @@ from pathlib import Path
 import pytest
 from devlearn_curiosity import RND, ForwardModel
 
-from devlearn.testing import load_checkpoint, registry_for, run_command, run_config, train
-from devlearn.testing.fake_infant import TinyBehavior, fake_infant_factory
+from devlearn.testing import (
+    TinyBehavior,
+    fake_infant_factory,
+    load_checkpoint,
+    registry_for,
+    run_command,
+    run_config,
+    train,
+)
 
 
 def rows(run_dir: Path) -> list[dict]:

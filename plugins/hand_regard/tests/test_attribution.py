@@ -21,7 +21,7 @@ from devlearn_hand_regard.babbling import BabblingData, mirror_signs, posture_jo
 from devlearn_hand_regard.detector import DetectorParams, HandDetector
 from synthetic import draw
 
-from devlearn.testing.runs import from_dict
+from devlearn.testing import load_saved_config
 
 BLOCKS = np.array([[12.0, 52.0], [32.0, 56.0], [52.0, 50.0]])
 NAMES = ["head_swivel", "head_tilt", "left_shoulder_flexion", "left_elbow", "left_wrist_flexion"]
@@ -202,7 +202,7 @@ def test_new_runs_attribute_by_visibility_and_saved_configs_by_position(
     synthetic_params, model, tmp_path
 ):
     assert HandRegardConfig().hand_attribution == "visibility"
-    old = from_dict({"behavior": {"detector_file": "x.json"}}, HandRegard)
+    old = load_saved_config({"behavior": {"detector_file": "x.json"}}, HandRegard)
     assert old.behavior.hand_attribution == "position"  # how every published run was trained
     path = DetectorParams(**{**vars(synthetic_params), "visibility_model": model}).save(
         tmp_path / "hand_detector.json"

@@ -13,7 +13,7 @@ from devlearn_hand_regard.detector import DetectorParams
 from fake_sitting import LEFT_ARM, RIGHT_ARM, FakeSittingInfant
 
 from devlearn.api.errors import UsageError
-from devlearn.testing.envs import BehaviorEnv
+from devlearn.testing import Play, facts_of, observations_of
 
 
 @pytest.fixture()
@@ -49,9 +49,9 @@ def test_curriculum_stages_and_lengths():
 def test_process_action_masks_the_inactive_arm(behavior, stage, zeroed, kept):
     infant = FakeSittingInfant()
     infant.reset(None)
-    behavior.on_episode_start(infant, None)  # reads the arm actuator groups
+    behavior.episode().hooks.on_episode_start(infant, None)  # reads the arm actuator groups
     action = np.linspace(-1, 1, 17)
-    out = behavior.process_action(action, stage_options(behavior, stage))
+    out = behavior.episode().hooks.process_action(action, stage_options(behavior, stage))
     assert np.all(out[zeroed] == 0)
     np.testing.assert_array_equal(out[kept], action[kept])
     np.testing.assert_array_equal(out[:3], action[:3])  # the head always moves
@@ -60,38 +60,38 @@ def test_process_action_masks_the_inactive_arm(behavior, stage, zeroed, kept):
 
 def test_process_action_before_facts_fails_clearly():
     with pytest.raises(RuntimeError, match="arm actuator groups"):
-        HandRegard().process_action(np.zeros(17), {"active_arms": ["left"]})
+        HandRegard().episode().hooks.process_action(np.zeros(17), {"active_arms": ["left"]})
 
 
 def test_facts_detect_hands_and_motion(behavior):
     infant = FakeSittingInfant()
     infant.reset(None)
-    facts = behavior.facts(infant)
+    facts = facts_of(behavior, infant)
     assert facts["hand_detections"].all() and facts["hand_count"] == 4
     assert facts["motion"] == 0.0  # first frame of the episode
     action = np.zeros(17)
     action[LEFT_ARM[0]] = 1.0  # left hand moves 2 px right
     infant.step(action)
-    facts = behavior.facts(infant)
+    facts = facts_of(behavior, infant)
     per_pixel = facts["hand_flow"] / facts["hand_pixels"]  # (2 eyes, 2 hands) px per step
     assert np.all(per_pixel[:, 0] > 1.0) and np.all(per_pixel[:, 1] < 0.3)
     assert 0.0 < facts["motion"] < 0.08
     infant.step(action)  # moving on, the previous frame is still remembered
-    assert behavior.facts(infant)["motion"] > 0.0
+    assert facts_of(behavior, infant)["motion"] > 0.0
     infant.reset(None)  # a new episode: no motion from the old frame
-    behavior.on_episode_start(infant, None)
-    assert behavior.facts(infant)["motion"] == 0.0
+    behavior.episode().hooks.on_episode_start(infant, None)
+    assert facts_of(behavior, infant)["motion"] == 0.0
 
 
 def test_env_steps_with_rewards_and_metrics(behavior):
-    env = BehaviorEnv(behavior, seed=0, infant_factory=FakeSittingInfant)
-    obs = env.reset()
+    env = Play(behavior, infant_factory=FakeSittingInfant)
+    [obs] = env.reset()
     assert set(obs) == {"proprioception", "hands_seen"}  # the default policy: no images
     assert obs["hands_seen"].shape == (16,) and obs["hands_seen"].dtype == np.float32
     env.set_stage(stage_options(behavior, "left_arm"))
     info = None
     for _ in range(env.episode_steps):
-        obs, reward, done, _, info = env.step(np.zeros(17))
+        [(obs, reward, done, _, info)] = env.step(np.zeros(17))
     assert done and info is not None
     # Left arm stage: both eyes see the left hand every step -> 0.5 - 0.05 per step.
     assert info["reward/hand_count"] == pytest.approx(0.5 * 20)
@@ -127,7 +127,7 @@ def test_prepare_reuses_the_saved_detector(tmp_path, synthetic_params, monkeypat
 
     monkeypatch.setattr("devlearn_hand_regard.babbling.babble", no_babbling)
     behavior = HandRegard()
-    behavior.prepare(tmp_path)
+    behavior.artifacts().prepare(tmp_path)
     assert behavior.config.detector_file == str((tmp_path / DETECTOR_FILE).resolve())
     assert behavior.detector.params == synthetic_params
 
@@ -145,21 +145,21 @@ def test_prepare_copies_a_given_detector_instead_of_babbling(
     monkeypatch.setattr("devlearn_hand_regard.babbling.babble", no_babbling)
     behavior = HandRegard()
     behavior.config.detector_file = str(shared)
-    behavior.prepare(run)
+    behavior.artifacts().prepare(run)
     assert behavior.config.detector_file == str((run / DETECTOR_FILE).resolve())
     assert DetectorParams.load(run / DETECTOR_FILE) == synthetic_params
     missing = HandRegard()
     missing.config.detector_file = str(tmp_path / "nope.json")
     with pytest.raises(UsageError, match="does not exist"):
-        missing.prepare(tmp_path / "other")
+        missing.artifacts().prepare(tmp_path / "other")
 
 
 def test_behavior_pickles_without_runtime_state(behavior):
     infant = FakeSittingInfant()
     infant.reset(None)
-    behavior.facts(infant)
+    facts_of(behavior, infant)
     clone = pickle.loads(pickle.dumps(behavior))
-    assert clone._flow.previous is None
+    assert clone.hooks.flow.previous is None
     assert clone.config == behavior.config
 
 
@@ -169,7 +169,7 @@ def test_a_stored_detector_travels_to_workers(synthetic_params, tmp_path):
 
     behavior = HandRegard(HandRegardConfig(detector_file=str(tmp_path / "moved_away.json")))
     stored = {"hand_detector": detector_store.as_artifact(synthetic_params)}
-    behavior.load_policy_artifacts(stored, tmp_path)
+    behavior.artifacts().load_policy_artifacts(stored, tmp_path)
     clone = pickle.loads(pickle.dumps(behavior))
     assert clone.detector.params == synthetic_params
 
@@ -178,13 +178,16 @@ def test_cnn_policy_sees_the_eyes(behavior):
     """The actor sees the eyes and proprioception; the default (asymmetric) critic adds the
     detector's output, which the paper's critic (``critic=same``) does without."""
     behavior.config.policy = "cnn"
-    env = BehaviorEnv(behavior, seed=0, infant_factory=FakeSittingInfant)
-    obs = env.reset()
+    [obs] = Play(behavior, infant_factory=FakeSittingInfant).reset()
     assert set(obs) == {"left_eye", "right_eye", "proprioception", "hands_seen"}
-    assert behavior.obs_groups(list(obs))["actor"] == ["left_eye", "right_eye", "proprioception"]
+    assert behavior.network().obs_groups(list(obs))["actor"] == [
+        "left_eye",
+        "right_eye",
+        "proprioception",
+    ]
     assert obs["left_eye"].shape == (64, 64, 3) and obs["left_eye"].dtype == np.uint8
     behavior.config.critic = "same"
-    obs = BehaviorEnv(behavior, seed=0, infant_factory=FakeSittingInfant).reset()
+    [obs] = Play(behavior, infant_factory=FakeSittingInfant).reset()
     assert set(obs) == {"left_eye", "right_eye", "proprioception"}
 
 
@@ -195,9 +198,9 @@ def test_proprio_policy_sees_the_detector_output(behavior):
 
     infant = FakeSittingInfant()  # left hand disc at x 20, right at x 44, both at y 40
     infant.reset(None)
-    behavior.on_episode_start(infant, None)
-    facts = behavior.facts(infant)
-    obs = behavior.observe(infant, facts)
+    behavior.episode().hooks.on_episode_start(infant, None)
+    facts = facts_of(behavior, infant)
+    obs = observations_of(behavior, infant, facts)
     features = obs["hands_seen"].reshape(2, 2, 4)
     assert np.all(features[..., 0] == 1.0)
     np.testing.assert_allclose(features[:, 0, 1], 2 * 20.5 / 64 - 1, atol=0.05)
@@ -214,21 +217,21 @@ def test_proprio_policy_sees_the_detector_output(behavior):
 
 
 def test_scene_start_and_policy_defaults_and_legacy():
-    from devlearn.testing.runs import from_dict
+    from devlearn.testing import load_saved_config
 
     behavior = HandRegard()
     assert behavior.scene == "sitting_babybench" and HandRegard.scene == "sitting_babybench"
-    assert behavior.infant_options() == {"appearance": "mittens", "start": "babybench"}
-    assert behavior.eval_stage() == {"active_arms": ["left", "right"], "random_pose": False}
-    assert behavior.config.policy == "proprio" and HandRegard.facts_every_physics_step is False
+    assert behavior.episode().infant_options == {"appearance": "mittens", "start": "babybench"}
+    assert behavior.evaluation().stage == {"active_arms": ["left", "right"], "random_pose": False}
+    assert behavior.config.policy == "proprio" and not behavior.episode().facts_every_physics_step
     # A config saved before issue #29 lacks these keys: the old scene, start, eval and network.
-    old = from_dict({"behavior": {"detector_file": "x.json"}}, HandRegard)
+    old = load_saved_config({"behavior": {"detector_file": "x.json"}}, HandRegard)
     legacy = HandRegard(old.behavior)
     assert legacy.scene == "sitting" and legacy.config.policy == "cnn"
-    assert legacy.infant_options()["start"] == "rest"
-    assert legacy.eval_stage()["random_pose"] is True
+    assert legacy.episode().infant_options["start"] == "rest"
+    assert legacy.evaluation().stage["random_pose"] is True
     with pytest.raises(Exception, match="valid: sitting_babybench, sitting"):
-        HandRegard(HandRegardConfig(scene="crib")).infant_options()
+        HandRegard(HandRegardConfig(scene="crib")).episode()
 
 
 def test_demonstration_by_default_and_the_paper_preset():
@@ -302,9 +305,9 @@ def test_asymmetric_critic_trains_without_eye_cnns(tmp_path, detector_file):
     )
     assert cfg.network.layout == "separate"
     behavior = HandRegard(cfg.behavior)
-    obs = BehaviorEnv(behavior, seed=0, infant_factory=FakeSittingInfant).reset()
+    [obs] = Play(behavior, infant_factory=FakeSittingInfant).reset()
     assert set(obs) == {"left_eye", "right_eye", "proprioception", "hands_seen"}
-    assert behavior.obs_groups(list(obs)) == {
+    assert behavior.network().obs_groups(list(obs)) == {
         "actor": ["left_eye", "right_eye", "proprioception"],
         "critic": ["proprioception", "hands_seen"],
     }
@@ -341,19 +344,20 @@ def test_an_asymmetric_critic_with_a_shared_body_is_refused_up_front():
 def test_the_cnn_policy_trains_with_the_asymmetric_critic_unless_told_or_saved_otherwise():
     """Issue #40: ``policy=cnn`` gets the critic without eye CNNs by default; the paper preset
     keeps the paper's critic, and a config saved before the key existed loads as trained."""
-    from devlearn.testing import run_config
-    from devlearn.testing.runs import from_dict, to_dict
+    from devlearn.testing import load_saved_config, run_config, saved_config
 
     fresh = run_config(HandRegard, ["behavior.policy=cnn"])
     assert fresh.behavior.critic == "proprio"
-    groups = HandRegard(fresh.behavior).obs_groups(
-        ["left_eye", "right_eye", "proprioception", "hands_seen"]
+    groups = (
+        HandRegard(fresh.behavior)
+        .network()
+        .obs_groups(["left_eye", "right_eye", "proprioception", "hands_seen"])
     )
     assert groups["critic"] == ["proprioception", "hands_seen"]
     assert run_config(HandRegard, preset="paper").behavior.critic == "same"
-    saved = to_dict(fresh)
+    saved = saved_config(fresh)
     del saved["behavior"]["critic"]  # as issue #29's CNN runs saved theirs
-    assert from_dict(saved, HandRegard).behavior.critic == "same"
+    assert load_saved_config(saved, HandRegard).behavior.critic == "same"
 
 
 def test_a_detector_file_with_values_no_calibration_writes_is_one_line(tmp_path, detector_file):
@@ -386,11 +390,11 @@ def test_a_detector_file_with_values_no_calibration_writes_is_one_line(tmp_path,
             HandRegard(HandRegardConfig(detector_file=str(path))).detector  # noqa: B018
         run = tmp_path / f"run{i}"
         with pytest.raises(UsageError, match=expected):
-            HandRegard(HandRegardConfig(detector_file=str(path))).prepare(run)
+            HandRegard(HandRegardConfig(detector_file=str(path))).artifacts().prepare(run)
         assert not (run / DETECTOR_FILE).exists()
     behavior = HandRegard(HandRegardConfig(detector_file=str(deep)))
     with pytest.raises(UsageError, match="its JSON is nested too deeply"):
         behavior.detector  # noqa: B018
     stored = {"format_version": 2, **{**good, "min_area": float("nan")}}
     with pytest.raises(UsageError, match="the checkpoint's hand detector: min_area"):
-        HandRegard().load_policy_artifacts({"hand_detector": stored}, tmp_path)
+        HandRegard().artifacts().load_policy_artifacts({"hand_detector": stored}, tmp_path)

@@ -13,7 +13,7 @@ from devlearn_hand_regard import HandRegard, HandRegardConfig
 
 from devlearn import build_infant
 from devlearn.api.errors import UsageError
-from devlearn.testing.envs import BehaviorEnv
+from devlearn.testing import Play
 
 RESULTS = Path(__file__).resolve().parents[3] / "results" / "hand_regard"
 
@@ -29,8 +29,10 @@ def starts(seed, episodes, sitting, detector_file, eval_start="random"):
     """Joint angles and toy positions at the start of each evaluation episode."""
     behavior = HandRegard(HandRegardConfig(eval_start=eval_start))
     behavior.config.detector_file = str(detector_file)
-    env = BehaviorEnv(behavior, seed, lambda scene, senses, **options: sitting, training=False)
-    env.set_stage(behavior.eval_stage())
+    env = Play(
+        behavior, seed=seed, infant_factory=lambda scene, senses, **options: sitting, training=False
+    )
+    env.set_stage(behavior.evaluation().stage)
     toys = [g for g in range(sitting.model.ngeom) if sitting.model.geom(g).name.startswith("toy")]
     out = []
     for _ in range(episodes):
@@ -53,7 +55,7 @@ def test_evaluation_episodes_differ_and_repeat_with_the_seed(sitting, detector_f
     head, arms = sitting.actuator_groups["head"], sitting.actuator_groups["left_arm"]
     assert np.ptp([q[head] for q, _ in first], axis=0).min() > 0  # every head joint varies
     assert np.ptp([q[arms] for q, _ in first], axis=0).min() > 0
-    random = HandRegard(HandRegardConfig(eval_start="random")).eval_stage()
+    random = HandRegard(HandRegardConfig(eval_start="random")).evaluation().stage
     assert random == {"active_arms": ["left", "right"], "random_pose": True}
 
 
@@ -97,21 +99,21 @@ def test_detector_is_found_beside_a_relocated_checkpoint(tmp_path, detector_file
     moved = tmp_path / "elsewhere" / "run"
     shutil.copytree(original, moved)
     shutil.rmtree(original)
-    behavior.load_policy_artifacts({}, moved)
+    behavior.artifacts().load_policy_artifacts({}, moved)
     assert behavior.config.detector_file == str(moved / "hand_detector.json")
     assert behavior.detector.params is not None
     (moved / "hand_detector.json").unlink()
     with pytest.raises(UsageError, match="hand_detector.json"):
-        HandRegard(behavior.config).load_policy_artifacts({}, moved)
+        HandRegard(behavior.config).artifacts().load_policy_artifacts({}, moved)
 
 
 def test_policy_artifacts_carry_the_detector(detector_file):
     behavior = HandRegard()
     behavior.config.detector_file = str(detector_file)
-    artifacts = json.loads(json.dumps(behavior.policy_artifacts()))  # plain data only
+    artifacts = json.loads(json.dumps(behavior.artifacts().policy_artifacts()))  # plain data only
     restored = HandRegard()
     restored.config.detector_file = "/nowhere/hand_detector.json"
-    restored.load_policy_artifacts(artifacts, detector_file.parent)
+    restored.artifacts().load_policy_artifacts(artifacts, detector_file.parent)
     assert restored.detector.params == behavior.detector.params
 
 
@@ -120,17 +122,16 @@ def old_run_policy(detector_file: Path) -> dict:
     config (old scene, random starts; its policy file is in git history since 2d704d9) with
     an actor of that config and the detector among its artifacts. The weights are fresh: these
     tests check the evaluation protocol, not what the policy does."""
-    from devlearn.testing import policy_file, policy_network
-    from devlearn.testing.runs import from_dict
+    from devlearn.testing import load_saved_config, policy_file, policy_network
 
     saved = json.loads((RESULTS / "run" / "config.json").read_text())
     saved["behavior"]["detector_file"] = str(detector_file)
-    cfg = from_dict(saved, HandRegard)
+    cfg = load_saved_config(saved, HandRegard)
     behavior = HandRegard(cfg.behavior)
-    env = BehaviorEnv(behavior, 0, training=False)
+    env = Play(behavior, training=False)
     try:
-        env.set_stage(behavior.eval_stage())
-        obs = env.reset()
+        env.set_stage(behavior.evaluation().stage)
+        [obs] = env.reset()
         actor = policy_network(cfg, behavior, obs, env.action_dim)
     finally:
         env.close()

@@ -112,7 +112,7 @@ def test_eval_reports_pixel_precision_and_recall_per_hand():
 
 
 def test_training_mode_uses_the_detector():
-    evaluator = HandRegard().evaluator(training=True)
+    evaluator = HandRegard().evaluation().evaluator(True)
     step(evaluator, [[0, 0], [0, 0]], [[1, 1], [0, 0]])  # truth ignored in training
     step(evaluator, [[0, 0], [0, 0]], [[1, 0], [0, 0]])
     metrics = evaluator.end_episode()

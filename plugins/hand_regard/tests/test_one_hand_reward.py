@@ -24,6 +24,7 @@ from devlearn_hand_regard.rewards import BilateralBalance, HandCount, ReachIntoV
 
 from devlearn import build_infant
 from devlearn.api.rewards import StepContext
+from devlearn.testing import facts_of
 
 DETECTOR = (
     Path(__file__).resolve().parents[3]
@@ -97,8 +98,10 @@ def test_one_hand_before_both_eyes_earns_nothing_for_the_other(infant, attributi
     )
     assert behavior.detector.attribution == attribution
     infant.reset(np.random.default_rng(0), start="babybench")
-    behavior.on_episode_start(infant, np.random.default_rng(0))
-    behavior.process_action(np.zeros(infant.action_dim), BOTH_ARMS)  # both arms move
+    behavior.episode().hooks.on_episode_start(infant, np.random.default_rng(0))
+    behavior.episode().hooks.process_action(
+        np.zeros(infant.action_dim), BOTH_ARMS
+    )  # both arms move
     balance, count, reach = BilateralBalance(), HandCount(), ReachIntoView(bonus=1.0)
     absent = 1 - held
     poses = LEFT_HAND_HELD if held == 0 else [mirrored(p) for p in LEFT_HAND_HELD]
@@ -111,7 +114,7 @@ def test_one_hand_before_both_eyes_earns_nothing_for_the_other(infant, attributi
             labels = (infant.hand_labels["left"], infant.hand_labels["right"])
             assert all((seg[eye] == labels[held]).sum() >= 20 for eye in range(2))
             assert not np.isin(seg, labels[absent]).any()
-            facts = behavior.facts(infant)
+            facts = facts_of(behavior, infant)
             ctx = StepContext(infant, {}, facts, step, False, BOTH_ARMS)
             detections = facts["hand_detections"]
             value = balance(ctx)

@@ -53,7 +53,7 @@ def test_babbling_finds_arm_correlated_tracks(real):
 
 
 def test_no_toy_colour_is_hand_coloured(real):
-    from devlearn.testing.fixtures import TOY_COLOURS
+    from devlearn.testing import TOY_COLOURS
 
     detector = HandDetector(real[0])
     for rgba in TOY_COLOURS:  # flat, shaded and lit toy faces

@@ -63,7 +63,7 @@ def test_skin_detector_finds_the_hands_but_not_only_them(skin):
 
 def test_skin_detector_fires_on_a_skin_coloured_forearm(skin):
     # A flat patch of the body's own skin colour is "hand" to the skin detector.
-    from devlearn.testing.fixtures import SKIN_RGBA
+    from devlearn.testing import SKIN_RGBA
 
     patch = np.full((8, 8, 3), np.array(SKIN_RGBA[:3]) * 255 * 0.9, np.uint8)
     assert HandDetector(skin[0]).colour_mask(patch).mean() > 0.5

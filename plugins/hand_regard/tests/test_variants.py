@@ -11,9 +11,7 @@ from devlearn_hand_regard import HandRegard, HandRegardConfig
 from fake_sitting import FakeSittingInfant
 
 from devlearn.api.errors import UsageError
-from devlearn.testing import run_config
-from devlearn.testing.envs import BehaviorEnv
-from devlearn.testing.runs import from_dict, to_dict
+from devlearn.testing import Play, config_round_trip, load_saved_config, run_config
 
 ROOT = Path(__file__).resolve().parents[3]
 PAPER_TERMS = ["hand_count", "motion", "living_penalty"]
@@ -74,7 +72,7 @@ def test_reward_switch_on_the_command_line():
 def test_unknown_choice_names_the_valid_ones(key, value, valid):
     behavior = HandRegard(HandRegardConfig(**{key: value}))
     with pytest.raises(UsageError, match=f"unknown behavior.{key} '{value}'; valid: {valid}"):
-        behavior.reward_terms() if key == "reward" else behavior.infant_options()
+        behavior.reward_terms() if key == "reward" else behavior.episode().infant_options
 
 
 @pytest.mark.parametrize("appearance", ["skin", "mittens"])
@@ -86,7 +84,7 @@ def test_env_builds_the_infant_in_the_configured_appearance(appearance):
         return FakeSittingInfant(scene, senses)
 
     behavior = HandRegard(HandRegardConfig(appearance=appearance))
-    BehaviorEnv(behavior, seed=0, infant_factory=factory)
+    Play(behavior, infant_factory=factory)
     assert built == [("sitting_babybench", {"appearance": appearance, "start": "babybench"})]
 
 
@@ -94,18 +92,18 @@ def test_old_run_config_loads_with_mittens_and_the_bilateral_term():
     # results/hand_regard/run was trained before these keys existed: mittens, bilateral term.
     saved = json.loads((ROOT / "results/hand_regard/run/config.json").read_text())
     assert "appearance" not in saved["behavior"] and "reward" not in saved["behavior"]
-    cfg = from_dict(saved, HandRegard)
+    cfg = load_saved_config(saved, HandRegard)
     assert cfg.behavior.appearance == "mittens" and cfg.behavior.reward == "bilateral"
     assert "bilateral_balance" in _names(cfg.behavior)
     # Its policy file (in git history since 2d704d9) carried this config: the old scene.
     behavior = HandRegard(cfg.behavior)
-    assert behavior.infant_options() == {"appearance": "mittens", "start": "rest"}
+    assert behavior.episode().infant_options == {"appearance": "mittens", "start": "rest"}
     assert behavior.scene == "sitting" and behavior.config.policy == "cnn"
     # A config saved now keeps its own values; no saved behaviour section: today's defaults.
     fresh = run_config(HandRegard, ["behavior.appearance=skin", "behavior.reward=paper"])
-    again = from_dict(to_dict(fresh), HandRegard).behavior
+    again = config_round_trip(fresh, HandRegard).behavior
     assert (again.appearance, again.reward) == ("skin", "paper")
-    assert from_dict({}, HandRegard).behavior.appearance == HandRegardConfig().appearance
+    assert load_saved_config({}, HandRegard).behavior.appearance == HandRegardConfig().appearance
 
 
 def test_policy_spread_bound_reaches_the_network():

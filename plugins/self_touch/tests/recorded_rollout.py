@@ -7,9 +7,10 @@ facts and observations, the compiled proprioception and the compiled guards) wit
     git archive f17ca1c | tar -x -C BASE
     PYTHONPATH=BASE:BASE/plugins/self_touch/src python recorded_rollout.py OUT.npz
 
-Only APIs that commit already had are used, so the same function replays it on today's code:
-a decision every physics step (``make_envs``' default ``action_repeat=1``), so the test also
-checks that K=1 is bit for bit the environment from before the decision rate (issue #28).
+It was recorded through the core's ``make_envs`` and ``step_batch`` of that commit; today's
+function plays the same batch (the same seeds, one copy of the behaviour per env) through
+``devlearn.testing.Play``, a decision every physics step (``action_repeat=1``), so the test
+also checks that K=1 is bit for bit the environment from before the decision rate (issue #28).
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ import sys
 
 import numpy as np
 
-from devlearn.testing.envs import EPISODE_RECORD
+from devlearn.testing import EPISODE_RECORD
 
 NUM_ENVS, STEPS, EPISODE_STEPS, SEED = 2, 120, 40, 3
 
@@ -41,29 +42,27 @@ def record_rollout() -> dict[str, np.ndarray]:
     """
     from devlearn_self_touch import SelfTouch
 
-    from devlearn.testing import place_hand_on_body
-    from devlearn.testing.envs import make_envs, step_batch
+    from devlearn.testing import Play, place_hand_on_body
 
     behavior = SelfTouch()
     # the memory f17ca1c had (each env its own); an unknown attribute there, so harmless
     behavior.config.lifetime_memory = "per_env"
     behavior.config.touch_count = "step"  # the paper's count, which f17ca1c had (issue #28)
-    envs = make_envs(behavior, list(range(NUM_ENVS)), None)
+    envs = Play(behavior, NUM_ENVS)
     rng = np.random.default_rng(SEED)
     out: dict[str, list] = {"body_map": [], "proprioception": [], "rewards": [], "dones": []}
     info_values: list[float] = []
     keys: list[str] = []
     try:
-        for env in envs:
-            env.set_stage({"random_pose": True})
-            env.episode_steps = EPISODE_STEPS
-            env.reset()
+        envs.set_stage({"random_pose": True})
+        envs.episode_steps = EPISODE_STEPS
+        envs.reset()
         for t in range(STEPS):
             if t % 10 == 5:
-                for env in envs:
-                    place_hand_on_body(env.infant, rng)
-            actions = rng.uniform(-1, 1, (NUM_ENVS, envs[0].action_dim))
-            results = step_batch(envs, actions)
+                for infant in envs.infants:
+                    place_hand_on_body(infant, rng)
+            actions = rng.uniform(-1, 1, (NUM_ENVS, envs.action_dim))
+            results = envs.step(actions)
             out["body_map"].append([obs["body_map"] for obs, *_ in results])
             out["proprioception"].append([obs["proprioception"] for obs, *_ in results])
             out["rewards"].append([reward for _, reward, *_ in results])
@@ -73,8 +72,7 @@ def record_rollout() -> dict[str, np.ndarray]:
                     keys = sorted(k for k in info if k != EPISODE_RECORD)  # not a number
                     info_values.extend(info[k] for k in keys)
     finally:
-        for env in envs:
-            env.close()
+        envs.close()
     return {
         "body_map": np.array(out["body_map"], dtype=np.float32),
         "proprioception": np.array(out["proprioception"], dtype=np.float32),

@@ -7,7 +7,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from devlearn import StepContext
-from devlearn.testing.envs import EPISODE_RECORD
+from devlearn.testing import EPISODE_RECORD
 
 TINY_RUN = ["env.action_repeat=1", "ppo.num_steps_per_env=20", "ppo.num_mini_batches=2"]
 """One iteration is one 20-step episode per env (SwappingInfant's script), two minibatches."""
@@ -86,7 +86,7 @@ class FakeInfant:
 
 
 class ScriptedInfant(FakeInfant):
-    """A fake infant for :class:`devlearn.env.BehaviorEnv` whose hands follow a script.
+    """A fake infant for :class:`devlearn.testing.Play` whose hands follow a script.
 
     On episode step t the left hand touches region t while t < ``left`` and the right hand
     touches region 34 + t while t < ``right`` (both hands, the same part index t).

@@ -12,8 +12,10 @@ from devlearn_self_touch import ActivityLevel, Effort, SelfTouch, SelfTouchConfi
 from devlearn_self_touch.activity import hand_speed, joint_speed
 
 from devlearn import BatchContext, StepContext, UsageError
-from devlearn.testing import run_config
-from devlearn.testing.fixtures import crib_infant  # noqa: F401 (a fixture)
+from devlearn.testing import (
+    crib_infant,  # noqa: F401 (a fixture)
+    run_config,
+)
 
 
 class MovingBody:

@@ -9,13 +9,7 @@ from per_env_rewards import per_env_reward_terms
 from self_touch_fakes import ScriptedInfant, same_info
 
 from devlearn import StepContext
-from devlearn.testing.envs import (
-    BehaviorEnv,
-    make_envs,
-    share_batched_terms,
-    step_batch,
-    term_values,
-)
+from devlearn.testing import Play
 
 
 def recorded_steps(rng, num_envs: int, steps: int, episode: int):
@@ -98,39 +92,39 @@ class PerEnvSelfTouch(SelfTouch):
 
 
 def test_envs_log_the_same_sums_with_either_form():
-    """Through BehaviorEnv and a shared batch: same rewards, same reward/<term> sums, state."""
+    """Played in a batch and one env at a time: same rewards, reward/<term> sums, state."""
 
     def factory(k):
         return lambda scene, senses=(): ScriptedInfant(scene, senses, left=12 - k, right=9 + k)
 
     config = SelfTouchConfig(lifetime_memory=PER_ENV)
-    batch = [BehaviorEnv(SelfTouch(config), k, factory(k)) for k in range(3)]
-    share_batched_terms(batch)
-    reference = [BehaviorEnv(PerEnvSelfTouch(config), k, factory(k)) for k in range(3)]
-    for env in batch + reference:
+    batch = Play(SelfTouch(config), seeds=[0, 1, 2], infant_factory=[factory(k) for k in range(3)])
+    reference = [Play(PerEnvSelfTouch(config), seed=k, infant_factory=factory(k)) for k in range(3)]
+    batch.reset()
+    for env in reference:
         env.reset()
     ends = 0
     for _ in range(3 * ScriptedInfant.episode_steps):
-        got = step_batch(batch, np.zeros((3, 4)))
-        want = [env.step(np.zeros(4)) for env in reference]
+        got = batch.step(np.zeros((3, 4)))
+        want = [env.step(np.zeros(4))[0] for env in reference]
         for (_, r1, d1, _, i1), (_, r2, d2, _, i2) in zip(got, want):
             assert (r1, d1) == (r2, d2) and same_info(i1, i2)
             ends += i1 is not None
     assert ends == 9
-    for a, b in zip(batch, reference):
+    for a, b in zip(batch.state(), reference):
         assert all(
-            _same_state(x, y)
-            for x, y in zip(a.state_dict()["terms"].values(), b.state_dict()["terms"].values())
+            _same_state(x, y) for x, y in zip(a["terms"].values(), b.state()[0]["terms"].values())
         )
 
 
 @pytest.mark.parametrize("memory, rows", [(PER_ENV, 3), ("shared", 1)])
 def test_worker_batches_share_one_instance_per_term(memory, rows):
-    envs = make_envs(SelfTouch(SelfTouchConfig(lifetime_memory=memory)), [0, 1, 2], ScriptedInfant)
-    assert all(a is b for a, b in zip(envs[0].terms, envs[2].terms))
-    assert [env.batch_index for env in envs] == [0, 1, 2]
-    assert envs[0].terms[0].ever.shape == (rows, 68)
-    for env in envs:
-        env.reset()
-    contexts = [env.advance(np.zeros(4)) for env in envs]
-    assert term_values(envs, contexts).shape == (4, 3)
+    envs = Play(
+        SelfTouch(SelfTouchConfig(lifetime_memory=memory)), 3, infant_factory=ScriptedInfant
+    )
+    assert envs.reward_terms[0].num_envs == 3  # one instance of each term for the batch
+    assert envs.reward_terms[0].ever.shape == (rows, 68)
+    envs.reset()
+    values = envs.term_values(np.zeros((3, 4)))
+    assert list(values) == [t.name for t in envs.reward_terms]
+    assert all(v.shape == (3,) for v in values.values()) and len(values) == 4

@@ -14,9 +14,14 @@ from devlearn_self_touch import SelfTouch, SelfTouchConfig, TouchNovelty
 from self_touch_fakes import ScriptedInfant
 
 from devlearn import BatchContext, StepContext, UsageError
-from devlearn.testing import PluginRegistry, run_command, run_config
-from devlearn.testing.envs import BehaviorEnv
-from devlearn.testing.runs import from_dict, to_dict
+from devlearn.testing import (
+    Play,
+    PluginRegistry,
+    config_round_trip,
+    load_saved_config,
+    run_command,
+    run_config,
+)
 
 ROOT = Path(__file__).resolve().parents[3]
 PUBLISHED = ROOT / "results/self_touch/i30/curriculum/two_stage/seed=4"
@@ -90,9 +95,9 @@ class HoldingInfant(ScriptedInfant):
 
 def rewards(action_repeat: int, decisions: int) -> list[float]:
     behavior = SelfTouch(SelfTouchConfig(touch_count="step"))
-    env = BehaviorEnv(behavior, 0, HoldingInfant, action_repeat=action_repeat)
+    env = Play(behavior, infant_factory=HoldingInfant, action_repeat=action_repeat)
     env.reset()
-    return [env.step(np.zeros(env.action_dim))[1] for _ in range(decisions)]
+    return [reward for [(_, reward, *_)] in env.play(decisions)]
 
 
 def test_changing_the_decision_rate_keeps_the_reward_in_time():
@@ -110,26 +115,26 @@ def test_changing_the_decision_rate_keeps_the_reward_in_time():
 
 
 def test_the_episode_length_in_seconds():
-    env = BehaviorEnv(SelfTouch(SelfTouchConfig(episode_s=0.06)), 0, ScriptedInfant)
+    env = Play(SelfTouch(SelfTouchConfig(episode_s=0.06)), infant_factory=ScriptedInfant)
     assert env.episode_steps == 12  # 0.06 s of 5 ms steps, not the scripted infant's 20
     env.reset()
-    infos = [env.step(np.zeros(env.action_dim))[4] for _ in range(12)]
+    infos = [info for [(*_, info)] in env.play(12)]
     assert infos[:-1] == [None] * 11 and infos[-1]["reward/balance"] == 10.0
     with pytest.raises(ValueError, match="episode_s must be above 0 seconds"):
         SelfTouch(SelfTouchConfig(episode_s=0.0))
-    with pytest.raises(UsageError, match=r"self_touch's episode_seconds\(\): 0.0123 s is not"):
-        BehaviorEnv(SelfTouch(SelfTouchConfig(episode_s=0.0123)), 0, ScriptedInfant)
+    with pytest.raises(UsageError, match=r"self_touch's episode\(\).seconds: 0.0123 s is not"):
+        Play(SelfTouch(SelfTouchConfig(episode_s=0.0123)), infant_factory=ScriptedInfant)
 
 
 def test_saved_runs_keep_the_clock_they_were_trained_with():
     saved = json.loads((PUBLISHED / "config.json").read_text())
     assert "repeat_crossing_s" not in saved["behavior"]
-    old = from_dict(saved, SelfTouch).behavior
+    old = load_saved_config(saved, SelfTouch).behavior
     assert (old.repeat_crossing_s, old.repeat_steepness_s, old.episode_s) == (None, None, None)
     assert touch_novelty(old).clock is None  # the rewards table's counts
-    new = from_dict(to_dict(run_config(SelfTouch)), SelfTouch).behavior
+    new = config_round_trip(run_config(SelfTouch), SelfTouch).behavior
     assert (new.repeat_crossing_s, new.repeat_steepness_s, new.episode_s) == (0.05, 0.01, None)
-    fresh = from_dict({"behavior": {}}, SelfTouch, run_config(SelfTouch)).behavior
+    fresh = load_saved_config({"behavior": {}}, SelfTouch, run_config(SelfTouch)).behavior
     assert fresh.repeat_crossing_s == 0.05
     assert PluginRegistry().behavior("self_touch") is SelfTouch
 

@@ -13,7 +13,7 @@ from devlearn_self_touch.body_map import body_map, hand_touched_parts, sparse_bo
 from self_touch_fakes import FakeInfant, make_ctx
 
 from devlearn import Behavior, Curriculum
-from devlearn.testing import PluginRegistry
+from devlearn.testing import PluginRegistry, facts_of, observations_of
 
 
 def test_entry_point_is_declared_and_registers_self_touch():
@@ -56,21 +56,21 @@ def test_facts_touched_sources():
     contacts = np.zeros((2, 68), bool)
     contacts[0, 30] = True
     infant = FakeInfant(touch, contacts)
-    facts = SelfTouch().facts(infant)
+    facts = facts_of(SelfTouch(), infant)
     assert facts["body_map"][20] == pytest.approx(0.5)
     assert facts["body_map"][30] == pytest.approx(0.01)
     assert np.flatnonzero(facts["touched"]).tolist() == [30]  # default: hands, light touch counts
     assert facts["hand_parts"].shape == (2, 34) and facts["hand_parts"][0, 30]
-    literal = SelfTouch(SelfTouchConfig(touch_source="threshold")).facts(infant)
+    literal = facts_of(SelfTouch(SelfTouchConfig(touch_source="threshold")), infant)
     assert np.flatnonzero(literal["touched"]).tolist() == [20]  # the paper's rule: mattress
-    either = SelfTouch(SelfTouchConfig(touch_source="hands_or_threshold")).facts(infant)
+    either = facts_of(SelfTouch(SelfTouchConfig(touch_source="hands_or_threshold")), infant)
     assert np.flatnonzero(either["touched"]).tolist() == [20, 30]
 
 
 def test_observations_have_fixed_shapes_and_are_scaled():
     behavior = SelfTouch()
     infant = FakeInfant()
-    obs = behavior.observe(infant, behavior.facts(infant))
+    obs = observations_of(behavior, infant)
     assert set(obs) == {"body_map", "proprioception"}
     assert obs["body_map"].shape == (68,) and obs["body_map"].dtype == np.float32
     g = np.full(68, behavior.config.body_map_scale)
@@ -121,17 +121,17 @@ def test_config_rejects_unknown_choices_and_documents_every_field():
 def test_behavior_contract():
     behavior = SelfTouch()
     assert isinstance(behavior, Behavior)
-    assert behavior.scene == "crib" and "touch" in behavior.senses
+    assert behavior.scene == "crib" and "touch" in behavior.episode().senses
     assert [t.name for t in behavior.reward_terms()] == [
         "touch_novelty",
         "contact_novelty",
         "diversity_milestones",
         "balance",
     ]
-    assert behavior.eval_stage() == {"random_pose": True}
+    assert behavior.evaluation().stage == {"random_pose": True}
     from devlearn_self_touch.behavior import DEFAULT_STEPS
 
-    assert behavior.train_defaults() == {"total_steps": DEFAULT_STEPS}  # issue #55
+    assert behavior.about.train_defaults == {"total_steps": DEFAULT_STEPS}  # issue #55
     import pickle
 
     assert pickle.loads(pickle.dumps(behavior)).config == behavior.config

@@ -11,9 +11,15 @@ from devlearn_self_touch import SelfTouch
 
 import devlearn
 from devlearn.api.errors import UsageError
-from devlearn.testing import PluginRegistry, policy_network, run_config
-from devlearn.testing.envs import BehaviorEnv
-from devlearn.testing.runs import from_dict, load_run_config, to_dict
+from devlearn.testing import (
+    Play,
+    PluginRegistry,
+    config_round_trip,
+    load_saved_config,
+    policy_network,
+    run_config,
+    saved_config,
+)
 
 ROOT = Path(__file__).resolve().parents[3]
 RESULTS = ROOT / "results/self_touch"
@@ -46,7 +52,7 @@ def test_paper_preset_gives_the_papers_values():
 
 def test_a_new_config_loads_back_with_its_own_values():
     """LEGACY_DEFAULTS fill only what a saved config lacks."""
-    cfg = from_dict(to_dict(run_config(SelfTouch)), SelfTouch)
+    cfg = config_round_trip(run_config(SelfTouch), SelfTouch)
     assert (cfg.behavior.max_std, cfg.behavior.lifetime_memory) == (1.0, "shared")
 
 
@@ -59,7 +65,7 @@ def test_published_runs_load_as_trained(run, max_std):
     unbounded spread and per-environment memory they were trained with, also on --resume."""
     data = json.loads((RESULTS / run / "config.json").read_text())
     assert "lifetime_memory" not in data["behavior"]
-    cfg = load_run_config(RESULTS / run, PluginRegistry())
+    cfg = load_saved_config(RESULTS / run, PluginRegistry())
     assert (cfg.behavior.max_std, cfg.behavior.lifetime_memory) == (max_std, "per_env")
 
 
@@ -68,13 +74,13 @@ def test_the_old_runs_policy_is_rebuilt_with_its_unbounded_spread():
     its policy file is in git history since 2d704d9): a policy of its saved config, rebuilt
     after the default became 1.0, still has that spread."""
     registry = PluginRegistry()
-    cfg = from_dict(json.loads((RESULTS / "run/config.json").read_text()), SelfTouch)
+    cfg = load_saved_config(json.loads((RESULTS / "run/config.json").read_text()), SelfTouch)
     assert (cfg.behavior.max_std, cfg.behavior.lifetime_memory) == (0.0, "per_env")
     behavior = registry.create("self_touch", cfg.behavior)
-    env = BehaviorEnv(behavior, 0, training=False)
+    env = Play(behavior, training=False)
     try:
-        env.set_stage(behavior.eval_stage())
-        obs = env.reset()
+        env.set_stage(behavior.evaluation().stage)
+        [obs] = env.reset()
         saved = policy_network(cfg, behavior, obs, env.action_dim).state_dict()
         actor = policy_network(cfg, behavior, obs, env.action_dim, weights=saved)
     finally:
@@ -117,7 +123,7 @@ def test_only_self_touchs_own_terms_may_be_named(cls):
     with pytest.raises(UsageError) as refused:
         run_config(SelfTouch, [f"{key}.cls={cls}", f"{key}.params={{}}"])
     assert str(refused.value) == expected
-    saved = to_dict(run_config(SelfTouch))
+    saved = saved_config(run_config(SelfTouch))
     saved["behavior"]["rewards"]["diversity_milestones"] = {"cls": cls, "weight": 1.0}
     with pytest.raises(UsageError, match=re.escape(expected)):
-        from_dict(saved, SelfTouch)
+        load_saved_config(saved, SelfTouch)

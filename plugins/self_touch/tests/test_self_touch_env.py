@@ -1,4 +1,4 @@
-"""The behaviour inside a real BehaviorEnv, with a scripted fake infant: per-episode sums."""
+"""The behaviour played as training plays it, with a scripted fake infant: per-episode sums."""
 
 from __future__ import annotations
 
@@ -7,19 +7,19 @@ import pytest
 from devlearn_self_touch import SelfTouch
 from self_touch_fakes import ScriptedInfant
 
-env_module = pytest.importorskip("devlearn.env")
+from devlearn.testing import Play
 
 
-def _run_episode(env) -> dict[str, float]:
+def _run_episode(env: Play) -> dict[str, float]:
     for _ in range(ScriptedInfant.episode_steps):
-        _, reward, done, _, info = env.step(np.zeros(ScriptedInfant.action_dim))
+        [(_, reward, done, _, info)] = env.step(np.zeros(ScriptedInfant.action_dim))
         assert np.isfinite(reward)
     assert done
     return info
 
 
 def test_two_episodes_pay_what_the_paper_says():
-    env = env_module.BehaviorEnv(SelfTouch(), seed=0, infant_factory=ScriptedInfant)
+    env = Play(SelfTouch(), seed=0, infant_factory=ScriptedInfant)
     env.reset()
     # 22 regions touched once each: left hand regions 0..11, right hand regions 34..43.
     first = _run_episode(env)
@@ -35,9 +35,9 @@ def test_two_episodes_pay_what_the_paper_says():
     assert second["reward/contact_novelty"] == pytest.approx(22 * 2.0)
     assert second["reward/diversity_milestones"] == pytest.approx(20.0)
     # Resume: lifetime memory comes back, so a restored env pays "first in episode" only.
-    state = env.state_dict()
-    resumed = env_module.BehaviorEnv(SelfTouch(), seed=1, infant_factory=ScriptedInfant)
-    resumed.load_state_dict(state)
+    state = env.state()
+    resumed = Play(SelfTouch(), seed=1, infant_factory=ScriptedInfant)
+    resumed.load_state(state)
     resumed.reset()
     assert _run_episode(resumed)["reward/contact_novelty"] == pytest.approx(22 * 2.0)
 
@@ -46,7 +46,7 @@ def test_unbalanced_hands_get_no_balance_bonus():
     def factory(scene, senses=()):
         return ScriptedInfant(scene, senses, left=12, right=8)
 
-    env = env_module.BehaviorEnv(SelfTouch(), seed=0, infant_factory=factory)
+    env = Play(SelfTouch(), seed=0, infant_factory=factory)
     env.reset()
     info = _run_episode(env)
     assert info["reward/balance"] == 0.0  # |12 - 8| = 4 > 3

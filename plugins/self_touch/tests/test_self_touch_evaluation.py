@@ -21,7 +21,7 @@ def test_settle_period_does_not_credit_the_reset_contact():
     # The reset pose lands the left hand on part 5 (steps 0-2); the policy later touches
     # part 7 with the right hand (step 12).
     contacts = {0: [(0, 5)], 1: [(0, 5)], 2: [(0, 5)], 12: [(1, 7)]}
-    settled = run_episode(SelfTouch().evaluator(training=False), contacts)
+    settled = run_episode(SelfTouch().evaluation().evaluator(False), contacts)
     assert settled == {
         "coverage_left": 0.0,
         "coverage_right": 1.0,
@@ -36,11 +36,11 @@ def test_settle_period_does_not_credit_the_reset_contact():
 
 
 def test_settle_is_recorded_and_training_credits_every_step():
-    evaluator = SelfTouch().evaluator(training=False)
+    evaluator = SelfTouch().evaluation().evaluator(False)
     assert evaluator.settle_steps == 10 and evaluator.protocol()["settle_steps"] == 10
     run_episode(evaluator, {})
     assert evaluator.summary()["settle_steps"] == 10
-    training = SelfTouch().evaluator(training=True)
+    training = SelfTouch().evaluation().evaluator(True)
     assert run_episode(training, {0: [(0, 5)]})["coverage_left"] == 1.0
     with pytest.raises(ValueError, match="settle_steps"):
         SelfTouchEvaluator(training=False, settle_steps=-1)

@@ -12,9 +12,14 @@ from devlearn_self_touch.rewards import ContactNovelty, TouchNovelty
 from self_touch_fakes import SwappingInfant, make_ctx, train_swapping
 
 from devlearn import BatchContext
-from devlearn.testing import load_checkpoint, registry_for, run_config, train
-from devlearn.testing.envs import DevVecEnv
-from devlearn.testing.runs import load_run_config
+from devlearn.testing import (
+    Play,
+    load_checkpoint,
+    load_saved_config,
+    registry_for,
+    run_config,
+    train,
+)
 
 GROUPS = np.zeros(68, bool)
 GROUPS[:10] = True  # SwappingInfant's env 0 discovers regions 0-4, env 1 regions 5-9
@@ -44,46 +49,50 @@ def test_unknown_lifetime_memory_names_the_valid_ones():
         TouchNovelty(lifetime_memory="run")
 
 
-def _episode_sums(vec: DevVecEnv, term: str) -> list[float]:
-    """Step ``vec`` through one episode; return each env's ``reward/<term>`` sum."""
+def _episode_sums(*batches: Play, term: str) -> list[float]:
+    """Play every batch through one episode; return each env's ``reward/<term>`` sum."""
     infos = []
-    for _ in range(SwappingInfant.episode_steps):
-        infos += vec.step(torch.zeros(vec.num_envs, 4))[3]["episode_infos"]
+    for batch in batches:
+        for steps in batch.play(SwappingInfant.episode_steps):
+            infos += [info for *_, info in steps if info is not None]
     return [info[f"reward/{term}"] for info in infos]
 
 
-def _vec(memory: str, workers: int) -> DevVecEnv:
+def _batch(memory: str, seeds: list[int]) -> Play:
     behavior = SelfTouch(SelfTouchConfig(lifetime_memory=memory))
-    return DevVecEnv(behavior, 2, seed=0, workers=workers, infant_factory=SwappingInfant)
+    batch = Play(behavior, seeds=seeds, infant_factory=SwappingInfant)
+    batch.reset()
+    return batch
 
 
 @pytest.mark.parametrize("memory, second", [("shared", 5.0), ("per_env", 25.0)])
 def test_in_process_envs_share_their_discoveries(memory, second):
     """Episode 1: each env discovers 5 regions (5 x 5.0); episode 2: each touches the other's
     regions, known to the run (5 x 1.0), or only to the other env (per_env: 5 x 5.0)."""
-    vec = _vec(memory, workers=0)
+    batch = _batch(memory, [0, 1])
     try:
-        assert _episode_sums(vec, "touch_novelty") == [25.0, 25.0]
-        vec.sync_run_memory()  # nothing to merge in one batch: no change
-        assert _episode_sums(vec, "touch_novelty") == [second, second]
+        assert _episode_sums(batch, term="touch_novelty") == [25.0, 25.0]
+        batch.sync_run_memory()  # nothing to merge in one batch: no change
+        assert _episode_sums(batch, term="touch_novelty") == [second, second]
     finally:
-        vec.close()
+        batch.close()
 
 
 def test_two_workers_merge_their_memories_at_the_iteration_boundary():
     """One env per worker: before the merge each worker knows its own discoveries only; after
-    :meth:`DevVecEnv.sync_run_memory` (the runner's iteration boundary) both know both."""
-    vec = _vec("shared", workers=2)
+    the merge at the runner's iteration boundary (``Play.sync_run_memory``) both know both."""
+    first, second = _batch("shared", [0]), _batch("shared", [1])
     try:
-        assert _episode_sums(vec, "contact_novelty") == [50.0, 50.0]  # 5 pairs x 10.0 each
-        envs = vec.state_dict()["envs"]
+        assert _episode_sums(first, second, term="contact_novelty") == [50.0, 50.0]
+        envs = [*first.state(), *second.state()]  # 5 pairs x 10.0 each, above
         assert [e["terms"]["touch_novelty"]["ever"].sum() for e in envs] == [5, 5]
-        vec.sync_run_memory()
-        for env in vec.state_dict()["envs"]:
+        first.sync_run_memory(second)
+        for env in [*first.state(), *second.state()]:
             assert np.array_equal(env["terms"]["touch_novelty"]["ever"], GROUPS)
-        assert _episode_sums(vec, "contact_novelty") == [10.0, 10.0]  # 5 x 2.0: known pairs
+        assert _episode_sums(first, second, term="contact_novelty") == [10.0, 10.0]  # known
     finally:
-        vec.close()
+        first.close()
+        second.close()
 
 
 def test_shared_memory_survives_resume_with_another_worker_count(tmp_path):
@@ -102,7 +111,7 @@ def test_shared_memory_survives_resume_with_another_worker_count(tmp_path):
         for path in out.iterdir():
             if path.is_file():
                 (copy / path.name).write_bytes(path.read_bytes())
-        cfg = load_run_config(copy, registry)
+        cfg = load_saved_config(copy, registry)
         cfg.workers, cfg.total_steps = workers, 80
         train(cfg, registry, resume=copy, infant_factory=SwappingInfant, progress=False)
         last = json.loads((copy / "metrics.jsonl").read_text().splitlines()[-1])

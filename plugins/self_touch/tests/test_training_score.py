@@ -12,8 +12,7 @@ from devlearn_self_touch import SelfTouch, SelfTouchConfig
 from devlearn_self_touch.evaluation import TrainingScore
 from self_touch_fakes import SwappingInfant, make_ctx, train_swapping
 
-from devlearn.testing import load_checkpoint, registry_for, train
-from devlearn.testing.runs import load_run_config
+from devlearn.testing import load_checkpoint, load_saved_config, registry_for, train
 
 
 def episode(left=(), right=()) -> np.ndarray:
@@ -73,13 +72,13 @@ def test_window_state_round_trips_and_a_shorter_window_keeps_the_newest():
 
 
 def test_training_evaluator_records_each_episode_for_the_run():
-    evaluator = SelfTouch().evaluator(training=True)
+    evaluator = SelfTouch().evaluation().evaluator(True)
     evaluator.record(make_ctx(hand_parts=[(0, 4), (1, 4), (1, 9)], step=0))
     evaluator.end_episode()
     assert np.array_equal(evaluator.episode_record(), episode(left=[4], right=[4, 9]))
-    assert SelfTouch().evaluator(training=False).episode_record() is None
+    assert SelfTouch().evaluation().evaluator(False).episode_record() is None
     behavior = SelfTouch(SelfTouchConfig(training_score_episodes=7))
-    assert behavior.run_metrics().episodes == 7
+    assert behavior.evaluation().run_metrics.episodes == 7
     with pytest.raises(ValueError, match="training_score_episodes must be at least 1"):
         SelfTouchConfig(training_score_episodes=0)
 
@@ -98,7 +97,7 @@ def test_run_logs_the_window_over_all_workers_and_resumes_it(tmp_path):
     assert row["metrics/training_score_episodes"] == 2.0
     state = load_checkpoint(out / "checkpoint_latest.pt")
     assert state["run_metrics"]["parts"].shape == (2, 2, 5)
-    cfg = load_run_config(out, registry)
+    cfg = load_saved_config(out, registry)
     cfg.workers, cfg.total_steps = 0, 80
     train(cfg, registry, resume=out, infant_factory=SwappingInfant, progress=False)
     row = json.loads((out / "metrics.jsonl").read_text().splitlines()[-1])

@@ -125,20 +125,34 @@ class MouthEvaluator(devlearn.Evaluator):
         self.episodes_with_contact += later.episodes_with_contact
 
 
+class LastAction(devlearn.EpisodeHooks):
+    """One environment's action of the step being taken, for its action cost (its hooks keep
+    it; none yet in a new episode, so the first facts pay no action cost)."""
+
+    def __init__(self) -> None:
+        self.action = np.zeros(0)
+
+    def on_episode_start(self, infant: Infant, rng: np.random.Generator) -> None:
+        self.action = np.zeros(0)
+
+    def before_step(self, infant: Infant, action: np.ndarray) -> None:
+        self.action = action
+
+
 class HandToMouth(devlearn.Behavior):
     """Bring a hand to the mouth, in the crib, from proprioception and touch contacts."""
 
     name = "hand_to_mouth"
-    description = "example plugin: bring either hand to the mouth"
     scene = "crib"
-    senses = ("touch", "proprioception")
     config_class = HandToMouthConfig
-    headline_metric = "reached"
+    about = devlearn.About(
+        description="example plugin: bring either hand to the mouth", headline_metric="reached"
+    )
 
     def __init__(self, config: HandToMouthConfig | None = None) -> None:
         super().__init__(config)
         self._target: np.ndarray | None = None  # (68,) bool, built from the infant's regions
-        self._last_action = np.zeros(0)
+        self.last_action = LastAction()
 
     def _target_regions(self, infant: Infant) -> np.ndarray:
         if self._target is None:
@@ -150,22 +164,18 @@ class HandToMouth(devlearn.Behavior):
             self._target = np.isin(np.asarray(infant.regions.parts), wanted)
         return self._target
 
-    def on_episode_start(self, infant: Infant, rng: np.random.Generator) -> None:
-        # No action yet in a new episode: the first facts() pays no action cost.
-        self._last_action = np.zeros(0)
-
-    def before_step(self, infant: Infant, action: np.ndarray) -> None:
-        # The action of the step about to be taken, read by facts() after it.
-        self._last_action = action
-
+    # facts and observations for one environment at a time: per_env runs them batched
+    @devlearn.per_env
     def facts(self, infant: Infant) -> dict[str, Any]:
         contacts = infant.hand_contacts()  # (2 hands, 68) bool
-        energy = float(np.mean(np.square(self._last_action))) if self._last_action.size else 0.0
+        action = self.last_action.action
+        energy = float(np.mean(np.square(action))) if action.size else 0.0
         return {
             "mouth_contact": bool(np.any(contacts[:, self._target_regions(infant)])),
             "action_energy": energy,
         }
 
+    @devlearn.per_env
     def observe(self, infant: Infant, facts: dict[str, Any]) -> dict[str, np.ndarray]:
         return {"proprioception": infant.proprioception().astype(np.float32)}
 
@@ -184,5 +194,8 @@ class HandToMouth(devlearn.Behavior):
             ]
         )
 
-    def evaluator(self, training: bool) -> devlearn.Evaluator:
-        return MouthEvaluator()
+    def episode(self) -> devlearn.EpisodeSpec:
+        return devlearn.EpisodeSpec(senses=("touch", "proprioception"), hooks=self.last_action)
+
+    def evaluation(self) -> devlearn.EvalProtocol:
+        return devlearn.EvalProtocol(evaluator=lambda training: MouthEvaluator())

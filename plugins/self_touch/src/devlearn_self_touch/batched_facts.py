@@ -1,10 +1,12 @@
 """Self-touch facts and observations of a worker's environments at once (one compiled pass each).
 
 :func:`batch_touch_facts` gives, for every infant, exactly (bit for bit) the facts of
-:meth:`SelfTouch.facts`, and :func:`batch_touch_observations` the observations of
-:meth:`SelfTouch.observe`; ``plugins/self_touch/tests/test_batched_facts.py`` compares them on
-recorded steps. The body map's sums repeat numpy's float operations in numpy's order (see
-:func:`_touch_row`); the rest is boolean or done by the same numpy calls over the batch.
+:func:`~devlearn_self_touch.behavior.touch_facts` (that infant alone), and
+:func:`batch_touch_observations` the observations of
+:func:`~devlearn_self_touch.behavior.touch_observations`;
+``plugins/self_touch/tests/test_batched_facts.py`` compares them on recorded steps. The body
+map's sums repeat numpy's float operations in numpy's order (see :func:`_touch_row`); the rest
+is boolean or done by the same numpy calls over the batch.
 """
 
 from __future__ import annotations
@@ -51,7 +53,8 @@ def _touch_row(
 def batch_touch_facts(
     infants: Sequence[Any], touch_source: str, touch_threshold: float
 ) -> list[dict[str, np.ndarray]]:
-    """:meth:`SelfTouch.facts` of every infant; each fact is a row of one (num_envs, ...) array.
+    """:func:`~devlearn_self_touch.behavior.touch_facts` of every infant; each fact is a row of
+    one (num_envs, ...) array.
 
     Args:
         infants: (num_envs,) infants after this step's physics (touch sense enabled).
@@ -74,7 +77,7 @@ def batch_touch_facts(
     if touch_source == "hands":
         touched = contacts.any(axis=1)
     else:
-        above = g > touch_threshold  # float32 against the Python float, as facts() compares
+        above = g > touch_threshold  # float32 against the Python float, as touch_facts() compares
         touched = above if touch_source == "threshold" else contacts.any(axis=1) | above
     # touched is (n, 68) bool; numpy's stubs also allow a scalar for any(axis=1) and ">"
     return [
@@ -86,7 +89,7 @@ def batch_touch_facts(
 def batch_touch_observations(
     infants: Sequence[Any], facts: Sequence[dict[str, np.ndarray]], body_map_scale: float
 ) -> dict[str, np.ndarray]:
-    """:meth:`SelfTouch.observe` of every infant, stacked.
+    """:func:`~devlearn_self_touch.behavior.touch_observations` of every infant, stacked.
 
     Returns:
         ``body_map`` (num_envs, 68) float32 log1p(g / scale) and ``proprioception``

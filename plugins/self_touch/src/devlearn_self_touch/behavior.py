@@ -3,15 +3,18 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from devlearn import (
+    About,
     BatchedIntrinsicReward,
     Behavior,
     Curriculum,
-    Evaluator,
+    EnvBatch,
+    EpisodeSpec,
+    EvalProtocol,
     IntrinsicReward,
     MLPEncoder,
     NetworkSpec,
@@ -31,7 +34,98 @@ if TYPE_CHECKING:
 
 
 DEFAULT_STEPS = 1_024_000
-"""``devlearn run self_touch``'s budget (:meth:`SelfTouch.train_defaults`)."""
+"""``devlearn run self_touch``'s budget (``SelfTouch.about.train_defaults``): a few minutes on
+two cores, long enough that its evaluation shows learning (issue #55: at least twice the random
+policy's per-episode score; the 150,000 steps before scored below it). The paper's run is
+``--preset paper`` (8M)."""
+
+PRESETS: dict[str, dict[str, Any]] = {
+    "paper": {
+        "behavior.max_std": 0.0,
+        "total_steps": 8_000_000,
+        # the paper's policy head (tanh mean, softplus spread) at BabyBench's 200 Hz,
+        # with the discount and rollouts this behaviour used at that rate
+        "network.head": "paper",
+        "network.layout": "shared",
+        # the paper's Model I network: per-sense ReLU encoders, torch's initialisation,
+        # Adam's default epsilon, no ceiling on the spread (issue #54's core defaults not)
+        "network.encoders": "behavior",
+        "network.activation": "relu",
+        "network.init": "torch",
+        "network.final_std": 0.0,
+        "ppo.adam_eps": 1e-8,
+        "ppo.normalize_advantage_per_mini_batch": False,
+        "behavior.touch_count": "step",
+        "env.action_repeat": 1,
+        "ppo.num_steps_per_env": 128,
+        "ppo.gamma": 0.995,
+    }
+}
+"""``paper``: the paper's values where the default recipe differs (sec. II-A):
+the unbounded softplus spread (``behavior.max_std`` 0; the default bounds it at 1.0)
+and the full curriculum, 4M fixed-pose + 4M random-pose steps (``total_steps`` 8M;
+the default is a short demonstration). The lifetime memory is the default's, shared:
+the paper's "first-ever" and "first global" bonuses are one agent's. Runs published
+before issue #20 also kept per-environment memory
+(``--set behavior.lifetime_memory=per_env``)."""
+
+
+def touch_facts(infant: Infant, touch_source: str, touch_threshold: float) -> dict[str, Any]:
+    """One infant's touch facts after a step (the reference the compiled batch matches).
+
+    Args:
+        infant: The infant (touch sense enabled).
+        touch_source: :attr:`SelfTouchConfig.touch_source`.
+        touch_threshold: :attr:`SelfTouchConfig.touch_threshold`.
+    Returns:
+        ``body_map``: (68,) float32 g_t (N per sensor), mattress contact included.
+        ``hand_contacts``: (2, 68) bool, hand (left, right) palm or fingers touches region
+        j; by the infant's contract never its own hand and never the mattress.
+        ``hand_parts``: (2, 34) bool, the same per side-free part.
+        ``touched``: (68,) bool, region j counts as touched (``touch_source``).
+    """
+    skin = infant.skin
+    g = sparse_body_map(*infant.touch_sparse(), skin.sensor_region, skin.region_sizes)
+    contacts = np.asarray(infant.hand_contacts(), dtype=bool)
+    by_hand = contacts.any(axis=0)
+    above = g > touch_threshold
+    touched = {"hands": by_hand, "threshold": above, "hands_or_threshold": by_hand | above}
+    return {
+        "body_map": g,
+        "hand_contacts": contacts,
+        "hand_parts": hand_touched_parts(contacts, np.asarray(infant.regions.parts)),
+        "touched": touched[touch_source],
+    }
+
+
+def touch_observations(
+    infant: Infant, facts: dict[str, Any], body_map_scale: float
+) -> dict[str, np.ndarray]:
+    """One infant's observations: ``body_map`` (68,) log1p(g / body_map_scale) and
+    ``proprioception`` (P,) float32 (the reference the compiled batch matches)."""
+    return {
+        "body_map": body_map_observation(facts["body_map"], body_map_scale),
+        "proprioception": np.asarray(infant.proprioception(), dtype=np.float32),
+    }
+
+
+def stages_as_halves(total_steps: int) -> dict[str, Any]:
+    """The two stages as halves of the run, as the paper's 4M + 4M are of its 8M (sec.
+    II-A5), so that a run of any length reaches the random poses it is evaluated from
+    (issue #55: a short run used to spend all of it in the fixed pose, 4M steps by
+    default, and scored below random); ``--set behavior.fixed_pose_steps=...`` keeps its
+    own."""
+    fixed = int(total_steps) // 2
+    return {
+        "behavior.fixed_pose_steps": fixed,
+        "behavior.random_pose_steps": int(total_steps) - fixed,
+    }
+
+
+def paper_results(config: dict[str, Any]) -> tuple[str, dict[str, float]] | None:
+    """The paper's figures for the run's curriculum (:data:`PAPER_RESULTS`; all at 8M
+    steps, whatever the run's budget)."""
+    return PAPER_RESULTS.get((config.get("behavior") or {}).get("curriculum", "two_stage"))
 
 
 class SelfTouch(Behavior):
@@ -45,63 +139,45 @@ class SelfTouch(Behavior):
     """
 
     name = "self_touch"
-    description = "Model I (paper sec. II-A): self-touch driven by tactile novelty on a body map"
     scene = "crib"
-    senses = ("touch", "proprioception")
     config_class = SelfTouchConfig
-    headline_metric = "score"
+    about = About(
+        description="Model I (paper sec. II-A): self-touch driven by tactile novelty on a body map",
+        headline_metric="score",
+        train_defaults={"total_steps": DEFAULT_STEPS},
+        presets=PRESETS,
+        run_length_defaults=stages_as_halves,
+        paper_results=paper_results,
+    )
 
     config: SelfTouchConfig  # checked by SelfTouchConfig.validate whenever built
 
     # --- observations -------------------------------------------------------------------
-    def facts(self, infant: Infant) -> dict[str, Any]:
-        """Compute this step's touch facts.
+    def facts(self, batch: EnvBatch) -> list[dict[str, Any]]:
+        """This step's touch facts of every environment (:func:`touch_facts`).
 
-        Returns:
-            ``body_map``: (68,) float32 g_t (N per sensor), mattress contact included.
-            ``hand_contacts``: (2, 68) bool, hand (left, right) palm or fingers touches region
-            j; by the infant's contract never its own hand and never the mattress.
-            ``hand_parts``: (2, 34) bool, the same per side-free part.
-            ``touched``: (68,) bool, region j counts as touched
-            (:attr:`SelfTouchConfig.touch_source`).
+        One environment (a reset, ``devlearn info``) takes the numpy reference, so describing
+        the behaviour compiles nothing; several take one compiled pass
+        (:func:`~devlearn_self_touch.batched_facts.batch_touch_facts`), bit for bit the same.
         """
         cfg = self.config
-        skin = infant.skin
-        g = sparse_body_map(*infant.touch_sparse(), skin.sensor_region, skin.region_sizes)
-        contacts = np.asarray(infant.hand_contacts(), dtype=bool)
-        by_hand = contacts.any(axis=0)
-        above = g > cfg.touch_threshold
-        touched = {"hands": by_hand, "threshold": above, "hands_or_threshold": by_hand | above}
-        return {
-            "body_map": g,
-            "hand_contacts": contacts,
-            "hand_parts": hand_touched_parts(contacts, np.asarray(infant.regions.parts)),
-            "touched": touched[cfg.touch_source],
-        }
-
-    def observe(self, infant: Infant, facts: dict[str, Any]) -> dict[str, np.ndarray]:
-        """Return ``body_map`` (68,) log1p(g / body_map_scale) and ``proprioception`` (P,)."""
-        return {
-            "body_map": body_map_observation(facts["body_map"], self.config.body_map_scale),
-            "proprioception": np.asarray(infant.proprioception(), dtype=np.float32),
-        }
-
-    def batch_facts(self, infants: Sequence[Infant]) -> list[dict[str, Any]]:
-        """:meth:`facts` of a worker's infants at once, bit for bit the same
-        (:func:`~devlearn_self_touch.batched_facts.batch_touch_facts`)."""
+        if len(batch) == 1:
+            return [touch_facts(batch.infants[0], cfg.touch_source, cfg.touch_threshold)]
         from devlearn_self_touch.batched_facts import batch_touch_facts  # numba: only to step
 
-        cfg = self.config
-        return batch_touch_facts(infants, cfg.touch_source, cfg.touch_threshold)
+        return batch_touch_facts(batch.infants, cfg.touch_source, cfg.touch_threshold)
 
-    def batch_observe(
-        self, infants: Sequence[Infant], facts: Sequence[dict[str, Any]]
-    ) -> dict[str, np.ndarray]:
-        """:meth:`observe` of a worker's infants at once: ``body_map`` (num_envs, 68) and
-        ``proprioception`` (num_envs, P), row i bit for bit ``observe(infants[i], facts[i])``."""
+    def observe(self, batch: EnvBatch, facts: Sequence[dict[str, Any]]) -> dict[str, np.ndarray]:
+        """``body_map`` (num_envs, 68) log1p(g / body_map_scale) and ``proprioception``
+        (num_envs, P) float32; one environment by :func:`touch_observations`, several by
+        :func:`~devlearn_self_touch.batched_facts.batch_touch_observations` (the same bits)."""
+        scale = self.config.body_map_scale
+        if len(batch) == 1:
+            row = touch_observations(batch.infants[0], facts[0], scale)
+            return {name: value[None] for name, value in row.items()}
         from devlearn_self_touch.batched_facts import batch_touch_observations
 
-        return batch_touch_observations(infants, facts, self.config.body_map_scale)
+        return batch_touch_observations(batch.infants, facts, scale)
 
     def network(self) -> NetworkSpec:
         """The paper's Model I network (sec. II-A2 and II-A4)."""
@@ -135,10 +211,6 @@ class SelfTouch(Behavior):
         terms = build_reward_terms(c.rewards, shared)
         return [t for t in terms if t.weight != 0.0 or t.name not in NOT_IN_PAPER]
 
-    def episode_seconds(self) -> float | None:
-        """``episode_s`` (None: the infant's 5 s, BabyBench's)."""
-        return self.config.episode_s
-
     def curriculum(self) -> Curriculum:
         """``two_stage``: fixed pose for ``fixed_pose_steps``, then random initial poses;
         ``fixed_only`` / ``random_only``: one stage for the whole run (sec. II-A5, Table II)."""
@@ -151,71 +223,19 @@ class SelfTouch(Behavior):
         fixed.steps = int(self.config.fixed_pose_steps)
         return Curriculum([fixed, random])
 
-    def train_defaults(self) -> dict[str, Any]:
-        """The default run (``devlearn run self_touch``): 1,024,000 steps, a few minutes on two
-        cores, long enough that its evaluation shows learning (issue #55: at least twice the
-        random policy's per-episode score; the 150,000 steps before scored below it). The
-        paper's run is ``--preset paper`` (8M)."""
-        return {"total_steps": DEFAULT_STEPS}
+    # --- the episode and its evaluation ---------------------------------------------------
+    def episode(self) -> EpisodeSpec:
+        """Touch and proprioception; ``episode_s`` seconds (None: the infant's 5 s,
+        BabyBench's)."""
+        return EpisodeSpec(senses=("touch", "proprioception"), seconds=self.config.episode_s)
 
-    def run_length_defaults(self, total_steps: int) -> dict[str, Any]:
-        """The two stages as halves of the run, as the paper's 4M + 4M are of its 8M (sec.
-        II-A5), so that a run of any length reaches the random poses it is evaluated from
-        (issue #55: a short run used to spend all of it in the fixed pose, 4M steps by
-        default, and scored below random); ``--set behavior.fixed_pose_steps=...`` keeps its
-        own."""
-        fixed = int(total_steps) // 2
-        return {
-            "behavior.fixed_pose_steps": fixed,
-            "behavior.random_pose_steps": int(total_steps) - fixed,
-        }
-
-    def eval_stage(self) -> dict[str, Any]:
-        """Evaluation starts every episode from a random initial pose (sec. II-A6)."""
-        return {"random_pose": True}
-
-    # --- metrics and set-up --------------------------------------------------------------
-    def evaluator(self, training: bool) -> Evaluator:
-        """Per-hand coverage of the 34 parts and the score (:class:`SelfTouchEvaluator`)."""
-        return SelfTouchEvaluator(training=training)
-
-    def run_metrics(self) -> TrainingScore:
-        """BabyBench's training score over the last ``training_score_episodes`` training
-        episodes of the run (:class:`TrainingScore`)."""
-        return TrainingScore(self.config.training_score_episodes)
-
-    @classmethod
-    def paper_results(cls, config: dict[str, Any]) -> tuple[str, dict[str, float]] | None:
-        """The paper's figures for the run's curriculum (:data:`PAPER_RESULTS`; all at 8M
-        steps, whatever the run's budget)."""
-        return PAPER_RESULTS.get((config.get("behavior") or {}).get("curriculum", "two_stage"))
-
-    presets: ClassVar[dict[str, dict[str, Any]]] = {
-        "paper": {
-            "behavior.max_std": 0.0,
-            "total_steps": 8_000_000,
-            # the paper's policy head (tanh mean, softplus spread) at BabyBench's 200 Hz,
-            # with the discount and rollouts this behaviour used at that rate
-            "network.head": "paper",
-            "network.layout": "shared",
-            # the paper's Model I network: per-sense ReLU encoders, torch's initialisation,
-            # Adam's default epsilon, no ceiling on the spread (issue #54's core defaults not)
-            "network.encoders": "behavior",
-            "network.activation": "relu",
-            "network.init": "torch",
-            "network.final_std": 0.0,
-            "ppo.adam_eps": 1e-8,
-            "ppo.normalize_advantage_per_mini_batch": False,
-            "behavior.touch_count": "step",
-            "env.action_repeat": 1,
-            "ppo.num_steps_per_env": 128,
-            "ppo.gamma": 0.995,
-        }
-    }
-    """``paper``: the paper's values where the default recipe differs (sec. II-A):
-    the unbounded softplus spread (``behavior.max_std`` 0; the default bounds it at 1.0)
-    and the full curriculum, 4M fixed-pose + 4M random-pose steps (``total_steps`` 8M;
-    the default is a short demonstration). The lifetime memory is the default's, shared:
-    the paper's "first-ever" and "first global" bonuses are one agent's. Runs published
-    before issue #20 also kept per-environment memory
-    (``--set behavior.lifetime_memory=per_env``)."""
+    def evaluation(self) -> EvalProtocol:
+        """Per-hand coverage of the 34 parts and the score (:class:`SelfTouchEvaluator`);
+        BabyBench's training score over the last ``training_score_episodes`` training episodes
+        of the run (:class:`TrainingScore`); every evaluation episode from a random initial
+        pose (sec. II-A6)."""
+        return EvalProtocol(
+            evaluator=lambda training: SelfTouchEvaluator(training=training),
+            run_metrics=TrainingScore(self.config.training_score_episodes),
+            stage={"random_pose": True},
+        )

@@ -78,7 +78,7 @@ class SelfTouchConfig(BehaviorConfig):
     policy spread is bounded (``max_std`` 1.0) and the lifetime memory is the run's
     (``lifetime_memory`` shared), the recipe ``results/self_touch/README.md`` supports. The
     paper's values are ``devlearn run self_touch --preset paper``
-    (:meth:`devlearn_self_touch.SelfTouch.presets`).
+    (:data:`devlearn_self_touch.behavior.PRESETS`).
     """
 
     LEGACY_DEFAULTS: ClassVar[dict[str, Any]] = {
@@ -205,7 +205,8 @@ class SelfTouchConfig(BehaviorConfig):
     (the paper's ablation, Table II)."""
     fixed_pose_steps: int = 4_000_000
     """Environment steps (all environments) of stage 1, fixed initial pose (paper: 4M). A new
-    run's default is half its ``total_steps`` (``SelfTouch.run_length_defaults``)."""
+    run's default is half its ``total_steps``
+    (:func:`~devlearn_self_touch.behavior.stages_as_halves`)."""
     random_pose_steps: int = 4_000_000
     """Environment steps of stage 2, random initial joint angles (paper: 4M; a new run's
     default: the other half). Informational: the last stage lasts until training ends."""
