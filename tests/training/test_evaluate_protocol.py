@@ -301,14 +301,16 @@ def test_baseline_config_overrides(registry, tmp_path):
 
 
 def test_an_undeclared_protocol_evaluates_in_the_stage_the_policy_trained_in(registry, tmp_path):
-    from devlearn import evaluation_stage
+    from devlearn import EvalProtocol, evaluation_stage
 
     behavior = TinyBehavior()  # fixed pose for stage_steps (1000), then random poses
     assert behavior.evaluation().stage is None
     assert evaluation_stage(behavior, 0) == {"random_pose": False}
     assert evaluation_stage(behavior, 999) == {"random_pose": False}
     assert evaluation_stage(behavior, 1000) == {"random_pose": True}
-    declared = type("Declared", (TinyBehavior,), {"eval_stage": lambda self: {"x": 1}})()
+    declared = type(
+        "Declared", (TinyBehavior,), {"evaluation": lambda self: EvalProtocol(stage={"x": 1})}
+    )()
     assert evaluation_stage(declared, 0) == {"x": 1}
     # a baseline evaluates in the stage a default run ends in (tiny: 150,000 steps: random)
     summary = Evaluation(
