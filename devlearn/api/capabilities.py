@@ -22,8 +22,10 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from devlearn.api.evaluator import Evaluator
+
 if TYPE_CHECKING:
-    from devlearn.api.behavior import Evaluator, RunMetrics
+    from devlearn.api.evaluator import RunMetrics
     from devlearn.infant import Infant
 
 
@@ -141,8 +143,6 @@ class EpisodeSpec:
 
 
 def _no_metrics(training: bool) -> Evaluator:
-    from devlearn.api.behavior import Evaluator
-
     return Evaluator()
 
 

@@ -339,39 +339,3 @@ class ContingencyAttribution:
             return None
         return np.asarray(positions[::-1]), np.asarray(projected[::-1])
 
-
-def fit_from_calibration(
-    params: Any, infant: Any, data: Any, other_arm_hangs: bool
-) -> dict[str, Any]:
-    """A fresh run's contingency model, from its own calibration babbling (issue #58: a run
-    with ``hand_attribution=contingency`` and no detector file fits it after babbling).
-
-    Args:
-        params: The calibrated :class:`~devlearn_hand_regard.detector.DetectorParams`
-            (its colour step finds the blobs).
-        infant: The infant that babbled (its model gives the body schema).
-        data: Its :class:`~devlearn_hand_regard.babbling.BabblingData`.
-        other_arm_hangs: The babbling moved one arm at a time, the other limp.
-    Returns:
-        :func:`fit_contingency_model`'s dict.
-    Raises:
-        ValueError: Too few labelled blobs (the message says to babble longer).
-    """
-    from devlearn_hand_regard.babbling import posture_joints
-    from devlearn_hand_regard.blob_table import tabulate
-    from devlearn_hand_regard.contingency_body import body_schema
-    from devlearn_hand_regard.detector import HandDetector
-
-    names = list(infant.actuator_names)
-    table = tabulate(
-        HandDetector(params),
-        data.eyes,
-        data.proprioception,
-        data.episode,
-        moving_arm=data.moving_arm,
-        other_arm_hangs=other_arm_hangs,
-    )
-    joints = posture_joints(names, infant.actuator_groups)
-    return fit_contingency_model(
-        [table], joints, body_schema(infant.model, names, int(data.eyes.shape[3]))
-    )
