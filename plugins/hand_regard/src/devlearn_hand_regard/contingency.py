@@ -338,4 +338,3 @@ class ContingencyAttribution:
         if len(positions) < 3:
             return None
         return np.asarray(positions[::-1]), np.asarray(projected[::-1])
-
