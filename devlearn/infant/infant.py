@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -153,7 +152,6 @@ class Infant:
         )
         self._gl: dict[str, Any] = {"eyes": None, "views": {}}  # renderers, made on first use
         self._cache: dict[str, Any] = {}
-        self._ctrl: tuple[mujoco.MjData, np.ndarray] | None = None  # (data, data.ctrl)
         self.steps = 0
         self._initial: tuple[np.ndarray, np.ndarray] | None = None
         if spec.settle_steps:
@@ -232,14 +230,9 @@ class Infant:
         action = np.asarray(action, dtype=np.float64)
         if action.shape != (self.action_dim,):
             raise ValueError(f"action has shape {action.shape}; expected ({self.action_dim},)")
-        # a.a is finite for every finite action up to 1e154 per entry (one BLAS call, a quarter
-        # of np.isfinite(a).all()'s cost); only a non-finite square is checked element-wise
-        if not math.isfinite(action.dot(action)) and not np.isfinite(action).all():
+        if not np.isfinite(action).all():
             raise ValueError("action contains NaN or inf")
-        ctrl = self._ctrl
-        if ctrl is None or ctrl[0] is not self.data:  # ctrl has a fixed size: one view per data
-            ctrl = self._ctrl = (self.data, self.data.ctrl)
-        np.minimum(np.maximum(action, -1.0), 1.0, out=ctrl[1])  # np.clip, less overhead
+        np.minimum(np.maximum(action, -1.0), 1.0, out=self.data.ctrl)  # np.clip, less overhead
         mujoco.mj_step(self.model, self.data)
         self._cache.clear()
         self.steps += 1
@@ -276,22 +269,15 @@ class Infant:
 
     def _touch_and_hands(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Sparse touch and hand contacts, computed together once per step (compiled)."""
-        # the hot path (every physics step): the cache read inline, as _cached does it
-        value = self._cache.get("touch_and_hands")
-        if value is None:
-            value = self._cached(
-                "touch_and_hands",
-                lambda: self._contacts.touch_and_hands(self.data, self.hand_of_body),
-            )
-        return value
+        return self._cached(
+            "touch_and_hands",
+            lambda: self._contacts.touch_and_hands(self.data, self.hand_of_body),
+        )
 
     def proprioception(self) -> np.ndarray:
         """Returns (6 * action_dim,) float32; layout in :class:`~.senses.Proprioception`."""
-        value = self._cache.get("proprioception")  # the hot path: the cache read inline
-        if value is None:
-            self._need("proprioception")
-            value = self._cached("proprioception", lambda: self._proprio(self.data))
-        return value
+        self._need("proprioception")
+        return self._cached("proprioception", lambda: self._proprio(self.data))
 
     def vestibular(self) -> np.ndarray:
         """Returns (6,) float32: head accelerometer (m/s^2) then gyro (rad/s), head frame."""

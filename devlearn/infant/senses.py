@@ -30,7 +30,6 @@ class Proprioception:
         self.compiled = compiled
         # the compiled routine, imported (numba) on first use
         self._gather: Callable[..., None] | None = None
-        self._views: tuple | None = None  # (data, its qpos, qvel, qfrc_*, ctrl)
         ids = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, j) for j in joints]
         self.qpos = np.array([model.jnt_qposadr[j] for j in ids])
         self.dof = np.array([model.jnt_dofadr[j] for j in ids])
@@ -39,15 +38,7 @@ class Proprioception:
 
     def __call__(self, data: mujoco.MjData) -> np.ndarray:
         """Returns (6 J,) float32 (one compiled gather; the numbers of :meth:`reference`)."""
-        views = self._views
-        if views is None or views[0] is not data:
-            # fixed-size arrays of this MjData: their views stay valid for its life (reading
-            # them anew costs a binding call each, every physics step)
-            views = self._views = (
-                data, data.qpos, data.qvel, data.qfrc_actuator, data.qfrc_passive,
-                data.qfrc_constraint, data.ctrl,
-            )  # fmt: skip
-        _, qpos, qvel, actuator, passive, constraint, ctrl = views
+        ctrl = data.ctrl
         if not self.compiled or ctrl.shape[0] != len(self.dof):  # or other actuators
             return self.reference(data)
         if self._gather is None:
@@ -56,7 +47,7 @@ class Proprioception:
             self._gather = gather
         out = np.empty(self.size, dtype=np.float32)
         self._gather(
-            qpos, qvel, actuator, passive, constraint,
+            data.qpos, data.qvel, data.qfrc_actuator, data.qfrc_passive, data.qfrc_constraint,
             ctrl, self.qpos, self.dof, self.lo, self.hi, LIMIT_ZONE, out,
         )  # fmt: skip
         return out
