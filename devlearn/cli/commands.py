@@ -490,8 +490,19 @@ COMMANDS: tuple[Command, ...] = (
             ),
             Command(
                 "table",
-                option("dest", metavar="DEST", help="a publication (devlearn experiment publish)"),
+                option(
+                    "dest",
+                    metavar="DEST",
+                    nargs="+",
+                    help="a publication (devlearn experiment publish); several pool an arm's "
+                    "seeds across them",
+                ),
                 option("--json", help="print the figures as JSON"),
+                option(
+                    "--versus",
+                    metavar="ARM",
+                    help="also each arm's paired difference from ARM over the seeds both have",
+                ),
                 option("--out", metavar="FILE", help="also write the tables (or JSON) to FILE"),
                 option(
                     "--metric",
@@ -504,7 +515,10 @@ COMMANDS: tuple[Command, ...] = (
                 description="""Per protocol, every arm's headline as the mean and 95% t-interval
                 over seeds with each seed's value, its seconds of learning where recorded, the
                 baselines under the same protocol and the references with their source; with
-                --metric, a table of those eval.json numbers per protocol too.""",
+                --metric, a table of those eval.json numbers per protocol too. Several DESTs
+                make one table: an arm of the same name pools its seeds across them (the same
+                behaviour, budget and arm settings, protocols of the same definition; each
+                seed in one publication only).""",
             ),
         ),
     ),

@@ -129,3 +129,81 @@ def test_a_reference_row_needs_a_value_or_metrics(dest):
     )
     with pytest.raises(UsageError, match="value"):
         experiment_table(dest)
+
+
+LATER = SPEC.replace("seeds = [1, 2, 3]", "seeds = [4, 5]").replace(
+    '[[arms]]\nname = "b"\n', '[[arms]]\nname = "c"\n'
+)
+"""A later experiment: arm a's seeds 4-5 under the same protocol, and an arm c of its own."""
+
+
+@pytest.fixture
+def later(tmp_path: Path, dest: Path) -> Path:
+    folder = tmp_path / "later"
+    folder.mkdir()
+    (folder / "experiment.toml").write_text(LATER)
+    _write(folder / "experiment.json", {"published": "later", "headline_metric": "score"})
+    for arm, scores in {"a": {4: 0.9, 5: 0.2}, "c": {4: 0.5, 5: 0.6}}.items():
+        for seed, score in scores.items():
+            _write(
+                folder / arm / f"seed={seed}" / "eval_random_mean" / "eval.json", {"score": score}
+            )
+    return folder
+
+
+def test_publications_pool_an_arms_seeds(dest, later):
+    table = experiment_table([dest, later])
+    (protocol,) = table["protocols"]
+    rows = {row["arm"]: row for row in protocol["arms"]}
+    assert list(rows) == ["a", "b", "c"]
+    values = [0.1, 0.2, 0.30000000000000004, 0.9, 0.2]
+    assert rows["a"]["seeds"] == dict(zip(["1", "2", "3", "4", "5"], values))
+    assert rows["a"]["n"] == 5 and rows["a"]["mean"] == pytest.approx(np.mean(values))
+    assert rows["c"]["n"] == 2 and rows["b"]["n"] == 2
+    assert table["seeds"] == [1, 2, 3, 4, 5] and table["publications"] == [str(dest), str(later)]
+    assert "Pooled publications" in markdown(table)
+    # the first publication alone is unchanged
+    alone = experiment_table(dest)["protocols"][0]["arms"][0]
+    assert alone["n"] == 3 and "publications" not in experiment_table(dest)
+
+
+def test_versus_gives_the_paired_difference_over_common_seeds(dest, later):
+    table = experiment_table([dest, later], versus="c")
+    rows = {row["arm"]: row for row in table["protocols"][0]["arms"]}
+    paired = rows["a"]["paired"]  # a and c share seeds 4 and 5: 0.9 - 0.5, 0.2 - 0.6
+    x = np.array([0.4, -0.4])
+    half = stats.t.ppf(0.975, 1) * x.std(ddof=1) / np.sqrt(2)
+    assert paired["seeds"] == ["4", "5"] and paired["n"] == 2
+    assert (paired["mean"], paired["ci_high"]) == pytest.approx((0.0, half))
+    assert rows["b"]["paired"]["n"] == 0 and rows["c"]["paired"] is None
+    assert "paired with c (same seeds)" in markdown(table)
+    with pytest.raises(UsageError, match="--versus d: no such arm"):
+        experiment_table([dest, later], versus="d")
+
+
+def test_an_arm_trained_otherwise_or_a_seed_twice_is_refused(dest, later):
+    (later / "experiment.toml").write_text(
+        LATER.replace('name = "a"\n', 'name = "a"\nset = ["ppo.learning_rate=1e-3"]\n')
+    )
+    with pytest.raises(UsageError, match="arm a in .* is not the arm of the same name"):
+        experiment_table([dest, later])
+    (later / "experiment.toml").write_text(LATER.replace("seeds = [4, 5]", "seeds = [3, 4]"))
+    with pytest.raises(UsageError, match="arm a seed 3 is in both"):
+        experiment_table([dest, later])
+    (later / "experiment.toml").write_text(LATER.replace("episodes = 2", "episodes = 3"))
+    with pytest.raises(UsageError, match="protocol random_mean is"):
+        experiment_table([dest, later])
+
+
+def test_resolved_configs_that_agree_pool_arms_whose_files_differ(dest, later):
+    """Issue #54's proof was published before its file named the fixed-pose stage that was
+    then the default: its runs' resolved configs say they trained alike."""
+    (later / "experiment.toml").write_text(
+        LATER.replace('name = "a"\n', 'name = "a"\nset = ["x=1"]\n')
+    )
+    for folder, seed in ((dest, 1), (later, 4)):
+        _write(folder / "a" / f"seed={seed}" / "config.json", {"seed": seed, "ppo": {"lr": 1}})
+    assert experiment_table([dest, later])["protocols"][0]["arms"][0]["n"] == 5
+    _write(later / "a" / "seed=4" / "config.json", {"seed": 4, "ppo": {"lr": 2}})
+    with pytest.raises(UsageError, match=r"resolved config differs in 1 key\(s\) \(ppo.lr: 2"):
+        experiment_table([dest, later])
