@@ -141,6 +141,21 @@ def human_summary(
                 else ""
             )
         )
+    still = (summary.get("policy_figures") or {}).get("ends_still")
+    if still:
+        from devlearn.evaluation.episodes import STILL_SPEED, STILL_WINDOW_S
+
+        # a deterministic policy held in a posture it never leaves (issue #54)
+        lines.append(
+            f"  policy    {still:.0%} of episodes end with the body still (joints under "
+            f"{STILL_SPEED} a second over the last {STILL_WINDOW_S:g} s): "
+            + (
+                "the mean action holds a posture the sampled actions' noise leaves; compare "
+                "--action sample"
+                if (summary.get("protocol") or {}).get("action", "mean") != "sample"
+                else "the policy rests"
+            )
+        )
     if json_path is not None:
         lines.append(f"  all figures: {json_path} (devlearn eval ... --json prints them)")
     return lines

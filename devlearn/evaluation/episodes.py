@@ -52,6 +52,51 @@ VIDEO_FPS = 25
 VIDEO_FORMATS = {".mp4": "mp4", ".mkv": "matroska", ".mov": "mov", ".avi": "avi"}
 """The video files ``devlearn eval --video`` writes, by extension, and ffmpeg's container for
 each (H.264 inside; WebM and GIF need other codecs, and ffmpeg writes them empty without one)."""
+STILL_WINDOW_S = 1.0
+"""An episode's end, in simulated seconds, over which :class:`EndStillness` measures the body."""
+STILL_SPEED = 0.05
+"""Mean absolute joint velocity (rad/s, m/s for a free joint) below which the body is still: a
+held posture's tremor is ~0.01-0.03, a moving arm's ~1 (hand_to_mouth, issue #54)."""
+
+
+class EndStillness:
+    """Whether a policy's episode ends with the body still (issue #54 item 3).
+
+    A deterministic policy (the mean action) can hold a posture it never leaves: a fixed point
+    of the closed loop, which the exploration noise kicked it out of in training. On
+    ``hand_to_mouth`` 16 of 30 random-pose episodes of a policy whose sampled actions reach
+    the mouth in 0.8 of them ended so (mean joint speed 0.005-0.04 over the last second). The
+    figures, per episode: ``end_speed`` (the mean absolute joint velocity over the last
+    :data:`STILL_WINDOW_S` simulated seconds) and ``ends_still`` (1 below
+    :data:`STILL_SPEED`); none for a body without MuJoCo data (a stand-in infant).
+
+    Args:
+        decision_s: Simulated seconds per decision.
+    """
+
+    def __init__(self, decision_s: float) -> None:
+        self.window = max(1, round(STILL_WINDOW_S / decision_s))
+        self.speeds: list[float] = []
+
+    def add(self, infant: Any) -> None:
+        """Record the body's speed after one decision."""
+        data = getattr(infant, "data", None)
+        qvel = getattr(data, "qvel", None)
+        if qvel is None or not len(qvel):
+            return
+        self.speeds.append(float(np.abs(qvel).mean()))
+        if len(self.speeds) > 2 * self.window:
+            del self.speeds[: -self.window]
+
+    def figures(self) -> dict[str, float]:
+        """The episode's figures, counted afresh for the next."""
+        if not self.speeds:
+            return {}
+        speed = float(np.mean(self.speeds[-self.window :]))
+        self.speeds = []
+        return {"end_speed": speed, "ends_still": float(speed < STILL_SPEED)}
+
+
 PROGRESS_SECONDS = 0.5
 """How often a worker reports its progress (physics steps, episodes) to the progress bar."""
 
@@ -148,15 +193,23 @@ class _Slot:
         self.begins = (env.rng.bit_generator.state, self.actions.rng_state())
         self.episodes: list[dict[str, float]] = []
         self.video_error: str | None = None
+        step_s = float(getattr(env.infant, "physics_timestep", 0.0)) * env.action_repeat
+        self.stillness = EndStillness(step_s) if step_s > 0 else None
 
     def step(self, obs: dict[str, np.ndarray], info: dict[str, Any] | None) -> bool:
         """Take one decision's outcome; True when it ended an episode."""
         self.obs = obs
+        if self.stillness is not None and info is None:  # the last step's body is the reset's
+            self.stillness.add(self.env.infant)
         if info is None:
             return False
         metrics = {k: v for k, v in info.items() if k.startswith("metrics/")}
         figures = {k.removeprefix("metrics/"): float(v) for k, v in metrics.items()}
-        policy = {f"policy/{k}": v for k, v in self.actions.episode_figures().items()}
+        own = self.actions.episode_figures()
+        still = self.stillness.figures() if self.stillness is not None else {}
+        if own:  # a network's: how its episode ended too (baselines report no policy figures)
+            own = {**own, **still}
+        policy = {f"policy/{k}": v for k, v in own.items()}
         self.episodes.append({**figures, **policy})
         self.left -= 1
         return True

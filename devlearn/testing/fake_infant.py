@@ -13,6 +13,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
+from types import SimpleNamespace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -59,6 +60,8 @@ class FakeInfant:
         self.die_after = die_after  # SIGKILL this process (use only in env worker processes)
         self.steps_taken = 0
         self.position = np.zeros(action_dim)
+        self.data = SimpleNamespace(qvel=np.zeros(action_dim))
+        """As MuJoCo's ``MjData``: ``qvel``, the point's velocity over its last step."""
 
     @property
     def start(self) -> str:
@@ -75,6 +78,7 @@ class FakeInfant:
         self.position = (
             rng.uniform(-1, 1, self.action_dim) if random_pose else np.zeros(self.action_dim)
         )
+        self.data.qvel = np.zeros(self.action_dim)
 
     def step(self, action: np.ndarray) -> None:
         self.steps_taken += 1
@@ -87,11 +91,14 @@ class FakeInfant:
             import signal
 
             os.kill(os.getpid(), signal.SIGKILL)  # as if the OOM killer struck
+        before = self.position
         self.position = np.clip(self.position + 0.1 * np.clip(action, -1, 1), -2, 2)
+        self.data.qvel = (self.position - before) / self.physics_timestep
 
     def continue_from(self, other: FakeInfant) -> None:
         """Take over ``other``'s position and step count (the real infant's joint state)."""
         self.position = other.position.copy()
+        self.data.qvel = other.data.qvel.copy()
         self.steps_taken = other.steps_taken
 
     def proprioception(self) -> np.ndarray:

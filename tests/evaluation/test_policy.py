@@ -223,6 +223,33 @@ def test_an_evaluation_says_where_the_mean_action_sits_past_the_bounds(
     assert "policy_figures" not in baseline
 
 
+def test_an_evaluation_says_when_the_mean_action_ends_still(tmp_path, first_obs, capsys):
+    """Issue #54 item 3: hand_to_mouth's mean action held a posture it never left in 16 of 30
+    random-pose episodes (its noise moved the arm out in training), and eval.json did not
+    say so. A network whose mean is 0 whatever it sees holds the point still; its sampled
+    actions (spread 1) move it: eval.json's ``policy_figures.ends_still`` is 1 and 0, with
+    ``end_speed`` the point's mean speed over the episode's last second, and the printed
+    summary names the stall."""
+    from devlearn.cli.evaluate import human_summary
+    from devlearn.evaluation.evaluate import Evaluation
+
+    fixed_mean_policy(tmp_path / "policy.pt", first_obs, [0.0, 0.0, 0.0])
+    figures = {}
+    for action in ("mean", "sample"):
+        request = EvalRequest("tiny", tmp_path / "policy.pt", episodes=2, action=action)
+        summary = Evaluation(request, REGISTRY, infant_factory=fake_infant_factory).run()
+        figures[action] = summary["policy_figures"]
+        if action == "mean":
+            text = "\n".join(human_summary(summary, "", {}, None))
+            assert "100% of episodes end with the body still" in text
+            assert "compare --action sample" in text
+    assert figures["mean"]["ends_still"] == 1.0 and figures["mean"]["end_speed"] == 0.0
+    # a step of 0.1 * N(0, 1) per 5 ms: ~16 units a second, far above the threshold
+    assert figures["sample"]["ends_still"] == 0.0 and figures["sample"]["end_speed"] > 5.0
+    zero = EvalRequest("tiny", policy="zero", episodes=2)
+    assert "policy_figures" not in Evaluation(zero, REGISTRY, fake_infant_factory).run()
+
+
 def test_the_expected_clipped_action_is_the_mean_of_the_clipped_samples():
     """``--action expected_clipped`` plays E[clip(mean + std * noise, -1, 1)] (issue #40's seed
     1: its mean past the bounds played them, where training's clipped samples did not)."""
