@@ -150,8 +150,8 @@ def human_summary(
             f"  policy    {still:.0%} of episodes end with the body still (joints under "
             f"{STILL_SPEED} a second over the last {STILL_WINDOW_S:g} s): "
             + (
-                "the mean action holds a posture the sampled actions' noise leaves; compare "
-                "--action sample"
+                "a goal held, or a posture the mean action never leaves (a stall that "
+                "sampled actions' noise moves out of); compare --action sample"
                 if (summary.get("protocol") or {}).get("action", "mean") != "sample"
                 else "the policy rests"
             )
