@@ -503,6 +503,13 @@ COMMANDS: tuple[Command, ...] = (
                     metavar="ARM",
                     help="also each arm's paired difference from ARM over the seeds both have",
                 ),
+                option(
+                    "--ignore-config",
+                    metavar="KEY",
+                    action="append",
+                    help="pooling: a resolved-config key (or section) that arms of one name may "
+                    "differ in, because it does not decide their numbers; repeatable",
+                ),
                 option("--out", metavar="FILE", help="also write the tables (or JSON) to FILE"),
                 option(
                     "--metric",

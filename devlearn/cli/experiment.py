@@ -82,7 +82,9 @@ def _table(args: argparse.Namespace, registry: PluginRegistry) -> int:
     out = Path(args.out) if args.out else None
     if out is not None:  # a folder, a device or FIFO, an unwritable place: refused first
         check_out_file(out, parents=True)
-    table = experiment_table(args.dest, args.metric or (), versus=args.versus)
+    table = experiment_table(
+        args.dest, args.metric or (), versus=args.versus, ignore_config=args.ignore_config or ()
+    )
     text = json.dumps(table, indent=2) + "\n" if args.json else markdown(table)
     if out is not None:
         try:

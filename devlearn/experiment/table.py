@@ -177,10 +177,14 @@ def _resolved(pub: _Publication, arm_name: str) -> dict[str, Any] | None:
     return None
 
 
-def _trained_alike(a: _Publication, b: _Publication, arm_name: str) -> str | None:
+def _trained_alike(
+    a: _Publication, b: _Publication, arm_name: str, ignore: Sequence[str] = ()
+) -> str | None:
     """None where ``arm_name`` trained alike in ``a`` and ``b``, else what differs: the
     experiment files' training settings and the arm's, or failing those the resolved configs
-    of its runs (the keys both record: a key added later was its default then)."""
+    of its runs (the keys both record: a key added later was its default then), without the
+    keys ``ignore`` names or lies under (``network``: every ``network.*``), which the reader
+    declares do not decide the arm's numbers (another learner's unused network settings)."""
     same_files = a.spec.train.what() == b.spec.train.what()
     if same_files and a.spec.arm(arm_name).what() == b.spec.arm(arm_name).what():
         return None
@@ -191,14 +195,19 @@ def _trained_alike(a: _Publication, b: _Publication, arm_name: str) -> str | Non
             f"{a.spec.train.what()} {a.spec.arm(arm_name).what()}) and no resolved config "
             "is published to compare"
         )
-    differ = sorted(k for k in mine.keys() & theirs.keys() if mine[k] != theirs[k])
+
+    def ignored(key: str) -> bool:
+        return any(key == name or key.startswith(name + ".") for name in ignore)
+
+    shared = mine.keys() & theirs.keys()
+    differ = sorted(k for k in shared if mine[k] != theirs[k] and not ignored(k))
     if not differ:
         return None
     shown = ", ".join(f"{k}: {theirs[k]!r} against {mine[k]!r}" for k in differ[:4])
     return f"its resolved config differs in {len(differ)} key(s) ({shown})"
 
 
-def _check_pooled(pubs: list[_Publication]) -> None:
+def _check_pooled(pubs: list[_Publication], ignore: Sequence[str] = ()) -> None:
     """Refuse publications whose same-named arms or protocols would mix different numbers.
 
     Raises:
@@ -223,11 +232,12 @@ def _check_pooled(pubs: list[_Publication]) -> None:
     for pub in pubs:
         for arm in pub.spec.arms:
             if arm.name in owner:
-                differs = _trained_alike(owner[arm.name], pub, arm.name)
+                differs = _trained_alike(owner[arm.name], pub, arm.name, ignore)
                 if differs:
                     raise UsageError(
                         f"arm {arm.name} in {pub.dest} is not the arm of the same name in "
-                        f"{owner[arm.name].dest}: {differs}; rename one"
+                        f"{owner[arm.name].dest}: {differs}; rename one, or name the keys that "
+                        "do not decide its numbers (--ignore-config KEY)"
                     )
             owner.setdefault(arm.name, pub)
             for seed in pub.spec.seeds:
@@ -256,6 +266,7 @@ def experiment_table(
     dest: str | Path | Sequence[str | Path],
     metrics: list[str] | tuple[str, ...] = (),
     versus: str | None = None,
+    ignore_config: Sequence[str] = (),
 ) -> dict[str, Any]:
     """The figures of publication ``dest`` (or of several, pooled: module docstring), per
     protocol: each arm's headline (the behaviour's, as ``devlearn eval``'s summary picks it:
@@ -265,7 +276,8 @@ def experiment_table(
     interval over episodes); the references of the protocol with their source. Each of
     ``metrics`` (an eval.json number by its dotted key) adds, per protocol, the same figures
     for that number (``"metrics"``: arms over seeds, baselines as evaluated). ``versus`` (an
-    arm) adds each other arm's paired difference from it (``"paired"``).
+    arm) adds each other arm's paired difference from it (``"paired"``). ``ignore_config``:
+    resolved-config keys that pooled arms may differ in (:func:`_trained_alike`).
 
     Raises:
         UsageError: A ``dest`` is not a publication, publications that cannot be pooled, no
@@ -273,7 +285,7 @@ def experiment_table(
     """
     dests = [dest] if isinstance(dest, (str, Path)) else list(dest)
     pubs = [_Publication(d) for d in dests]
-    _check_pooled(pubs)
+    _check_pooled(pubs, ignore_config)
     if versus is not None and versus not in _arm_names(pubs):
         names = ", ".join(_arm_names(pubs))
         raise UsageError(f"--versus {versus}: no such arm (the arms: {names})")
@@ -353,6 +365,7 @@ def experiment_table(
     }
     if len(pubs) > 1:
         table_info["publications"] = [str(pub.dest) for pub in pubs]
+        table_info["ignored_config"] = list(ignore_config)
     return table_info
 
 
@@ -416,7 +429,12 @@ def markdown(table: dict[str, Any]) -> str:
         lines += [
             "Pooled publications (an arm's seeds from each that has it): "
             + ", ".join(table["publications"])
-            + ".",
+            + "."
+            + (
+                " Resolved configs compared without: " + ", ".join(table["ignored_config"]) + "."
+                if table.get("ignored_config")
+                else ""
+            ),
             "",
         ]
     sources: list[str] = []

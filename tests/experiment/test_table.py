@@ -207,3 +207,10 @@ def test_resolved_configs_that_agree_pool_arms_whose_files_differ(dest, later):
     _write(later / "a" / "seed=4" / "config.json", {"seed": 4, "ppo": {"lr": 2}})
     with pytest.raises(UsageError, match=r"resolved config differs in 1 key\(s\) \(ppo.lr: 2"):
         experiment_table([dest, later])
+    # a reader may declare a key that does not decide the numbers (an outside learner's unused
+    # network settings): the arms pool, and the table says which keys were not compared
+    table = experiment_table([dest, later], ignore_config=["ppo"])
+    assert table["protocols"][0]["arms"][0]["n"] == 5 and table["ignored_config"] == ["ppo"]
+    assert "Resolved configs compared without: ppo." in markdown(table)
+    with pytest.raises(UsageError, match="ppo.lr"):
+        experiment_table([dest, later], ignore_config=["pp"])  # a section, not a prefix
