@@ -173,3 +173,49 @@ def test_wrong_activity_options_name_the_valid_ones():
     # a run's config is refused before anything starts, with the term's own message
     with pytest.raises((UsageError, ValueError), match="valid: hand_speed, joint_speed"):
         run_config(SelfTouch, ["behavior.rewards.activity_level.params.signal=feet"])
+
+
+def test_contact_time_costs_a_held_hand_after_its_free_start_per_second():
+    """Issue #57: the paper's reward kept a hand on the body 93% of a session. Each hand's bout
+    on the body is free for ``free_s`` seconds, then costs 1 a second; a step off the body ends
+    the bout. At 200 Hz with free_s 0.02 (4 steps): the left hand held 6 steps pays 0, 0, 0, 0,
+    -dt, -dt; both hands on: twice; a break restarts the free start."""
+    from devlearn_self_touch import ContactTime
+
+    term = ContactTime(free_s=0.02)
+    term.bind(2)
+    dt = 0.005
+    body = MovingBody(dt=dt)
+
+    def step(left: bool, right: bool) -> np.ndarray:
+        contacts = np.zeros((2, 68), dtype=bool)
+        contacts[0, 3], contacts[1, 40] = left, right
+        facts = [{"hand_contacts": contacts}, {"hand_contacts": np.zeros((2, 68), bool)}]
+        return term(BatchContext([StepContext(body, {}, f, 0, False) for f in facts]))
+
+    paid = [step(True, False) for _ in range(6)]
+    assert [float(p[0]) for p in paid] == pytest.approx([0, 0, 0, 0, -dt, -dt])
+    assert all(float(p[1]) == 0 for p in paid)  # the other env touches nothing
+    # the right hand joins: its own free start, then both cost
+    both = [float(step(True, True)[0]) for _ in range(5)]
+    assert both == pytest.approx([-dt, -dt, -dt, -dt, -2 * dt])
+    # one step off the body ends the left hand's bout; the right hand's goes on
+    assert float(step(False, True)[0]) == pytest.approx(-dt)
+    assert float(step(True, True)[0]) == pytest.approx(-dt)
+    term.reset(0)  # a new episode: every bout starts afresh
+    assert float(step(True, True)[0]) == 0.0
+    with pytest.raises(ValueError, match="free_s must be 0 seconds or above"):
+        ContactTime(free_s=-1)
+
+
+def test_contact_time_is_off_by_default_and_switched_on_from_the_config():
+    from devlearn_self_touch import ContactTime
+
+    cfg = run_config(
+        SelfTouch,
+        ["behavior.rewards.contact_time.weight=2", "behavior.rewards.contact_time.params.free_s=1"],
+    )
+    terms = {t.name: t for t in SelfTouch(cfg.behavior).reward_terms()}
+    assert isinstance(terms["contact_time"], ContactTime)
+    assert (terms["contact_time"].weight, terms["contact_time"].free_s) == (2.0, 1.0)
+    assert "contact_time" not in [t.name for t in SelfTouch(SelfTouchConfig()).reward_terms()]

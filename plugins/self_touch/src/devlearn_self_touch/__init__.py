@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from devlearn_self_touch.activity import ActivityLevel, Effort
+from devlearn_self_touch.activity import ActivityLevel, ContactTime, Effort
 from devlearn_self_touch.behavior import SelfTouch
 from devlearn_self_touch.config import SelfTouchConfig, default_rewards, paper_rewards
 from devlearn_self_touch.evaluation import SelfTouchEvaluator
@@ -18,6 +18,7 @@ __all__ = [
     "ActivityLevel",
     "Balance",
     "ContactNovelty",
+    "ContactTime",
     "DiversityMilestones",
     "Effort",
     "SelfTouch",

@@ -1,5 +1,6 @@
-"""Reward terms on how much the body moves, not on what it touches (issue #57's infant-like
-variants): a rest drive toward a preferred activity level, and an effort cost.
+"""Reward terms on how much the body moves and how long it rests on itself, not on what it
+touches (issue #57's infant-like variants): a rest drive toward a preferred activity level, an
+effort cost, and a cost on the time a hand lies on the body.
 
 Both are costs per simulated second: a term called at every physics step of ``dt`` seconds
 pays its rate times ``dt``, so a second costs the same at any physics step or decision rate
@@ -158,3 +159,51 @@ class Effort(BatchedIntrinsicReward):
         infants, dt = bodies(batch, self.name)
         effort = [float(np.mean(np.square(infant.data.ctrl))) for infant in infants]
         return -np.array(effort) * dt
+
+
+class ContactTime(BatchedIntrinsicReward):
+    """A cost on the time a hand lies on the body, per second, after a free start (issue #57).
+
+    Under the video-coding protocol the paper's reward keeps a hand on the body 93% of a
+    5-minute session, in bouts of ~14 s (``results/self_touch/likeness/``); infants touch the
+    body about half the time and spend the rest moving between touches (DiMercurio et al.
+    2018, abstract). The paper's repeat penalty does not reach a resting hand: it counts the
+    regions whose force crosses the touch threshold, and a hand resting lightly touches none.
+    This term counts contact itself: for each hand h touching any body region this step
+    (``facts["hand_contacts"][h].any()``), with b_h the simulated seconds its current bout has
+    lasted (0 at its first step), it pays, per physics step of dt seconds::
+
+        r_t = -sum_h [b_h >= free_s] * dt
+
+    so a touch shorter than ``free_s`` is free and a hand held on the body costs 1 a second
+    (times the weight) after that, whatever the physics step. A bout ends at the first step the
+    hand touches nothing; bouts start afresh every episode.
+
+    Args:
+        weight: Term weight (0 in the default table: off).
+        free_s: The free start of each bout (simulated seconds).
+    """
+
+    name = "contact_time"
+
+    def __init__(self, weight: float = 1.0, free_s: float = 0.5) -> None:
+        super().__init__(weight)
+        if not (math.isfinite(free_s) and free_s >= 0):
+            raise ValueError(f"contact_time free_s must be 0 seconds or above, got {free_s}")
+        self.free_s = float(free_s)
+        self.bind(1)
+
+    def bind(self, num_envs: int) -> None:
+        super().bind(num_envs)
+        self.bout = np.zeros((num_envs, 2))
+        """(num_envs, 2): each hand's current bout on the body so far, in seconds (0: none)."""
+
+    def __call__(self, batch: BatchContext) -> np.ndarray:
+        _, dt = bodies(batch, self.name)
+        on = batch.stack("hand_contacts", bool).any(axis=2)  # (num_envs, 2)
+        paid = on & (self.bout >= self.free_s - 1e-12)
+        self.bout = np.where(on, self.bout + dt, 0.0)
+        return -paid.sum(axis=1) * dt
+
+    def reset(self, env: int) -> None:
+        self.bout[env] = 0.0

@@ -7,7 +7,7 @@ from typing import Any, ClassVar
 
 from devlearn.api.behavior import BehaviorConfig
 from devlearn.api.rewards import RewardTermCfg, reward_term_cfg
-from devlearn_self_touch.activity import ActivityLevel, Effort
+from devlearn_self_touch.activity import ActivityLevel, ContactTime, Effort
 from devlearn_self_touch.rewards import (
     LIFETIME_MEMORIES,
     TOUCH_COUNTS,
@@ -49,7 +49,7 @@ def paper_rewards() -> dict[str, RewardTermCfg]:
     }
 
 
-NOT_IN_PAPER = ("activity_level", "effort")
+NOT_IN_PAPER = ("activity_level", "effort", "contact_time")
 """Our reward terms beside the paper's (issue #57's infant-like variants,
 :mod:`devlearn_self_touch.activity`): in the default table at weight 0, and left out of a run
 while their weight is 0, so that a run without them is the paper's reward exactly."""
@@ -67,6 +67,7 @@ def default_rewards() -> dict[str, RewardTermCfg]:
             {"preferred": 0.1, "time_constant_s": 1.0, "signal": "hand_speed"},
         ),
         "effort": RewardTermCfg(Effort, 0.0, {}),
+        "contact_time": RewardTermCfg(ContactTime, 0.0, {"free_s": 0.5}),
     }
 
 
@@ -136,7 +137,7 @@ class SelfTouchConfig(BehaviorConfig):
     # --- reward terms (R_t = R_touch + R_geom + R_milestones + R_balance, sec. II-A3) ----
     rewards: dict[str, RewardTermCfg] = field(default_factory=default_rewards)
     """Term name -> (class, weight, params) (:func:`default_rewards`: the paper's four terms
-    with its constants, :func:`paper_rewards`, and two of ours at weight 0, off):
+    with its constants, :func:`paper_rewards`, and three of ours at weight 0, off):
     ``touch_novelty`` (R_touch: first_ever, first_in_episode, repeat_scale and f_decay's
     midpoint and rate, f_decay(c) = 2 / (1 + exp(rate (c - midpoint))) - 1, in counts of c:
     touches with ``touch_count=onset``; with ``step``, ``repeat_crossing_s`` and
@@ -149,7 +150,9 @@ class SelfTouchConfig(BehaviorConfig):
     :mod:`devlearn_self_touch.activity`, costs per simulated second, left out while their
     weight is 0): ``activity_level``, a rest drive, -|m - preferred| per second with m the
     running mean over ``time_constant_s`` seconds of ``signal`` (``hand_speed`` in m/s or
-    ``joint_speed`` in rad/s); ``effort``, -mean squared motor command per second."""
+    ``joint_speed`` in rad/s); ``effort``, -mean squared motor command per second;
+    ``contact_time``, -1 per second per hand on the body after each bout's first ``free_s``
+    seconds."""
 
     # --- touch novelty R_touch (sec. II-A3) ------------------------------------------------
     lifetime_memory: str = "shared"
