@@ -47,7 +47,6 @@ REFERENCE_KIND: dict[str, str] = {
     "hand_regard__i40__cnn.npz": "authenticamd-avx512",
     # issue #54's reruns with the new core learner, recorded when they were published
     "plugins__i54__hand_to_mouth__core_defaults.npz": "genuineintel-avx512",
-    "learners__i54__proof__devlearn_ppo.npz": "genuineintel-avx512",
 }
 """The CPU kind a reference recording was made on, where it is known and not the AMD machine of
 the first recordings: a machine of another kind has no recording to compare with."""
