@@ -85,3 +85,20 @@ def test_tiny_training_run(tmp_path):
 def test_gymnasium_conformance():
     # devlearn/HandToMouth-v0 passes Gymnasium's check_env, and its vector env steps
     check_gymnasium(HandToMouth)
+
+
+def test_the_stall_diagnostic_tells_a_still_failure_from_a_moving_one():
+    """Issue #54 item 3's diagnostic (``python -m devlearn_hand_to_mouth.stalls``): an untrained
+    policy's mean action (the committed test checkpoint) fails both episodes with the joints
+    still over the last second, a stall; with noise of spread 3 it fails moving."""
+    from pathlib import Path
+
+    from devlearn_hand_to_mouth.stalls import STALL_SPEED, stalls
+
+    checkpoint = Path(__file__).parents[3] / "tests/training/data/hand_to_mouth_shared.pt"
+    still = stalls(str(checkpoint), episodes=2, noise=0.0)
+    assert (still["failed"], still["failed_stalled"]) == (2, 2)
+    assert max(still["failed_end_speed"]) < STALL_SPEED
+    moving = stalls(str(checkpoint), episodes=2, noise=3.0)
+    assert (moving["failed"], moving["failed_stalled"]) == (2, 0)
+    assert min(moving["failed_end_speed"]) > 1.0

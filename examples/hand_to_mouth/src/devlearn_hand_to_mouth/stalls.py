@@ -22,8 +22,8 @@ from typing import Any
 import numpy as np
 import torch
 
-from devlearn.plugins import PluginRegistry
-from devlearn.testing import Play, load_checkpoint, load_saved_config, policy_network
+from devlearn.testing import Play, load_checkpoint, load_saved_config, policy_network, registry_for
+from devlearn_hand_to_mouth.behavior import HandToMouth
 
 STALL_SPEED = 0.05
 """Mean absolute joint velocity (rad/s) over the last second below which a failed episode is a
@@ -36,7 +36,7 @@ def stalls(checkpoint: str, episodes: int, noise: float, first_seed: int = 200) 
     """Play ``episodes`` random-pose episodes of ``checkpoint`` together (one env each) with the
     mean action plus N(0, ``noise``); return the reach share, the failed episodes' and the
     successful ones' joint speed over the last second, and how many failed episodes stalled."""
-    registry = PluginRegistry()
+    registry = registry_for(HandToMouth)
     state = load_checkpoint(checkpoint)
     cfg = load_saved_config(state["config"], registry)
     behavior = registry.create("hand_to_mouth", cfg.behavior)
