@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import contextlib
 import time
+from collections import deque
 from collections.abc import Callable, Generator
 from dataclasses import dataclass
 from functools import partial
@@ -75,25 +76,21 @@ class EndStillness:
     """
 
     def __init__(self, decision_s: float) -> None:
-        self.window = max(1, round(STILL_WINDOW_S / decision_s))
-        self.speeds: list[float] = []
+        self.speeds: deque[float] = deque(maxlen=max(1, round(STILL_WINDOW_S / decision_s)))
+        """The body's speed after each of the window's last decisions."""
 
     def add(self, infant: Any) -> None:
         """Record the body's speed after one decision."""
-        data = getattr(infant, "data", None)
-        qvel = getattr(data, "qvel", None)
-        if qvel is None or not len(qvel):
-            return
-        self.speeds.append(float(np.abs(qvel).mean()))
-        if len(self.speeds) > 2 * self.window:
-            del self.speeds[: -self.window]
+        qvel = getattr(getattr(infant, "data", None), "qvel", None)
+        if qvel is not None and len(qvel):
+            self.speeds.append(float(np.abs(qvel).mean()))
 
     def figures(self) -> dict[str, float]:
         """The episode's figures, counted afresh for the next."""
         if not self.speeds:
             return {}
-        speed = float(np.mean(self.speeds[-self.window :]))
-        self.speeds = []
+        speed = float(np.mean(self.speeds))
+        self.speeds.clear()
         return {"end_speed": speed, "ends_still": float(speed < STILL_SPEED)}
 
 
@@ -199,9 +196,9 @@ class _Slot:
     def step(self, obs: dict[str, np.ndarray], info: dict[str, Any] | None) -> bool:
         """Take one decision's outcome; True when it ended an episode."""
         self.obs = obs
-        if self.stillness is not None and info is None:  # the last step's body is the reset's
-            self.stillness.add(self.env.infant)
         if info is None:
+            if self.stillness is not None:  # not at an episode's end: that body is the reset's
+                self.stillness.add(self.env.infant)
             return False
         metrics = {k: v for k, v in info.items() if k.startswith("metrics/")}
         figures = {k.removeprefix("metrics/"): float(v) for k, v in metrics.items()}

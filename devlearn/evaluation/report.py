@@ -77,12 +77,13 @@ SINGLE_VARIANT = "trained"
 """Column name of the checkpoints when their configs differ only in seed (one variant)."""
 
 
-def _flatten(data: dict[str, Any], prefix: str = "") -> dict[str, Any]:
+def flatten(data: dict[str, Any], prefix: str = "") -> dict[str, Any]:
+    """A nested dict's leaves by dotted key (``ppo.learning_rate``)."""
     out: dict[str, Any] = {}
     for key, value in data.items():
         name = f"{prefix}{key}"
         if isinstance(value, dict):
-            out.update(_flatten(value, name + "."))
+            out.update(flatten(value, name + "."))
         else:
             out[name] = value
     return out
@@ -91,7 +92,7 @@ def _flatten(data: dict[str, Any], prefix: str = "") -> dict[str, Any]:
 def _metrics(summary: dict[str, Any]) -> dict[str, float]:
     """Numeric metrics of one eval JSON, dotted keys; per-episode spreads left out."""
     out = {}
-    for key, value in _flatten(summary).items():
+    for key, value in flatten(summary).items():
         parts = key.split(".")
         if parts[0] in NOT_METRIC or key.endswith(("_std", "_ci_low", "_ci_high")):
             continue
@@ -226,7 +227,7 @@ def group(
     if as_loaded is not None:
         saved = [as_loaded(d.get("behavior", "?"), c) for (_, d), c in zip(runs, saved)]
     configs = [
-        {k: json.dumps(v) for k, v in _flatten(c).items() if k not in NOT_VARIANT} for c in saved
+        {k: json.dumps(v) for k, v in flatten(c).items() if k not in NOT_VARIANT} for c in saved
     ]
     for config, (_, data) in zip(configs, runs):
         # another learner, same config: a variant; one policy at several ages: a column per age

@@ -156,24 +156,16 @@ NOT_NUMBERS = frozenset({"seed", "out_dir", "logger", "wandb_project", "save_int
 """Resolved-config keys that do not decide a run's numbers beyond its seed."""
 
 
-def _flat(value: Any, prefix: str = "") -> dict[str, Any]:
-    if not isinstance(value, dict):
-        return {prefix: value}
-    flat: dict[str, Any] = {}
-    for key, item in value.items():
-        flat.update(_flat(item, f"{prefix}.{key}" if prefix else str(key)))
-    return flat
-
-
 def _resolved(pub: _Publication, arm_name: str) -> dict[str, Any] | None:
     """The resolved config of ``arm_name``'s first recorded seed, flattened, without the keys
     that do not decide its numbers; None where none is published."""
+    from devlearn.evaluation.report import flatten
+
     for _seed, run in _runs([pub], arm_name):
         for name in RUN_CONFIGS:
             config = read_json(run / name)
             if config is not None:
-                flat = _flat({k: v for k, v in config.items() if k not in NOT_NUMBERS})
-                return flat
+                return flatten({k: v for k, v in config.items() if k not in NOT_NUMBERS})
     return None
 
 
