@@ -221,6 +221,27 @@ def test_where_both_hands_can_be_no_side_is_credited(model, monkeypatch):
     assert (rule.step(blobs, np.zeros(102))[:, 0] == 0).all()
 
 
+def test_two_blobs_each_within_one_hands_reach_are_the_two_hands(model, monkeypatch):
+    """Both hands 1.2 reaches apart (each inside the other's margin): a blob on each is no
+    one's blob by blob, and the pair of them is the two hands; two blobs both within reach
+    of the left hand alone (one hand split in two) credit the right hand nowhere."""
+    projected = np.array([[[30.0, 30.0, 0.2]] * 2, [[30.0, 30.0, 0.2]] * 2])
+    alone = ContingencyAttribution(model, use_motion=False, pair_blobs=False)
+    reach = float(alone.reach(projected)[0, 0])
+    projected[1, :, 0] += 1.2 * reach
+    blobs = np.full((2, MAX_BLOBS, 3), np.nan)
+    blobs[:, 0] = (*projected[0, 0, :2], 100.0)
+    blobs[:, 1] = (*projected[1, 0, :2], 90.0)
+    paired = ContingencyAttribution(model, use_motion=False, pair_blobs=True)
+    for rule in (alone, paired):
+        monkeypatch.setattr(rule.body, "project", lambda p: projected)
+    assert (alone.step(blobs, np.zeros(102)) == -1).all()
+    assert (paired.step(blobs, np.zeros(102)) == [[0, 1], [0, 1]]).all()
+    split = blobs.copy()
+    split[:, 1, 0] = projected[0, 0, 0] - 0.5 * reach  # the left hand's second blob
+    assert not (paired.step(split, np.zeros(102)) == 1).any()
+
+
 def test_a_blob_that_moves_against_the_arm_is_not_credited(model):
     """Motion agreement: the left arm swings one way over the window while the blob at its
     hand's place moves the other way: not credited; moving with it: credited."""

@@ -16,6 +16,10 @@ devlearn_hand_regard.contingency_check replay ... --tables DIR``, episode 1 of 1
   rule credits the absent right hand on 91% of steps, and issue #58's first contingency rule
   (nearest babbled postures, results at 10096f0) on 24%.
 
+- ``i58_pilot_both_seed3_episode4.npz``: issue #58's pilot, ``both_hands_contingency``
+  seed 3 (trained under the contingency rule without blob pairs): both hands in view beside
+  each other, two blobs, the other hand within the rule's margin of each.
+
 The contingency rule, with the committed detector of ``results/hand_regard/i58_attribution``,
 credits no absent hand on any (at most 1% of steps), and still credits the hand in view
 (a rule that credits nothing would fail that).
@@ -62,6 +66,27 @@ def test_the_old_rule_was_fooled_and_the_contingency_rule_is_not(
     new = score_credits(credits(new_detector, "contingency", table), table)
     assert new["false_credit"] <= TARGET
     assert (new["recall"] or 0.0) >= least_recall
+
+
+def test_two_blobs_beside_each_other_are_paired_without_false_credit(params):
+    """Both hands in view side by side: without the pairing (the pilot's rule) the rule
+    credits no side on many of these steps; paired, recall rises and no absent hand is
+    credited."""
+    table = BlobTable.load(DATA / "i58_pilot_both_seed3_episode4.npz")
+    scored = {
+        pairs: score_credits(
+            credits(
+                HandDetector(params, attribution="contingency", pair_blobs=pairs),
+                "contingency",
+                table,
+            ),
+            table,
+        )
+        for pairs in (False, True)
+    }
+    assert scored[False]["recall"] < 0.6
+    assert scored[True]["recall"] > 0.75
+    assert scored[True]["false_credit"] == 0.0
 
 
 def test_contingency_needs_a_detector_with_its_model(params):

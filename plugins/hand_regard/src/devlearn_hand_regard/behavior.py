@@ -279,7 +279,11 @@ class HandRegard(Behavior):
             UsageError: An unknown ``config.hand_attribution``.
         """
         _check_choice("hand_attribution", self.config.hand_attribution, HAND_ATTRIBUTION_CHOICES)
-        return HandDetector(params, attribution=self.config.hand_attribution)
+        return HandDetector(
+            params,
+            attribution=self.config.hand_attribution,
+            pair_blobs=self.config.contingency_pairs,
+        )
 
     # --- observations (one environment each: its previous frame and arm mask are its own) ---
     @per_env

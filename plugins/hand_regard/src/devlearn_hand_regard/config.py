@@ -65,6 +65,7 @@ class HandRegardConfig(BehaviorConfig):
         "policy": "cnn",
         "babbling_arms": "both",
         "hand_attribution": "position",
+        "contingency_pairs": False,
         "critic": "same",
     }
     """Values for keys a saved config lacks: runs saved before these keys existed were trained
@@ -161,6 +162,11 @@ class HandRegardConfig(BehaviorConfig):
     its track moves with that arm, else to no side; its ``contingency_model`` is fitted from
     the calibration babbling of a fresh run, or read from a detector file
     (``python -m devlearn_hand_regard.contingency_check fit``; plugin README)."""
+    contingency_pairs: bool = True
+    """``contingency`` only: two blobs in an eye, each within reach of one hand only and of
+    different hands, are those hands' even where the other hand is nearer than the rule's
+    margin (both hands in view beside each other; :data:`contingency.PAIR_BLOBS`). Saved
+    configs without this key (issue #58's pilot) attribute without it."""
     attribution_babbling_share: float = 5.0
     """One-arm babbling recorded after calibration (seeds from ``babbling_seed + 2``), in steps
     as a share of ``babbling_steps`` (5.0: 50,000 more at the paper's 10,000; ~2 min of

@@ -25,7 +25,12 @@ proprioception by a step). Per decision and eye (:meth:`ContingencyAttribution.s
    blob that moved must move with the credited arm's projected hand (cosine above
    :data:`MIN_COSINE`; optional, :data:`USE_MOTION`);
 3. a blob is credited to a hand only when that hand can be it and the other hand cannot
-   (both can: the evidence does not tell them apart, no side).
+   (both can: the evidence does not tell them apart, no side);
+4. **two hands, two blobs** (:data:`PAIR_BLOBS`): where an eye shows two blobs, each within
+   reach of exactly one hand and of different hands, each is its hand's (when it moves with
+   that arm), even though the other hand is nearer than the :data:`MARGIN` allows: both
+   hands are in view beside each other, the case rule 3 alone credited to no side (issue
+   #58's pilot, seed 3: the detector 0.09-0.27 below ``pixels``).
 
 Validation and the adversarial replay of every published policy:
 ``python -m devlearn_hand_regard.contingency_check`` (``results/hand_regard/i58_attribution``).
@@ -82,6 +87,12 @@ MIN_COSINE = 0.0
 that arm's projected hand's is above this."""
 USE_MOTION = True
 """Require the motion agreement (item 2 of the rule) for a credit."""
+PAIR_BLOBS = True
+"""Credit two blobs of an eye to the two hands when each blob is within reach of one hand
+only (item 4 of the rule). On every published policy's replayed frames it credited no absent
+hand and raised recall where both hands are in view (issue #39's ``reach_t4`` seed 3: 0.52 to
+0.83; the #58 pilot's seed 3: 0.65 to 0.78; ``results/hand_regard/i58_attribution``). Runs
+saved before it (config key ``contingency_pairs`` absent) attribute without it."""
 MIN_LABELS = 50
 """Fewer labelled babbled blobs than this: no calibration (the fit fails and says so)."""
 MODEL_VERSION = 2
@@ -242,6 +253,7 @@ class ContingencyAttribution:
             not change).
         margin: :data:`MARGIN`.
         use_motion: :data:`USE_MOTION`.
+        pair_blobs: :data:`PAIR_BLOBS`.
     """
 
     def __init__(
@@ -250,6 +262,7 @@ class ContingencyAttribution:
         visibility_model: dict[str, Any] | None = None,
         margin: float = MARGIN,
         use_motion: bool = USE_MOTION,
+        pair_blobs: bool = PAIR_BLOBS,
     ) -> None:
         check_contingency_model(model)
         self.body = BodySchema(model["body"])
@@ -257,6 +270,7 @@ class ContingencyAttribution:
         self.radius = float(model["reach"]["radius"])
         self.margin = margin
         self.use_motion = use_motion
+        self.pair_blobs = pair_blobs
         self.history: deque[tuple[np.ndarray, np.ndarray]] = deque(maxlen=WINDOW + 1)
 
     def reset(self) -> None:
@@ -298,7 +312,21 @@ class ContingencyAttribution:
                 for hand in range(2):
                     if can[row, hand] and cannot[row, 1 - hand] and self._agrees(eye, int(b), hand):
                         out[eye, b] = hand
+            if self.pair_blobs and len(present) == 2:
+                self._pair(out[eye], eye, present, can)
         return out
+
+    def _pair(self, credited: np.ndarray, eye: int, present: np.ndarray, can: np.ndarray) -> None:
+        """Rule 4: two blobs, each within reach of one hand only, and of different hands, are
+        those hands' (each moving with its arm); ``credited`` (B,) is updated in place."""
+        if can.sum(axis=1).tolist() != [1, 1]:
+            return
+        hands = [int(np.argmax(row)) for row in can]
+        if hands[0] == hands[1]:
+            return
+        if all(self._agrees(eye, int(b), h) for b, h in zip(present, hands)):
+            for b, h in zip(present, hands):
+                credited[b] = h
 
     def _agrees(self, eye: int, b: int, hand: int) -> bool:
         """The motion evidence allows crediting blob ``b`` to ``hand`` (always, without it)."""

@@ -69,7 +69,9 @@ def credits(detector: HandDetector, rule: str, table: BlobTable) -> np.ndarray:
     params = detector.params
     assert params is not None
     if rule == "contingency":
-        attribution = ContingencyAttribution(params.contingency_model, params.visibility_model)
+        attribution = ContingencyAttribution(
+            params.contingency_model, pair_blobs=detector.pair_blobs
+        )
         for t in range(len(table)):
             if t == 0 or table.episode[t] != table.episode[t - 1]:
                 attribution.reset()
@@ -214,9 +216,11 @@ def published_detector(path: Path) -> HandDetector:
     if state.get("behavior") != "hand_regard" or not stored:
         raise SystemExit(f"{path}: not a hand_regard policy with its hand detector")
     params = DetectorParams.from_dict(stored, source=f"{path}: hand detector")
-    legacy = HandRegardConfig.LEGACY_DEFAULTS["hand_attribution"]
-    rule = state["config"]["behavior"].get("hand_attribution", legacy)
-    return HandDetector(params, attribution=rule)
+    legacy = HandRegardConfig.LEGACY_DEFAULTS
+    behavior = state["config"]["behavior"]
+    rule = behavior.get("hand_attribution", legacy["hand_attribution"])
+    pairs = behavior.get("contingency_pairs", legacy["contingency_pairs"])
+    return HandDetector(params, attribution=rule, pair_blobs=pairs)
 
 
 def _with_model(params: DetectorParams, model: dict[str, Any]) -> HandDetector:

@@ -21,7 +21,11 @@ from devlearn import write_text_atomically
 from devlearn.api.json_files import read_json_object
 from devlearn_hand_regard.attribution import VisibilityPredictor, assign
 from devlearn_hand_regard.blob_table import MAX_BLOBS, blob_row
-from devlearn_hand_regard.contingency import ContingencyAttribution, check_contingency_model
+from devlearn_hand_regard.contingency import (
+    PAIR_BLOBS,
+    ContingencyAttribution,
+    check_contingency_model,
+)
 
 FORMAT_VERSION = 2
 """2: no static-body masks (the mittens made them unnecessary); 1 files are refused."""
@@ -324,13 +328,19 @@ class HandDetector:
             visibility model (calibrated before issue #39, or babbling saw too few hands to
             learn one) falls back to ``position`` with a warning; :attr:`attribution` is the
             rule in use.
+        pair_blobs: ``contingency`` only: credit two blobs to the two hands when each is
+            within reach of one hand only (:data:`contingency.PAIR_BLOBS`).
 
     Raises:
         ValueError: An unknown attribution.
     """
 
     def __init__(
-        self, params: DetectorParams | None, max_hands: int = 2, attribution: str = "position"
+        self,
+        params: DetectorParams | None,
+        max_hands: int = 2,
+        attribution: str = "position",
+        pair_blobs: bool = PAIR_BLOBS,
     ) -> None:
         if attribution not in ATTRIBUTIONS:
             raise ValueError(
@@ -354,9 +364,10 @@ class HandDetector:
         self.params = params
         self.max_hands = max_hands
         self.attribution = attribution
+        self.pair_blobs = pair_blobs
         self._predictor: tuple[dict[str, Any], VisibilityPredictor] | None = None
         self._contingency = (
-            ContingencyAttribution(params.contingency_model, params.visibility_model)
+            ContingencyAttribution(params.contingency_model, pair_blobs=pair_blobs)
             if attribution == "contingency" and params is not None
             else None
         )

@@ -81,7 +81,9 @@ def calibrate_by_babbling(
                 start=cfg.start,
                 hold_steps=cfg.babbling_hold_steps,
             )
-            detector = HandDetector(params, attribution=cfg.hand_attribution)
+            detector = HandDetector(
+                params, attribution=cfg.hand_attribution, pair_blobs=cfg.contingency_pairs
+            )
             result = score(detector, test, segmentation)
             params.calibration["held_out"] = {
                 "steps": held_out_steps,
