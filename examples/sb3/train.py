@@ -81,16 +81,27 @@ def sac_settings(cfg: Any, net: list[int], decisions: int) -> dict[str, Any]:
 
 
 class WallClock(BaseCallback):
-    """Stops learning once ``seconds`` have passed (0: never)."""
+    """Stops learning once ``seconds`` have passed (0: never), and times the rollouts:
+    ``collect_s`` sums the seconds from each rollout's start to its end (policy, envs and
+    buffer, as devlearn's ``collect_s``); the rest of ``learn()`` is the updates and SB3's
+    bookkeeping (issue #54's split of the seconds of learning)."""
 
     def __init__(self, seconds: float) -> None:
         super().__init__()
         self.seconds = seconds
         self.start = time.perf_counter()
         self.stopped = False
+        self.collect_s = 0.0
+        self._rollout_start = 0.0
 
     def _on_training_start(self) -> None:
         self.start = time.perf_counter()
+
+    def _on_rollout_start(self) -> None:
+        self._rollout_start = time.perf_counter()
+
+    def _on_rollout_end(self) -> None:
+        self.collect_s += time.perf_counter() - self._rollout_start
 
     def _on_step(self) -> bool:
         self.stopped = 0 < self.seconds <= time.perf_counter() - self.start
@@ -233,6 +244,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             "seconds_budget": args.seconds,
             "stopped_by": "seconds" if clock.stopped else "steps",
             "learn_s": learn_s,
+            "collect_s": clock.collect_s,
             "wall_clock_s": time.perf_counter() - started,
             "settings": json.loads(json.dumps(hyper)),
             "overrides": args.overrides,

@@ -75,6 +75,7 @@ def test_sb3_trains_self_touch_and_devlearn_eval_scores_it(algo, tmp_path):
     assert record["env_steps"] == 5 * record["decisions"] >= 2000
     assert record["stopped_by"] == "steps" and record["learner"] == f"sb3_{algo}"
     assert json.loads((out / "train.json").read_text())["seed"] == 2
+    assert 0 < record["collect_s"] < record["learn_s"]  # the rollouts' share of learn()
     # the scripted policy acts as SB3's own deterministic prediction does
     with open(out / "vecnormalize.pkl", "rb") as f:
         normalizer = pickle.load(f)
