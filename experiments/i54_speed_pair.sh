@@ -15,6 +15,7 @@ export MUJOCO_GL=egl
 S=${STEPS:-163840}
 OUT=${OUT:-/tmp}
 PY=${PYTHON:-.venv/bin/python}
+mkdir -p "$OUT"
 rm -rf "$OUT/pair_ours_$3" "$OUT/pair_sb3_$3"
 common=(--seed 6 --workers 0 --set behavior.fixed_pose_steps=4000000)
 taskset -c "$1" "$PY" -m devlearn.cli run self_touch --out "$OUT/pair_ours_$3" --steps "$S" \
