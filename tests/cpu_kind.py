@@ -38,7 +38,6 @@ def to_record(path: Path) -> Path:
 
 
 REFERENCE_KIND: dict[str, str] = {
-    "plugins__hand_to_mouth__core_defaults.npz": "genuineintel-avx512",
     # issue #39's median policies, recorded when they were published (the other four seeds'
     # policies left the tree in issue #56)
     "hand_regard__i39__paper.npz": "authenticamd-avx512",
@@ -47,6 +46,8 @@ REFERENCE_KIND: dict[str, str] = {
     "hand_regard__i40__cnn.npz": "authenticamd-avx512",
     # issue #54's reruns with the new core learner, recorded when they were published
     "plugins__i54__hand_to_mouth__core_defaults.npz": "genuineintel-avx512",
+    # issue #58's median both-hands policy, recorded when it was published
+    "hand_regard__i58__both_hands.npz": "genuineintel-avx512",
 }
 """The CPU kind a reference recording was made on, where it is known and not the AMD machine of
 the first recordings: a machine of another kind has no recording to compare with."""
