@@ -219,3 +219,37 @@ def test_contact_time_is_off_by_default_and_switched_on_from_the_config():
     assert isinstance(terms["contact_time"], ContactTime)
     assert (terms["contact_time"].weight, terms["contact_time"].free_s) == (2.0, 1.0)
     assert "contact_time" not in [t.name for t in SelfTouch(SelfTouchConfig()).reward_terms()]
+
+
+def test_touch_onset_costs_each_touch_a_coder_counts():
+    """Issue #57: the contact cost's policies touch 150 times a minute in 0.4-s bouts. Each new
+    bout of a hand on the body costs 1; a gap shorter than ``min_gap_s`` (the coder's merge)
+    continues the bout and costs nothing; holding costs nothing; both hands count apart."""
+    from devlearn_self_touch import TouchOnset
+
+    term = TouchOnset(min_gap_s=0.015)  # 3 steps at 200 Hz
+    term.bind(2)
+    body = MovingBody(dt=0.005)
+
+    def step(left: bool, right: bool) -> float:
+        contacts = np.zeros((2, 68), dtype=bool)
+        contacts[0, 3], contacts[1, 40] = left, right
+        facts = [{"hand_contacts": contacts}, {"hand_contacts": np.zeros((2, 68), bool)}]
+        paid = term(BatchContext([StepContext(body, {}, f, 0, False) for f in facts]))
+        assert float(paid[1]) == 0.0  # the other env touches nothing
+        return float(paid[0])
+
+    assert [step(True, False) for _ in range(4)] == [-1.0, 0.0, 0.0, 0.0]  # one touch, held
+    assert [step(False, False) for _ in range(2)] == [0.0, 0.0]  # 2 steps off: under the gap
+    assert step(True, False) == 0.0  # the same bout, as the coder merges it
+    assert [step(False, False) for _ in range(3)] == [0.0, 0.0, 0.0]  # 3 steps off: a gap
+    assert step(True, True) == -2.0  # a new touch by each hand
+    term.reset(0)  # a new episode: a hand already on the body starts a bout
+    assert step(True, False) == -1.0
+    with pytest.raises(ValueError, match="min_gap_s must be 0 seconds or above"):
+        TouchOnset(min_gap_s=-1)
+    cfg = run_config(SelfTouch, ["behavior.rewards.touch_onset.weight=3"])
+    terms = {t.name: t for t in SelfTouch(cfg.behavior).reward_terms()}
+    assert isinstance(terms["touch_onset"], TouchOnset) and terms["touch_onset"].weight == 3.0
+    assert terms["touch_onset"].min_gap_s == pytest.approx(2 / 30)
+    assert "touch_onset" not in [t.name for t in SelfTouch(SelfTouchConfig()).reward_terms()]

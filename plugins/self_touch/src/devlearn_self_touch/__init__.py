@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from devlearn_self_touch.activity import ActivityLevel, ContactTime, Effort
+from devlearn_self_touch.activity import ActivityLevel, ContactTime, Effort, TouchOnset
 from devlearn_self_touch.behavior import SelfTouch
 from devlearn_self_touch.config import SelfTouchConfig, default_rewards, paper_rewards
 from devlearn_self_touch.evaluation import SelfTouchEvaluator
@@ -19,6 +19,7 @@ __all__ = [
     "Balance",
     "ContactNovelty",
     "ContactTime",
+    "TouchOnset",
     "DiversityMilestones",
     "Effort",
     "SelfTouch",

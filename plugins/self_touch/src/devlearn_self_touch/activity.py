@@ -1,13 +1,14 @@
-"""Reward terms on how much the body moves and how long it rests on itself, not on what it
-touches (issue #57's infant-like variants): a rest drive toward a preferred activity level, an
-effort cost, and a cost on the time a hand lies on the body.
+"""Reward terms on how much the body moves and how long and how often it touches itself, not
+on what it touches (issue #57's infant-like variants): a rest drive toward a preferred activity
+level, an effort cost, a cost on the time a hand lies on the body, and a cost per touch.
 
-Both are costs per simulated second: a term called at every physics step of ``dt`` seconds
-pays its rate times ``dt``, so a second costs the same at any physics step or decision rate
-(``env.action_repeat``), as the touch terms' clock in seconds (``repeat_crossing_s``). Both
-read the body (``ctx.infant``: its joint or hand velocities, the controls it applied), which
-the touch facts do not carry; both are off (weight 0) in the default reward table and left out
-of the run while they are.
+The first three are costs per simulated second: a term called at every physics step of ``dt``
+seconds pays its rate times ``dt``, so a second costs the same at any physics step or decision
+rate (``env.action_repeat``), as the touch terms' clock in seconds (``repeat_crossing_s``). The
+fourth is a cost per event (a touch as a video coder counts it), whose gap is in seconds too.
+The first two read the body (``ctx.infant``: its joint or hand velocities, the controls it
+applied), which the touch facts do not carry. All are off (weight 0) in the default reward
+table and left out of the run while they are.
 """
 
 from __future__ import annotations
@@ -207,3 +208,53 @@ class ContactTime(BatchedIntrinsicReward):
 
     def reset(self, env: int) -> None:
         self.bout[env] = 0.0
+
+
+class TouchOnset(BatchedIntrinsicReward):
+    """A cost per touch: each new bout of a hand on the body pays -1, as a video coder counts it
+    (issue #57).
+
+    Under the video-coding protocol (:mod:`devlearn_self_touch.coding`: 30 frames a second, gaps
+    shorter than two frames merged) the contact cost's policies touch 150 times a minute in
+    0.4-s bouts: :class:`ContactTime` leaves each bout's first ``free_s`` free, so short
+    frequent touches cost nothing (``results/self_touch/likeness/``); infants touch at most ~40
+    times a minute (DiMercurio et al. 2018, abstract). This term prices the touch itself: for
+    each hand h that touches a body region this step (``facts["hand_contacts"][h].any()``) after
+    touching none for at least ``min_gap_s`` simulated seconds (the coder's merge: a shorter
+    gap continues the bout), it pays::
+
+        r_t = -sum_h onset_h
+
+    so every touch a coder would count costs 1 (times the weight), whatever the physics step or
+    the decision rate. A hand touching at an episode's first step starts a bout there; bouts
+    start afresh every episode.
+
+    Args:
+        weight: Term weight (0 in the default table: off).
+        min_gap_s: The shortest gap off the body that ends a bout (simulated seconds; the
+            coding protocol's two frames at 30 Hz by default).
+    """
+
+    name = "touch_onset"
+
+    def __init__(self, weight: float = 1.0, min_gap_s: float = 2 / 30) -> None:
+        super().__init__(weight)
+        if not (math.isfinite(min_gap_s) and min_gap_s >= 0):
+            raise ValueError(f"touch_onset min_gap_s must be 0 seconds or above, got {min_gap_s}")
+        self.min_gap_s = float(min_gap_s)
+        self.bind(1)
+
+    def bind(self, num_envs: int) -> None:
+        super().bind(num_envs)
+        self.off = np.full((num_envs, 2), np.inf)
+        """(num_envs, 2): seconds since each hand last touched the body (inf: not this episode)."""
+
+    def __call__(self, batch: BatchContext) -> np.ndarray:
+        _, dt = bodies(batch, self.name)
+        on = batch.stack("hand_contacts", bool).any(axis=2)  # (num_envs, 2)
+        onset = on & (self.off >= self.min_gap_s - 1e-12)
+        self.off = np.where(on, 0.0, self.off + dt)
+        return -onset.sum(axis=1).astype(float)
+
+    def reset(self, env: int) -> None:
+        self.off[env] = np.inf

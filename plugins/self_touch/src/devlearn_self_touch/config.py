@@ -7,7 +7,7 @@ from typing import Any, ClassVar
 
 from devlearn.api.behavior import BehaviorConfig
 from devlearn.api.rewards import RewardTermCfg, reward_term_cfg
-from devlearn_self_touch.activity import ActivityLevel, ContactTime, Effort
+from devlearn_self_touch.activity import ActivityLevel, ContactTime, Effort, TouchOnset
 from devlearn_self_touch.rewards import (
     LIFETIME_MEMORIES,
     TOUCH_COUNTS,
@@ -49,7 +49,7 @@ def paper_rewards() -> dict[str, RewardTermCfg]:
     }
 
 
-NOT_IN_PAPER = ("activity_level", "effort", "contact_time")
+NOT_IN_PAPER = ("activity_level", "effort", "contact_time", "touch_onset")
 """Our reward terms beside the paper's (issue #57's infant-like variants,
 :mod:`devlearn_self_touch.activity`): in the default table at weight 0, and left out of a run
 while their weight is 0, so that a run without them is the paper's reward exactly."""
@@ -68,6 +68,7 @@ def default_rewards() -> dict[str, RewardTermCfg]:
         ),
         "effort": RewardTermCfg(Effort, 0.0, {}),
         "contact_time": RewardTermCfg(ContactTime, 0.0, {"free_s": 0.5}),
+        "touch_onset": RewardTermCfg(TouchOnset, 0.0, {"min_gap_s": 2 / 30}),
     }
 
 
@@ -152,7 +153,8 @@ class SelfTouchConfig(BehaviorConfig):
     running mean over ``time_constant_s`` seconds of ``signal`` (``hand_speed`` in m/s or
     ``joint_speed`` in rad/s); ``effort``, -mean squared motor command per second;
     ``contact_time``, -1 per second per hand on the body after each bout's first ``free_s``
-    seconds."""
+    seconds; ``touch_onset``, -1 per touch as a video coder counts it (a hand's new bout on the
+    body after ``min_gap_s`` seconds off it)."""
 
     # --- touch novelty R_touch (sec. II-A3) ------------------------------------------------
     lifetime_memory: str = "shared"
