@@ -13,6 +13,7 @@ from devlearn.api.behavior import BehaviorConfig, check_reward_table
 from devlearn.api.errors import UsageError
 from devlearn.api.rewards import upgrade_saved_rewards
 from devlearn.config.values import convert, field_types
+from devlearn.timing import PHYSICS_TIMESTEP
 
 if TYPE_CHECKING:
     from devlearn.api.behavior import Behavior
@@ -105,6 +106,13 @@ class NetworkConfig:
     wide at first, and at the end a policy whose mean action is its behaviour (issue #54; 0.3
     by default, :data:`LEARNER_EVIDENCE`: 0.1 before, which ended exploration too early). 0: no
     ceiling. A saved config without this field means 0."""
+    exploration_beta: float = 0.0
+    """The spectrum of the policy's exploration noise over decisions: power ~ f^-beta (every
+    head; :class:`devlearn.training.distribution.ColoredNoise`). 0: white, independent draws
+    at every decision (SB3's and rsl-rl's; the default); 1: pink (Eberhard et al. 2023), a
+    drift that a slightly perturbed deterministic policy would make, so training meets the
+    closed loop the mean action plays (issue #54). Each draw is still the policy's Gaussian:
+    PPO's probabilities are unchanged. From 0 to below 2."""
     encoders: str = "flat"
     """How senses are encoded; ``flat`` by default (:data:`LEARNER_EVIDENCE`; ``behavior``
     before issue #54). ``behavior``: each observation through the encoder the behaviour's
@@ -376,6 +384,11 @@ def check_learner(cfg: RunConfig, spec: Any) -> None:
             f"got {init_std}"
         )
     floor = net.min_std if net.head == "gaussian" else 0.0
+    if not (isinstance(net.exploration_beta, (int, float)) and 0 <= net.exploration_beta < 2):
+        raise UsageError(
+            "network.exploration_beta must be from 0 (white noise) to below 2, got "
+            f"{net.exploration_beta!r}"
+        )
     if net.final_std and not floor <= net.final_std < init_std:
         raise UsageError(
             f"network.final_std must lie in [{floor}, {init_std}) (the spread's lower bound "
@@ -558,6 +571,9 @@ def to_rsl_rl(cfg: RunConfig, behavior: Any, observation_names: list[str] | None
         }
     if cfg.network.final_std:  # absent otherwise: configs from before issue #54 build as then
         distribution["final_std"] = cfg.network.final_std
+    if cfg.network.exploration_beta:  # absent otherwise: white noise, as every run before
+        distribution["noise_beta"] = cfg.network.exploration_beta
+        distribution["noise_decision_s"] = PHYSICS_TIMESTEP * cfg.env.action_repeat
     return {
         "algorithm": {
             "class_name": "devlearn.training.ppo:UniqueParamPPO",

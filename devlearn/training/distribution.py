@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 from typing import cast
 
+import numpy as np
 import torch
 import torch.nn as nn
 import torch.nn.functional as F
@@ -14,6 +15,7 @@ from rsl_rl.modules.distribution import Distribution
 from torch.distributions import Normal
 
 from devlearn.api.network_spec import check_spread
+from devlearn.env.motor_noise import check_noise, power_law_filters
 
 
 def inverse_softplus(y: float) -> float:
@@ -68,8 +70,32 @@ class DiagonalNormal(Distribution):
         """``std`` under the ceiling (unchanged without one)."""
         return std.clamp(max=self.std_cap) if math.isfinite(self.std_cap) else std
 
+    noise_beta: float = 0.0
+    """The exploration noise's spectral exponent (``network.exploration_beta``): 0, white
+    (independent draws at every decision, the default); above 0, :class:`ColoredNoise`."""
+    _noise: ColoredNoise | None = None
+
+    def set_noise(self, beta: float, decision_s: float) -> None:
+        """Sample with time-correlated noise whose power falls as f^-``beta``, one stream per
+        environment and action, advanced once per decision of ``decision_s`` seconds (beta 0:
+        white, as without this call)."""
+        check_noise(1.0, beta, "network.exploration")
+        if beta and not decision_s > 0:
+            raise ValueError(
+                f"coloured exploration needs a decision period above 0 s, got {decision_s}"
+            )
+        self.noise_beta, self.noise_decision_s = float(beta), float(decision_s)
+        self._noise = None
+
     def sample(self) -> torch.Tensor:
-        return self._distribution.sample()  # type: ignore[union-attr]
+        dist = self._distribution
+        assert dist is not None
+        if not self.noise_beta:
+            return dist.sample()
+        shape = tuple(dist.mean.shape)
+        if self._noise is None or self._noise.shape != shape:
+            self._noise = ColoredNoise(shape, self.noise_beta, self.noise_decision_s)
+        return dist.mean + dist.stddev * self._noise.next()
 
     @property
     def mean(self) -> torch.Tensor:
@@ -96,6 +122,42 @@ class DiagonalNormal(Distribution):
         new_params: tuple[torch.Tensor, torch.Tensor],
     ) -> torch.Tensor:
         return torch.distributions.kl_divergence(Normal(*old_params), Normal(*new_params)).sum(-1)
+
+
+class ColoredNoise:
+    """Unit-variance Gaussian noise with a power spectrum ~ f^-beta, one stream per element of
+    ``shape`` (environments x actions), for the policy's exploration (issue #54).
+
+    Each stream is the motor noise's sum of AR(1) processes
+    (:func:`devlearn.env.motor_noise.power_law_filters`), advanced once per decision. Every
+    draw is still N(0, 1) per element, so an action mean + std * noise has the policy's
+    Gaussian as its law at each decision and PPO's log-probabilities hold; only successive
+    draws are correlated. Exploration then drifts smoothly, as a slightly perturbed
+    deterministic policy acts, instead of jittering at every decision (pink noise: Eberhard
+    et al., ICLR 2023; gSDE's motivation: Raffin et al., CoRL 2021). Draws come from torch's
+    generator (a run's seed); the streams are not saved in checkpoints, so a resumed run
+    starts fresh ones.
+
+    Args:
+        shape: The streams' shape (the batch of means).
+        beta: Spectral exponent, 0 <= beta < 2.
+        decision_s: Seconds between draws (the physics step times ``env.action_repeat``).
+    """
+
+    def __init__(self, shape: tuple[int, ...], beta: float, decision_s: float) -> None:
+        a, variance = power_law_filters(float(beta), float(decision_s))
+        self.shape = tuple(shape)
+        view = (-1,) + (1,) * len(self.shape)
+        self._a = torch.tensor(a, dtype=torch.float32).view(view)
+        self._gain = torch.tensor(np.sqrt(variance * (1.0 - a**2)), dtype=torch.float32).view(view)
+        spread = torch.tensor(np.sqrt(variance), dtype=torch.float32).view(view)
+        self.state = torch.randn((len(a), *self.shape)) * spread
+        """(K, *shape): each AR(1) process's value, started from its stationary law."""
+
+    def next(self) -> torch.Tensor:
+        """The next draw, ``shape``."""
+        self.state = self.state * self._a + self._gain * torch.randn_like(self.state)
+        return self.state.sum(dim=0)
 
 
 class TanhSoftplusGaussian(DiagonalNormal):
@@ -126,8 +188,11 @@ class TanhSoftplusGaussian(DiagonalNormal):
         min_std: float = 1e-3,
         max_std: float = 0.0,
         final_std: float = 0.0,
+        noise_beta: float = 0.0,
+        noise_decision_s: float = 0.0,
     ) -> None:
         super().__init__(output_dim)
+        self.set_noise(noise_beta, noise_decision_s)
         check_spread(init_std, max_std, min_std)
         self.set_final_std(final_std, min_std, init_std)
         self.init_std = float(init_std)
@@ -239,8 +304,11 @@ class BoundedGaussian(LinearMeanGaussian):
         min_std: float = 0.05,
         max_std: float = 1.0,
         final_std: float = 0.0,
+        noise_beta: float = 0.0,
+        noise_decision_s: float = 0.0,
     ) -> None:
         super().__init__(output_dim)
+        self.set_noise(noise_beta, noise_decision_s)
         self.set_final_std(final_std, min_std, init_std)
         if not 0 < min_std < init_std < max_std:
             raise ValueError(
@@ -270,8 +338,16 @@ class FreeGaussian(LinearMeanGaussian):
         init_std: Spread at initialisation (SB3: 1.0).
     """
 
-    def __init__(self, output_dim: int, init_std: float = 1.0, final_std: float = 0.0) -> None:
+    def __init__(
+        self,
+        output_dim: int,
+        init_std: float = 1.0,
+        final_std: float = 0.0,
+        noise_beta: float = 0.0,
+        noise_decision_s: float = 0.0,
+    ) -> None:
         super().__init__(output_dim)
+        self.set_noise(noise_beta, noise_decision_s)
         if not init_std > 0:
             raise ValueError(f"init_std must be above 0, got {init_std}")
         self.set_final_std(final_std, 0.0, init_std)

@@ -233,3 +233,53 @@ def test_a_run_with_a_spread_ceiling_trains_and_its_checkpoint_plays_at_its_step
         config("unused", 256, "network.final_std=1.5")  # above the free head's 1.0
     with pytest.raises(UsageError, match="network.final_std must lie in"):
         config("unused", 256, "network.head=gaussian", "network.final_std=0.01")  # < min_std
+
+
+def test_pink_exploration_keeps_the_policys_law_and_correlates_its_draws():
+    """Issue #54 item 3: ``network.exploration_beta`` samples mean + std * coloured noise. Each
+    draw must still be the policy's Gaussian (mean, std: PPO's probabilities are computed with
+    it), successive draws must be correlated (white noise's are not), and beta 0 must sample
+    exactly as before (saved runs replay)."""
+    torch.manual_seed(0)
+    pink = FreeGaussian(2, init_std=1.0, noise_beta=1.0, noise_decision_s=0.025)
+    mean, std = torch.tensor([[0.5, -0.2]]).repeat(64, 1), torch.tensor([0.3, 0.1])
+    with torch.no_grad():
+        pink.log_std[:] = std.log()
+    draws = []
+    for _ in range(3000):
+        pink.update(mean)
+        draws.append(pink.sample())
+    x = torch.stack(draws)  # (time, envs, actions)
+    assert torch.allclose(x.mean(dim=(0, 1)), mean[0], atol=0.03)
+    assert torch.allclose(x.std(dim=(0, 1)), std, rtol=0.1)
+    z = (x - mean) / std
+    assert float((z[1:] * z[:-1]).mean()) > 0.5  # pink: neighbours alike
+    white = FreeGaussian(2, init_std=1.0)
+    torch.manual_seed(1)
+    w = []
+    for _ in range(3000):
+        white.update(mean)
+        w.append(white.sample())
+    zw = (torch.stack(w) - mean) / 1.0
+    assert abs(float((zw[1:] * zw[:-1]).mean())) < 0.05  # white: neighbours independent
+    # beta 0 draws exactly what the Normal draws (runs saved before the option replay)
+    torch.manual_seed(2)
+    white.update(mean)
+    a = white.sample()
+    torch.manual_seed(2)
+    assert torch.equal(a, Normal(mean, torch.ones(2)).sample())
+    # a new batch size (an evaluation's envs) starts its own streams
+    pink.update(mean[:3])
+    assert pink.sample().shape == (3, 2)
+
+
+def test_exploration_beta_reaches_the_head_and_is_checked():
+    cfg = config("unused", 256, "network.exploration_beta=1", "env.action_repeat=5")
+    dist = to_rsl_rl(cfg, TinyBehavior(cfg.behavior))["actor"]["distribution_cfg"]
+    assert dist["noise_beta"] == 1.0 and dist["noise_decision_s"] == pytest.approx(0.025)
+    white = config("unused", 256)
+    assert "noise_beta" not in to_rsl_rl(white, TinyBehavior(white.behavior))["actor"][
+        "distribution_cfg"
+    ]
+    with pytest.raises(UsageError, match="exploration_beta must be from 0"):
+        config("unused", 256, "network.exploration_beta=2")
