@@ -253,3 +253,49 @@ def test_touch_onset_costs_each_touch_a_coder_counts():
     assert isinstance(terms["touch_onset"], TouchOnset) and terms["touch_onset"].weight == 3.0
     assert terms["touch_onset"].min_gap_s == pytest.approx(2 / 30)
     assert "touch_onset" not in [t.name for t in SelfTouch(SelfTouchConfig()).reward_terms()]
+
+
+def test_touch_onset_with_surface_counts_the_mattress_as_the_coder_does():
+    """The fourth pilot's body-only cost moved the touches onto the mattress (body 54-66 a
+    minute, surface 106-117): with ``surface`` a hand's contact with anything that is not the
+    infant is a touch too, and a hand going from the mattress to the body with no gap is one
+    bout, as ``all_touches_per_minute`` codes it."""
+    from devlearn_self_touch import TouchOnset
+
+    names = ["world", "hip", "left_hand", "left_fingers", "right_hand"]
+    ids = {name: b for b, name in enumerate(names)}
+
+    class Infant:
+        physics_timestep = 0.005
+        model = SimpleNamespace(
+            nbody=len(names),
+            body=lambda b: SimpleNamespace(name=names[b]),
+            geom_bodyid=np.arange(len(names)),
+        )
+
+        def touching(self, *pairs: tuple[str, str]) -> None:
+            geom = np.array([[ids[a], ids[b]] for a, b in pairs], dtype=np.int64).reshape(-1, 2)
+            self.data = SimpleNamespace(
+                contact=SimpleNamespace(geom=geom, efc_address=np.zeros(len(geom), np.int64))
+            )
+
+    infant = Infant()
+    body_only, both = TouchOnset(min_gap_s=0.01), TouchOnset(min_gap_s=0.01, surface=True)
+    for term in (body_only, both):
+        term.bind(1)
+
+    def step(on_body: bool, *pairs: tuple[str, str]) -> tuple[float, float]:
+        infant.touching(*pairs)
+        contacts = np.zeros((2, 68), dtype=bool)
+        contacts[0, 3] = on_body  # the left hand on a body region
+        batch = BatchContext([StepContext(infant, {}, {"hand_contacts": contacts}, 0, False)])
+        return float(body_only(batch)[0]), float(both(batch)[0])
+
+    assert step(False, ("world", "left_fingers")) == (0.0, -1.0)  # on the mattress
+    assert step(False, ("world", "left_fingers")) == (0.0, 0.0)  # held
+    assert step(True, ("left_hand", "hip")) == (-1.0, 0.0)  # onto the body, no gap: one bout
+    assert step(False, ("left_hand", "left_fingers")) == (0.0, 0.0)  # its own fingers: nothing
+    step(False)
+    assert step(False, ("right_hand", "world")) == (0.0, -1.0)  # the right hand on the mattress
+    with pytest.raises(ValueError, match="surface must be true or false"):
+        TouchOnset(surface="yes")  # type: ignore[arg-type]

@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from devlearn import BatchContext, BatchedIntrinsicReward
+from devlearn_self_touch.coding import body_codes, contact_bodies, limb_contacts
 
 ACTIVITY_SIGNALS = ("hand_speed", "joint_speed")
 """What :class:`ActivityLevel` measures: ``hand_speed``, the mean linear speed of the two
@@ -219,7 +220,9 @@ class TouchOnset(BatchedIntrinsicReward):
     0.4-s bouts: :class:`ContactTime` leaves each bout's first ``free_s`` free, so short
     frequent touches cost nothing (``results/self_touch/likeness/``); infants touch at most ~40
     times a minute (DiMercurio et al. 2018, abstract). This term prices the touch itself: for
-    each hand h that touches a body region this step (``facts["hand_contacts"][h].any()``) after
+    each hand h that touches a body region this step (``facts["hand_contacts"][h].any()``), or
+    with ``surface`` the body or the surface (the mattress, the crib: the coder's body and
+    surface contacts, ``all_touches_per_minute``, from the infant's contact list), after
     touching none for at least ``min_gap_s`` simulated seconds (the coder's merge: a shorter
     gap continues the bout), it pays::
 
@@ -227,22 +230,43 @@ class TouchOnset(BatchedIntrinsicReward):
 
     so every touch a coder would count costs 1 (times the weight), whatever the physics step or
     the decision rate. A hand touching at an episode's first step starts a bout there; bouts
-    start afresh every episode.
+    start afresh every episode. Body contacts alone (the fourth pilot) moved the touches onto
+    the mattress, where they were free: ``surface`` counts them too.
 
     Args:
         weight: Term weight (0 in the default table: off).
         min_gap_s: The shortest gap off the body that ends a bout (simulated seconds; the
             coding protocol's two frames at 30 Hz by default).
+        surface: Count touches of the surface too (False: the body's only).
     """
 
     name = "touch_onset"
 
-    def __init__(self, weight: float = 1.0, min_gap_s: float = 2 / 30) -> None:
+    def __init__(
+        self, weight: float = 1.0, min_gap_s: float = 2 / 30, surface: bool = False
+    ) -> None:
         super().__init__(weight)
         if not (math.isfinite(min_gap_s) and min_gap_s >= 0):
             raise ValueError(f"touch_onset min_gap_s must be 0 seconds or above, got {min_gap_s}")
-        self.min_gap_s = float(min_gap_s)
+        if not isinstance(surface, bool):
+            raise ValueError(f"touch_onset surface must be true or false, got {surface!r}")
+        self.min_gap_s, self.surface = float(min_gap_s), surface
+        self._codes: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         self.bind(1)
+
+    def _on_surface(self, infant: Any) -> np.ndarray:
+        """(2,) bool: each hand touches something that is not the infant this step."""
+        pairs = contact_bodies(infant)
+        if pairs is None:
+            raise ValueError("touch_onset with surface reads the contact list: it needs an infant")
+        model = infant.model
+        codes = self._codes.get(id(model))
+        if codes is None:  # once per body (a growing body is rebuilt)
+            codes = body_codes([model.body(b).name for b in range(model.nbody)])
+            if len(self._codes) > 64:  # bodies built and gone: keep the cache small
+                self._codes.clear()
+            self._codes[id(model)] = codes
+        return limb_contacts(pairs, *codes)[1][:2]
 
     def bind(self, num_envs: int) -> None:
         super().bind(num_envs)
@@ -250,8 +274,10 @@ class TouchOnset(BatchedIntrinsicReward):
         """(num_envs, 2): seconds since each hand last touched the body (inf: not this episode)."""
 
     def __call__(self, batch: BatchContext) -> np.ndarray:
-        _, dt = bodies(batch, self.name)
+        infants, dt = bodies(batch, self.name)
         on = batch.stack("hand_contacts", bool).any(axis=2)  # (num_envs, 2)
+        if self.surface:
+            on = on | np.stack([self._on_surface(infant) for infant in infants])
         onset = on & (self.off >= self.min_gap_s - 1e-12)
         self.off = np.where(on, 0.0, self.off + dt)
         return -onset.sum(axis=1).astype(float)

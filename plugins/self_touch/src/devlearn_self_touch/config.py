@@ -68,7 +68,7 @@ def default_rewards() -> dict[str, RewardTermCfg]:
         ),
         "effort": RewardTermCfg(Effort, 0.0, {}),
         "contact_time": RewardTermCfg(ContactTime, 0.0, {"free_s": 0.5}),
-        "touch_onset": RewardTermCfg(TouchOnset, 0.0, {"min_gap_s": 2 / 30}),
+        "touch_onset": RewardTermCfg(TouchOnset, 0.0, {"min_gap_s": 2 / 30, "surface": False}),
     }
 
 
