@@ -116,7 +116,7 @@ def test_only_self_touchs_own_terms_may_be_named(cls):
         f"behavior.rewards.diversity_milestones.cls: unknown reward term class '{cls}': a "
         "config names only the reward terms its behaviour declares; valid: "
         "devlearn_self_touch.activity:ActivityLevel, devlearn_self_touch.activity:ContactTime, "
-        "devlearn_self_touch.activity:Effort, "
+        "devlearn_self_touch.activity:Effort, devlearn_self_touch.activity:TouchOnset, "
         "devlearn_self_touch.rewards:Balance, devlearn_self_touch.rewards:ContactNovelty, "
         "devlearn_self_touch.rewards:DiversityMilestones, devlearn_self_touch.rewards:TouchNovelty"
     )
