@@ -137,18 +137,22 @@ def _check_infant(cfg: RunConfig) -> None:
     growth_schedule(cfg)
 
 
-def _check_motor_noise(cfg: RunConfig) -> None:
-    """``env.action_noise_std`` from 0 to 1, ``env.action_noise_beta`` from 0 to below 2 (the
-    bounds of :func:`devlearn.env.motor_noise.check_noise`, which the envs apply again)."""
-    std, beta = cfg.env.action_noise_std, cfg.env.action_noise_beta
+def _check_noise(cfg: RunConfig) -> None:
+    """The noises' bounds (those of :func:`devlearn.env.motor_noise.check_noise`, which the envs
+    and the policy's head apply again): ``env.action_noise_std`` from 0 to 1, and the spectral
+    exponents of the motor noise (``env.action_noise_beta``) and of the policy's exploration
+    (``network.exploration_beta``) from 0 to below 2."""
+    std = cfg.env.action_noise_std
     if not 0.0 <= std <= 1.0:
         raise UsageError(
             f"env.action_noise_std must be from 0 (off) to 1 (action units), got {std:g}"
         )
-    if not 0.0 <= beta < 2.0:
-        raise UsageError(
-            f"env.action_noise_beta must be from 0 (white noise) to below 2, got {beta:g}"
-        )
+    for key, beta in (
+        ("env.action_noise_beta", cfg.env.action_noise_beta),
+        ("network.exploration_beta", cfg.network.exploration_beta),
+    ):
+        if not 0.0 <= beta < 2.0:
+            raise UsageError(f"{key} must be from 0 (white noise) to below 2, got {beta:g}")
 
 
 def _check_batches(cfg: RunConfig) -> None:
@@ -158,7 +162,7 @@ def _check_batches(cfg: RunConfig) -> None:
     _whole(repeat, "env.action_repeat", 1, EPISODE_STEPS)
     if error := decision_rate_error(repeat):
         raise UsageError(error)
-    _check_motor_noise(cfg)
+    _check_noise(cfg)
     rollout = cfg.num_envs * cfg.ppo.num_steps_per_env
     iteration = rollout * repeat
     if iteration > OVERSHOOT_MAX * cfg.total_steps:

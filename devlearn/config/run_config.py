@@ -384,11 +384,6 @@ def check_learner(cfg: RunConfig, spec: Any) -> None:
             f"got {init_std}"
         )
     floor = net.min_std if net.head == "gaussian" else 0.0
-    if not (isinstance(net.exploration_beta, (int, float)) and 0 <= net.exploration_beta < 2):
-        raise UsageError(
-            "network.exploration_beta must be from 0 (white noise) to below 2, got "
-            f"{net.exploration_beta!r}"
-        )
     if net.final_std and not floor <= net.final_std < init_std:
         raise UsageError(
             f"network.final_std must lie in [{floor}, {init_std}) (the spread's lower bound "

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from devlearn import BatchContext, BatchedIntrinsicReward
-from devlearn_self_touch.coding import body_codes, contact_bodies, limb_contacts
+from devlearn_self_touch.coding import contact_bodies, limb_contacts, model_body_codes
 
 ACTIVITY_SIGNALS = ("hand_speed", "joint_speed")
 """What :class:`ActivityLevel` measures: ``hand_speed``, the mean linear speed of the two
@@ -262,7 +262,7 @@ class TouchOnset(BatchedIntrinsicReward):
         model = infant.model
         codes = self._codes.get(id(model))
         if codes is None:  # once per body (a growing body is rebuilt)
-            codes = body_codes([model.body(b).name for b in range(model.nbody)])
+            codes = model_body_codes(model)
             if len(self._codes) > 64:  # bodies built and gone: keep the cache small
                 self._codes.clear()
             self._codes[id(model)] = codes

@@ -117,6 +117,11 @@ def body_codes(body_names: list[str]) -> tuple[np.ndarray, np.ndarray]:
     return limb, area
 
 
+def model_body_codes(model: Any) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`body_codes` of every body of a MuJoCo model, by their names."""
+    return body_codes([model.body(b).name for b in range(model.nbody)])
+
+
 def contact_bodies(infant: Any) -> np.ndarray | None:
     """The bodies of this step's active contacts, (m, 2) int, from the infant's MuJoCo
     contact list (contacts without force, excluded or gap contacts, left out); None for an
@@ -329,8 +334,7 @@ class CodedTouches:
                 self.region_area = region_areas(regions)
         model = getattr(infant, "model", None)
         if model is not None and (self._bodies is None or self._bodies[0] != id(model)):
-            names = [model.body(b).name for b in range(model.nbody)]
-            self._bodies = (id(model), *body_codes(names))
+            self._bodies = (id(model), *model_body_codes(model))
 
     def record(self, hand_contacts: np.ndarray, infant: Any, dt: float) -> None:
         """One coded step: the hands' (2, 68) region contacts, the infant (for its contact
