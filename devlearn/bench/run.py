@@ -131,7 +131,9 @@ def _train(registry: PluginRegistry, quick: bool, progress: Callable[[str], None
     result: dict[str, Any] = {}
     if "self_touch" in behaviors:
         progress("self_touch: end-to-end training (devlearn run defaults)")
-        steps = 8192 if quick else 32768
+        # 26 iterations of 5,120 steps: a figure that one warm-up and the thread plan's two
+        # probe iterations (one in 25 in a long run) do not skew
+        steps = 8192 if quick else 131072
         result["self_touch_train_steps_per_s"] = bench_training("self_touch", steps, [], progress)
         result.update(decision_rate(registry, "self_touch", steps, [], progress))
         # the rollout's policy on every core too: the automatic plan on an idle machine before

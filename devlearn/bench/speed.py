@@ -145,11 +145,8 @@ def bench_training(
     behavior: str, steps: int, extra: list[str], progress: Callable[[str], None]
 ) -> float | None:
     """End-to-end training steps per second (collection plus PPO update) of ``devlearn run``
-    with its default environments and workers.
-
-    Reads the steps-per-second the run itself logged for its iterations after the first (which
-    includes start-up costs). Returns None, after reporting the run's error through
-    ``progress``, when the run fails.
+    with its default environments and workers: :func:`training_rate` of the run's metrics.
+    Returns None, after reporting the run's error through ``progress``, when the run fails.
     """
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "run"
@@ -161,8 +158,19 @@ def bench_training(
             progress(f"{behavior} training failed: {lines[-1] if lines else done.returncode}")
             return None
         rows = [json.loads(line) for line in (out / "metrics.jsonl").read_text().splitlines()]
-    rows = rows[1:] or rows
-    return float(np.mean([r["steps_per_s"] for r in rows]))
+    return training_rate(rows)
+
+
+def training_rate(rows: list[dict[str, Any]]) -> float:
+    """Physics steps per second of training from a run's metrics rows: the steps of every
+    iteration after the first (whose collection includes start-up costs) over their collection
+    and update seconds. Totals, not the mean of the iterations' rates: the thread plan's probe
+    iterations (:class:`~devlearn.training.process.ThreadPlan`) are slower, and a run's rate is
+    its steps over its time."""
+    kept = rows[1:] or rows
+    steps = [b["step"] - a["step"] for a, b in zip(rows, rows[1:])] or [rows[0]["step"]]
+    seconds = sum(r["collect_s"] + r["update_s"] for r in kept)
+    return float(sum(steps) / max(seconds, 1e-9))
 
 
 def decision_rate(

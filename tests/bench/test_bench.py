@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import math
 
+import pytest
+
 from devlearn.bench.infant import bench_infant
 from devlearn.cli.bench import ROWS, format_table
 
@@ -105,3 +107,19 @@ def test_the_gymnasium_vector_env_is_measured_beside_devvecenv():
     assert figures["gym_vec_fraction_of_devlearn"] == ratio > 0
     table = format_table({**figures, "gym_vec_fraction_of_devlearn": 0.93})
     assert "| Gymnasium vector env / DevVecEnv | 93% | - | >= 85% |" in table
+
+
+def test_the_training_rate_is_the_runs_steps_over_its_seconds():
+    """``devlearn bench``'s end-to-end training figure (issue #54 item 5): the steps of the
+    iterations after the first over their seconds, not the mean of the iterations' rates (a
+    slow thread-plan probe iteration weighs by its time)."""
+    from devlearn.bench.speed import training_rate
+
+    rows = [
+        {"step": 5120, "collect_s": 3.0, "update_s": 1.0},  # start-up: left out
+        {"step": 10240, "collect_s": 0.5, "update_s": 0.2},
+        {"step": 15360, "collect_s": 0.5, "update_s": 1.8},  # a slow probe
+        {"step": 20480, "collect_s": 0.5, "update_s": 0.2},
+    ]
+    assert training_rate(rows) == pytest.approx(3 * 5120 / 3.7)
+    assert training_rate(rows[:1]) == pytest.approx(5120 / 4.0)
