@@ -208,6 +208,12 @@ class Behavior(ABC):
     def observe(self, batch: EnvBatch, facts: Sequence[dict[str, Any]]) -> dict[str, np.ndarray]:
         """This step's observations of every environment in ``batch``.
 
+        Called at every step the policy observes: each decision's last physics step (and each
+        reset). Inside a decision (``env.action_repeat`` > 1 with
+        ``EpisodeSpec.facts_every_physics_step``) it is called only where a reward term or the
+        evaluator reads ``StepContext.observations``; so keep it free of side effects (state
+        that must advance every physics step belongs in :meth:`facts`).
+
         Args:
             batch: The environments, as :meth:`facts` got them.
             facts: Their facts, as :meth:`facts` returned them.

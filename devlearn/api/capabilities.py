@@ -128,7 +128,9 @@ class EpisodeSpec:
         facts_every_physics_step: With a decision rate (``env.action_repeat=K``): True (cheap
             facts, e.g. touch): facts, reward terms and the evaluator run at every physics step
             and the decision's reward is their sum, exactly an env stepped K times with the
-            same action. False (facts that render, e.g. eye images and a detector): physics
+            same action (observations inside the decision are computed only where a term or
+            the evaluator reads them: the policy sees the last step's). False (facts that
+            render, e.g. eye images and a detector): physics
             runs K times, then facts, observations, terms and the evaluator run once on the
             state the decision reached, and the terms are paid K times.
         hooks: The environment's :class:`EpisodeHooks` (default: none). Return the same object

@@ -66,7 +66,8 @@ class StepContext:
 
     Attributes:
         infant: The simulated infant after the step (read-only use: senses, contacts).
-        observations: The behaviour's observations for this step, name -> array (unbatched).
+        observations: The behaviour's observations for this step, name -> array (unbatched);
+            inside a decision a read-only mapping, computed on first read.
         facts: Exactly what the behaviour's own :meth:`devlearn.Behavior.facts` returned for
             this step (the core adds none), e.g. self-touch's ``"touched"``: (68,) bool,
             ``"hand_contacts"``: (2, 68) bool, ``"hand_count"``: int. Computed once per step

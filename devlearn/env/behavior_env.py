@@ -421,8 +421,8 @@ def step_batch(
                 env.episode_step += 1
         return step_physics(envs, actions, obs_out, paid=repeat)
     totals = np.zeros(len(envs))
-    for _ in range(repeat):
-        results = step_physics(envs, actions, obs_out)
+    for k in range(repeat):  # the policy observes the decision's last physics step only
+        results = step_physics(envs, actions, obs_out, observe=k == repeat - 1)
         totals += [reward for _, reward, _, _, _ in results]
     return [(obs, float(total), *rest) for (obs, _, *rest), total in zip(results, totals)]
 
@@ -432,6 +432,7 @@ def step_physics(
     actions: Sequence[np.ndarray] | np.ndarray,
     obs_out: dict[str, np.ndarray] | None = None,
     paid: int = 1,
+    observe: bool = True,
 ) -> list[tuple]:
     """Step ``envs`` one physics step with ``actions[i]`` each: physics per env, facts and
     observations (once for the batch), every reward term (batched ones
@@ -442,12 +443,15 @@ def step_physics(
         actions: (num_envs, action_dim), or one (action_dim,) action per env.
         obs_out: Optional name -> (num_envs, *shape) arrays that receive every env's
             returned observation (the next episode's first one after an auto-reset).
+        observe: False inside a decision (:func:`step_batch`): observations only if read
+            (:func:`~devlearn.env.batch_advance.advance_batch`), ``obs_out`` untouched
+            but for envs that reset.
     Returns:
         One ``(obs, reward, done, time_out, episode_info)`` per env, as :meth:`BehaviorEnv.step`.
     """
-    contexts, batch = advance_batch(envs, actions)
+    contexts, batch = advance_batch(envs, actions, observe)
     values = term_values(envs, contexts)
-    if obs_out is not None:
+    if obs_out is not None and batch is not None:
         for name, array in batch.items():  # the whole batch at once; resets overwrite rows
             obs_out[name][...] = array
     # every env's column as Python floats in one call (not a view and tolist() per env)

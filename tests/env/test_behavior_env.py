@@ -164,3 +164,43 @@ def test_facts_once_per_decision_pay_the_reward_for_every_physics_step():
     assert done and time_out and env.infant.steps_taken == 10  # the episode: 10 physics steps
     assert info["reward/reach"] == pytest.approx(2 * 5 * -0.05)
     assert info["metrics/close"] == 1.0  # two records, one per decision
+
+
+class ObserveCounted(TinyBehavior):
+    """Counts its observe() calls; ``readers`` picks whether a reward term reads observations
+    (Reach) and whether the evaluator does (CloseEvaluator)."""
+
+    observe_calls = 0
+    readers = False
+
+    @devlearn.per_env
+    def observe(self, infant, facts):
+        type(self).observe_calls += 1
+        return {"proprioception": infant.proprioception()}
+
+    def reward_terms(self):
+        from devlearn.testing.fake_infant import Reach, StepCounter
+
+        return [Reach(0.45)] if self.readers else [StepCounter()]
+
+    def evaluation(self):
+        if self.readers:
+            return super().evaluation()
+        return devlearn.EvalProtocol(evaluator=lambda training: devlearn.Evaluator())
+
+
+@pytest.mark.parametrize("readers", [False, True])
+def test_a_decision_observes_its_last_physics_step_unless_a_term_reads_the_others(readers):
+    """Issue #54 item 5: inside a decision of 5 physics steps the policy sees only the last
+    step's observations; the others are computed only when a reward term or the evaluator
+    reads them (and then equal an env stepped every physics step: the test above)."""
+    ObserveCounted.readers = readers
+    ten = functools.partial(fake_infant_factory, episode_steps=10)
+    env = BehaviorEnv(ObserveCounted(TinyConfig()), 0, ten, action_repeat=5)
+    env.reset()
+    ObserveCounted.observe_calls = 0
+    obs, _, done, _, _ = env.step(np.ones(3))
+    assert env.infant.steps_taken == 5 and not done
+    assert ObserveCounted.observe_calls == (5 if readers else 1)
+    assert isinstance(obs, dict)  # what the policy gets is a plain dict, as before
+    np.testing.assert_array_equal(obs["proprioception"], env.infant.proprioception())
