@@ -122,8 +122,9 @@ def iteration_profile(
     step = env_breakdown(behavior, env_steps)  # ms per physics step, part by part
     once = repeat if behavior.episode().facts_every_physics_step else 1
     per_decision = {"physics": repeat * step["physics"], "render": once * step["eyes"]}
-    for part in ("touch", "facts", "observe", "rewards", "env"):
+    for part in ("touch", "facts", "rewards", "env"):
         per_decision[part] = once * step[part]
+    per_decision["observe"] = step["observe"]  # the decision's last physics step only
     result = {part: ms * envs * decisions / 1000.0 for part, ms in per_decision.items()}
     steps = update_steps or decisions
     alg, observations = build_learner(behavior, cfg.network.layout, envs, steps, registry=registry)
