@@ -58,9 +58,13 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 # eye image in the calling thread (the same pixels, ~20% less per render, and runs side by side
 # do not share its thread pool). GPU drivers ignore it.
 os.environ.setdefault("LP_NUM_THREADS", "0")
-# OpenMP threads that wait for work sleep instead of spinning, so torch's idle threads do not
-# take cores from the env workers (read when torch loads: effective if devlearn comes first).
-os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+# OpenMP's wait policy is libgomp's default (a waiting thread spins a while, then sleeps), not
+# PASSIVE as before issue #54: a sleeping thread woken for each of a PPO update's thousands of
+# small operations made a 2-thread self-touch update take 0.34 s against 0.16 s spinning (and
+# 0.24 s on one thread), so training kept one thread. Rollouts beside env workers use one
+# thread (ThreadPlan), so no idle thread spins on the workers' cores; on a machine shared with
+# other programs, ThreadPlan falls back to one thread, or `export OMP_WAIT_POLICY=PASSIVE`
+# before starting devlearn (docs/benchmarks.md).
 
 # The public names load on first use (PEP 562), so that ``import devlearn`` and the commands
 # that neither train nor evaluate (``devlearn --help``, ``plugins``, ``config``) do not pay for
