@@ -106,13 +106,14 @@ class NetworkConfig:
     wide at first, and at the end a policy whose mean action is its behaviour (issue #54; 0.3
     by default, :data:`LEARNER_EVIDENCE`: 0.1 before, which ended exploration too early). 0: no
     ceiling. A saved config without this field means 0."""
-    exploration_beta: float = 0.0
+    exploration_beta: float = 1.0
     """The spectrum of the policy's exploration noise over decisions: power ~ f^-beta (every
-    head; :class:`devlearn.training.distribution.ColoredNoise`). 0: white, independent draws
-    at every decision (SB3's and rsl-rl's; the default); 1: pink (Eberhard et al. 2023), a
-    drift that a slightly perturbed deterministic policy would make, so training meets the
-    closed loop the mean action plays (issue #54). Each draw is still the policy's Gaussian:
-    PPO's probabilities are unchanged. From 0 to below 2."""
+    head; :class:`devlearn.training.distribution.ColoredNoise`). 1 (the default,
+    :data:`LEARNER_EVIDENCE`): pink (Eberhard et al. 2023), a drift that a slightly perturbed
+    deterministic policy would make, so training meets the closed loop the mean action plays
+    (issue #54); 0: white, independent draws at every decision (SB3's and rsl-rl's; before
+    issue #54). Each draw is still the policy's Gaussian: PPO's probabilities are unchanged.
+    From 0 to below 2. A saved config without this field means 0."""
     encoders: str = "flat"
     """How senses are encoded; ``flat`` by default (:data:`LEARNER_EVIDENCE`; ``behavior``
     before issue #54). ``behavior``: each observation through the encoder the behaviour's
@@ -166,6 +167,7 @@ LEGACY_FIELDS: dict[str, Any] = {
     "network.activation": "relu",
     "network.init": "torch",
     "network.normalize": "behavior",
+    "network.exploration_beta": 0.0,
 }
 """Core fields a saved run's config may lack, and the value its run was trained with (the
 default changed when the field was added, issue #28): such a config loads as trained. A new
@@ -181,7 +183,9 @@ orthogonal initialisation, Adam's epsilon 1e-5 and advantages standardised per m
 SB3's PPO; a free state-independent spread starting at 1.0 under a ceiling that falls to 0.3
 over the run, so that the mean action is the behaviour: 0.3 against 0.1 scored higher with the
 mean action on self-touch at 2M and at the default run's 1M, on ``hand_to_mouth`` and on the
-behaviour ``devlearn new`` writes, ``results/learners/README.md``). Every behaviour gets them; a
+behaviour ``devlearn new`` writes; and pink exploration noise, f^-1 over decisions, with which
+the mean action of both plugins scored above their sampled actions, and self-touch learned
+faster and ended where white exploration and SB3's PPO end, ``results/learners/README.md``). Every behaviour gets them; a
 behaviour overrides in ``train_defaults`` only what its own evidence supports (issue #38: a
 third-party behaviour learned with these and not with the old defaults; hand regard keeps
 issue #28's learner, on which its results stand)."""

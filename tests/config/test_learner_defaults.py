@@ -35,6 +35,7 @@ LEARNER = {
     "network.init": "orthogonal",
     "ppo.adam_eps": 1e-5,
     "ppo.normalize_advantage_per_mini_batch": True,
+    "network.exploration_beta": 1.0,
 }
 """The values results/learner/README.md (issue #28) chose (decision rate, discount, rollout
 length, schedule, reward normalisation, layout) and results/learners/README.md (issue #54:
@@ -55,6 +56,7 @@ OLD = {
     "ppo.normalize_rewards": False,
     "network.layout": "separate",
     "network.head": "paper",
+    "network.exploration_beta": 0.0,
 }
 """What a run saved before those fields existed was trained with."""
 
@@ -104,6 +106,14 @@ def test_hand_regard_overrides_only_what_its_evidence_supports(capsys):
 def test_a_run_saved_before_loads_as_it_was_trained():
     cfg = from_dict({"behavior_name": "plain"}, Plain)
     assert {key: value(cfg, key) for key in OLD} == OLD
+
+
+def test_a_run_saved_before_pink_exploration_explores_white():
+    """Issue #54: a config saved with a ``network`` section but before
+    ``network.exploration_beta`` trained with white exploration; a new run gets pink."""
+    saved = from_dict({"behavior_name": "plain", "network": {"head": "free"}}, Plain)
+    assert saved.network.exploration_beta == 0.0
+    assert new_config(Plain).network.exploration_beta == 1.0
 
 
 def test_a_new_runs_config_file_gets_todays_defaults():

@@ -128,6 +128,8 @@ def test_the_knobs_reach_rsl_rl_and_the_optimiser():
         "class_name": "devlearn.training.distribution:SquashedGaussian",
         "init_std": 0.8,
         "final_std": 0.3,  # the default ceiling
+        "noise_beta": 1.0,  # pink exploration, the default
+        "noise_decision_s": 0.005,  # this config's decision: one physics step
     }
     free = to_rsl_rl(config("unused"), TinyBehavior(cfg.behavior))["actor"]["distribution_cfg"]
     assert free["init_std"] == 1.0 and free["final_std"] == 0.3  # the free head's own start
@@ -277,7 +279,8 @@ def test_exploration_beta_reaches_the_head_and_is_checked():
     cfg = config("unused", 256, "network.exploration_beta=1", "env.action_repeat=5")
     dist = to_rsl_rl(cfg, TinyBehavior(cfg.behavior))["actor"]["distribution_cfg"]
     assert dist["noise_beta"] == 1.0 and dist["noise_decision_s"] == pytest.approx(0.025)
-    white = config("unused", 256)
+    assert config("unused", 256).network.exploration_beta == 1.0  # pink: the default
+    white = config("unused", 256, "network.exploration_beta=0")
     assert "noise_beta" not in to_rsl_rl(white, TinyBehavior(white.behavior))["actor"][
         "distribution_cfg"
     ]
