@@ -142,6 +142,7 @@ PRESETS: dict[str, dict[str, Any]] = {
         # the paper's policy head and shared trunk at BabyBench's 200 Hz
         "network.head": "paper",
         "network.layout": "shared",
+        "network.exploration_beta": 0.0,  # white exploration, as the paper's PPO
         "env.action_repeat": 1,
         "ppo.entropy_coef": 0.005,
         "ppo.schedule": "adaptive",
