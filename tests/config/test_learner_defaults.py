@@ -48,6 +48,7 @@ ISSUE_28 = {
     "network.init": "torch",
     "ppo.adam_eps": 1e-8,
     "ppo.normalize_advantage_per_mini_batch": False,
+    "network.exploration_beta": 0.0,
 }
 """Issue #28's learner where issue #54 changed it: what hand regard keeps."""
 OLD = {

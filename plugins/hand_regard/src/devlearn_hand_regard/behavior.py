@@ -103,9 +103,13 @@ ISSUE_28_LEARNER: dict[str, Any] = {
     "network.final_std": 0.0,
     "ppo.adam_eps": 1e-8,
     "ppo.normalize_advantage_per_mini_batch": False,
+    "network.exploration_beta": 0.0,
 }
 """The core learner as it was before issue #54 (issue #28's), which every published hand-regard
-result was trained with: kept here until a rerun shows issue #54's learner does no worse."""
+result was trained with: kept here until a rerun shows issue #54's learner does no worse. White
+exploration included: with the core's pink exploration the proprioception policy scored 0.482
+[0.474, 0.490] at 614k against white's 0.516 [0.384, 0.648] (3 seeds, paired -0.034 [-0.160,
++0.092]; results/learners/i54/pink_hand_regard): not better, so hand regard keeps white."""
 
 TRAIN_DEFAULTS: dict[str, Any] = {
     "behavior.left_arm_steps": DEMO_STEPS[0],
