@@ -185,10 +185,11 @@ over the run, so that the mean action is the behaviour: 0.3 against 0.1 scored h
 mean action on self-touch at 2M and at the default run's 1M, on ``hand_to_mouth`` and on the
 behaviour ``devlearn new`` writes; and pink exploration noise, f^-1 over decisions, with which
 the mean action of both plugins scored above their sampled actions, and self-touch learned
-faster and ended where white exploration and SB3's PPO end, ``results/learners/README.md``). Every behaviour gets them; a
-behaviour overrides in ``train_defaults`` only what its own evidence supports (issue #38: a
-third-party behaviour learned with these and not with the old defaults; hand regard keeps
-issue #28's learner, on which its results stand)."""
+faster and ended where white exploration and SB3's PPO end, ``results/learners/README.md``).
+Every behaviour gets them; a behaviour overrides in ``train_defaults`` only what its own
+evidence supports (issue #38: a third-party behaviour learned with these and not with the old
+defaults; hand regard keeps issue #28's learner, on which its results stand, white exploration
+included)."""
 
 
 @dataclass
