@@ -214,8 +214,13 @@ class ActorActions(Actions):
         self.sample = sample
         self.expected = expected
         self.state = generator_state.clone()
+        self.noise: Any = None  # this slot's coloured exploration (network.exploration_beta)
         self.at_bound = 0  # mean components at or past the bounds, this episode
         self.components = 0
+
+    def _coloured(self) -> bool:
+        """Whether the head samples with coloured noise (its streams are then this slot's)."""
+        return bool(self.sample and getattr(self.actor.distribution, "noise_beta", 0.0))
 
     def act(self, obs: Observations) -> np.ndarray:
         from tensordict import TensorDict
@@ -223,6 +228,8 @@ class ActorActions(Actions):
         batch = TensorDict({k: torch.from_numpy(v) for k, v in obs.items()}, [self.rows])
         if self.sample:
             torch.set_rng_state(self.state)
+        if self._coloured():  # the shared network draws from this slot's streams
+            self.actor.distribution._noise = self.noise
         with torch.inference_mode():
             if self.expected:  # one pass: the head's mean as played, and its distribution
                 dist = self.actor.distribution
@@ -236,6 +243,8 @@ class ActorActions(Actions):
                 mean = self.actor(batch).numpy() if self.sample else action
         if self.sample:
             self.state = torch.get_rng_state()
+        if self._coloured():
+            self.noise = self.actor.distribution._noise
         self.at_bound += int((np.abs(mean) >= SATURATED).sum())
         self.components += mean.size
         return action
@@ -254,13 +263,26 @@ class ActorActions(Actions):
 
     def skip(self, decisions: int) -> None:
         """A sampled action is ``torch.normal(mean, std)`` of shape (N, action_dim): one
-        standard normal fill of that shape per decision, whatever the mean and spread."""
+        standard normal fill of that shape per decision, whatever the mean and spread. With
+        coloured exploration it is mean + std * the slot's streams' next value
+        (:class:`~devlearn.training.distribution.ColoredNoise`), made on the first decision:
+        the streams advance as acting would advance them."""
         if not self.sample or not decisions:
             return
         torch.set_rng_state(self.state)
-        noise = torch.empty(self.rows, self.action_dim)
-        for _ in range(decisions):
-            noise.normal_()
+        if self._coloured():
+            from devlearn.training.distribution import ColoredNoise
+
+            dist = self.actor.distribution
+            shape = (self.rows, self.action_dim)
+            for _ in range(decisions):
+                if self.noise is None or self.noise.shape != shape:
+                    self.noise = ColoredNoise(shape, dist.noise_beta, dist.noise_decision_s)
+                self.noise.next()
+        else:
+            noise = torch.empty(self.rows, self.action_dim)
+            for _ in range(decisions):
+                noise.normal_()
         self.state = torch.get_rng_state()
 
     def rng_state(self) -> Any:

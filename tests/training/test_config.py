@@ -155,10 +155,12 @@ def test_to_rsl_rl():
     assert train_cfg["obs_groups"] == {"actor": ["proprioception"], "critic": ["proprioception"]}
     assert train_cfg["actor"]["class_name"] == "devlearn.training.networks:MultiSenseModel"
     dist = train_cfg["actor"]["distribution_cfg"]
-    assert dist == {  # the default head (issue #54): free spread from 1.0, ceiling to 0.3
-        "class_name": "devlearn.training.distribution:FreeGaussian",
+    assert dist == {  # the default head (issue #54): free spread from 1.0, ceiling to 0.3,
+        "class_name": "devlearn.training.distribution:FreeGaussian",  # pink exploration
         "init_std": 1.0,
         "final_std": 0.3,
+        "noise_beta": 1.0,
+        "noise_decision_s": 0.005,  # the tiny behaviour decides every physics step
     }
     paper = to_rsl_rl(tiny_run.config("unused", 256, "network.head=paper"), behavior)
     dist = paper["actor"]["distribution_cfg"]

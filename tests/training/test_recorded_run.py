@@ -59,7 +59,8 @@ def _config(out: Path, steps: int):
     # issue #28's learner, which the recording was made with (issue #54 changed the defaults)
     old_learner = ["network.encoders=behavior", "network.activation=relu", "network.init=torch",
                    "network.head=gaussian", "network.final_std=0", "ppo.adam_eps=1e-8",
-                   "ppo.normalize_advantage_per_mini_batch=false"]  # fmt: skip
+                   "ppo.normalize_advantage_per_mini_batch=false",
+                   "network.exploration_beta=0"]  # fmt: skip
     return tiny_run.config(out, steps, "torch_threads=1", *old_learner, seed=3, save_interval=2)
 
 
