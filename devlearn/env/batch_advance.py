@@ -60,9 +60,7 @@ def advance_batch(
     """
     for env, action in zip(envs, clipped_actions(actions)):
         apply_action(env, action)
-    lead = envs[0].behavior
-    env_batch = EnvBatch([env.infant for env in envs], [env.behavior for env in envs])
-    facts = lead.facts(env_batch)
+    lead, env_batch, facts = batch_facts(envs)
     steps = [(env.index, env.episode_step + 1) for env in envs]  # the guard's names
     observations: list[Mapping[str, np.ndarray]]
     if observe:
@@ -91,7 +89,7 @@ def observe_checked(
 ) -> dict[str, np.ndarray]:
     """The behaviour's observations of ``batch`` (name -> (num_envs, *shape) array), checked by
     the guard; ``steps``: each env's (index, step) to name in a :class:`GuardError`."""
-    arrays = {name: np.asarray(a) for name, a in lead.observe(batch, facts).items()}
+    arrays = observe(lead, batch, facts)
     fine = all(a.dtype.kind not in "fc" or observation_within_bound(a) for a in arrays.values())
     if not fine:  # find the first env with a bad value, and name it
         for i, (index, step) in enumerate(steps):
@@ -136,12 +134,24 @@ class _Row(Mapping[str, np.ndarray]):
         return len(self._source.arrays())
 
 
+def batch_facts(envs: list[BehaviorEnv]) -> tuple[Any, EnvBatch, list[dict[str, Any]]]:
+    """``(lead, batch, facts)``: the first env's behaviour, ``envs`` as one
+    :class:`~devlearn.api.batching.EnvBatch`, and its facts (one dict per env), once for the
+    batch."""
+    lead = envs[0].behavior
+    batch = EnvBatch([env.infant for env in envs], [env.behavior for env in envs])
+    return lead, batch, lead.facts(batch)
+
+
+def observe(lead: Any, batch: EnvBatch, facts: list[dict[str, Any]]) -> dict[str, np.ndarray]:
+    """The behaviour's observations of ``batch``: name -> (num_envs, *shape) array."""
+    return {name: np.asarray(a) for name, a in lead.observe(batch, facts).items()}
+
+
 def facts_and_observations(
     envs: list[BehaviorEnv],
 ) -> tuple[list[dict[str, Any]], dict[str, np.ndarray]]:
     """The facts (one dict per env) and the observations (name -> (num_envs, *shape) array) of
     ``envs``, from the first env's behaviour, once for the batch."""
-    lead = envs[0].behavior
-    batch = EnvBatch([env.infant for env in envs], [env.behavior for env in envs])
-    facts = lead.facts(batch)
-    return facts, {name: np.asarray(a) for name, a in lead.observe(batch, facts).items()}
+    lead, batch, facts = batch_facts(envs)
+    return facts, observe(lead, batch, facts)

@@ -229,7 +229,7 @@ class ActorActions(Actions):
         if self.sample:
             torch.set_rng_state(self.state)
         if self._coloured():  # the shared network draws from this slot's streams
-            self.actor.distribution._noise = self.noise
+            self.actor.distribution.noise_streams = self.noise
         with torch.inference_mode():
             if self.expected:  # one pass: the head's mean as played, and its distribution
                 dist = self.actor.distribution
@@ -244,7 +244,7 @@ class ActorActions(Actions):
         if self.sample:
             self.state = torch.get_rng_state()
         if self._coloured():
-            self.noise = self.actor.distribution._noise
+            self.noise = self.actor.distribution.noise_streams
         self.at_bound += int((np.abs(mean) >= SATURATED).sum())
         self.components += mean.size
         return action
@@ -271,14 +271,11 @@ class ActorActions(Actions):
             return
         torch.set_rng_state(self.state)
         if self._coloured():
-            from devlearn.training.distribution import ColoredNoise
-
             dist = self.actor.distribution
-            shape = (self.rows, self.action_dim)
+            dist.noise_streams = self.noise
             for _ in range(decisions):
-                if self.noise is None or self.noise.shape != shape:
-                    self.noise = ColoredNoise(shape, dist.noise_beta, dist.noise_decision_s)
-                self.noise.next()
+                dist.next_noise((self.rows, self.action_dim))
+            self.noise = dist.noise_streams
         else:
             noise = torch.empty(self.rows, self.action_dim)
             for _ in range(decisions):

@@ -73,7 +73,9 @@ class DiagonalNormal(Distribution):
     noise_beta: float = 0.0
     """The exploration noise's spectral exponent (``network.exploration_beta``): 0, white
     (independent draws at every decision, the default); above 0, :class:`ColoredNoise`."""
-    _noise: ColoredNoise | None = None
+    noise_streams: ColoredNoise | None = None
+    """The coloured exploration's streams (made on the first draw, for its batch's shape);
+    :class:`~devlearn.evaluation.policy.ActorActions` swaps in each slot's own."""
 
     def set_noise(self, beta: float, decision_s: float) -> None:
         """Sample with time-correlated noise whose power falls as f^-``beta``, one stream per
@@ -85,17 +87,21 @@ class DiagonalNormal(Distribution):
                 f"coloured exploration needs a decision period above 0 s, got {decision_s}"
             )
         self.noise_beta, self.noise_decision_s = float(beta), float(decision_s)
-        self._noise = None
+        self.noise_streams = None
 
     def sample(self) -> torch.Tensor:
         dist = self._distribution
         assert dist is not None
         if not self.noise_beta:
             return dist.sample()
-        shape = tuple(dist.mean.shape)
-        if self._noise is None or self._noise.shape != shape:
-            self._noise = ColoredNoise(shape, self.noise_beta, self.noise_decision_s)
-        return dist.mean + dist.stddev * self._noise.next()
+        return dist.mean + dist.stddev * self.next_noise(tuple(dist.mean.shape))
+
+    def next_noise(self, shape: tuple[int, ...]) -> torch.Tensor:
+        """The coloured streams' next unit-variance draw, ``shape`` (a new batch shape, e.g.
+        an evaluation's envs, starts its own streams)."""
+        if self.noise_streams is None or self.noise_streams.shape != shape:
+            self.noise_streams = ColoredNoise(shape, self.noise_beta, self.noise_decision_s)
+        return self.noise_streams.next()
 
     @property
     def mean(self) -> torch.Tensor:
