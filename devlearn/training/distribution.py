@@ -383,7 +383,8 @@ class SquashedGaussian(FreeGaussian):
     """
 
     def sample(self) -> torch.Tensor:
-        return torch.tanh(self._distribution.sample()).clamp(-SQUASH_EDGE, SQUASH_EDGE)  # type: ignore[union-attr]
+        # the Gaussian's draw, coloured where network.exploration_beta asks, then squashed
+        return torch.tanh(super().sample()).clamp(-SQUASH_EDGE, SQUASH_EDGE)
 
     @property
     def entropy(self) -> torch.Tensor:

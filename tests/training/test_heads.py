@@ -275,6 +275,22 @@ def test_pink_exploration_keeps_the_policys_law_and_correlates_its_draws():
     assert pink.sample().shape == (3, 2)
 
 
+def test_the_squashed_head_explores_with_the_coloured_noise_too():
+    """``network.exploration_beta`` holds for every head: the squashed head's draws (tanh of
+    the Gaussian's) are correlated over decisions, not white."""
+    torch.manual_seed(0)
+    head = SquashedGaussian(2, init_std=1.0, noise_beta=1.0, noise_decision_s=0.025)
+    mean = torch.zeros(64, 2)
+    with torch.no_grad():
+        head.log_std[:] = math.log(0.3)
+    draws = []
+    for _ in range(2000):
+        head.update(mean)
+        draws.append(torch.atanh(head.sample()) / 0.3)
+    z = torch.stack(draws)
+    assert float((z[1:] * z[:-1]).mean()) > 0.5  # pink: neighbours alike (white: ~0)
+
+
 def test_exploration_beta_reaches_the_head_and_is_checked():
     cfg = config("unused", 256, "network.exploration_beta=1", "env.action_repeat=5")
     dist = to_rsl_rl(cfg, TinyBehavior(cfg.behavior))["actor"]["distribution_cfg"]
