@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 from devlearn.ages import check_age
 from devlearn.api.errors import UsageError
 from devlearn.config.growth import growth_schedule, keep_growth_on_resume
+from devlearn.config.run_config import LR_SCHEDULES
 from devlearn.files import unwritable
 from devlearn.timing import EPISODE_STEPS, decision_rate_error
 
@@ -85,8 +86,10 @@ def check_config(cfg: RunConfig) -> None:
     _whole(cfg.save_interval, "save_interval", 1, INTERVAL_MAX)
     if not _DEVICE.match(cfg.device):
         raise UsageError(f"--device must be cpu, cuda or cuda:N, got '{cfg.device}'")
-    if cfg.ppo.schedule not in ("adaptive", "fixed"):
-        raise UsageError(f"ppo.schedule must be adaptive or fixed, got '{cfg.ppo.schedule}'")
+    if cfg.ppo.schedule not in LR_SCHEDULES:
+        raise UsageError(
+            f"ppo.schedule must be one of {', '.join(LR_SCHEDULES)}, got '{cfg.ppo.schedule}'"
+        )
     for name in ("num_steps_per_env", "num_learning_epochs", "num_mini_batches"):
         _whole(getattr(cfg.ppo, name), f"ppo.{name}", 1, PPO_COUNT_MAX)
     _positive(cfg, "learning_rate", high=1.0)

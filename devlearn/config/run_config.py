@@ -47,8 +47,9 @@ class PPOConfig:
     """Target KL for the adaptive schedule (None disables adaptation)."""
     schedule: str = "fixed"
     """Learning-rate schedule: ``fixed`` (the default, :data:`LEARNER_EVIDENCE`: the adaptive
-    schedule sat at its 1e-5 floor in issue #28's pilots) or ``adaptive`` (KL-driven, rsl-rl's;
-    ``desired_kl`` is its target). A saved config without this field means ``adaptive``."""
+    schedule sat at its 1e-5 floor in issue #28's pilots), ``adaptive`` (KL-driven, rsl-rl's;
+    ``desired_kl`` is its target) or ``linear`` (from ``learning_rate`` at the run's first step
+    down to 0 at its last, by the run's share of steps done, cleanrl's ``anneal_lr``). A saved config without this field means ``adaptive``."""
     normalize_rewards: bool = True
     """Divide every reward by a running standard deviation of the discounted return (as
     gymnasium's ``NormalizeReward`` and SB3's ``VecNormalize``), then clip it to
@@ -147,6 +148,8 @@ INITS = ("torch", "orthogonal")
 """Valid values of :attr:`NetworkConfig.init`."""
 NORMALIZE = ("behavior", "all")
 """Valid values of :attr:`NetworkConfig.normalize`."""
+LR_SCHEDULES = ("fixed", "adaptive", "linear")
+"""Valid values of :attr:`PPOConfig.schedule`."""
 ACTIVATIONS = (
     "elu", "selu", "relu", "crelu", "lrelu", "tanh", "sigmoid", "softplus", "gelu", "swish",
     "mish", "identity",

@@ -73,10 +73,13 @@ class HealthWatch:
 
     Args:
         std_bounds: (lower, upper) bounds of the head's spread; an upper of 0 is unbounded.
+        adaptive: Whether the learning rate follows rsl-rl's adaptive schedule, whose floor
+            is the "stalled" signature (a linear schedule goes below it by design).
     """
 
-    def __init__(self, std_bounds: tuple[float, float]) -> None:
+    def __init__(self, std_bounds: tuple[float, float], adaptive: bool = True) -> None:
         self.std_bounds = std_bounds
+        self.adaptive = adaptive
         self.runs = {name: 0 for name in ADVICE}
         self.warnings: list[str] = []
         """Every warning given, in order (the end-of-run summary repeats them)."""
@@ -88,7 +91,13 @@ class HealthWatch:
         lr = row.get("learning_rate")
         std = row.get("health/std_mean")
         seen: dict[str, dict[str, Any]] = {}
-        if surrogate is not None and lr is not None and surrogate >= 0 and lr <= LR_FLOOR * 1.01:
+        if (
+            self.adaptive
+            and surrogate is not None
+            and lr is not None
+            and surrogate >= 0
+            and lr <= LR_FLOOR * 1.01
+        ):
             seen["stalled"] = {"lr": lr}
         if (row.get("health/saturated") or 0.0) > 0.5:
             seen["saturated"] = {"share": row["health/saturated"]}

@@ -175,7 +175,10 @@ class DevRunner:
                 env.num_envs, cfg.ppo.gamma, cfg.ppo.reward_clip
             ).to(self.device)
         dist_cfg = train_cfg["actor"]["distribution_cfg"]
-        self.health = HealthWatch((dist_cfg.get("min_std", 1e-3), dist_cfg.get("max_std", 0.0)))
+        self.health = HealthWatch(
+            (dist_cfg.get("min_std", 1e-3), dist_cfg.get("max_std", 0.0)),
+            adaptive=cfg.ppo.schedule == "adaptive",
+        )
         self.checkpoints = RunCheckpoints(
             self.alg,
             env,
@@ -267,6 +270,10 @@ class DevRunner:
                 self._grow(total_steps)
                 if alg.actor.distribution is not None:  # network.final_std's ceiling, if any
                     alg.actor.distribution.set_progress(self.env_steps / total_steps)
+                if self.run_cfg.ppo.schedule == "linear":  # ppo.schedule=linear: lr -> 0
+                    self._set_learning_rate(
+                        self.run_cfg.ppo.learning_rate * (1.0 - self.env_steps / total_steps)
+                    )
                 collect_threads, learn_threads = threads.next_iteration()
 
                 # Collect: a rollout with the workers stepping while the policy acts.
@@ -421,6 +428,12 @@ class DevRunner:
         for warning in self.health.check(row):
             if self.is_main:
                 tqdm.write(f"devlearn: {warning}", file=sys.stderr)
+
+    def _set_learning_rate(self, lr: float) -> None:
+        """The optimiser's step size from now on (``ppo.schedule=linear``)."""
+        self.alg.learning_rate = lr
+        for group in self.alg.optimizer.param_groups:
+            group["lr"] = lr
 
     def _save_on_schedule(self, good: dict[str, Any]) -> None:
         """``checkpoint_<step>.pt`` every ``save_interval`` iterations and before the first

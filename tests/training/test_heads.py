@@ -237,6 +237,28 @@ def test_a_run_with_a_spread_ceiling_trains_and_its_checkpoint_plays_at_its_step
         config("unused", 256, "network.head=gaussian", "network.final_std=0.01")  # < min_std
 
 
+def test_a_linear_schedule_steps_the_learning_rate_down_to_zero_over_the_run(tmp_path):
+    from tiny_run import factory, registry
+
+    from devlearn.training import train
+    from devlearn.training.health import HealthWatch
+
+    cfg = config(tmp_path / "run", 256, "ppo.schedule=linear", "ppo.learning_rate=0.001")
+    train(cfg, registry(), infant_factory=factory, progress=False)
+    rows = [json.loads(line) for line in (tmp_path / "run" / "metrics.jsonl").open()]
+    assert len(rows) == 8
+    for row in rows:  # each iteration's update used the rate at the steps done before it
+        done = (row["step"] - 32) / 256
+        assert row["learning_rate"] == pytest.approx(0.001 * (1 - done))
+    assert rows[-1]["learning_rate"] == pytest.approx(0.001 / 8)
+    # the adaptive schedule's floor is its "stalled" signature; a linear rate goes below it
+    watch = HealthWatch((0.05, 1.0), adaptive=False)
+    for _ in range(30):
+        assert not watch.check({"loss/surrogate": 0.1, "learning_rate": 1e-7})
+    with pytest.raises(UsageError, match="ppo.schedule must be one of fixed, adaptive, linear"):
+        config("unused", 256, "ppo.schedule=cosine")
+
+
 def test_pink_exploration_keeps_the_policys_law_and_correlates_its_draws():
     """Issue #54 item 3: ``network.exploration_beta`` samples mean + std * coloured noise. Each
     draw must still be the policy's Gaussian (mean, std: PPO's probabilities are computed with
