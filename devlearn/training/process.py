@@ -43,6 +43,12 @@ def rank_cores() -> int:
     return max(len(available_cores()) // local_ranks, 1)
 
 
+PROBE_BACKOFF_RATIO = 2.0
+"""A probe of the slower thread count slower than this times the faster count's time backs off."""
+PROBE_BACKOFF_MAX = 16
+"""The longest wait between probes, in multiples of ``probe_every``."""
+
+
 class ThreadPlan:
     """How many torch threads the rollout inference and the PPO update of each iteration get.
 
@@ -57,6 +63,10 @@ class ThreadPlan:
     sample with 2 threads against 0.71 ms with one (docs/benchmarks.md). So the automatic plan
     also times the update with one thread and keeps whichever count was faster, trying the
     other again every ``probe_every`` iterations. The first update (warm-up) is not timed.
+    A probe that loses by more than :data:`PROBE_BACKOFF_RATIO` (another program holds a core:
+    a 2-thread update then took 1-7 s against 0.3 s, results/learners/README.md) doubles the
+    wait before the next one, up to :data:`PROBE_BACKOFF_MAX` times ``probe_every``; a probe
+    that does not lose by that much resets it.
 
     Rollouts whose envs step in worker processes get one thread when automatic: the policy's
     forward pass on one batch of observations gains little from a second thread, and after
@@ -90,6 +100,9 @@ class ThreadPlan:
         fixed = update or collect
         self.candidates = [fixed] if fixed else sorted({self.cores, 1}, reverse=True)
         self.probe_every = probe_every
+        self.interval = probe_every  # the wait before the next probe (it backs off, above)
+        self.next_probe = probe_every
+        self.probing = False
         self.seconds: dict[int, float] = {}
         self.iteration = 0
         self.current = self.candidates[0]
@@ -103,14 +116,21 @@ class ThreadPlan:
             self.current = unmeasured[0]
         else:
             ranked = sorted(self.candidates, key=self.seconds.__getitem__)
-            probe = self.iteration % self.probe_every == 0
-            self.current = ranked[-1] if probe else ranked[0]
+            self.probing = self.iteration >= self.next_probe
+            self.current = ranked[-1] if self.probing else ranked[0]
         self.iteration += 1
         return self.fixed_collect or self.current, self.current
 
     def record(self, update_seconds: float) -> None:
         """Take note of how long the iteration's update took (the first is a warm-up)."""
         if self.iteration > 1:  # the latest time of each count: the load may have changed
+            if self.probing:
+                best = min(t for c, t in self.seconds.items() if c != self.current)
+                lost = update_seconds > PROBE_BACKOFF_RATIO * best
+                longest = self.probe_every * PROBE_BACKOFF_MAX
+                self.interval = min(2 * self.interval, longest) if lost else self.probe_every
+                self.next_probe = self.iteration - 1 + self.interval
+                self.probing = False
             self.seconds[self.current] = update_seconds
 
 

@@ -38,8 +38,19 @@ def test_automatic_falls_back_to_one_thread_when_the_machine_is_busy():
     plan = ThreadPlan(0, 0, cores=2, probe_every=10)
     busy = run(plan, {2: 6.0, 1: 1.0}, 12)  # another program holds a core
     assert busy[3:10] == [1] * 7 and busy[10] == 2
-    idle = run(plan, {2: 0.5, 1: 1.0}, 15)  # it finished: the probe finds 2 faster again
-    assert idle[8:] == [2] * 7
+    idle = run(plan, {2: 0.5, 1: 1.0}, 25)  # it finished: the next probe finds 2 faster again
+    # the lost probe at 10 (6x slower) doubled the wait: the next probe is at 30, not 20
+    assert idle[:18] == [1] * 18 and idle[18:] == [2] * 7
+
+
+def test_probes_that_lose_badly_back_off_and_a_close_one_resets_the_wait():
+    plan = ThreadPlan(0, 0, cores=2, probe_every=10)
+    busy = run(plan, {2: 6.0, 1: 1.0}, 400)  # a core held throughout: each probe costs 6x
+    probes = [i for i, c in enumerate(busy) if c == 2][2:]  # after the warm-up and first timing
+    assert probes == [10, 30, 70, 150, 310]  # waits 20, 40, 80, 160 (the cap: 16 x 10)
+    close = run(plan, {2: 1.5, 1: 1.0}, 400)  # lighter load: the probe loses, but by < 2x
+    # the wait of 160 runs out at 470 (70 here); from then on every 10 again
+    assert [i for i, c in enumerate(close) if c == 2] == list(range(70, 400, 10))
 
 
 def test_one_core_means_one_thread():
