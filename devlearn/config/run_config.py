@@ -49,7 +49,8 @@ class PPOConfig:
     """Learning-rate schedule: ``fixed`` (the default, :data:`LEARNER_EVIDENCE`: the adaptive
     schedule sat at its 1e-5 floor in issue #28's pilots), ``adaptive`` (KL-driven, rsl-rl's;
     ``desired_kl`` is its target) or ``linear`` (from ``learning_rate`` at the run's first step
-    down to 0 at its last, by the run's share of steps done, cleanrl's ``anneal_lr``). A saved config without this field means ``adaptive``."""
+    down to 0 at its last, by the run's share of steps done, cleanrl's ``anneal_lr``). A saved
+    config without this field means ``adaptive``."""
     normalize_rewards: bool = True
     """Divide every reward by a running standard deviation of the discounted return (as
     gymnasium's ``NormalizeReward`` and SB3's ``VecNormalize``), then clip it to
