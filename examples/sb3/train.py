@@ -46,18 +46,38 @@ NET = [512, 256, 256]
 groups flattened and concatenated, then one MLP)."""
 
 
+class LinearRate:
+    """SB3's learning-rate schedule falling from ``initial`` to 0 over the run: SB3 calls it
+    with the share of the run left (1 at the start). A class, not a lambda, so that
+    ``model.zip`` pickles it."""
+
+    def __init__(self, initial: float) -> None:
+        self.initial = initial
+
+    def __call__(self, progress_remaining: float) -> float:
+        return self.initial * progress_remaining
+
+    def __repr__(self) -> str:
+        return f"linear({self.initial:g} -> 0)"
+
+
 def ppo_settings(cfg: Any, net: list[int]) -> dict[str, Any]:
     """SB3 PPO with the values of devlearn's PPO (the resolved config's ``ppo`` section), so
     that the comparison is of learners, not of settings: rollouts of ``num_steps_per_env``
     decisions per env, the same mini-batches, epochs, step size, discount, GAE, clip (the value
     loss clipped too, as rsl-rl's), entropy and value weights and gradient clip; networks of
-    ``net``."""
+    ``net``. ``ppo.schedule=linear`` becomes SB3's linear schedule (the step size times the
+    share of the run left, as devlearn's); ``fixed`` and ``adaptive`` a constant step size (SB3
+    has no KL-adaptive one)."""
     ppo = cfg.ppo
+    rate: float | LinearRate = ppo.learning_rate
+    if ppo.schedule == "linear":
+        rate = LinearRate(ppo.learning_rate)
     return {
         "n_steps": ppo.num_steps_per_env,
         "batch_size": cfg.num_envs * ppo.num_steps_per_env // ppo.num_mini_batches,
         "n_epochs": ppo.num_learning_epochs,
-        "learning_rate": ppo.learning_rate,
+        "learning_rate": rate,
         "gamma": ppo.gamma,
         "gae_lambda": ppo.lam,
         "clip_range": ppo.clip_param,
@@ -246,7 +266,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             "learn_s": learn_s,
             "collect_s": clock.collect_s,
             "wall_clock_s": time.perf_counter() - started,
-            "settings": json.loads(json.dumps(hyper)),
+            "settings": json.loads(json.dumps(hyper, default=repr)),
             "overrides": args.overrides,
             "stable_baselines3": stable_baselines3.__version__,
             "torch_threads": torch.get_num_threads(),

@@ -98,3 +98,18 @@ def test_sb3_trains_self_touch_and_devlearn_eval_scores_it(algo, tmp_path):
     assert summary["checkpoint"] == str(out / "policy.pt")
     assert summary["protocol"]["start"] == "random" and summary["protocol"]["action_repeat"] == 5
     assert 0.0 <= summary["score"] <= 1.0
+
+
+def test_a_linear_schedule_reaches_sb3_as_its_linear_rate_and_fixed_stays_constant():
+    from devlearn.config.run_config import RunConfig
+
+    cfg = RunConfig()
+    cfg.ppo.learning_rate = 0.002
+    cfg.ppo.schedule = "linear"
+    rate = train.ppo_settings(cfg, [8])["learning_rate"]
+    assert callable(rate) and rate(1.0) == 0.002 and rate(0.25) == pytest.approx(0.0005)
+    assert pickle.loads(pickle.dumps(rate))(0.5) == pytest.approx(0.001)  # model.zip keeps it
+    assert json.loads(json.dumps({"lr": rate}, default=repr)) == {"lr": "linear(0.002 -> 0)"}
+    for schedule in ("fixed", "adaptive"):
+        cfg.ppo.schedule = schedule
+        assert train.ppo_settings(cfg, [8])["learning_rate"] == 0.002
