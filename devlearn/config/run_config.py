@@ -45,13 +45,15 @@ class PPOConfig:
     """Gradient-norm clip (actor and critic separately)."""
     desired_kl: float | None = 0.01
     """Target KL for the adaptive schedule (None disables adaptation)."""
-    schedule: str = "linear"
-    """Learning-rate schedule: ``linear`` (the default, :data:`LEARNER_EVIDENCE`: from
-    ``learning_rate`` at the run's first step down to 0 at its last, by the run's share of steps
-    done, cleanrl's ``anneal_lr``; self-touch at 2M scored above SB3's PPO with it, issue #54),
-    ``fixed`` (``learning_rate`` throughout: the default from issue #28 to #54) or ``adaptive``
-    (KL-driven, rsl-rl's, ``desired_kl`` its target; it sat at its 1e-5 floor in issue #28's
-    pilots). A saved config without this field means ``adaptive``."""
+    schedule: str = "fixed"
+    """Learning-rate schedule: ``fixed`` (the default, :data:`LEARNER_EVIDENCE`: the adaptive
+    schedule sat at its 1e-5 floor in issue #28's pilots), ``adaptive`` (KL-driven, rsl-rl's;
+    ``desired_kl`` is its target) or ``linear`` (from ``learning_rate`` at the run's first step
+    down to 0 at its last, by the run's share of steps done, cleanrl's ``anneal_lr``: on
+    self-touch at 2M it scored above the fixed step size and SB3's PPO, but on both plugins at
+    issue #38's 0.5M their mean action fell from 0.84 to 0.13 and from 28.5 to ~12 regions, so
+    it is not the core default; issue #54, :data:`LEARNER_EVIDENCE`). A saved config without
+    this field means ``adaptive``."""
     normalize_rewards: bool = True
     """Divide every reward by a running standard deviation of the discounted return (as
     gymnasium's ``NormalizeReward`` and SB3's ``VecNormalize``), then clip it to
@@ -188,11 +190,9 @@ orthogonal initialisation, Adam's epsilon 1e-5 and advantages standardised per m
 SB3's PPO; a free state-independent spread starting at 1.0 under a ceiling that falls to 0.3
 over the run, so that the mean action is the behaviour: 0.3 against 0.1 scored higher with the
 mean action on self-touch at 2M and at the default run's 1M, on ``hand_to_mouth`` and on the
-behaviour ``devlearn new`` writes; pink exploration noise, f^-1 over decisions, with which
+behaviour ``devlearn new`` writes; and pink exploration noise, f^-1 over decisions, with which
 the mean action of both plugins scored above their sampled actions, and self-touch learned
-faster and ended where white exploration and SB3's PPO end; and a learning rate falling
-linearly to 0 over the run, with which self-touch at 2M scored above SB3's PPO,
-``results/learners/README.md``).
+faster and ended where white exploration and SB3's PPO end, ``results/learners/README.md``).
 Every behaviour gets them; a behaviour overrides in ``train_defaults`` only what its own
 evidence supports (issue #38: a third-party behaviour learned with these and not with the old
 defaults; hand regard keeps issue #28's learner, on which its results stand, white exploration

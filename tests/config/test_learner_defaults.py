@@ -24,7 +24,7 @@ LEARNER = {
     "env.action_repeat": 5,
     "ppo.gamma": 0.99,
     "ppo.num_steps_per_env": 64,
-    "ppo.schedule": "linear",
+    "ppo.schedule": "fixed",
     "ppo.normalize_rewards": True,
     "network.layout": "separate",
     "network.head": "free",
@@ -38,9 +38,8 @@ LEARNER = {
     "network.exploration_beta": 1.0,
 }
 """The values results/learner/README.md (issue #28) chose (decision rate, discount, rollout
-length, reward normalisation, layout) and results/learners/README.md (issue #54:
-network, initialisation, head and its spread, exploration, the learning-rate schedule, Adam's
-epsilon, advantages)."""
+length, schedule, reward normalisation, layout) and results/learners/README.md (issue #54:
+network, initialisation, head and its spread, Adam's epsilon, advantages)."""
 ISSUE_28 = {
     "network.head": "gaussian",
     "network.final_std": 0.0,
@@ -50,7 +49,6 @@ ISSUE_28 = {
     "ppo.adam_eps": 1e-8,
     "ppo.normalize_advantage_per_mini_batch": False,
     "network.exploration_beta": 0.0,
-    "ppo.schedule": "fixed",
 }
 """Issue #28's learner where issue #54 changed it: what hand regard keeps."""
 OLD = {

@@ -104,7 +104,6 @@ ISSUE_28_LEARNER: dict[str, Any] = {
     "ppo.adam_eps": 1e-8,
     "ppo.normalize_advantage_per_mini_batch": False,
     "network.exploration_beta": 0.0,
-    "ppo.schedule": "fixed",
 }
 """The core learner as it was before issue #54 (issue #28's), which every published hand-regard
 result was trained with: kept here until a rerun shows issue #54's learner does no worse. White
