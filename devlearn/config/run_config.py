@@ -49,11 +49,13 @@ class PPOConfig:
     """Learning-rate schedule: ``fixed`` (the default, :data:`LEARNER_EVIDENCE`: the adaptive
     schedule sat at its 1e-5 floor in issue #28's pilots), ``adaptive`` (KL-driven, rsl-rl's;
     ``desired_kl`` is its target) or ``linear`` (from ``learning_rate`` at the run's first step
-    down to 0 at its last, by the run's share of steps done, cleanrl's ``anneal_lr``: on
-    self-touch at 2M it scored above the fixed step size and SB3's PPO, but on both plugins at
-    issue #38's 0.5M their mean action fell from 0.84 to 0.13 and from 28.5 to ~12 regions, so
-    it is not the core default; issue #54, :data:`LEARNER_EVIDENCE`). A saved config without
-    this field means ``adaptive``."""
+    down to 0 at its last, by the run's share of steps done, cleanrl's ``anneal_lr``). Linear
+    helps a run whose skill is learned early and refined late (self-touch at 2M, fixed poses:
+    0.692 against the fixed step size's 0.588 and SB3's PPO's 0.603) and starves one whose
+    skill emerges late, when the step size is small (both plugins at issue #38's 0.5M: the mean
+    action 0.13 against 0.84 and 12 regions against 28.5; the default self-touch run's random-
+    pose half), so it is not the default (issue #54, :data:`LEARNER_EVIDENCE`). A saved config
+    without this field means ``adaptive``."""
     normalize_rewards: bool = True
     """Divide every reward by a running standard deviation of the discounted return (as
     gymnasium's ``NormalizeReward`` and SB3's ``VecNormalize``), then clip it to

@@ -54,7 +54,6 @@ PRESETS: dict[str, dict[str, Any]] = {
         "network.init": "torch",
         "network.final_std": 0.0,
         "network.exploration_beta": 0.0,  # white exploration, as every PPO then
-        "ppo.schedule": "fixed",  # a constant step size (the paper names no schedule)
         "ppo.adam_eps": 1e-8,
         "ppo.normalize_advantage_per_mini_batch": False,
         "behavior.touch_count": "step",
