@@ -53,9 +53,10 @@ class PPOConfig:
     helps a run whose skill is learned early and refined late (self-touch at 2M, fixed poses:
     0.692 against the fixed step size's 0.588 and SB3's PPO's 0.603) and starves one whose
     skill emerges late, when the step size is small (both plugins at issue #38's 0.5M: the mean
-    action 0.13 against 0.84 and 12 regions against 28.5; the default self-touch run's random-
-    pose half), so it is not the default (issue #54, :data:`LEARNER_EVIDENCE`). A saved config
-    without this field means ``adaptive``."""
+    action 0.13 against 0.84 and 12 regions against 28.5); the default self-touch run (1M, both
+    stages) scored lower on average too (0.532 against 0.622, 3 seeds), so it is not the
+    default (issue #54, :data:`LEARNER_EVIDENCE`). A saved config without this field means
+    ``adaptive``."""
     normalize_rewards: bool = True
     """Divide every reward by a running standard deviation of the discounted return (as
     gymnasium's ``NormalizeReward`` and SB3's ``VecNormalize``), then clip it to
