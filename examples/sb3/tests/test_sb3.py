@@ -101,10 +101,11 @@ def test_sb3_trains_self_touch_and_devlearn_eval_scores_it(algo, tmp_path):
 
 
 def test_a_linear_schedule_reaches_sb3_as_its_linear_rate_and_fixed_stays_constant():
-    from devlearn.config.run_config import RunConfig
+    from types import SimpleNamespace
 
-    cfg = RunConfig()
-    cfg.ppo.learning_rate = 0.002
+    ppo = dict(num_steps_per_env=8, num_mini_batches=2, num_learning_epochs=1, gamma=0.99,
+               lam=0.95, clip_param=0.2, entropy_coef=0.0, value_loss_coef=1.0, max_grad_norm=1.0)  # fmt: skip
+    cfg = SimpleNamespace(num_envs=2, ppo=SimpleNamespace(**ppo, learning_rate=0.002))
     cfg.ppo.schedule = "linear"
     rate = train.ppo_settings(cfg, [8])["learning_rate"]
     assert callable(rate) and rate(1.0) == 0.002 and rate(0.25) == pytest.approx(0.0005)
