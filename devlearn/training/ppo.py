@@ -80,6 +80,13 @@ class UniqueParamPPO(PPO):
             group.update(_multi_tensor(type(self.optimizer)))
         return resumed
 
+    def set_learning_rate(self, lr: float) -> None:
+        """The optimiser's step size from now on (a resumed run's fixed rate, or
+        ``ppo.schedule=linear``'s next)."""
+        self.learning_rate = lr
+        for group in self.optimizer.param_groups:
+            group["lr"] = lr
+
     def reduce_parameters(self) -> None:
         """Average gradients across ranks, each tensor once."""
         modules = [self.actor, self.critic] + ([self.rnd] if self.rnd else [])

@@ -271,7 +271,7 @@ class DevRunner:
                 if alg.actor.distribution is not None:  # network.final_std's ceiling, if any
                     alg.actor.distribution.set_progress(self.env_steps / total_steps)
                 if self.run_cfg.ppo.schedule == "linear":  # ppo.schedule=linear: lr -> 0
-                    self._set_learning_rate(
+                    alg.set_learning_rate(
                         self.run_cfg.ppo.learning_rate * (1.0 - self.env_steps / total_steps)
                     )
                 collect_threads, learn_threads = threads.next_iteration()
@@ -428,12 +428,6 @@ class DevRunner:
         for warning in self.health.check(row):
             if self.is_main:
                 tqdm.write(f"devlearn: {warning}", file=sys.stderr)
-
-    def _set_learning_rate(self, lr: float) -> None:
-        """The optimiser's step size from now on (``ppo.schedule=linear``)."""
-        self.alg.learning_rate = lr
-        for group in self.alg.optimizer.param_groups:
-            group["lr"] = lr
 
     def _save_on_schedule(self, good: dict[str, Any]) -> None:
         """``checkpoint_<step>.pt`` every ``save_interval`` iterations and before the first

@@ -35,7 +35,7 @@ class RunCheckpoints:
     config (``docs/checkpoints.md``).
 
     Args:
-        alg: The PPO algorithm (``save()``, ``load()``, ``learning_rate``, ``optimizer``).
+        alg: The PPO algorithm (``save()``, ``load()``, ``learning_rate``, ``set_learning_rate()``).
         env: The DevVecEnv (``state_dict()``, ``load_state_dict()``, ``sync_run_memory()``).
         curriculum: The behaviour's curriculum.
         learned: The run's learned rewards.
@@ -145,9 +145,7 @@ class RunCheckpoints:
         count alone."""
         self.alg.load(state, None, strict=True)  # also takes the adaptive lr from the optimiser
         if self.cfg.ppo.schedule == "fixed":  # a fixed schedule means the configured lr
-            self.alg.learning_rate = self.cfg.ppo.learning_rate
-            for group in self.alg.optimizer.param_groups:
-                group["lr"] = self.alg.learning_rate
+            self.alg.set_learning_rate(self.cfg.ppo.learning_rate)
         iteration, env_steps = int(state["iteration"]), int(state["env_steps"])
         if curriculum:
             self.curriculum.load_state_dict(state["curriculum"])
