@@ -103,8 +103,17 @@ def test_sb3_trains_self_touch_and_devlearn_eval_scores_it(algo, tmp_path):
 def test_a_linear_schedule_reaches_sb3_as_its_linear_rate_and_fixed_stays_constant():
     from types import SimpleNamespace
 
-    ppo = dict(num_steps_per_env=8, num_mini_batches=2, num_learning_epochs=1, gamma=0.99,
-               lam=0.95, clip_param=0.2, entropy_coef=0.0, value_loss_coef=1.0, max_grad_norm=1.0)  # fmt: skip
+    ppo = {
+        "num_steps_per_env": 8,
+        "num_mini_batches": 2,
+        "num_learning_epochs": 1,
+        "gamma": 0.99,
+        "lam": 0.95,
+        "clip_param": 0.2,
+        "entropy_coef": 0.0,
+        "value_loss_coef": 1.0,
+        "max_grad_norm": 1.0,
+    }
     cfg = SimpleNamespace(num_envs=2, ppo=SimpleNamespace(**ppo, learning_rate=0.002))
     cfg.ppo.schedule = "linear"
     rate = train.ppo_settings(cfg, [8])["learning_rate"]
