@@ -90,6 +90,11 @@ def check_config(cfg: RunConfig) -> None:
         raise UsageError(
             f"ppo.schedule must be one of {', '.join(LR_SCHEDULES)}, got '{cfg.ppo.schedule}'"
         )
+    if not 0 < cfg.ppo.decay_share <= 1:
+        raise UsageError(
+            f"ppo.decay_share must be above 0 and at most 1 (the share of the run at its end "
+            f"over which ppo.schedule=linear falls), got {cfg.ppo.decay_share:g}"
+        )
     for name in ("num_steps_per_env", "num_learning_epochs", "num_mini_batches"):
         _whole(getattr(cfg.ppo, name), f"ppo.{name}", 1, PPO_COUNT_MAX)
     _positive(cfg, "learning_rate", high=1.0)

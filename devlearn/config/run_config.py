@@ -57,6 +57,11 @@ class PPOConfig:
     stages) scored lower on average too (0.532 against 0.622, 3 seeds), so it is not the
     default (issue #54, :data:`LEARNER_EVIDENCE`). A saved config without this field means
     ``adaptive``."""
+    decay_share: float = 1.0
+    """The share of the run, at its end, over which ``schedule=linear`` falls to 0: 1 (the
+    default) falls over the whole run (cleanrl's); 0.2 holds ``learning_rate`` for the first 80%
+    of the steps and falls over the last 20% (the "warmup-stable-decay" shape). Only read with
+    ``schedule=linear``; from 0 (excluded) to 1."""
     normalize_rewards: bool = True
     """Divide every reward by a running standard deviation of the discounted return (as
     gymnasium's ``NormalizeReward`` and SB3's ``VecNormalize``), then clip it to
@@ -72,6 +77,12 @@ class PPOConfig:
     normalize_advantage_per_mini_batch: bool = True
     """Standardise advantages in each mini-batch (SB3, :data:`LEARNER_EVIDENCE`) instead of
     once over the rollout (before issue #54)."""
+
+    def linear_rate(self, done: int, total: int) -> float:
+        """``schedule=linear``'s step size after ``done`` of ``total`` steps: ``learning_rate``
+        until the last ``decay_share`` of the run, then falling linearly to 0 at its end."""
+        left = max(0.0, 1.0 - done / total)
+        return self.learning_rate * min(1.0, left / self.decay_share)
 
 
 @dataclass
@@ -547,7 +558,7 @@ def to_rsl_rl(cfg: RunConfig, behavior: Any, observation_names: list[str] | None
     names = list(observation_names or spec.encoders)
     ppo = dataclasses.asdict(cfg.ppo)
     num_steps = ppo.pop("num_steps_per_env")
-    for ours in ("normalize_rewards", "reward_clip"):  # devlearn's, not rsl-rl's PPO's
+    for ours in ("normalize_rewards", "reward_clip", "decay_share"):  # devlearn's, not rsl-rl's
         ppo.pop(ours)
     shared = shared_layout(cfg, spec)
     model = {

@@ -271,9 +271,7 @@ class DevRunner:
                 if alg.actor.distribution is not None:  # network.final_std's ceiling, if any
                     alg.actor.distribution.set_progress(self.env_steps / total_steps)
                 if self.run_cfg.ppo.schedule == "linear":  # ppo.schedule=linear: lr -> 0
-                    alg.set_learning_rate(
-                        self.run_cfg.ppo.learning_rate * (1.0 - self.env_steps / total_steps)
-                    )
+                    alg.set_learning_rate(self.run_cfg.ppo.linear_rate(self.env_steps, total_steps))
                 collect_threads, learn_threads = threads.next_iteration()
 
                 # Collect: a rollout with the workers stepping while the policy acts.

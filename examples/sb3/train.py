@@ -47,18 +47,22 @@ groups flattened and concatenated, then one MLP)."""
 
 
 class LinearRate:
-    """SB3's learning-rate schedule falling from ``initial`` to 0 over the run: SB3 calls it
-    with the share of the run left (1 at the start). A class, not a lambda, so that
+    """SB3's learning-rate schedule: ``initial`` until the last ``decay_share`` of the run, then
+    falling to 0 at its end (devlearn's ``ppo.schedule=linear`` with ``ppo.decay_share``). SB3
+    calls it with the share of the run left (1 at the start). A class, not a lambda, so that
     ``model.zip`` pickles it."""
 
-    def __init__(self, initial: float) -> None:
+    def __init__(self, initial: float, decay_share: float = 1.0) -> None:
         self.initial = initial
+        self.decay_share = decay_share
 
     def __call__(self, progress_remaining: float) -> float:
-        return self.initial * progress_remaining
+        return self.initial * min(1.0, progress_remaining / self.decay_share)
 
     def __repr__(self) -> str:
-        return f"linear({self.initial:g} -> 0)"
+        if self.decay_share == 1.0:
+            return f"linear({self.initial:g} -> 0)"
+        return f"linear({self.initial:g} -> 0 over the last {self.decay_share:g})"
 
 
 def ppo_settings(cfg: Any, net: list[int]) -> dict[str, Any]:
@@ -66,13 +70,13 @@ def ppo_settings(cfg: Any, net: list[int]) -> dict[str, Any]:
     that the comparison is of learners, not of settings: rollouts of ``num_steps_per_env``
     decisions per env, the same mini-batches, epochs, step size, discount, GAE, clip (the value
     loss clipped too, as rsl-rl's), entropy and value weights and gradient clip; networks of
-    ``net``. ``ppo.schedule=linear`` becomes SB3's linear schedule (the step size times the
-    share of the run left, as devlearn's); ``fixed`` and ``adaptive`` a constant step size (SB3
+    ``net``. ``ppo.schedule=linear`` becomes SB3's linear schedule (as devlearn's, held until
+    the last ``ppo.decay_share`` of the run); ``fixed`` and ``adaptive`` a constant step size (SB3
     has no KL-adaptive one)."""
     ppo = cfg.ppo
     rate: float | LinearRate = ppo.learning_rate
     if ppo.schedule == "linear":
-        rate = LinearRate(ppo.learning_rate)
+        rate = LinearRate(ppo.learning_rate, ppo.decay_share)
     return {
         "n_steps": ppo.num_steps_per_env,
         "batch_size": cfg.num_envs * ppo.num_steps_per_env // ppo.num_mini_batches,

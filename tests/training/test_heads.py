@@ -259,6 +259,27 @@ def test_a_linear_schedule_steps_the_learning_rate_down_to_zero_over_the_run(tmp
         config("unused", 256, "ppo.schedule=cosine")
 
 
+def test_a_linear_schedule_with_a_decay_share_holds_the_rate_then_falls_over_the_runs_end(
+    tmp_path,
+):
+    from tiny_run import factory, registry
+
+    from devlearn.training import train
+
+    cfg = config(
+        tmp_path / "run", 256, "ppo.schedule=linear", "ppo.learning_rate=0.001",
+        "ppo.decay_share=0.25",
+    )  # fmt: skip
+    train(cfg, registry(), infant_factory=factory, progress=False)
+    rows = [json.loads(line) for line in (tmp_path / "run" / "metrics.jsonl").open()]
+    rates = [row["learning_rate"] for row in rows]  # 8 iterations of 32 steps
+    # held until 75% of the steps are done (iteration 7 starts there), then half at 87.5%
+    assert rates == pytest.approx([0.001] * 7 + [0.0005])
+    for bad in ("0", "1.5"):
+        with pytest.raises(UsageError, match="ppo.decay_share must be above 0 and at most 1"):
+            config("unused", 256, "ppo.schedule=linear", f"ppo.decay_share={bad}")
+
+
 def test_pink_exploration_keeps_the_policys_law_and_correlates_its_draws():
     """Issue #54 item 3: ``network.exploration_beta`` samples mean + std * coloured noise. Each
     draw must still be the policy's Gaussian (mean, std: PPO's probabilities are computed with

@@ -115,11 +115,15 @@ def test_a_linear_schedule_reaches_sb3_as_its_linear_rate_and_fixed_stays_consta
         "max_grad_norm": 1.0,
     }
     cfg = SimpleNamespace(num_envs=2, ppo=SimpleNamespace(**ppo, learning_rate=0.002))
-    cfg.ppo.schedule = "linear"
+    cfg.ppo.schedule, cfg.ppo.decay_share = "linear", 1.0
     rate = train.ppo_settings(cfg, [8])["learning_rate"]
     assert callable(rate) and rate(1.0) == 0.002 and rate(0.25) == pytest.approx(0.0005)
     assert pickle.loads(pickle.dumps(rate))(0.5) == pytest.approx(0.001)  # model.zip keeps it
     assert json.loads(json.dumps({"lr": rate}, default=repr)) == {"lr": "linear(0.002 -> 0)"}
+    cfg.ppo.decay_share = 0.2  # held, then falling over the last 20% of the run
+    rate = train.ppo_settings(cfg, [8])["learning_rate"]
+    assert rate(0.5) == 0.002 and rate(0.1) == pytest.approx(0.001) and rate(0.0) == 0.0
+    assert repr(rate) == "linear(0.002 -> 0 over the last 0.2)"
     for schedule in ("fixed", "adaptive"):
         cfg.ppo.schedule = schedule
         assert train.ppo_settings(cfg, [8])["learning_rate"] == 0.002
