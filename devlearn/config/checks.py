@@ -95,6 +95,7 @@ def check_config(cfg: RunConfig) -> None:
             f"ppo.decay_share must be above 0 and at most 1 (the share of the run at its end "
             f"over which ppo.schedule=linear falls), got {cfg.ppo.decay_share:g}"
         )
+    _whole(cfg.ppo.full_rate_steps, "ppo.full_rate_steps", 0, STEPS_MAX, "0: any run's")
     for name in ("num_steps_per_env", "num_learning_epochs", "num_mini_batches"):
         _whole(getattr(cfg.ppo, name), f"ppo.{name}", 1, PPO_COUNT_MAX)
     _positive(cfg, "learning_rate", high=1.0)

@@ -24,7 +24,8 @@ class PPOConfig:
     """PPO hyper-parameters (rsl-rl's ``PPO`` keyword arguments plus the rollout length)."""
 
     learning_rate: float = 3e-4
-    """Adam step size (the starting value when ``schedule`` is ``adaptive``)."""
+    """Adam step size (the starting value when ``schedule`` is ``adaptive``) of a run of up to
+    ``full_rate_steps``; a longer run takes less (:meth:`run_rate`)."""
     num_steps_per_env: int = 64
     """Steps each environment collects per iteration (rollout length)."""
     num_learning_epochs: int = 5
@@ -65,6 +66,18 @@ class PPOConfig:
     schedule's gain on self-touch at 2M (0.630 against the fixed step size's 0.588, paired
     +0.027 [-0.028, +0.081], 5 seeds), changed nothing in the default run (-0.004) and still
     made both plugins worse (issue #54, :data:`LEARNER_EVIDENCE`)."""
+    full_rate_steps: int = 1_024_000
+    """The longest run that takes ``learning_rate`` as it is; a longer run of ``total_steps``
+    takes ``learning_rate * full_rate_steps / total_steps``, at least half ``learning_rate``
+    (:data:`MIN_RATE_SHARE`, reached at twice ``full_rate_steps``), so that its step sizes sum
+    to a ``full_rate_steps`` run's (:meth:`run_rate`; every schedule starts from it). 0: the
+    same ``learning_rate`` for any run (before issue #54). The evidence
+    (:data:`LEARNER_EVIDENCE`): the best step size falls with the run's length. Self-touch at
+    2,048,000 steps scored 0.668 [0.622, 0.715] with half the step size against 0.588 with 3e-4
+    (5 seeds, every seed up), while the default run (1,024,000 steps) lost with half (0.542
+    against 0.622, every seed down) and ``hand_to_mouth`` at 496,640 steps lost most (0.300
+    against 0.844); runs of up to 1,024,000 steps (the default run, both plugins, hand regard's
+    614,400) train as before. A saved config without this field means 0."""
     normalize_rewards: bool = True
     """Divide every reward by a running standard deviation of the discounted return (as
     gymnasium's ``NormalizeReward`` and SB3's ``VecNormalize``), then clip it to
@@ -81,11 +94,25 @@ class PPOConfig:
     """Standardise advantages in each mini-batch (SB3, :data:`LEARNER_EVIDENCE`) instead of
     once over the rollout (before issue #54)."""
 
+    def run_rate(self, total: int) -> float:
+        """The step size of a run of ``total`` steps (``full_rate_steps``'s rule): the fixed
+        schedule's, the adaptive one's start and the linear one's before it falls."""
+        if not self.full_rate_steps or total <= self.full_rate_steps:
+            return self.learning_rate
+        return self.learning_rate * max(MIN_RATE_SHARE, self.full_rate_steps / total)
+
     def linear_rate(self, done: int, total: int) -> float:
-        """``schedule=linear``'s step size after ``done`` of ``total`` steps: ``learning_rate``
-        until the last ``decay_share`` of the run, then falling linearly to 0 at its end."""
+        """``schedule=linear``'s step size after ``done`` of ``total`` steps: the run's step
+        size (:meth:`run_rate`) until the last ``decay_share`` of the run, then falling linearly
+        to 0 at its end."""
         left = max(0.0, 1.0 - done / total)
-        return self.learning_rate * min(1.0, left / self.decay_share)
+        return self.run_rate(total) * min(1.0, left / self.decay_share)
+
+
+MIN_RATE_SHARE = 0.5
+"""The smallest share of ``ppo.learning_rate`` that a long run takes (``ppo.full_rate_steps``):
+half, the step size measured at twice the full-rate budget (self-touch at 2,048,000 steps);
+longer runs keep it, since no longer budget was measured."""
 
 
 @dataclass
@@ -192,6 +219,7 @@ LEGACY_FIELDS: dict[str, Any] = {
     "network.init": "torch",
     "network.normalize": "behavior",
     "network.exploration_beta": 0.0,
+    "ppo.full_rate_steps": 0,
 }
 """Core fields a saved run's config may lack, and the value its run was trained with (the
 default changed when the field was added, issue #28): such a config loads as trained. A new
@@ -209,11 +237,13 @@ over the run, so that the mean action is the behaviour: 0.3 against 0.1 scored h
 mean action on self-touch at 2M and at the default run's 1M, on ``hand_to_mouth`` and on the
 behaviour ``devlearn new`` writes; and pink exploration noise, f^-1 over decisions, with which
 the mean action of both plugins scored above their sampled actions, and self-touch learned
-faster and ended where white exploration and SB3's PPO end, ``results/learners/README.md``).
-Every behaviour gets them; a behaviour overrides in ``train_defaults`` only what its own
-evidence supports (issue #38: a third-party behaviour learned with these and not with the old
-defaults; hand regard keeps issue #28's learner, on which its results stand, white exploration
-included)."""
+faster and ended where white exploration and SB3's PPO end; a step size that falls with the
+run's length past 1,024,000 steps, ``ppo.full_rate_steps``: half of it scored higher on
+self-touch at 2M in every seed and lower at the default run's 1M and the plugins' 0.5M,
+``results/learners/README.md``). Every behaviour gets them; a behaviour overrides in
+``train_defaults`` only what its own evidence supports (issue #38: a third-party behaviour
+learned with these and not with the old defaults; hand regard keeps issue #28's learner, on
+which its results stand, white exploration and one step size for any run included)."""
 
 
 @dataclass
@@ -561,8 +591,9 @@ def to_rsl_rl(cfg: RunConfig, behavior: Any, observation_names: list[str] | None
     names = list(observation_names or spec.encoders)
     ppo = dataclasses.asdict(cfg.ppo)
     num_steps = ppo.pop("num_steps_per_env")
-    for ours in ("normalize_rewards", "reward_clip", "decay_share"):  # devlearn's, not rsl-rl's
-        ppo.pop(ours)
+    for ours in ("normalize_rewards", "reward_clip", "decay_share", "full_rate_steps"):
+        ppo.pop(ours)  # devlearn's, not rsl-rl's
+    ppo["learning_rate"] = cfg.ppo.run_rate(cfg.total_steps)
     shared = shared_layout(cfg, spec)
     model = {
         "class_name": "devlearn.training.networks:MultiSenseModel",

@@ -145,7 +145,7 @@ class RunCheckpoints:
         count alone."""
         self.alg.load(state, None, strict=True)  # also takes the adaptive lr from the optimiser
         if self.cfg.ppo.schedule == "fixed":  # a fixed schedule means the configured lr
-            self.alg.set_learning_rate(self.cfg.ppo.learning_rate)
+            self.alg.set_learning_rate(self.cfg.ppo.run_rate(self.cfg.total_steps))
         iteration, env_steps = int(state["iteration"]), int(state["env_steps"])
         if curriculum:
             self.curriculum.load_state_dict(state["curriculum"])

@@ -271,6 +271,14 @@ def _build(ctx: RunContext) -> tuple[DevVecEnv, DevRunner]:
     cfg.behavior = behavior.config
     if rank == 0:
         write_config_file(cfg, run_dir / CONFIG_FILE)
+        rate = cfg.ppo.run_rate(cfg.total_steps)
+        if rate != cfg.ppo.learning_rate:
+            print(
+                f"devlearn: note: a run of {cfg.total_steps:,} steps takes a step size of "
+                f"{rate:.3g} ({cfg.ppo.learning_rate:g} up to {cfg.ppo.full_rate_steps:,} "
+                "steps; ppo.full_rate_steps=0 keeps it for any run)",
+                file=sys.stderr,
+            )
 
     # Environments (seeded seed + rank * num_envs + index) and the runner.
     # The body at the run's age at its step: a resumed growing run goes on at its schedule's

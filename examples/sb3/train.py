@@ -70,13 +70,15 @@ def ppo_settings(cfg: Any, net: list[int]) -> dict[str, Any]:
     that the comparison is of learners, not of settings: rollouts of ``num_steps_per_env``
     decisions per env, the same mini-batches, epochs, step size, discount, GAE, clip (the value
     loss clipped too, as rsl-rl's), entropy and value weights and gradient clip; networks of
-    ``net``. ``ppo.schedule=linear`` becomes SB3's linear schedule (as devlearn's, held until
-    the last ``ppo.decay_share`` of the run); ``fixed`` and ``adaptive`` a constant step size (SB3
-    has no KL-adaptive one)."""
+    ``net``. The step size is the run's (``ppo.learning_rate``, less for a run longer than
+    ``ppo.full_rate_steps``); ``ppo.schedule=linear`` becomes SB3's linear schedule (as
+    devlearn's, held until the last ``ppo.decay_share`` of the run); ``fixed`` and ``adaptive``
+    a constant step size (SB3 has no KL-adaptive one)."""
     ppo = cfg.ppo
-    rate: float | LinearRate = ppo.learning_rate
+    step = ppo.run_rate(cfg.total_steps)
+    rate: float | LinearRate = step
     if ppo.schedule == "linear":
-        rate = LinearRate(ppo.learning_rate, ppo.decay_share)
+        rate = LinearRate(step, ppo.decay_share)
     return {
         "n_steps": ppo.num_steps_per_env,
         "batch_size": cfg.num_envs * ppo.num_steps_per_env // ppo.num_mini_batches,

@@ -36,10 +36,12 @@ LEARNER = {
     "ppo.adam_eps": 1e-5,
     "ppo.normalize_advantage_per_mini_batch": True,
     "network.exploration_beta": 1.0,
+    "ppo.full_rate_steps": 1_024_000,
 }
 """The values results/learner/README.md (issue #28) chose (decision rate, discount, rollout
 length, schedule, reward normalisation, layout) and results/learners/README.md (issue #54:
-network, initialisation, head and its spread, Adam's epsilon, advantages)."""
+network, initialisation, head and its spread, Adam's epsilon, advantages, exploration, the
+step size of long runs)."""
 ISSUE_28 = {
     "network.head": "gaussian",
     "network.final_std": 0.0,
@@ -49,6 +51,7 @@ ISSUE_28 = {
     "ppo.adam_eps": 1e-8,
     "ppo.normalize_advantage_per_mini_batch": False,
     "network.exploration_beta": 0.0,
+    "ppo.full_rate_steps": 0,
 }
 """Issue #28's learner where issue #54 changed it: what hand regard keeps."""
 OLD = {
@@ -58,6 +61,7 @@ OLD = {
     "network.layout": "separate",
     "network.head": "paper",
     "network.exploration_beta": 0.0,
+    "ppo.full_rate_steps": 0,
 }
 """What a run saved before those fields existed was trained with."""
 

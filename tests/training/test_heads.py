@@ -280,6 +280,40 @@ def test_a_linear_schedule_with_a_decay_share_holds_the_rate_then_falls_over_the
             config("unused", 256, "ppo.schedule=linear", f"ppo.decay_share={bad}")
 
 
+def test_a_run_longer_than_full_rate_steps_takes_a_smaller_step_size(tmp_path):
+    """Issue #54 item 2: the step size is ``learning_rate`` up to ``ppo.full_rate_steps``, then
+    falls as 1/steps to half at twice as many, and stays there; every schedule starts from it,
+    a resume keeps it, and 0 (saved runs, hand regard) keeps ``learning_rate`` for any run."""
+    from tiny_run import factory, registry
+
+    from devlearn.config.run_config import PPOConfig
+    from devlearn.training import train
+
+    ppo = PPOConfig(learning_rate=0.002, full_rate_steps=100)
+    assert [ppo.run_rate(n) for n in (50, 100, 125, 200, 10_000)] == pytest.approx(
+        [0.002, 0.002, 0.0016, 0.001, 0.001]
+    )
+    assert ppo.linear_rate(0, 125) == pytest.approx(0.0016)  # the linear schedule's start
+    assert PPOConfig(learning_rate=3e-4).run_rate(2_048_000) == 1.5e-4  # half_lr's, bit for bit
+    assert PPOConfig(learning_rate=0.002, full_rate_steps=0).run_rate(10_000) == 0.002
+    # a tiny run of 192 steps with full_rate_steps=128: 128/192 of the step size in every update
+    fixed = ("ppo.schedule=fixed", "ppo.learning_rate=0.002", "ppo.full_rate_steps=128")
+    cfg = config(tmp_path / "run", 192, *fixed)
+    assert to_rsl_rl(cfg, TinyBehavior())["algorithm"]["learning_rate"] == 0.002 * 128 / 192
+    train(cfg, registry(), infant_factory=factory, progress=False)
+    rows = [json.loads(line) for line in (tmp_path / "run" / "metrics.jsonl").open()]
+    assert [row["learning_rate"] for row in rows] == pytest.approx([0.002 * 128 / 192] * 6)
+    resumed = config(tmp_path / "run", 256, *fixed)  # resumed with a longer budget: its rate
+    train(resumed, registry(), resume=tmp_path / "run", infant_factory=factory, progress=False)
+    rows = [json.loads(line) for line in (tmp_path / "run" / "metrics.jsonl").open()]
+    assert [row["learning_rate"] for row in rows[6:]] == pytest.approx([0.001] * 2)
+    # below the full-rate budget, the configured rate as before
+    short = config("unused", 64, *fixed)
+    assert to_rsl_rl(short, TinyBehavior())["algorithm"]["learning_rate"] == 0.002
+    with pytest.raises(UsageError, match="ppo.full_rate_steps must be at least 0"):
+        config("unused", 256, "ppo.full_rate_steps=-1")
+
+
 def test_pink_exploration_keeps_the_policys_law_and_correlates_its_draws():
     """Issue #54 item 3: ``network.exploration_beta`` samples mean + std * coloured noise. Each
     draw must still be the policy's Gaussian (mean, std: PPO's probabilities are computed with

@@ -114,7 +114,9 @@ def test_a_linear_schedule_reaches_sb3_as_its_linear_rate_and_fixed_stays_consta
         "value_loss_coef": 1.0,
         "max_grad_norm": 1.0,
     }
-    cfg = SimpleNamespace(num_envs=2, ppo=SimpleNamespace(**ppo, learning_rate=0.002))
+    from devlearn.config.run_config import PPOConfig
+
+    cfg = SimpleNamespace(num_envs=2, total_steps=1000, ppo=PPOConfig(**ppo, learning_rate=0.002))
     cfg.ppo.schedule, cfg.ppo.decay_share = "linear", 1.0
     rate = train.ppo_settings(cfg, [8])["learning_rate"]
     assert callable(rate) and rate(1.0) == 0.002 and rate(0.25) == pytest.approx(0.0005)
@@ -127,3 +129,8 @@ def test_a_linear_schedule_reaches_sb3_as_its_linear_rate_and_fixed_stays_consta
     for schedule in ("fixed", "adaptive"):
         cfg.ppo.schedule = schedule
         assert train.ppo_settings(cfg, [8])["learning_rate"] == 0.002
+    # a run longer than ppo.full_rate_steps: devlearn's smaller step size, for every schedule
+    cfg.total_steps = 2 * cfg.ppo.full_rate_steps
+    assert train.ppo_settings(cfg, [8])["learning_rate"] == 0.001
+    cfg.ppo.schedule = "linear"
+    assert train.ppo_settings(cfg, [8])["learning_rate"](1.0) == 0.001

@@ -104,9 +104,11 @@ ISSUE_28_LEARNER: dict[str, Any] = {
     "ppo.adam_eps": 1e-8,
     "ppo.normalize_advantage_per_mini_batch": False,
     "network.exploration_beta": 0.0,
+    "ppo.full_rate_steps": 0,
 }
 """The core learner as it was before issue #54 (issue #28's), which every published hand-regard
-result was trained with: kept here until a rerun shows issue #54's learner does no worse. White
+result was trained with: kept here until a rerun shows issue #54's learner does no worse (one
+step size for any run length included: the paper's 1.85M too). White
 exploration included: with the core's pink exploration the proprioception policy scored 0.482
 [0.474, 0.490] at 614k against white's 0.516 [0.384, 0.648] (3 seeds, paired -0.034 [-0.160,
 +0.092]; results/learners/i54/pink_hand_regard): not better, so hand regard keeps white."""

@@ -54,6 +54,7 @@ PRESETS: dict[str, dict[str, Any]] = {
         "network.init": "torch",
         "network.final_std": 0.0,
         "network.exploration_beta": 0.0,  # white exploration, as every PPO then
+        "ppo.full_rate_steps": 0,  # one step size for the run, however long
         "ppo.adam_eps": 1e-8,
         "ppo.normalize_advantage_per_mini_batch": False,
         "behavior.touch_count": "step",
