@@ -2,9 +2,12 @@
 #54's publications of 2026-12-07 were: no policy file, no curves, and eval.json files without
 their copy of the run's config (config.json is beside each), per-episode parts, part touch
 steps and the self-touch coding's per-limb figures (``devlearn experiment table`` reads none of
-them). Prints the folder's bytes after.
+them). ``--scores-only`` also drops the self-touch coding's likeness figures (``likeness``,
+``likeness_coded``: a table of the per-episode score alone needs neither; a table with
+``--metric`` on them does). Prints the folder's bytes after.
 
     python3 experiments/trim_publication.py results/learners/i54/linear
+    python3 experiments/trim_publication.py results/learners/i54/parts_update --scores-only
 """
 
 import json
@@ -12,6 +15,7 @@ import pathlib
 import sys
 
 dest = pathlib.Path(sys.argv[1])
+scores_only = "--scores-only" in sys.argv[2:]
 for p in dest.rglob("policy.pt"):
     p.unlink()
 for p in dest.rglob("curve.jsonl"):
@@ -22,6 +26,9 @@ for p in dest.rglob("eval.json"):
         d.pop(k, None)
     if isinstance(d.get("likeness_coded"), dict):
         d["likeness_coded"].pop("limbs", None)
+    if scores_only:
+        d.pop("likeness", None)
+        d.pop("likeness_coded", None)
     p.write_text(json.dumps(d) + "\n")
 exp = dest / "experiment.json"
 if exp.exists():
