@@ -26,6 +26,7 @@ from devlearn.testing import (  # noqa: E402
     open_scripted_policy,
     registry_for,
     run_command,
+    run_config,
 )
 
 
@@ -101,8 +102,6 @@ def test_sb3_trains_self_touch_and_devlearn_eval_scores_it(algo, tmp_path):
 
 
 def test_a_linear_schedule_reaches_sb3_as_its_linear_rate_and_fixed_stays_constant():
-    from types import SimpleNamespace
-
     ppo = {
         "num_steps_per_env": 8,
         "num_mini_batches": 2,
@@ -113,10 +112,10 @@ def test_a_linear_schedule_reaches_sb3_as_its_linear_rate_and_fixed_stays_consta
         "entropy_coef": 0.0,
         "value_loss_coef": 1.0,
         "max_grad_norm": 1.0,
+        "learning_rate": 0.002,
     }
-    from devlearn.config.run_config import PPOConfig
-
-    cfg = SimpleNamespace(num_envs=2, total_steps=1000, ppo=PPOConfig(**ppo, learning_rate=0.002))
+    overrides = [f"ppo.{key}={value}" for key, value in ppo.items()]
+    cfg = run_config(TinyBehavior, overrides, total_steps=1000, num_envs=2, workers=0)
     cfg.ppo.schedule, cfg.ppo.decay_share = "linear", 1.0
     rate = train.ppo_settings(cfg, [8])["learning_rate"]
     assert callable(rate) and rate(1.0) == 0.002 and rate(0.25) == pytest.approx(0.0005)
