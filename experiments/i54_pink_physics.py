@@ -13,7 +13,6 @@ the machine's load does not change (times do, and are not printed).
 
 from __future__ import annotations
 
-import mujoco
 import numpy as np
 import torch
 
@@ -30,15 +29,14 @@ def counts(beta: float, std: float, seed: int) -> np.ndarray:
     """Mean (contacts, constraint rows, solver iterations) per physics step of one drive."""
     infant = build_infant("crib", senses=("proprioception", "touch"))
     infant.reset(np.random.default_rng(seed), random_pose=False)
-    model, data = infant.physics.model.ptr, infant.physics.data.ptr
     torch.manual_seed(seed)
     noise = ColoredNoise((infant.action_dim,), beta, PHYSICS_TIMESTEP * REPEAT)
     total = np.zeros(3)
     for _ in range(DECISIONS):
         action = torch.clamp(std * noise.next(), -1.0, 1.0).double().numpy()
         for _ in range(REPEAT):
-            np.copyto(data.ctrl, action)
-            mujoco.mj_step(model, data)
+            infant.step(action)
+            data = infant.data
             total += (data.ncon, data.nefc, data.solver_niter[0])
     infant.close()
     return total / (DECISIONS * REPEAT)
