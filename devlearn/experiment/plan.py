@@ -209,8 +209,8 @@ def _arm_run(
         trainer += ["--out", str(run_dir)]
         for item in shared:
             trainer += ["--set", item]
-    resume = ["--workers", str(train.workers)]
-    resume += ["--steps", str(train.steps)] if train.steps is not None else []
+    # a restart trains to the run's own budget: the file's, or the arm's ``total_steps=``
+    resume = ["--workers", str(train.workers), "--steps", str(cfg.total_steps)]
     settings = [f"seed={seed}", *([f"preset={arm.preset}"] if arm.preset else []), *overrides]
     job = RunJob(
         name=name,

@@ -421,3 +421,24 @@ def test_progress_estimates_the_time_left_from_this_starts_rate():
         assert Progress(1, None, io.StringIO()).eta({"a": 10}) is None  # no rate yet
     finally:
         progress.close()
+
+
+def test_an_arm_with_its_own_budget_restarts_to_that_budget(tmp_path):
+    # an arm that sets total_steps (issue #54's equal-seconds arm) trains, and resumes, to its
+    # own budget, not the file's [train] steps
+    from devlearn.experiment.plan import plan_experiment
+    from devlearn.experiment.spec import read_experiment
+
+    file = tmp_path / "tiny.toml"
+    file.write_text(TINY.replace('set = ["behavior.target=0.3"]', 'set = ["total_steps=32"]'))
+    with pytest.MonkeyPatch.context() as patch:
+        tiny_devlearn.install(patch)
+        import devlearn.plugins
+
+        plan = plan_experiment(
+            read_experiment(file), tmp_path / "out", devlearn.plugins.PluginRegistry()
+        )
+    budgets = {run.job.name: (run.total_steps, run.job.resume_args) for run in plan.runs}
+    for seed in SEEDS:
+        assert budgets[f"far,seed={seed}"] == (32, ["--workers", "0", "--steps", "32"])
+        assert budgets[f"near,seed={seed}"] == (64, ["--workers", "0", "--steps", "64"])
