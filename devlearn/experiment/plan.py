@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 from devlearn.api.errors import UsageError
 from devlearn.experiment.spec import Arm, ExperimentSpec, Protocol
 from devlearn.sweep.experiment import checked_config
-from devlearn.sweep.job import RunJob, read_json
+from devlearn.sweep.job import RunJob, read_json, resume_args
 
 if TYPE_CHECKING:
     from devlearn.evaluation.evaluate import EvalRequest
@@ -209,8 +209,6 @@ def _arm_run(
         trainer += ["--out", str(run_dir)]
         for item in shared:
             trainer += ["--set", item]
-    # a restart trains to the run's own budget: the file's, or the arm's ``total_steps=``
-    resume = ["--workers", str(train.workers), "--steps", str(cfg.total_steps)]
     settings = [f"seed={seed}", *([f"preset={arm.preset}"] if arm.preset else []), *overrides]
     job = RunJob(
         name=name,
@@ -220,7 +218,7 @@ def _arm_run(
         seed=seed,
         config=to_dict(cfg),
         settings=[f"learner={arm.learner}", *settings] if trainer else settings,
-        resume_args=resume,
+        resume_args=resume_args(train.workers, cfg.total_steps),
         eval_args=[],
         launcher=spec.launcher,
         global_args=list(global_args),

@@ -14,7 +14,7 @@ from devlearn.api.errors import UsageError
 from devlearn.files import NAME_MAX
 from devlearn.sweep.bookkeeping import RunFolder, SweepFolder, check_folder
 from devlearn.sweep.executors import LocalExecutor, RayExecutor, make_executor
-from devlearn.sweep.job import RunJob
+from devlearn.sweep.job import RunJob, resume_args
 from devlearn.sweep.progress import Progress
 from devlearn.sweep.spec import SweepSpec, Variant, variants
 
@@ -83,8 +83,6 @@ def plan_sweep(
             )
         cfg = checked_config(request, registry, variant.name)
         cfg.out_dir = str(run_dir)
-        common = ["--workers", str(train.workers)]
-        common += ["--steps", str(train.steps)] if train.steps is not None else []
         ev = spec.evaluation
         eval_args = ["--episodes", str(ev.episodes), "--seed", str(ev.seed), "--json", *ev.args]
         job = RunJob(
@@ -95,7 +93,7 @@ def plan_sweep(
             seed=variant.seed,
             config=to_dict(cfg),
             settings=_settings(variant.seed, train.preset, overrides),
-            resume_args=common,
+            resume_args=resume_args(train.workers, cfg.total_steps),
             eval_args=eval_args,
             launcher=spec.launcher,
             global_args=list(global_args or []),

@@ -99,6 +99,14 @@ class RunJob:
         return Path(self.sweep_dir) / "logs" / f"{self.name}.log"
 
 
+def resume_args(workers: int, total_steps: int) -> list[str]:
+    """The ``devlearn run --resume`` options of a planned run (:attr:`RunJob.resume_args`): its
+    worker count and its own budget, the resolved config's ``total_steps`` (``--steps``, or a
+    ``total_steps=`` item that overrides it), so that a restart trains to where the run was
+    meant to stop."""
+    return ["--workers", str(workers), "--steps", str(total_steps)]
+
+
 def write_json(path: Path, data: dict[str, Any]) -> None:
     """Write JSON atomically (a reader never sees half a file)."""
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -297,3 +297,16 @@ def test_a_sweep_file_is_read_with_guards(cli, refused, tmp_path):
     err = refused(cli, *base, "/dev/zero")
     assert "cannot read /dev/zero: a character device, not a file" in err
     assert not (tmp_path / "sweep").exists()
+
+
+def test_a_set_budget_is_the_one_a_restart_trains_to(tmp_path):
+    # --set total_steps=... wins over --steps for the run (the config resolves it last), and a
+    # restart trains to that budget, not --steps's
+    options = {"out": str(tmp_path / "s"), "steps": "64", "envs": "2"}
+    runs = plan_sweep(
+        build_spec("tiny", {**options, "overrides": ["total_steps=32"]}, None),
+        tiny_devlearn.registry(),
+    )
+    assert [(r.total_steps, r.job.resume_args) for r in runs] == [
+        (32, ["--workers", "0", "--steps", "32"])
+    ]
