@@ -23,12 +23,13 @@ taskset -c 1 "$PY" -m devlearn.cli run self_touch --steps "$S" --seed 1 --worker
     --set torch_threads=1 --out "$OUT/one_core" > "$OUT/one_core.log" 2>&1
 "$PY" - "$OUT" <<'PY'
 import json, pathlib, sys
+from devlearn.bench.speed import training_rate
 out = pathlib.Path(sys.argv[1])
 for name in ("two_cores", "one_core"):
-    rows = [json.loads(line) for line in (out / name / "metrics.jsonl").open()][2:]
-    collect = sum(r["collect_s"] for r in rows) / len(rows)
-    update = sum(r["update_s"] for r in rows) / len(rows)
-    steps = rows[-1]["step"] - rows[0]["step"] + (rows[1]["step"] - rows[0]["step"])
-    print(f"{name:9s} {len(rows)} iterations: collect {collect:.3f} s, update {update:.3f} s "
-          f"per iteration; {steps / (len(rows) * (collect + update)):,.0f} steps/s of learning")
+    rows = [json.loads(line) for line in (out / name / "metrics.jsonl").open()][1:]
+    kept = rows[1:]  # training_rate(rows) counts these: the steps of each over its seconds
+    collect = sum(r["collect_s"] for r in kept) / len(kept)
+    update = sum(r["update_s"] for r in kept) / len(kept)
+    print(f"{name:9s} {len(kept)} iterations: collect {collect:.3f} s, update {update:.3f} s "
+          f"per iteration; {training_rate(rows):,.0f} steps/s of learning")
 PY
